@@ -1,0 +1,81 @@
+//! `silrig`: the command-line front end. Parses arguments and calls the library; no logic of its own.
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use silrig::plant::{F16Model, derivative_csv, trim::trim_level_flight};
+use silrig::units::m_to_ft;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "silrig", version, about = "Software-in-the-loop rig for the Stevens & Lewis F-16")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Trim for steady wings-level flight and print throttle, elevator and alpha.
+    Trim {
+        /// True airspeed, m/s.
+        #[arg(long)]
+        airspeed_mps: f64,
+        /// Altitude, ft.
+        #[arg(long)]
+        altitude_ft: f64,
+        /// CG position, fraction of the mean aerodynamic chord.
+        #[arg(long, default_value_t = 0.35)]
+        xcg: f64,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Plant tools.
+    Plant {
+        #[command(subcommand)]
+        command: PlantCommand,
+    },
+    /// Micro-benchmarks of the model (median of batches; run on an idle machine).
+    Bench,
+}
+
+#[derive(Subcommand)]
+enum PlantCommand {
+    /// Read CSV rows of states and controls on stdin, write the 13 state derivatives as CSV on stdout.
+    Derivative,
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        Command::Trim { airspeed_mps, altitude_ft, xcg, json } => {
+            anyhow::ensure!((0.0..=1.0).contains(&xcg), "--xcg must be a fraction of the chord in 0..1, got {xcg}");
+            let trim = trim_level_flight(&F16Model::new(xcg), m_to_ft(airspeed_mps), altitude_ft)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&trim)?);
+            } else {
+                print!("{}", trim.to_text());
+            }
+        }
+        Command::Plant { command: PlantCommand::Derivative } => {
+            let rows =
+                derivative_csv::run(std::io::stdin().lock(), std::io::stdout().lock()).context("plant derivative")?;
+            eprintln!("{rows} rows");
+        }
+        Command::Bench => {
+            for figure in silrig::bench::plant_figures() {
+                println!("{figure}");
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
