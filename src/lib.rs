@@ -12,4 +12,5 @@ pub mod bench;
 pub mod integrator;
 pub mod plant;
 pub mod rng;
+pub mod trace;
 pub mod units;

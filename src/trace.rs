@@ -1,0 +1,203 @@
+//! The closed-loop trace: one row per tick, named columns, written as `trace.csv`. The single-process loop, the
+//! logger process and the plots all speak this one format.
+
+use std::io::{BufRead, Write};
+use std::path::Path;
+
+/// Columns every closed-loop trace starts with, in order. The RBF weight columns `w_<channel>_<k>` follow, one per
+/// node and channel.
+pub const BASE_COLUMNS: [&str; 24] = [
+    "t_s",
+    "phi_deg",
+    "theta_deg",
+    "psi_deg",
+    "alpha_deg",
+    "beta_deg",
+    "p_dps",
+    "q_dps",
+    "r_dps",
+    "vt_mps",
+    "alt_ft",
+    "aileron_cmd_deg",
+    "elevator_cmd_deg",
+    "rudder_cmd_deg",
+    "aileron_deg",
+    "elevator_deg",
+    "rudder_deg",
+    "throttle",
+    "s_phi",
+    "s_theta",
+    "s_psi",
+    "fhat_phi",
+    "fhat_theta",
+    "fhat_psi",
+];
+
+/// Controller channels in column-name form.
+pub const CHANNELS: [&str; 3] = ["phi", "theta", "psi"];
+
+/// Column names for a controller with `nodes` RBF nodes per channel.
+pub fn columns(nodes: usize) -> Vec<String> {
+    let mut names: Vec<String> = BASE_COLUMNS.iter().map(|s| s.to_string()).collect();
+    for ch in CHANNELS {
+        for k in 1..=nodes {
+            names.push(format!("w_{ch}_{k}"));
+        }
+    }
+    names
+}
+
+/// A table of f64 rows under named columns.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Trace {
+    /// Column names.
+    pub columns: Vec<String>,
+    /// Rows, each as long as `columns`.
+    pub rows: Vec<Vec<f64>>,
+}
+
+/// A trace file that cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum TraceReadError {
+    /// I/O failure.
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+    /// The file has no header.
+    #[error("empty trace file")]
+    Empty,
+    /// A cell is not a number.
+    #[error("line {line}, column `{column}`: not a number: {text:?}")]
+    BadCell {
+        /// 1-based line.
+        line: usize,
+        /// Column name.
+        column: String,
+        /// Cell text.
+        text: String,
+    },
+    /// A row has the wrong number of cells.
+    #[error("line {line}: {cells} cells, the header has {expected}")]
+    RowLength {
+        /// 1-based line.
+        line: usize,
+        /// Cells found.
+        cells: usize,
+        /// Cells expected.
+        expected: usize,
+    },
+}
+
+impl Trace {
+    /// An empty trace with these columns.
+    pub fn new(columns: Vec<String>) -> Self {
+        Self { columns, rows: Vec::new() }
+    }
+
+    /// Index of a column.
+    pub fn index(&self, name: &str) -> Option<usize> {
+        self.columns.iter().position(|c| c == name)
+    }
+
+    /// A copy of one column.
+    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
+        let i = self.index(name)?;
+        Some(self.rows.iter().map(|r| r[i]).collect())
+    }
+
+    /// The header line.
+    pub fn header_line(&self) -> String {
+        self.columns.join(",")
+    }
+
+    /// One row as a CSV line; values print so that they parse back to the same f64.
+    pub fn format_row(row: &[f64]) -> String {
+        let mut line = String::with_capacity(row.len() * 20);
+        for (i, v) in row.iter().enumerate() {
+            if i > 0 {
+                line.push(',');
+            }
+            line.push_str(&format!("{v:?}"));
+        }
+        line
+    }
+
+    /// Write as CSV.
+    pub fn write_csv(&self, mut out: impl Write) -> std::io::Result<()> {
+        writeln!(out, "{}", self.header_line())?;
+        for row in &self.rows {
+            writeln!(out, "{}", Self::format_row(row))?;
+        }
+        out.flush()
+    }
+
+    /// Write as CSV to a file.
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        self.write_csv(std::io::BufWriter::new(std::fs::File::create(path)?))
+    }
+
+    /// Read a CSV trace. A last line without its newline (a writer killed mid-line) is dropped, not an error.
+    pub fn read_csv(input: impl BufRead) -> Result<Self, TraceReadError> {
+        let mut text = String::new();
+        let mut input = input;
+        input.read_to_string(&mut text)?;
+        let complete = if text.ends_with('\n') { &text[..] } else { &text[..text.rfind('\n').map_or(0, |i| i + 1)] };
+        let mut lines = complete.lines();
+        let header = lines.next().ok_or(TraceReadError::Empty)?;
+        let columns: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+        let mut rows = Vec::new();
+        for (k, line) in lines.enumerate() {
+            if line.trim().is_empty() {
+                continue;
+            }
+            let line_no = k + 2;
+            let cells: Vec<&str> = line.split(',').collect();
+            if cells.len() != columns.len() {
+                return Err(TraceReadError::RowLength { line: line_no, cells: cells.len(), expected: columns.len() });
+            }
+            let row = cells
+                .iter()
+                .zip(&columns)
+                .map(|(c, name)| {
+                    c.trim().parse::<f64>().map_err(|_| TraceReadError::BadCell {
+                        line: line_no,
+                        column: name.clone(),
+                        text: c.to_string(),
+                    })
+                })
+                .collect::<Result<Vec<f64>, _>>()?;
+            rows.push(row);
+        }
+        Ok(Self { columns, rows })
+    }
+
+    /// Read a CSV trace file.
+    pub fn load(path: &Path) -> Result<Self, TraceReadError> {
+        Self::read_csv(std::io::BufReader::new(std::fs::File::open(path)?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_round_trips_bit_for_bit_and_tolerates_a_torn_last_line() {
+        let mut t = Trace::new(vec!["t_s".into(), "x".into()]);
+        t.rows.push(vec![0.0, 0.1 + 0.2]);
+        t.rows.push(vec![0.01, -1e-300]);
+        let mut buf = Vec::new();
+        t.write_csv(&mut buf).unwrap();
+        assert_eq!(Trace::read_csv(&buf[..]).unwrap(), t);
+        buf.extend_from_slice(b"0.02,1.2"); // killed mid-line
+        assert_eq!(Trace::read_csv(&buf[..]).unwrap(), t);
+        assert!(Trace::read_csv(&b"t_s,x\n1,zz\n"[..]).unwrap_err().to_string().contains("line 2, column `x`"));
+    }
+
+    #[test]
+    fn columns_list_weights_per_channel_and_node() {
+        let c = columns(5);
+        assert_eq!(c.len(), 24 + 15);
+        assert_eq!(c[24], "w_phi_1");
+        assert_eq!(c.last().unwrap(), "w_psi_5");
+    }
+}
