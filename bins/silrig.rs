@@ -3,7 +3,9 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use silrig::plant::{F16Model, derivative_csv, trim::trim_level_flight};
+use silrig::scenario::Scenario;
 use silrig::units::m_to_ft;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -34,6 +36,23 @@ enum Command {
     Plant {
         #[command(subcommand)]
         command: PlantCommand,
+    },
+    /// Run a scenario's closed loop in one process (deterministic) and write trace, summary and plots.
+    Sim {
+        /// Scenario file (TOML); without it, the embedded default scenario.
+        config: Option<PathBuf>,
+        /// Output folder (default: out/<scenario name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Run several scenarios and print their summaries side by side, with an overlay plot.
+    Compare {
+        /// Scenario files (TOML).
+        #[arg(required = true, num_args = 1..)]
+        configs: Vec<PathBuf>,
+        /// Output folder (default: out/compare).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Micro-benchmarks of the model (median of batches; run on an idle machine).
     Bench,
@@ -71,6 +90,30 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 derivative_csv::run(std::io::stdin().lock(), std::io::stdout().lock()).context("plant derivative")?;
             eprintln!("{rows} rows");
         }
+        Command::Sim { config, out } => {
+            let scenario = load_scenario(config.as_deref())?;
+            let out = out.unwrap_or_else(|| Path::new("out").join(&scenario.name));
+            let trace = silrig::sim::run(&scenario)?;
+            let summary = silrig::summary::summarize(&trace, &scenario);
+            let files = silrig::outputs::write_run(&out, &scenario, &trace, &summary)?;
+            print!("{}", summary.to_text());
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+        }
+        Command::Compare { configs, out } => {
+            let out = out.unwrap_or_else(|| Path::new("out").join("compare"));
+            let mut summaries = Vec::new();
+            for path in &configs {
+                let scenario = load_scenario(Some(path))?;
+                let trace = silrig::sim::run(&scenario)?;
+                let summary = silrig::summary::summarize(&trace, &scenario);
+                silrig::outputs::write_run(&out.join(&scenario.name), &scenario, &trace, &summary)?;
+                summaries.push(summary);
+            }
+            print!("{}", silrig::outputs::compare_table(&summaries));
+            println!("runs written under {}", out.display());
+        }
         Command::Bench => {
             for figure in silrig::bench::plant_figures() {
                 println!("{figure}");
@@ -78,4 +121,11 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn load_scenario(path: Option<&Path>) -> anyhow::Result<Scenario> {
+    Ok(match path {
+        Some(p) => Scenario::load(p)?,
+        None => Scenario::embedded_default(),
+    })
 }

@@ -9,8 +9,13 @@
 
 pub mod actuator;
 pub mod bench;
+pub mod control;
 pub mod integrator;
+pub mod outputs;
 pub mod plant;
 pub mod rng;
+pub mod scenario;
+pub mod sim;
+pub mod summary;
 pub mod trace;
 pub mod units;

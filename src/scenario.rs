@@ -1,0 +1,342 @@
+//! Scenario files: everything a closed-loop run needs (initial condition, set points, disturbance, plant options,
+//! controller gains, actuator limits, timing), as TOML with unit-suffixed keys. Unknown keys are errors; `validate`
+//! names the key and the problem of any out-of-range value.
+
+use crate::actuator::ActuatorSetLimits;
+use crate::control::ControllerGains;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The embedded default scenario (what `silrig sim` and `silrig run` use without a file).
+pub const DEFAULT_SCENARIO_TOML: &str = include_str!("../configs/robust.toml");
+
+/// A whole scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name, used for output folders and plot titles.
+    pub name: String,
+    /// What the scenario shows.
+    #[serde(default)]
+    pub description: String,
+    /// Seed for every random source of the run.
+    #[serde(default)]
+    pub seed: u64,
+    /// Initial condition.
+    pub initial: InitialCondition,
+    /// Attitude set points.
+    pub setpoint: Setpoint,
+    /// Disturbance on the Euler-angle accelerations.
+    #[serde(default)]
+    pub disturbance: Disturbance,
+    /// Plant options.
+    #[serde(default)]
+    pub plant: PlantOptions,
+    /// Controller gains.
+    #[serde(default)]
+    pub controller: ControllerGains,
+    /// Actuator limits and lags (default: the book's).
+    #[serde(default)]
+    pub actuators: ActuatorSetLimits,
+    /// Step, duration and command timing.
+    pub timing: Timing,
+}
+
+/// How the run starts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialCondition {
+    /// `explicit`: every angle below is used as given; `trim`: alpha, theta, throttle and elevator come from the
+    /// level-flight trim at this airspeed and altitude (phi, psi and the rates still from below).
+    #[serde(default)]
+    pub mode: InitialMode,
+    /// True airspeed, m/s.
+    pub airspeed_mps: f64,
+    /// Altitude, ft.
+    pub altitude_ft: f64,
+    /// Angle of attack, deg (explicit mode).
+    #[serde(default)]
+    pub alpha_deg: f64,
+    /// Sideslip, deg.
+    #[serde(default)]
+    pub beta_deg: f64,
+    /// Roll angle, deg.
+    #[serde(default)]
+    pub phi_deg: f64,
+    /// Pitch angle, deg (explicit mode).
+    #[serde(default)]
+    pub theta_deg: f64,
+    /// Heading, deg.
+    #[serde(default)]
+    pub psi_deg: f64,
+    /// Body roll rate, deg/s.
+    #[serde(default)]
+    pub p_dps: f64,
+    /// Body pitch rate, deg/s.
+    #[serde(default)]
+    pub q_dps: f64,
+    /// Body yaw rate, deg/s.
+    #[serde(default)]
+    pub r_dps: f64,
+    /// Throttle 0..1; omitted: the value that gives VT_dot = 0 at the initial state with the engine at its
+    /// equilibrium power (explicit mode), or the trim throttle.
+    #[serde(default)]
+    pub throttle: Option<f64>,
+}
+
+/// Initial-condition mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum InitialMode {
+    /// Angles and rates as given.
+    #[default]
+    Explicit,
+    /// Level-flight trim.
+    Trim,
+}
+
+/// Constant attitude set points, deg.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Setpoint {
+    /// Roll, deg.
+    pub phi_deg: f64,
+    /// Pitch, deg.
+    pub theta_deg: f64,
+    /// Heading, deg.
+    pub psi_deg: f64,
+}
+
+/// d(t) = amplitude * sin(frequency * t) on the chosen Euler-angle accelerations.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Disturbance {
+    /// Amplitude, rad/s^2.
+    #[serde(default)]
+    pub amplitude_radps2: f64,
+    /// Angular frequency, rad/s.
+    #[serde(default)]
+    pub frequency_radps: f64,
+    /// Channels it acts on: any of "phi", "theta", "psi".
+    #[serde(default = "all_channels")]
+    pub channels: Vec<String>,
+}
+
+fn all_channels() -> Vec<String> {
+    crate::control::CHANNEL_NAMES.iter().map(|s| s.to_string()).collect()
+}
+
+impl Default for Disturbance {
+    fn default() -> Self {
+        Self { amplitude_radps2: 0.0, frequency_radps: 0.0, channels: all_channels() }
+    }
+}
+
+impl Disturbance {
+    /// The disturbance at time `t_s`, per channel, rad/s^2.
+    #[inline]
+    pub fn at(&self, t_s: f64, mask: &[bool; 3]) -> [f64; 3] {
+        if self.amplitude_radps2 == 0.0 {
+            return [0.0; 3];
+        }
+        let d = self.amplitude_radps2 * (self.frequency_radps * t_s).sin();
+        mask.map(|on| if on { d } else { 0.0 })
+    }
+
+    /// Which channels are disturbed.
+    pub fn channel_mask(&self) -> [bool; 3] {
+        crate::control::CHANNEL_NAMES.map(|n| self.channels.iter().any(|c| c == n))
+    }
+}
+
+/// Plant options.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlantOptions {
+    /// Freeze the airspeed (VT_dot = 0), as the paper assumes.
+    #[serde(default)]
+    pub speed_hold: bool,
+    /// CG position, fraction of the mean chord.
+    #[serde(default = "default_xcg")]
+    pub xcg: f64,
+}
+
+fn default_xcg() -> f64 {
+    crate::plant::aero::XCG_REF
+}
+
+impl Default for PlantOptions {
+    fn default() -> Self {
+        Self { speed_hold: false, xcg: default_xcg() }
+    }
+}
+
+/// When a command computed from the sample of tick k acts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CommandTiming {
+    /// From tick k: no transport delay (the paper's simulation).
+    SameTick,
+    /// From tick k+1: one sample of transport delay, as in a multi-process loop.
+    NextTick,
+}
+
+/// Step, duration and command timing.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Timing {
+    /// Loop period, s.
+    pub dt_s: f64,
+    /// Run length, s.
+    pub duration_s: f64,
+    /// Command timing.
+    pub command_timing: CommandTiming,
+}
+
+impl Timing {
+    /// Number of ticks in the run.
+    pub fn ticks(&self) -> u64 {
+        (self.duration_s / self.dt_s).round() as u64
+    }
+}
+
+/// A scenario that cannot be used, with where the problem is.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// Malformed TOML or an unknown or mistyped key.
+    #[error("{origin}: {message}")]
+    Parse {
+        /// File name or "embedded default".
+        origin: String,
+        /// The parser's message, which names the key and position.
+        message: String,
+    },
+    /// A value out of range.
+    #[error("{origin}: `{key}`: {problem}")]
+    Invalid {
+        /// File name or "embedded default".
+        origin: String,
+        /// The key, dotted.
+        key: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+impl Scenario {
+    /// Parse and validate TOML text; `origin` names the source in errors.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, ScenarioError> {
+        let scenario: Scenario = toml::from_str(text)
+            .map_err(|e| ScenarioError::Parse { origin: origin.into(), message: e.to_string().trim_end().into() })?;
+        scenario.validate().map_err(|(key, problem)| ScenarioError::Invalid { origin: origin.into(), key, problem })?;
+        Ok(scenario)
+    }
+
+    /// Read, parse and validate a scenario file.
+    pub fn load(path: &Path) -> Result<Self, ScenarioError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| ScenarioError::Io { path: path.display().to_string(), source })?;
+        Self::from_toml(&text, &path.display().to_string())
+    }
+
+    /// The embedded default scenario.
+    pub fn embedded_default() -> Self {
+        Self::from_toml(DEFAULT_SCENARIO_TOML, "embedded default").expect("the embedded default scenario is valid")
+    }
+
+    /// The scenario as TOML (what a run records next to its outputs).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a scenario serialises")
+    }
+
+    /// Check every value; on error return (dotted key, problem).
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let err = |key: &str, problem: String| Err((key.to_string(), problem));
+        let finite = |key: &str, v: f64| {
+            if v.is_finite() { Ok(()) } else { err(key, format!("must be a finite number, got {v}")) }
+        };
+        if self.name.trim().is_empty() || !self.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+        {
+            return err("name", format!("must be non-empty letters, digits, '-' or '_', got {:?}", self.name));
+        }
+        let i = &self.initial;
+        if !(i.airspeed_mps > 0.0 && i.airspeed_mps <= 400.0) {
+            return err("initial.airspeed_mps", format!("must be within (0, 400], got {}", i.airspeed_mps));
+        }
+        if !(0.0..=50_000.0).contains(&i.altitude_ft) {
+            return err("initial.altitude_ft", format!("must be within 0..50000, got {}", i.altitude_ft));
+        }
+        for (key, v, limit) in [
+            ("initial.alpha_deg", i.alpha_deg, 45.0),
+            ("initial.beta_deg", i.beta_deg, 30.0),
+            ("initial.phi_deg", i.phi_deg, 180.0),
+            ("initial.theta_deg", i.theta_deg, 80.0),
+            ("initial.psi_deg", i.psi_deg, 180.0),
+            ("initial.p_dps", i.p_dps, 360.0),
+            ("initial.q_dps", i.q_dps, 360.0),
+            ("initial.r_dps", i.r_dps, 360.0),
+        ] {
+            finite(key, v)?;
+            if v.abs() > limit {
+                return err(key, format!("must be within -{limit}..{limit}, got {v}"));
+            }
+        }
+        if let Some(t) = i.throttle
+            && !(0.0..=1.0).contains(&t)
+        {
+            return err("initial.throttle", format!("must be within 0..1, got {t}"));
+        }
+        for (key, v, limit) in [
+            ("setpoint.phi_deg", self.setpoint.phi_deg, 90.0),
+            ("setpoint.theta_deg", self.setpoint.theta_deg, 60.0),
+            ("setpoint.psi_deg", self.setpoint.psi_deg, 180.0),
+        ] {
+            finite(key, v)?;
+            if v.abs() > limit {
+                return err(key, format!("must be within -{limit}..{limit} deg, got {v}"));
+            }
+        }
+        let d = &self.disturbance;
+        finite("disturbance.amplitude_radps2", d.amplitude_radps2)?;
+        if !(d.frequency_radps >= 0.0 && d.frequency_radps.is_finite()) {
+            return err("disturbance.frequency_radps", format!("must be >= 0, got {}", d.frequency_radps));
+        }
+        if let Some(c) = d.channels.iter().find(|c| !crate::control::CHANNEL_NAMES.contains(&c.as_str())) {
+            return err("disturbance.channels", format!("unknown channel {c:?}; use \"phi\", \"theta\" or \"psi\""));
+        }
+        if !(0.0..=1.0).contains(&self.plant.xcg) {
+            return err("plant.xcg", format!("must be a fraction of the chord in 0..1, got {}", self.plant.xcg));
+        }
+        self.controller.validate().map_err(|e| {
+            let key = e.split([' ', '[', ':']).next().unwrap_or("").to_string();
+            (format!("controller.{key}"), e)
+        })?;
+        for (name, a) in [
+            ("elevator_deg", &self.actuators.elevator_deg),
+            ("aileron_deg", &self.actuators.aileron_deg),
+            ("rudder_deg", &self.actuators.rudder_deg),
+            ("throttle", &self.actuators.throttle),
+        ] {
+            a.validate().map_err(|e| (format!("actuators.{name}"), e))?;
+        }
+        let t = &self.timing;
+        if !(t.dt_s > 0.0 && t.dt_s <= 0.1) {
+            return err("timing.dt_s", format!("must be within (0, 0.1] s, got {}", t.dt_s));
+        }
+        if !(t.duration_s > 0.0 && t.duration_s <= 3600.0) {
+            return err("timing.duration_s", format!("must be within (0, 3600] s, got {}", t.duration_s));
+        }
+        if t.duration_s < t.dt_s {
+            return err("timing.duration_s", format!("is shorter than one step ({} s)", t.dt_s));
+        }
+        Ok(())
+    }
+}
