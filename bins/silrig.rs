@@ -118,6 +118,13 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             for figure in silrig::bench::plant_figures() {
                 println!("{figure}");
             }
+            let closed_loop = silrig::bench::closed_loop_figure(20);
+            println!("{closed_loop}");
+            println!(
+                "closed loop: {:.0} steps/s median ({:.0}x real time at 100 Hz)",
+                1e9 / closed_loop.median_ns,
+                1e9 / closed_loop.median_ns / 100.0
+            );
         }
     }
     Ok(ExitCode::SUCCESS)

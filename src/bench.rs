@@ -1,5 +1,6 @@
-//! Micro-benchmarks run by `silrig bench`: the cost of one plant derivative and one RK4 step. Each figure is the
-//! median (and spread) of many batches, so one descheduled batch on a shared machine does not move it.
+//! Benchmarks run by `silrig bench`: the cost of one plant derivative, one RK4 step, and closed-loop steps per
+//! second in one process. Each figure is the median (and spread) of many batches, so one descheduled batch on a
+//! shared machine does not move it.
 
 use crate::integrator::rk4_step;
 use crate::plant::{ExternalForcing, F16Model, trim::trim_level_flight};
@@ -72,4 +73,23 @@ pub fn plant_figures() -> Vec<BenchFigure> {
         );
     });
     vec![derivative, rk4]
+}
+
+/// Closed-loop ticks per second in one process (plant, actuators, controller and trace recording) on the embedded
+/// default scenario stretched to 60 s, as the median of `repeats` runs.
+pub fn closed_loop_figure(repeats: usize) -> BenchFigure {
+    let mut scenario = crate::scenario::Scenario::embedded_default();
+    scenario.timing.duration_s = 60.0;
+    let ticks = scenario.timing.ticks() as usize;
+    let figure = measure("closed-loop tick (sim)", 1, repeats, || {
+        black_box(crate::sim::run(&scenario).expect("the default scenario runs"));
+    });
+    let per_tick = |ns: f64| ns / ticks as f64;
+    BenchFigure {
+        median_ns: per_tick(figure.median_ns),
+        p10_ns: per_tick(figure.p10_ns),
+        p90_ns: per_tick(figure.p90_ns),
+        batch: ticks,
+        ..figure
+    }
 }
