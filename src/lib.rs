@@ -2,6 +2,10 @@
 //!
 //! The library holds all the math (F-16 plant, integrator, actuators), and the binaries in `bins/` are thin shells
 //! over it. Pure modules ([`plant`], [`integrator`], [`actuator`]) do no I/O, IPC or clock reads.
+//!
+//! Transport and timing: [`wire`] (the sample types on the wire), [`ipc`] (iceoryx2 streams, per-run namespaces,
+//! WaitSet loop, timerfd ticks, cleanup), [`clock`] (monotonic clock, absolute sleeps, SCHED_FIFO, tick schedule),
+//! [`timing`] (latency histograms and the timer baseline).
 
 #![warn(missing_docs)]
 // `!(x > 0.0)` is how we reject NaN along with the out-of-range values; keep it.
@@ -9,8 +13,12 @@
 
 pub mod actuator;
 pub mod bench;
+pub mod clock;
 pub mod integrator;
+pub mod ipc;
 pub mod plant;
 pub mod rng;
+pub mod timing;
 pub mod trace;
 pub mod units;
+pub mod wire;
