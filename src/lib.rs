@@ -1,7 +1,13 @@
 //! silrig: a real-time software-in-the-loop rig for flight control.
 //!
 //! The library holds all the math (F-16 plant, integrator, actuators), and the binaries in `bins/` are thin shells
-//! over it. Pure modules ([`plant`], [`integrator`], [`actuator`]) do no I/O, IPC or clock reads.
+//! over it. Pure modules ([`plant`], [`integrator`], [`actuator`], [`control`]) do no I/O, IPC or clock reads.
+The closed loop: [`scenario`] (TOML scenarios), [`sim`] (the single-process loop), [`summary`] (control-quality
+figures), [`trace`] and [`outputs`] (files).
+//!
+//! Transport and timing: [`wire`] (the sample types on the wire), [`ipc`] (iceoryx2 streams, per-run namespaces,
+//! WaitSet loop, timerfd ticks, cleanup), [`clock`] (monotonic clock, absolute sleeps, SCHED_FIFO, tick schedule),
+//! [`timing`] (latency histograms and the timer baseline).
 
 #![warn(missing_docs)]
 // `!(x > 0.0)` is how we reject NaN along with the out-of-range values; keep it.
@@ -9,13 +15,17 @@
 
 pub mod actuator;
 pub mod bench;
+pub mod clock;
 pub mod control;
 pub mod integrator;
+pub mod ipc;
 pub mod outputs;
 pub mod plant;
 pub mod rng;
 pub mod scenario;
 pub mod sim;
 pub mod summary;
+pub mod timing;
 pub mod trace;
 pub mod units;
+pub mod wire;

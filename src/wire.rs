@@ -1,0 +1,327 @@
+//! The wire format: the one definition of every sample type that crosses a process boundary over iceoryx2, with
+//! its layout version and its validity check.
+//!
+//! iceoryx2 matches a service's payload by type *name*, size and alignment only; field order and meaning are not
+//! checked. The type names therefore carry [`WIRE_LAYOUT_VERSION`]: whenever a field is added, removed, reordered or
+//! changes meaning, bump the version and the `#[type_name]`s together, so that a peer built from the old layout gets
+//! `IncompatibleTypes` on open (turned into [`crate::ipc::IpcError::OtherWireLayout`]) instead of misreading bytes.
+
+use iceoryx2::prelude::ZeroCopySend;
+
+/// Version of the wire layout; every sample carries it in [`SampleHeader::layout_version`], and every type name
+/// ends in `::v<version>`.
+pub const WIRE_LAYOUT_VERSION: u32 = 1;
+
+/// The iceoryx2 type name of [`PlantSample`].
+pub const PLANT_SAMPLE_TYPE_NAME: &str = "silrig::PlantSample::v1";
+/// The iceoryx2 type name of [`CommandSample`].
+pub const COMMAND_SAMPLE_TYPE_NAME: &str = "silrig::CommandSample::v1";
+/// The iceoryx2 type name of [`SampleHeader`] (not a payload on its own; named so that no crate path leaks in).
+pub const SAMPLE_HEADER_TYPE_NAME: &str = "silrig::SampleHeader::v1";
+
+/// `PlantSample::flags`/`CommandSample::flags`: the command the plant applied is older than the staleness limit.
+pub const FLAG_COMMAND_STALE: u32 = 1 << 0;
+/// At least one surface or the throttle sits on its position limit.
+pub const FLAG_SATURATED: u32 = 1 << 1;
+/// The failsafe output is active (the producer of the input is gone or stale for too long).
+pub const FLAG_FAILSAFE: u32 = 1 << 2;
+/// At least one surface moved at its rate limit during this tick.
+pub const FLAG_RATE_LIMITED: u32 = 1 << 3;
+
+/// Names of the three surfaces, in the order of every `[f64; 3]` surface array on the wire.
+pub const SURFACE_NAMES: [&str; 3] = ["aileron", "elevator", "rudder"];
+/// Names of the three controller channels, in the order of `sliding_surface`, `f_hat` and `weight_norm`.
+pub const CHANNEL_NAMES: [&str; 3] = ["phi", "theta", "psi"];
+
+/// Bookkeeping that precedes every sample: loss detection, timing and restart detection.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[type_name("silrig::SampleHeader::v1")]
+pub struct SampleHeader {
+    /// Per-publisher counter, starting at 0 for each epoch; a jump means samples were lost.
+    pub seq: u64,
+    /// Plant tick the sample belongs to; sim time = tick * dt.
+    pub tick: u64,
+    /// CLOCK_MONOTONIC at publish, ns (the same clock in every process of the machine).
+    pub t_send_ns: u64,
+    /// Identity of the publishing process's life: changes whenever that process (re)starts.
+    pub epoch: u64,
+    /// [`WIRE_LAYOUT_VERSION`] of the sender.
+    pub layout_version: u32,
+    /// Explicit padding, always 0.
+    pub _pad: u32,
+}
+
+/// What the plant publishes every tick.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("silrig::PlantSample::v1")]
+pub struct PlantSample {
+    /// Bookkeeping.
+    pub header: SampleHeader,
+    /// The 13 states in `F16State` order and book units: vt_fps, alpha_rad, beta_rad, phi_rad, theta_rad, psi_rad,
+    /// p_radps, q_radps, r_radps, north_ft, east_ft, alt_ft, power_pct.
+    pub state: [f64; 13],
+    /// Surface positions after the actuators, deg: aileron, elevator, rudder.
+    pub surfaces_deg: [f64; 3],
+    /// Throttle after its limits, 0..1.
+    pub throttle: f64,
+    /// Simulated time of this state, s.
+    pub t_sim_s: f64,
+    /// `FLAG_*` bits.
+    pub flags: u32,
+    /// Explicit padding, always 0.
+    pub _pad: u32,
+}
+
+/// What the controller publishes in answer to a plant sample.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("silrig::CommandSample::v1")]
+pub struct CommandSample {
+    /// Bookkeeping.
+    pub header: SampleHeader,
+    /// Tick of the plant sample this command was computed from.
+    pub answers_tick: u64,
+    /// Commanded surfaces, deg: aileron, elevator, rudder.
+    pub surface_cmd_deg: [f64; 3],
+    /// Commanded throttle, 0..1.
+    pub throttle_cmd: f64,
+    /// Sliding surface per channel (phi, theta, psi).
+    pub sliding_surface: [f64; 3],
+    /// RBF estimate of the unknown dynamics per channel.
+    pub f_hat: [f64; 3],
+    /// Norm of the RBF weights per channel.
+    pub weight_norm: [f64; 3],
+    /// Time the controller spent computing this command, ns.
+    pub compute_ns: u64,
+    /// `FLAG_*` bits.
+    pub flags: u32,
+    /// Explicit padding, always 0.
+    pub _pad: u32,
+}
+
+// The sizes are part of the wire contract: iceoryx2 compares them on open, and a change here without a version bump
+// would only be caught at run time.
+const _: () = assert!(core::mem::size_of::<SampleHeader>() == 40);
+const _: () = assert!(core::mem::align_of::<SampleHeader>() == 8);
+const _: () = assert!(core::mem::size_of::<PlantSample>() == 192);
+const _: () = assert!(core::mem::align_of::<PlantSample>() == 8);
+const _: () = assert!(core::mem::size_of::<CommandSample>() == 168);
+const _: () = assert!(core::mem::align_of::<CommandSample>() == 8);
+
+/// A sample that must not be used.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum WireError {
+    /// A float field is NaN or infinite.
+    #[error("{type_name}: field `{field}` is not finite ({value})")]
+    NotFinite {
+        /// Type name of the sample.
+        type_name: &'static str,
+        /// Field (with its element name, e.g. `state[3] phi_rad`).
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// The sender used another layout version (should be unreachable: the type name already differs).
+    #[error("{type_name}: layout_version {got}, this build speaks {expected}")]
+    LayoutVersion {
+        /// Type name of the sample.
+        type_name: &'static str,
+        /// Version in the sample.
+        got: u32,
+        /// [`WIRE_LAYOUT_VERSION`].
+        expected: u32,
+    },
+}
+
+/// What every sample type on the wire offers to the transport.
+pub trait WireSample: ZeroCopySend + Copy + core::fmt::Debug + 'static {
+    /// The iceoryx2 type name (also in `#[type_name]`).
+    const TYPE_NAME: &'static str;
+    /// The header.
+    fn header(&self) -> &SampleHeader;
+    /// The header, to stamp before sending.
+    fn header_mut(&mut self) -> &mut SampleHeader;
+    /// Rejects NaN/inf in any float field and a foreign layout version, naming the field.
+    fn validate(&self) -> Result<(), WireError>;
+}
+
+const STATE_FIELDS: [&str; 13] = [
+    "state[0] vt_fps",
+    "state[1] alpha_rad",
+    "state[2] beta_rad",
+    "state[3] phi_rad",
+    "state[4] theta_rad",
+    "state[5] psi_rad",
+    "state[6] p_radps",
+    "state[7] q_radps",
+    "state[8] r_radps",
+    "state[9] north_ft",
+    "state[10] east_ft",
+    "state[11] alt_ft",
+    "state[12] power_pct",
+];
+
+fn check_layout(type_name: &'static str, header: &SampleHeader) -> Result<(), WireError> {
+    if header.layout_version != WIRE_LAYOUT_VERSION {
+        return Err(WireError::LayoutVersion { type_name, got: header.layout_version, expected: WIRE_LAYOUT_VERSION });
+    }
+    Ok(())
+}
+
+fn check_finite(type_name: &'static str, fields: &[&'static str], values: &[f64]) -> Result<(), WireError> {
+    for (field, value) in fields.iter().zip(values) {
+        if !value.is_finite() {
+            return Err(WireError::NotFinite { type_name, field, value: *value });
+        }
+    }
+    Ok(())
+}
+
+impl PlantSample {
+    /// A sample with everything zero and the current layout version.
+    pub fn zeroed() -> Self {
+        Self {
+            header: SampleHeader { layout_version: WIRE_LAYOUT_VERSION, ..SampleHeader::default() },
+            state: [0.0; 13],
+            surfaces_deg: [0.0; 3],
+            throttle: 0.0,
+            t_sim_s: 0.0,
+            flags: 0,
+            _pad: 0,
+        }
+    }
+}
+
+impl WireSample for PlantSample {
+    const TYPE_NAME: &'static str = PLANT_SAMPLE_TYPE_NAME;
+
+    fn header(&self) -> &SampleHeader {
+        &self.header
+    }
+
+    fn header_mut(&mut self) -> &mut SampleHeader {
+        &mut self.header
+    }
+
+    fn validate(&self) -> Result<(), WireError> {
+        let t = Self::TYPE_NAME;
+        check_layout(t, &self.header)?;
+        check_finite(t, &STATE_FIELDS, &self.state)?;
+        check_finite(
+            t,
+            &["surfaces_deg[0] aileron", "surfaces_deg[1] elevator", "surfaces_deg[2] rudder"],
+            &self.surfaces_deg,
+        )?;
+        check_finite(t, &["throttle", "t_sim_s"], &[self.throttle, self.t_sim_s])
+    }
+}
+
+impl CommandSample {
+    /// A sample with everything zero and the current layout version.
+    pub fn zeroed() -> Self {
+        Self {
+            header: SampleHeader { layout_version: WIRE_LAYOUT_VERSION, ..SampleHeader::default() },
+            answers_tick: 0,
+            surface_cmd_deg: [0.0; 3],
+            throttle_cmd: 0.0,
+            sliding_surface: [0.0; 3],
+            f_hat: [0.0; 3],
+            weight_norm: [0.0; 3],
+            compute_ns: 0,
+            flags: 0,
+            _pad: 0,
+        }
+    }
+}
+
+impl WireSample for CommandSample {
+    const TYPE_NAME: &'static str = COMMAND_SAMPLE_TYPE_NAME;
+
+    fn header(&self) -> &SampleHeader {
+        &self.header
+    }
+
+    fn header_mut(&mut self) -> &mut SampleHeader {
+        &mut self.header
+    }
+
+    fn validate(&self) -> Result<(), WireError> {
+        let t = Self::TYPE_NAME;
+        check_layout(t, &self.header)?;
+        check_finite(
+            t,
+            &["surface_cmd_deg[0] aileron", "surface_cmd_deg[1] elevator", "surface_cmd_deg[2] rudder"],
+            &self.surface_cmd_deg,
+        )?;
+        check_finite(t, &["throttle_cmd"], &[self.throttle_cmd])?;
+        check_finite(
+            t,
+            &["sliding_surface[0] phi", "sliding_surface[1] theta", "sliding_surface[2] psi"],
+            &self.sliding_surface,
+        )?;
+        check_finite(t, &["f_hat[0] phi", "f_hat[1] theta", "f_hat[2] psi"], &self.f_hat)?;
+        check_finite(t, &["weight_norm[0] phi", "weight_norm[1] theta", "weight_norm[2] psi"], &self.weight_norm)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plant::STATE_NAMES;
+
+    #[test]
+    fn sizes_alignment_and_type_names_are_the_contract() {
+        assert_eq!(core::mem::size_of::<SampleHeader>(), 40);
+        assert_eq!(core::mem::size_of::<PlantSample>(), 192);
+        assert_eq!(core::mem::size_of::<CommandSample>(), 168);
+        assert_eq!(core::mem::align_of::<PlantSample>(), 8);
+        assert_eq!(core::mem::align_of::<CommandSample>(), 8);
+        // Safety of `type_name`: only reads the string the derive generated.
+        unsafe {
+            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), PLANT_SAMPLE_TYPE_NAME);
+            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), COMMAND_SAMPLE_TYPE_NAME);
+            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), SAMPLE_HEADER_TYPE_NAME);
+        }
+        for name in [PLANT_SAMPLE_TYPE_NAME, COMMAND_SAMPLE_TYPE_NAME, SAMPLE_HEADER_TYPE_NAME] {
+            assert!(name.ends_with(&format!("::v{WIRE_LAYOUT_VERSION}")), "{name}");
+        }
+    }
+
+    #[test]
+    fn state_field_names_follow_the_f16_state_order() {
+        for (k, (field, state)) in STATE_FIELDS.iter().zip(STATE_NAMES).enumerate() {
+            assert_eq!(*field, format!("state[{k}] {state}"));
+        }
+    }
+
+    #[test]
+    fn validate_names_the_non_finite_field() {
+        assert_eq!(PlantSample::zeroed().validate(), Ok(()));
+        assert_eq!(CommandSample::zeroed().validate(), Ok(()));
+
+        let mut p = PlantSample::zeroed();
+        p.state[3] = f64::NAN;
+        let msg = p.validate().unwrap_err().to_string();
+        assert!(msg.contains("silrig::PlantSample::v1") && msg.contains("state[3] phi_rad"), "{msg}");
+        assert!(msg.contains("NaN"), "{msg}");
+
+        let mut p = PlantSample::zeroed();
+        p.t_sim_s = f64::INFINITY;
+        assert!(p.validate().unwrap_err().to_string().contains("`t_sim_s`"));
+
+        let mut c = CommandSample::zeroed();
+        c.f_hat[2] = f64::NEG_INFINITY;
+        let msg = c.validate().unwrap_err().to_string();
+        assert!(msg.contains("f_hat[2] psi") && msg.contains("-inf"), "{msg}");
+
+        let mut c = CommandSample::zeroed();
+        c.surface_cmd_deg[1] = f64::NAN;
+        assert!(c.validate().unwrap_err().to_string().contains("surface_cmd_deg[1] elevator"));
+
+        let mut c = CommandSample::zeroed();
+        c.header.layout_version = 0;
+        assert!(matches!(c.validate(), Err(WireError::LayoutVersion { got: 0, .. })));
+    }
+}
