@@ -2,8 +2,8 @@
 //!
 //! The library holds all the math (F-16 plant, integrator, actuators), and the binaries in `bins/` are thin shells
 //! over it. Pure modules ([`plant`], [`integrator`], [`actuator`], [`control`]) do no I/O, IPC or clock reads.
-The closed loop: [`scenario`] (TOML scenarios), [`sim`] (the single-process loop), [`summary`] (control-quality
-figures), [`trace`] and [`outputs`] (files).
+//! The closed loop: [`scenario`] (TOML scenarios), [`sim`] (the single-process loop), [`summary`] (control-quality
+//! figures), [`trace`] and [`outputs`] (files).
 //!
 //! Transport and timing: [`wire`] (the sample types on the wire), [`ipc`] (iceoryx2 streams, per-run namespaces,
 //! WaitSet loop, timerfd ticks, cleanup), [`clock`] (monotonic clock, absolute sleeps, SCHED_FIFO, tick schedule),
