@@ -56,6 +56,27 @@ enum Command {
     },
     /// Micro-benchmarks of the model (median of batches; run on an idle machine).
     Bench,
+    /// Measure the OS timer floor: a bare absolute-deadline loop, wake-up lateness as cyclictest reports it.
+    TimerBaseline {
+        /// How long to run, s.
+        #[arg(long, default_value_t = 10.0)]
+        duration_s: f64,
+        /// Period, ms.
+        #[arg(long, default_value_t = 10.0)]
+        period_ms: f64,
+        /// SCHED_FIFO priority to ask for (1..=99); 0 stays with SCHED_OTHER.
+        #[arg(long, default_value_t = 80)]
+        fifo_priority: i32,
+        /// Wait on an absolute timerfd in an iceoryx2 WaitSet instead of clock_nanosleep.
+        #[arg(long)]
+        timerfd: bool,
+        /// Also write the HdrHistogram percentile distribution (.hgrm, µs) to this file.
+        #[arg(long)]
+        hgrm: Option<std::path::PathBuf>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 #[derive(Subcommand)]
@@ -125,6 +146,27 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 1e9 / closed_loop.median_ns,
                 1e9 / closed_loop.median_ns / 100.0
             );
+        }
+        Command::TimerBaseline { duration_s, period_ms, fifo_priority, timerfd, hgrm, json } => {
+            anyhow::ensure!(duration_s > 0.0, "--duration-s must be positive, got {duration_s}");
+            anyhow::ensure!(period_ms > 0.0, "--period-ms must be positive, got {period_ms}");
+            anyhow::ensure!((0..=99).contains(&fifo_priority), "--fifo-priority must be 0..=99, got {fifo_priority}");
+            if fifo_priority > 0
+                && let Some(warning) = silrig::clock::try_realtime(fifo_priority).warning
+            {
+                eprintln!("{warning}");
+            }
+            use silrig::timing::{TickSource, timer_baseline_with};
+            let source = if timerfd { TickSource::TimerfdWaitSet } else { TickSource::Nanosleep };
+            let report = timer_baseline_with(source, duration_s, (period_ms * 1e6).round() as u64)?;
+            if let Some(path) = hgrm {
+                std::fs::write(&path, &report.hgrm).with_context(|| format!("writing {}", path.display()))?;
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.to_text());
+            }
         }
     }
     Ok(ExitCode::SUCCESS)

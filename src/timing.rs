@@ -202,6 +202,8 @@ pub struct Outlier {
 /// Result of [`timer_baseline`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct BaselineReport {
+    /// How the loop waited.
+    pub source: TickSource,
     /// Period, ns.
     pub period_ns: u64,
     /// Wall time the loop ran, s.
@@ -227,7 +229,8 @@ impl BaselineReport {
     /// Human-readable report: one table line plus overruns and outliers.
     pub fn to_text(&self) -> String {
         let mut out = format!(
-            "timer baseline: clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME), period {:.3} ms, {:.1} s, {}\n",
+            "timer baseline: {}, period {:.3} ms, {:.1} s, {}\n",
+            self.source,
             self.period_ns as f64 / 1e6,
             self.duration_s,
             self.policy
@@ -244,50 +247,132 @@ impl BaselineReport {
     }
 }
 
+/// How the baseline loop waits for its ticks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum TickSource {
+    /// `clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)`: the floor for a loop that waits on nothing else.
+    Nanosleep,
+    /// A [`crate::ipc::TickTimer`] (absolute timerfd) attached to an iceoryx2 WaitSet: what a loop that also waits
+    /// on listeners gets.
+    TimerfdWaitSet,
+}
+
+impl std::fmt::Display for TickSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            TickSource::Nanosleep => "clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)",
+            TickSource::TimerfdWaitSet => "absolute timerfd in an iceoryx2 WaitSet",
+        })
+    }
+}
+
+/// Accumulates wake-ups of a baseline loop.
+struct BaselineRecorder {
+    schedule: TickSchedule,
+    hist: LatencyHistogram,
+    worst: Vec<Outlier>,
+    overruns: u64,
+    skipped_ticks: u64,
+}
+
+impl BaselineRecorder {
+    fn new(schedule: TickSchedule) -> Self {
+        Self { schedule, hist: LatencyHistogram::new(), worst: Vec::with_capacity(6), overruns: 0, skipped_ticks: 0 }
+    }
+
+    /// Record a wake-up at `now_ns` for `tick`; returns the tick to wait for next.
+    fn record(&mut self, tick: u64, now_ns: u64) -> u64 {
+        let outcome = self.schedule.on_wake(tick, now_ns);
+        self.hist.record_ns(outcome.wake_lateness_ns);
+        if outcome.is_overrun() {
+            self.overruns += 1;
+            self.skipped_ticks += outcome.skipped;
+        }
+        let lateness_us = outcome.wake_lateness_ns as f64 / 1e3;
+        if self.worst.len() < 5 || self.worst.last().is_some_and(|w| lateness_us > w.lateness_us) {
+            self.worst.push(Outlier { tick, lateness_us });
+            self.worst.sort_by(|a, b| b.lateness_us.total_cmp(&a.lateness_us));
+            self.worst.truncate(5);
+        }
+        outcome.next_tick
+    }
+
+    fn report(self, source: TickSource, start_ns: u64) -> BaselineReport {
+        BaselineReport {
+            source,
+            period_ns: self.schedule.period_ns,
+            duration_s: (clock::monotonic_ns() - start_ns) as f64 / 1e9,
+            wakeups: self.hist.count(),
+            overruns: self.overruns,
+            skipped_ticks: self.skipped_ticks,
+            policy: clock::current_policy(),
+            lateness: self.hist.summary(),
+            worst: self.worst,
+            hgrm: self.hist.hgrm(),
+        }
+    }
+}
+
 /// The OS floor: a bare absolute-deadline loop (no work) at `period_ns` for `duration_s`, recording how late each
 /// wake-up is, with the rig's skip-on-overrun rule. Runs under whatever policy the caller set (see
 /// [`clock::try_realtime`]).
 pub fn timer_baseline(duration_s: f64, period_ns: u64) -> BaselineReport {
-    let period_ns = period_ns.max(1);
-    let mut hist = LatencyHistogram::new();
-    let mut worst: Vec<Outlier> = Vec::with_capacity(6);
-    let (mut overruns, mut skipped_ticks) = (0u64, 0u64);
     let start_ns = clock::monotonic_ns();
-    let schedule = TickSchedule::new(start_ns + period_ns, period_ns);
-    let end_ns = start_ns + (duration_s.max(0.0) * 1e9) as u64;
+    let (mut rec, end_ns) = baseline_grid(start_ns, duration_s, period_ns);
     let mut tick = 0u64;
-    loop {
-        let due_ns = schedule.deadline_ns(tick);
-        if due_ns > end_ns {
-            break;
-        }
-        clock::sleep_until_ns(due_ns);
-        let now_ns = clock::monotonic_ns();
-        let outcome = schedule.on_wake(tick, now_ns);
-        hist.record_ns(outcome.wake_lateness_ns);
-        if outcome.is_overrun() {
-            overruns += 1;
-            skipped_ticks += outcome.skipped;
-        }
-        let lateness_us = outcome.wake_lateness_ns as f64 / 1e3;
-        if worst.len() < 5 || worst.last().is_some_and(|w| lateness_us > w.lateness_us) {
-            worst.push(Outlier { tick, lateness_us });
-            worst.sort_by(|a, b| b.lateness_us.total_cmp(&a.lateness_us));
-            worst.truncate(5);
-        }
-        tick = outcome.next_tick;
+    while rec.schedule.deadline_ns(tick) <= end_ns {
+        clock::sleep_until_ns(rec.schedule.deadline_ns(tick));
+        tick = rec.record(tick, clock::monotonic_ns());
     }
-    BaselineReport {
-        period_ns,
-        duration_s: (clock::monotonic_ns() - start_ns) as f64 / 1e9,
-        wakeups: hist.count(),
-        overruns,
-        skipped_ticks,
-        policy: clock::current_policy(),
-        lateness: hist.summary(),
-        worst,
-        hgrm: hist.hgrm(),
+    rec.report(TickSource::Nanosleep, start_ns)
+}
+
+fn baseline_grid(start_ns: u64, duration_s: f64, period_ns: u64) -> (BaselineRecorder, u64) {
+    let period_ns = period_ns.max(1);
+    let schedule = TickSchedule::new(start_ns + period_ns, period_ns);
+    (BaselineRecorder::new(schedule), start_ns + (duration_s.max(0.0) * 1e9) as u64)
+}
+
+/// The same measurement with the tick from `source`; [`TickSource::TimerfdWaitSet`] measures the tick a rig loop
+/// gets when it also waits on iceoryx2 listeners.
+pub fn timer_baseline_with(
+    source: TickSource,
+    duration_s: f64,
+    period_ns: u64,
+) -> Result<BaselineReport, crate::ipc::IpcError> {
+    use iceoryx2::prelude::CallbackProgression;
+    if source == TickSource::Nanosleep {
+        return Ok(timer_baseline(duration_s, period_ns));
     }
+    let start_ns = clock::monotonic_ns();
+    let (mut rec, end_ns) = baseline_grid(start_ns, duration_s, period_ns);
+    let timer = crate::ipc::TickTimer::new(rec.schedule)?;
+    let waitset = crate::ipc::rig_waitset()?;
+    let guard = waitset
+        .attach_notification(&timer)
+        .map_err(|e| crate::ipc::IpcError::WaitSet(format!("attaching the timerfd: {e:?}")))?;
+    let mut tick = 0u64;
+    let mut failure = None;
+    crate::ipc::run_waitset(&waitset, |id| {
+        if id.has_event_from(&guard) {
+            let now_ns = clock::monotonic_ns();
+            match timer.read_expirations() {
+                // Readiness without an expiration (a spurious wake-up) is not a tick.
+                Ok(0) => {}
+                Ok(_) => tick = rec.record(tick, now_ns),
+                Err(e) => {
+                    failure = Some(e);
+                    return CallbackProgression::Stop;
+                }
+            }
+        }
+        if rec.schedule.deadline_ns(tick) > end_ns { CallbackProgression::Stop } else { CallbackProgression::Continue }
+    })?;
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    drop(guard);
+    Ok(rec.report(source, start_ns))
 }
 
 #[cfg(test)]
@@ -392,5 +477,14 @@ mod tests {
         assert!(r.lateness.p50_us <= r.lateness.max_us);
         assert!(r.hgrm.contains("#[Max"));
         assert!(r.to_text().contains("wake-up lateness"));
+    }
+
+    #[test]
+    fn timerfd_baseline_runs_and_counts_every_wakeup() {
+        let r = timer_baseline_with(TickSource::TimerfdWaitSet, 0.05, 5_000_000).unwrap();
+        assert_eq!(r.source, TickSource::TimerfdWaitSet);
+        assert!(r.wakeups >= 1);
+        assert!(r.wakeups + r.skipped_ticks <= 11, "{r:?}");
+        assert!(r.lateness.min_us >= 0.0 && r.lateness.p50_us <= r.lateness.max_us);
     }
 }
