@@ -54,6 +54,29 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Run the three-process rig (plant, controller, logger over iceoryx2) and report control quality and timing.
+    Run {
+        /// Scenario file (TOML); without it, the embedded default scenario.
+        config: Option<PathBuf>,
+        /// realtime (the scenario's rate on the wall clock) or lockstep (as fast as possible, deterministic).
+        #[arg(long, value_enum, default_value = "realtime")]
+        mode: silrig::rig::RigMode,
+        /// Override the scenario's duration, s.
+        #[arg(long)]
+        duration_s: Option<f64>,
+        /// Output folder (default: out/run-<run id>); must not hold a run already.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Run id (default: a fresh one).
+        #[arg(long)]
+        run_id: Option<silrig::ipc::RunId>,
+        /// Do not run the OS-floor timer loop beside a realtime rig.
+        #[arg(long)]
+        no_baseline: bool,
+        /// Same-tick mode: how long the plant waits for the command of the tick it just published, ms.
+        #[arg(long, default_value_t = 2.0)]
+        command_budget_ms: f64,
+    },
     /// Micro-benchmarks of the model (median of batches; run on an idle machine).
     Bench,
     /// Measure the OS timer floor: a bare absolute-deadline loop, wake-up lateness as cyclictest reports it.
@@ -134,6 +157,22 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             print!("{}", silrig::outputs::compare_table(&summaries));
             println!("runs written under {}", out.display());
+        }
+        Command::Run { config, mode, duration_s, out, run_id, no_baseline, command_budget_ms } => {
+            let opts = silrig::rig::launcher::LaunchOptions {
+                config,
+                mode,
+                duration_s,
+                out,
+                run_id,
+                baseline: !no_baseline,
+                command_budget_ms,
+            };
+            let report = silrig::rig::launcher::run(&opts)?;
+            print!("{}", report.to_text());
+            if !report.failures.is_empty() {
+                return Ok(ExitCode::FAILURE);
+            }
         }
         Command::Bench => {
             for figure in silrig::bench::plant_figures() {

@@ -264,17 +264,20 @@ pub enum Stream {
     Plant,
     /// Controller -> plant, logger: [`crate::wire::CommandSample`].
     Command,
+    /// Logger -> plant: [`crate::wire::LogAckSample`], rows written (lockstep flow control).
+    LogAck,
 }
 
 impl Stream {
-    /// Both streams.
-    pub const ALL: [Stream; 2] = [Stream::Plant, Stream::Command];
+    /// Every stream.
+    pub const ALL: [Stream; 3] = [Stream::Plant, Stream::Command, Stream::LogAck];
 
     /// Short name, as in messages.
     pub fn label(self) -> &'static str {
         match self {
             Stream::Plant => "plant",
             Stream::Command => "command",
+            Stream::LogAck => "log-ack",
         }
     }
 
@@ -284,6 +287,7 @@ impl Stream {
         match self {
             Stream::Plant => "silrig/plant",
             Stream::Command => "silrig/command",
+            Stream::LogAck => "silrig/log-ack",
         }
     }
 }
@@ -578,9 +582,9 @@ impl<T: WireSample> std::fmt::Debug for StreamPublisher<T> {
 impl<T: WireSample> StreamPublisher<T> {
     /// Send `sample` as belonging to plant `tick`: stamps `seq`, `tick`, `epoch`, `layout_version` and `t_send_ns`
     /// (overwriting what the caller put there), validates, loans, writes, sends, notifies. Returns the number of
-    /// subscriber queues it went into (0 is not an error: nobody is listening). An invalid sample is refused
-    /// and not counted.
-    pub fn send(&mut self, tick: u64, sample: &T) -> Result<usize, IpcError> {
+    /// subscriber queues it went into (0 is not an error: nobody is listening) and the send stamp. An invalid
+    /// sample is refused and not counted.
+    pub fn send(&mut self, tick: u64, sample: &T) -> Result<SendReceipt, IpcError> {
         let mut out = *sample;
         {
             let h = out.header_mut();
@@ -597,7 +601,8 @@ impl<T: WireSample> StreamPublisher<T> {
             detail: format!("{e:?}"),
         })?;
         // Stamped as late as possible, so that data age measured by the receiver excludes our own loan.
-        out.header_mut().t_send_ns = clock::monotonic_ns();
+        let t_send_ns = clock::monotonic_ns();
+        out.header_mut().t_send_ns = t_send_ns;
         let delivered = loan.write_payload(out).send().map_err(|e| IpcError::Transfer {
             stream: self.stream,
             op: "send",
@@ -609,7 +614,7 @@ impl<T: WireSample> StreamPublisher<T> {
             op: "notify",
             detail: format!("{e:?}"),
         })?;
-        Ok(delivered)
+        Ok(SendReceipt { delivered, t_send_ns })
     }
 
     /// Epoch stamped into every sample.
@@ -621,6 +626,15 @@ impl<T: WireSample> StreamPublisher<T> {
     pub fn next_seq(&self) -> u64 {
         self.next_seq
     }
+}
+
+/// What [`StreamPublisher::send`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SendReceipt {
+    /// Subscriber queues the sample went into.
+    pub delivered: usize,
+    /// The `t_send_ns` stamped into the sample, CLOCK_MONOTONIC ns.
+    pub t_send_ns: u64,
 }
 
 /// Loss and restart detection from `(epoch, seq)`. Pure, so the rules are unit-tested without iceoryx2.

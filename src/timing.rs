@@ -220,6 +220,9 @@ pub struct BaselineReport {
     pub lateness: LatencySummary,
     /// The five latest wake-ups, latest first, with their tick numbers.
     pub worst: Vec<Outlier>,
+    /// `(percentile, µs)` points of the lateness distribution, for plots.
+    #[serde(default)]
+    pub percentile_points: Vec<(f64, f64)>,
     /// The lateness distribution as `.hgrm` text.
     #[serde(skip)]
     pub hgrm: String,
@@ -308,6 +311,7 @@ impl BaselineRecorder {
             policy: clock::current_policy(),
             lateness: self.hist.summary(),
             worst: self.worst,
+            percentile_points: self.hist.percentile_points(),
             hgrm: self.hist.hgrm(),
         }
     }

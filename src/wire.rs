@@ -18,6 +18,10 @@ pub const PLANT_SAMPLE_TYPE_NAME: &str = "silrig::PlantSample::v1";
 pub const COMMAND_SAMPLE_TYPE_NAME: &str = "silrig::CommandSample::v1";
 /// The iceoryx2 type name of [`SampleHeader`] (not a payload on its own; named so that no crate path leaks in).
 pub const SAMPLE_HEADER_TYPE_NAME: &str = "silrig::SampleHeader::v1";
+/// Type name of [`LogAckSample`].
+pub const LOG_ACK_SAMPLE_TYPE_NAME: &str = "silrig::LogAckSample::v1";
+/// Largest RBF network (nodes per channel) a command sample carries.
+pub const MAX_RBF_NODES: usize = 16;
 
 /// `PlantSample::flags`/`CommandSample::flags`: the command the plant applied is older than the staleness limit.
 pub const FLAG_COMMAND_STALE: u32 = 1 << 0;
@@ -30,7 +34,7 @@ pub const FLAG_RATE_LIMITED: u32 = 1 << 3;
 
 /// Names of the three surfaces, in the order of every `[f64; 3]` surface array on the wire.
 pub const SURFACE_NAMES: [&str; 3] = ["aileron", "elevator", "rudder"];
-/// Names of the three controller channels, in the order of `sliding_surface`, `f_hat` and `weight_norm`.
+/// Names of the three controller channels, in the order of `sliding_surface`, `f_hat` and the `weights` blocks.
 pub const CHANNEL_NAMES: [&str; 3] = ["phi", "theta", "psi"];
 
 /// Bookkeeping that precedes every sample: loss detection, timing and restart detection.
@@ -91,14 +95,27 @@ pub struct CommandSample {
     pub sliding_surface: [f64; 3],
     /// RBF estimate of the unknown dynamics per channel.
     pub f_hat: [f64; 3],
-    /// Norm of the RBF weights per channel.
-    pub weight_norm: [f64; 3],
+    /// RBF weights after this tick's adaptation: channel phi's `rbf_nodes` weights, then theta's, then psi's, then
+    /// zeros. All of them, not a norm, so the logger's trace equals the single-process one.
+    pub weights: [f64; 3 * MAX_RBF_NODES],
     /// Time the controller spent computing this command, ns.
     pub compute_ns: u64,
+    /// RBF nodes per channel in `weights` (at most [`MAX_RBF_NODES`]).
+    pub rbf_nodes: u32,
     /// `FLAG_*` bits.
     pub flags: u32,
-    /// Explicit padding, always 0.
-    pub _pad: u32,
+}
+
+/// What the logger publishes after writing rows, so a lockstep plant never runs further ahead of it than the
+/// logger's queue holds (lockstep must lose nothing, however slow the disk).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("silrig::LogAckSample::v1")]
+pub struct LogAckSample {
+    /// Bookkeeping (`tick` is the last tick written).
+    pub header: SampleHeader,
+    /// Rows written to `trace.csv` so far.
+    pub rows_written: u64,
 }
 
 // The sizes are part of the wire contract: iceoryx2 compares them on open, and a change here without a version bump
@@ -107,7 +124,8 @@ const _: () = assert!(core::mem::size_of::<SampleHeader>() == 40);
 const _: () = assert!(core::mem::align_of::<SampleHeader>() == 8);
 const _: () = assert!(core::mem::size_of::<PlantSample>() == 192);
 const _: () = assert!(core::mem::align_of::<PlantSample>() == 8);
-const _: () = assert!(core::mem::size_of::<CommandSample>() == 168);
+const _: () = assert!(core::mem::size_of::<CommandSample>() == 528);
+const _: () = assert!(core::mem::size_of::<LogAckSample>() == 48);
 const _: () = assert!(core::mem::align_of::<CommandSample>() == 8);
 
 /// A sample that must not be used.
@@ -132,6 +150,16 @@ pub enum WireError {
         got: u32,
         /// [`WIRE_LAYOUT_VERSION`].
         expected: u32,
+    },
+    /// A count field is beyond what the layout holds.
+    #[error("{type_name}: field `{field}` is out of range ({value})")]
+    OutOfRange {
+        /// Type name of the sample.
+        type_name: &'static str,
+        /// Field.
+        field: &'static str,
+        /// The offending value.
+        value: f64,
     },
 }
 
@@ -228,10 +256,10 @@ impl CommandSample {
             throttle_cmd: 0.0,
             sliding_surface: [0.0; 3],
             f_hat: [0.0; 3],
-            weight_norm: [0.0; 3],
+            weights: [0.0; 3 * MAX_RBF_NODES],
             compute_ns: 0,
+            rbf_nodes: 0,
             flags: 0,
-            _pad: 0,
         }
     }
 }
@@ -262,7 +290,44 @@ impl WireSample for CommandSample {
             &self.sliding_surface,
         )?;
         check_finite(t, &["f_hat[0] phi", "f_hat[1] theta", "f_hat[2] psi"], &self.f_hat)?;
-        check_finite(t, &["weight_norm[0] phi", "weight_norm[1] theta", "weight_norm[2] psi"], &self.weight_norm)
+        if let Some(value) = self.weights.iter().find(|w| !w.is_finite()) {
+            return Err(WireError::NotFinite { type_name: t, field: "weights", value: *value });
+        }
+        if self.rbf_nodes as usize > MAX_RBF_NODES {
+            return Err(WireError::OutOfRange { type_name: t, field: "rbf_nodes", value: self.rbf_nodes as f64 });
+        }
+        Ok(())
+    }
+}
+
+impl CommandSample {
+    /// The weights of channel `channel` (0 phi, 1 theta, 2 psi).
+    pub fn channel_weights(&self, channel: usize) -> &[f64] {
+        let n = (self.rbf_nodes as usize).min(MAX_RBF_NODES);
+        &self.weights[channel * n..(channel + 1) * n]
+    }
+}
+
+impl LogAckSample {
+    /// An acknowledgement of `rows_written` rows.
+    pub fn new(rows_written: u64) -> Self {
+        Self { header: SampleHeader { layout_version: WIRE_LAYOUT_VERSION, ..SampleHeader::default() }, rows_written }
+    }
+}
+
+impl WireSample for LogAckSample {
+    const TYPE_NAME: &'static str = LOG_ACK_SAMPLE_TYPE_NAME;
+
+    fn header(&self) -> &SampleHeader {
+        &self.header
+    }
+
+    fn header_mut(&mut self) -> &mut SampleHeader {
+        &mut self.header
+    }
+
+    fn validate(&self) -> Result<(), WireError> {
+        check_layout(Self::TYPE_NAME, &self.header)
     }
 }
 
@@ -275,7 +340,7 @@ mod tests {
     fn sizes_alignment_and_type_names_are_the_contract() {
         assert_eq!(core::mem::size_of::<SampleHeader>(), 40);
         assert_eq!(core::mem::size_of::<PlantSample>(), 192);
-        assert_eq!(core::mem::size_of::<CommandSample>(), 168);
+        assert_eq!(core::mem::size_of::<CommandSample>(), 528);
         assert_eq!(core::mem::align_of::<PlantSample>(), 8);
         assert_eq!(core::mem::align_of::<CommandSample>(), 8);
         // Safety of `type_name`: only reads the string the derive generated.

@@ -1,0 +1,151 @@
+//! `silrig-controller`: event-driven. A WaitSet wakes it on each plant sample (with a deadline that flags the
+//! plant stale); it runs the same [`crate::control::AttitudeController`] as `silrig sim` on the newest sample and
+//! publishes the command with a notify.
+
+use super::report::{ProcessReport, Recorder, ReportMeta, scheduling_text};
+use super::{ProcessArgs, RigMode, period_ns};
+use crate::clock::{self, monotonic_ns};
+use crate::control::AttitudeController;
+use crate::ipc::{self, LoopEnd, Stream};
+use crate::sim::{PlantSnapshot, measurement, setpoint_rad};
+use crate::wire::{CommandSample, MAX_RBF_NODES, PlantSample};
+use anyhow::Context;
+use iceoryx2::prelude::CallbackProgression;
+use std::time::Duration;
+
+const IPC_PLANT_TO_CONTROLLER: usize = 0;
+const COMPUTE: usize = 1;
+
+/// The snapshot a plant sample carries.
+pub fn snapshot(s: &PlantSample) -> PlantSnapshot {
+    PlantSnapshot {
+        tick: s.header.tick,
+        t_s: s.t_sim_s,
+        state: crate::plant::F16State::from_array(&s.state),
+        surfaces_deg: s.surfaces_deg,
+        throttle: s.throttle,
+    }
+}
+
+/// Run the controller until SIGTERM and write its report.
+pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
+    let scenario = args.scenario()?;
+    anyhow::ensure!(
+        scenario.controller.rbf.nodes() <= MAX_RBF_NODES,
+        "the rig carries at most {MAX_RBF_NODES} RBF nodes per channel, the scenario has {}",
+        scenario.controller.rbf.nodes()
+    );
+    let rt = (args.mode == RigMode::Realtime).then(|| clock::try_realtime(79));
+    if let Some(w) = rt.as_ref().and_then(|s| s.warning.as_ref()) {
+        eprintln!("silrig-controller: warning: {w}");
+    }
+    let scheduling = rt.as_ref().map_or_else(|| clock::current_policy().to_string(), scheduling_text);
+
+    let node = ipc::create_node(&args.run_id, "controller")?;
+    let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
+    let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
+    let samples = plant_stream.subscriber(ipc::CONSUMER_BUFFER)?;
+    let mut publisher = command_stream.publisher().context("refusing to start a second controller for this run")?;
+
+    let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
+    let mut controller = AttitudeController::new(scenario.controller.clone(), tables);
+    let setpoint = setpoint_rad(&scenario);
+    let dt = scenario.timing.dt_s;
+    let nodes = scenario.controller.rbf.nodes();
+    let mut rec = Recorder::new(
+        "controller",
+        &[
+            ("ipc_plant_to_controller", "plant publish to receive at the controller"),
+            ("compute", "controller step execution time"),
+        ],
+    );
+    rec.declare(&["commands_sent", "samples_skipped", "samples_invalid", "plant_stale_deadlines", "errors"]);
+
+    let waitset = ipc::rig_waitset()?;
+    let stale_after = Duration::from_nanos(period_ns(&scenario) * u64::from(args.stale_after_periods.max(1)));
+    let guard = waitset
+        .attach_deadline(samples.listener(), stale_after)
+        .map_err(|e| anyhow::anyhow!("attaching the plant stream to the WaitSet: {e:?}"))?;
+    let mut last_tick: Option<(u64, u64)> = None;
+    let mut error: Option<anyhow::Error> = None;
+
+    let exit = ipc::run_waitset(&waitset, |id| {
+        if id.has_event_from(&guard) {
+            let mut newest: Option<ipc::Received<PlantSample>> = None;
+            let mut fresh = 0u64;
+            let drained = samples.drain(|r| {
+                if r.invalid.is_some() {
+                    rec.count("samples_invalid", 1);
+                } else {
+                    fresh += 1;
+                    newest = Some(*r);
+                }
+            });
+            if let Err(e) = drained {
+                error = Some(e.into());
+                return CallbackProgression::Stop;
+            }
+            // After a stall several samples wait; acting on stale ones would only delay the newest.
+            rec.count("samples_skipped", fresh.saturating_sub(1));
+            let Some(r) = newest else { return CallbackProgression::Continue };
+            let h = r.sample.header;
+            if last_tick.is_some_and(|(epoch, tick)| epoch == h.epoch && tick >= h.tick) {
+                return CallbackProgression::Continue;
+            }
+            last_tick = Some((h.epoch, h.tick));
+            rec.record(IPC_PLANT_TO_CONTROLLER, r.age_ns() as i64);
+            let t0 = monotonic_ns();
+            let snap = snapshot(&r.sample);
+            let (command, diag) = controller.step(&measurement(&snap), &setpoint, dt);
+            let compute_ns = monotonic_ns() - t0;
+            rec.record(COMPUTE, compute_ns as i64);
+            let mut out = CommandSample {
+                answers_tick: h.tick,
+                surface_cmd_deg: [command.aileron_deg, command.elevator_deg, command.rudder_deg],
+                throttle_cmd: r.sample.throttle,
+                sliding_surface: diag.sliding_surface,
+                f_hat: diag.f_hat,
+                compute_ns,
+                rbf_nodes: nodes as u32,
+                ..CommandSample::zeroed()
+            };
+            for (c, net) in controller.networks().iter().enumerate() {
+                out.weights[c * nodes..(c + 1) * nodes].copy_from_slice(&net.weights);
+            }
+            match publisher.send(h.tick, &out) {
+                Ok(_) => rec.count("commands_sent", 1),
+                Err(e) => {
+                    // A NaN command is refused by the transport: say so and keep running on the next sample.
+                    eprintln!("silrig-controller: tick {}: {e}", h.tick);
+                    rec.count("errors", 1);
+                }
+            }
+        } else if id.has_missed_deadline(&guard) && last_tick.is_some() {
+            // Only once the plant has been seen: waiting for it to start is not staleness.
+            rec.count("plant_stale_deadlines", 1);
+            let _ = plant_stream.try_cleanup_dead_nodes();
+        }
+        CallbackProgression::Continue
+    })?;
+    let stats = samples.stats();
+    rec.count("plant_samples_lost", stats.lost);
+    rec.count("plant_restarts", stats.publisher_restarts);
+    let ended = match (&error, exit.end) {
+        (Some(e), _) => format!("error: {e}"),
+        (None, LoopEnd::TerminationRequest) => "terminated by signal".into(),
+        (None, LoopEnd::Stopped) => "completed".into(),
+    };
+    rec.count("interrupted_waits", exit.interrupts);
+    let meta = ReportMeta {
+        run_id: args.run_id.to_string(),
+        scenario: scenario.name.clone(),
+        mode: args.mode.label().into(),
+        scheduling,
+        ended,
+    };
+    let report = rec.finish(meta, &args.out)?;
+    match error {
+        Some(e) => Err(e),
+        None => Ok(report),
+    }
+}

@@ -1,0 +1,357 @@
+//! `silrig run`: starts the plant, controller and logger as separate processes of one run id, supervises them
+//! (reaps its children, reports any that die), stops them with SIGTERM at the end, merges their reports with the
+//! control-quality summary of the logged trace, and removes the run's iceoryx2 resources. In realtime mode it also
+//! runs a bare absolute-deadline timer loop beside the rig, so the plant's wake-up lateness can be read against the
+//! OS floor measured under the same conditions.
+
+use super::report::{MachineConditions, ProcessReport, read_report};
+use super::{RigMode, load_scenario, signals};
+use crate::ipc::{self, RunId};
+use crate::summary::{Summary, summarize};
+use crate::timing::{BaselineReport, summary_line, summary_table_header};
+use crate::trace::Trace;
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+/// What `silrig run` was asked to do.
+#[derive(Debug, Clone)]
+pub struct LaunchOptions {
+    /// Scenario file; `None` for the embedded default.
+    pub config: Option<PathBuf>,
+    /// Realtime or lockstep.
+    pub mode: RigMode,
+    /// Duration override, s.
+    pub duration_s: Option<f64>,
+    /// Output folder; `None` for `out/run-<run id>`.
+    pub out: Option<PathBuf>,
+    /// Run id; `None` for a fresh one.
+    pub run_id: Option<RunId>,
+    /// Run the timer baseline beside a realtime rig.
+    pub baseline: bool,
+    /// Same-tick command budget, ms.
+    pub command_budget_ms: f64,
+}
+
+/// The merged report of one run (`report.json`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RigReport {
+    /// Run id.
+    pub run_id: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// realtime or lockstep.
+    pub mode: String,
+    /// Output folder.
+    pub out_dir: String,
+    /// Machine conditions at the start of the run.
+    pub conditions_start: MachineConditions,
+    /// Machine conditions at the end of the run.
+    pub conditions_end: MachineConditions,
+    /// Wall time from starting the processes to the plant's last tick, s.
+    pub wall_s: f64,
+    /// Plant ticks per wall second (the lockstep throughput figure).
+    pub cycles_per_s: f64,
+    /// The three processes' reports.
+    pub processes: Vec<ProcessReport>,
+    /// The OS floor measured beside a realtime run.
+    pub timer_baseline: Option<BaselineReport>,
+    /// Control quality of the logged trace (as `silrig sim` reports it).
+    pub control: Option<Summary>,
+    /// Processes that failed, and how.
+    pub failures: Vec<String>,
+    /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
+    pub leftovers: Vec<String>,
+}
+
+/// A fresh run id: short, lowercase, unique per launcher process and start time.
+pub fn fresh_run_id() -> RunId {
+    let t = crate::clock::monotonic_ns();
+    let id = format!("r{:x}-{:x}", std::process::id(), (t / 1_000) & 0xff_ffff);
+    RunId::new(&id).expect("generated run ids are valid")
+}
+
+struct Proc {
+    name: &'static str,
+    child: Child,
+    status: Option<ExitStatus>,
+}
+
+impl Proc {
+    fn poll(&mut self) -> std::io::Result<Option<ExitStatus>> {
+        if self.status.is_none() {
+            self.status = self.child.try_wait()?;
+        }
+        Ok(self.status)
+    }
+
+    fn signal(&mut self, signal: libc::c_int) {
+        if self.status.is_none() {
+            // SAFETY: kill(2) on the pid of a child we have not reaped yet, so the pid cannot have been reused.
+            unsafe {
+                libc::kill(self.child.id() as libc::pid_t, signal);
+            }
+        }
+    }
+
+    /// Wait up to `timeout` for the process to end; then SIGKILL it. Always reaps.
+    fn finish(&mut self, timeout: Duration) -> std::io::Result<ExitStatus> {
+        let deadline = Instant::now() + timeout;
+        while self.poll()?.is_none() && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        if self.status.is_none() {
+            self.signal(libc::SIGKILL);
+            self.status = Some(self.child.wait()?);
+        }
+        Ok(self.status.expect("reaped"))
+    }
+}
+
+fn describe(status: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(c), _) => format!("exit status {c}"),
+        (None, Some(s)) => format!("killed by signal {s}"),
+        _ => "ended".into(),
+    }
+}
+
+/// Folder of the rig binaries: next to the running executable (`target/release/` in a build tree).
+pub fn binary_dir() -> anyhow::Result<PathBuf> {
+    let exe = std::env::current_exe().context("locating the running executable")?;
+    Ok(exe.parent().context("the executable has no folder")?.to_path_buf())
+}
+
+fn spawn(bin_dir: &Path, name: &'static str, args: &[String], out_dir: &Path) -> anyhow::Result<Proc> {
+    let exe = bin_dir.join(format!("silrig-{name}"));
+    let log = std::fs::File::create(out_dir.join(format!("{name}.stderr.log")))?;
+    let child = Command::new(&exe)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(log)
+        .spawn()
+        .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
+    Ok(Proc { name, child, status: None })
+}
+
+/// Run the three processes to the end of the scenario and return the merged report (also written as
+/// `report.json`). An `Err` means the run could not be set up; a run whose processes failed returns `Ok` with
+/// `failures` filled in.
+pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
+    signals::install_termination_flag();
+    let scenario = load_scenario(opts.config.as_deref(), opts.duration_s)?;
+    let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
+    let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));
+    anyhow::ensure!(
+        !out.join("trace.csv").exists(),
+        "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
+        out.display()
+    );
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let scenario_path = out.join("scenario.toml");
+    std::fs::write(&scenario_path, scenario.to_toml())?;
+    // A crashed run with this id may have left resources behind; they must not poison this one.
+    let pre = ipc::cleanup_run(&run_id)?;
+    anyhow::ensure!(pre.is_clean(), "run id {run_id} is in use by live processes: {pre:?}");
+
+    let bin_dir = binary_dir()?;
+    let args: Vec<String> = vec![
+        scenario_path.display().to_string(),
+        "--run-id".into(),
+        run_id.to_string(),
+        "--mode".into(),
+        opts.mode.label().into(),
+        "--out".into(),
+        out.display().to_string(),
+        "--command-budget-ms".into(),
+        opts.command_budget_ms.to_string(),
+    ];
+    let conditions_start = MachineConditions::now();
+    let started = Instant::now();
+    let mut procs = Vec::new();
+    // Staggered starts: concurrent node creation with dead-node cleanup is where iceoryx2 has had races (#1880).
+    for name in ["logger", "controller", "plant"] {
+        procs.push(spawn(&bin_dir, name, &args, &out)?);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let baseline_path = out.join("timer-baseline.json");
+    let mut baseline = if opts.mode == RigMode::Realtime && opts.baseline {
+        let file = std::fs::File::create(&baseline_path)?;
+        let child = Command::new(std::env::current_exe()?)
+            .args(["timer-baseline", "--duration-s", &scenario.timing.duration_s.to_string(), "--json"])
+            .args(["--hgrm", &out.join("baseline.wake_lateness.hgrm").display().to_string()])
+            .stdin(Stdio::null())
+            .stdout(file)
+            .stderr(Stdio::null())
+            .spawn()
+            .context("starting the timer baseline")?;
+        Some(Proc { name: "timer-baseline", child, status: None })
+    } else {
+        None
+    };
+
+    let mut failures = Vec::new();
+    let timeout = Duration::from_secs_f64(scenario.timing.duration_s * 3.0 + 30.0);
+    let mut plant_done_at: Option<Instant> = None;
+    let mut wall_s = 0.0;
+    loop {
+        for p in procs.iter_mut() {
+            if let Some(status) = p.poll()? {
+                let ok = status.success();
+                if p.name == "plant" && plant_done_at.is_none() {
+                    plant_done_at = Some(Instant::now());
+                    wall_s = started.elapsed().as_secs_f64();
+                    if !ok {
+                        failures.push(format!("plant: {}", describe(status)));
+                    }
+                } else if p.name != "plant" && plant_done_at.is_none() && !failures.iter().any(|f| f.starts_with(p.name)) {
+                    failures.push(format!("{}: {} before the end of the run", p.name, describe(status)));
+                }
+            }
+        }
+        let logger_done = procs.iter_mut().find(|p| p.name == "logger").is_some_and(|p| p.status.is_some());
+        if let Some(t) = plant_done_at
+            && (logger_done || t.elapsed() > Duration::from_secs(2))
+        {
+            break;
+        }
+        if !failures.is_empty() || signals::termination_requested() || started.elapsed() > timeout {
+            if signals::termination_requested() {
+                failures.push("silrig run: interrupted".into());
+            } else if started.elapsed() > timeout {
+                failures.push(format!("silrig run: no end after {timeout:?}"));
+            }
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    if plant_done_at.is_none() {
+        wall_s = started.elapsed().as_secs_f64();
+    }
+    for p in procs.iter_mut() {
+        p.signal(libc::SIGTERM);
+    }
+    for p in procs.iter_mut() {
+        let status = p.finish(Duration::from_secs(5))?;
+        // The controller ends on our SIGTERM; anything else than a clean exit is a failure.
+        if !status.success() && !failures.iter().any(|f| f.starts_with(p.name)) {
+            failures.push(format!("{}: {}", p.name, describe(status)));
+        }
+    }
+    let timer_baseline = match baseline.as_mut() {
+        Some(b) => {
+            if !failures.is_empty() {
+                b.signal(libc::SIGKILL);
+            }
+            b.finish(Duration::from_secs_f64(scenario.timing.duration_s + 10.0))?;
+            std::fs::read_to_string(&baseline_path).ok().and_then(|t| serde_json::from_str(&t).ok())
+        }
+        None => None,
+    };
+    let conditions_end = MachineConditions::now();
+
+    let mut processes = Vec::new();
+    for name in ["plant", "controller", "logger"] {
+        match read_report(&out, name) {
+            Ok(r) => processes.push(r),
+            Err(e) => failures.push(format!("{name}: no report ({e})")),
+        }
+    }
+    let control = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty()).map(|t| summarize(&t, &scenario));
+    let cleanup = ipc::cleanup_run(&run_id)?;
+    let leftovers = if cleanup.is_clean() { Vec::new() } else { vec![format!("{cleanup:?}")] };
+    let ticks = processes.iter().find(|p| p.process == "plant").and_then(|p| p.counters.get("ticks").copied()).unwrap_or(0);
+    let report = RigReport {
+        run_id: run_id.to_string(),
+        scenario: scenario.name.clone(),
+        mode: opts.mode.label().into(),
+        out_dir: out.display().to_string(),
+        conditions_start,
+        conditions_end,
+        wall_s,
+        cycles_per_s: if wall_s > 0.0 { ticks as f64 / wall_s } else { 0.0 },
+        processes,
+        timer_baseline,
+        control,
+        failures,
+        leftovers,
+    };
+    std::fs::write(out.join("report.json"), serde_json::to_string_pretty(&report)? + "\n")?;
+    Ok(report)
+}
+
+impl RigReport {
+    /// The report as a person reads it: conditions, a cyclictest-style table, counters, control quality.
+    pub fn to_text(&self) -> String {
+        let c = &self.conditions_start;
+        let mut out = format!(
+            "silrig run {}: scenario {}, {} mode, {} CPUs, load average {:.2} {:.2} {:.2} (end {:.2}), kernel {}\n",
+            self.run_id,
+            self.scenario,
+            self.mode,
+            c.cpu_count,
+            c.load_average[0],
+            c.load_average[1],
+            c.load_average[2],
+            self.conditions_end.load_average[0],
+            c.kernel
+        );
+        for p in &self.processes {
+            out += &format!("  {:<10} pid {:<7} {:<34} {}\n", p.process, p.pid, p.scheduling, p.ended);
+        }
+        out += &format!("\n{}\n", summary_table_header());
+        for p in &self.processes {
+            for l in &p.latencies {
+                if l.summary.count > 0 {
+                    out += &format!("{}\n", summary_line(&l.name, &l.summary));
+                }
+            }
+        }
+        if let Some(b) = &self.timer_baseline {
+            out += &format!("{}\n", summary_line("os-floor.wake_lateness", &b.lateness));
+            if let Some(plant) = self.latency("plant.wake_lateness") {
+                out += &format!(
+                    "plant wake-up lateness p99 is {:.2}x the OS floor's p99 measured beside it ({}, {})\n",
+                    plant.p99_us / b.lateness.p99_us,
+                    b.source,
+                    b.policy
+                );
+            }
+        }
+        out.push('\n');
+        for p in &self.processes {
+            let counters: Vec<String> = p.counters.iter().map(|(k, v)| format!("{k} {v}")).collect();
+            out += &format!("  {:<10} {}\n", p.process, counters.join(", "));
+            if !p.command_age_ticks.is_empty() {
+                let ages: Vec<String> = p.command_age_ticks.iter().map(|(a, n)| format!("{a}: {n}")).collect();
+                out += &format!("  {:<10} command age at use (ticks: count) {}\n", "", ages.join(", "));
+            }
+        }
+        out += &format!("  wall time {:.3} s, {:.0} plant cycles/s\n\n", self.wall_s, self.cycles_per_s);
+        match &self.control {
+            Some(s) => out += &s.to_text(),
+            None => out += "no trace to summarise\n",
+        }
+        if self.failures.is_empty() {
+            out += "all processes ended cleanly\n";
+        } else {
+            for f in &self.failures {
+                out += &format!("FAILED: {f}\n");
+            }
+        }
+        if !self.leftovers.is_empty() {
+            out += &format!("iceoryx2 leftovers after cleanup: {}\n", self.leftovers.join("; "));
+        }
+        out += &format!("report: {}/report.json\n", self.out_dir);
+        out
+    }
+
+    /// A latency summary by name, from any process.
+    pub fn latency(&self, name: &str) -> Option<&crate::timing::LatencySummary> {
+        self.processes.iter().flat_map(|p| &p.latencies).find(|l| l.name == name).map(|l| &l.summary)
+    }
+}

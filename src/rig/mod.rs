@@ -1,0 +1,90 @@
+//! The three-process rig: the plant (time master), the controller and the logger as separate processes over
+//! iceoryx2, and the launcher that starts, supervises and stops them. Each process is a `run_*` function here; the
+//! binaries in `bins/` only parse arguments and call it.
+//!
+//! All processes of one run load the same scenario and use the same run id, which selects the iceoryx2
+//! namespace (see [`crate::ipc::rig_config`]), so rigs side by side never see each other.
+
+pub mod controller;
+pub mod launcher;
+pub mod logger;
+pub mod plant;
+pub mod report;
+pub mod signals;
+
+use crate::ipc::RunId;
+use crate::scenario::Scenario;
+use std::path::{Path, PathBuf};
+
+/// How the loop keeps time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RigMode {
+    /// 100 Hz (the scenario's dt) on the wall clock: absolute-deadline ticks, commands within a budget.
+    Realtime,
+    /// As fast as possible: no sleeping, the plant waits for every command (and for the logger); deterministic.
+    Lockstep,
+}
+
+impl RigMode {
+    /// Name as on the command line.
+    pub fn label(self) -> &'static str {
+        match self {
+            RigMode::Realtime => "realtime",
+            RigMode::Lockstep => "lockstep",
+        }
+    }
+}
+
+/// Arguments every rig process takes (the launcher passes the same ones to all three).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ProcessArgs {
+    /// Scenario file (TOML); without it, the embedded default scenario.
+    pub config: Option<PathBuf>,
+    /// Run id shared by the three processes of one run (1..=24 of a-z, 0-9, '-').
+    #[arg(long)]
+    pub run_id: RunId,
+    /// Realtime (wall clock) or lockstep (as fast as possible, deterministic).
+    #[arg(long, value_enum, default_value = "realtime")]
+    pub mode: RigMode,
+    /// Override the scenario's duration, s.
+    #[arg(long)]
+    pub duration_s: Option<f64>,
+    /// Folder for this process's report (and, for the logger, trace.csv and timing.csv).
+    #[arg(long, default_value = "out/rig")]
+    pub out: PathBuf,
+    /// Same-tick mode: how long the plant waits for the command of the tick it just published, ms.
+    #[arg(long, default_value_t = 2.0)]
+    pub command_budget_ms: f64,
+    /// Consumers flag their input stale after this many periods without a sample.
+    #[arg(long, default_value_t = 5)]
+    pub stale_after_periods: u32,
+    /// How long the plant waits for the controller and logger to connect, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub startup_timeout_s: f64,
+}
+
+impl ProcessArgs {
+    /// The scenario with the duration override applied, validated.
+    pub fn scenario(&self) -> anyhow::Result<Scenario> {
+        load_scenario(self.config.as_deref(), self.duration_s)
+    }
+}
+
+/// Load a scenario (or the embedded default) and apply a duration override.
+pub fn load_scenario(path: Option<&Path>, duration_s: Option<f64>) -> anyhow::Result<Scenario> {
+    let mut scenario = match path {
+        Some(p) => Scenario::load(p)?,
+        None => Scenario::embedded_default(),
+    };
+    if let Some(d) = duration_s {
+        scenario.timing.duration_s = d;
+        scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("--duration-s: `{key}`: {problem}"))?;
+    }
+    Ok(scenario)
+}
+
+/// Period of the scenario in ns.
+pub fn period_ns(scenario: &Scenario) -> u64 {
+    (scenario.timing.dt_s * 1e9).round() as u64
+}

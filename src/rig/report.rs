@@ -1,0 +1,186 @@
+//! What each rig process reports at its end (`<process>.report.json` plus one `.hgrm` file per distribution), and
+//! the conditions a timing figure needs to be read honestly: scheduling policy, CPU count, load average.
+
+use crate::timing::{LatencyHistogram, LatencySummary};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// One timing distribution of a process.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct NamedLatency {
+    /// Short name, also the `.hgrm` file stem (e.g. `plant.wake_lateness`).
+    pub name: String,
+    /// What was measured, from when to when.
+    pub description: String,
+    /// The distribution, µs.
+    pub summary: LatencySummary,
+    /// `(percentile, µs)` points for plots.
+    #[serde(default)]
+    pub percentile_points: Vec<(f64, f64)>,
+}
+
+/// The end-of-run report of one process.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ProcessReport {
+    /// plant, controller or logger.
+    pub process: String,
+    /// Process id.
+    pub pid: u32,
+    /// Run id.
+    pub run_id: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// realtime or lockstep.
+    pub mode: String,
+    /// Scheduling obtained, e.g. "SCHED_FIFO 80, memory locked".
+    pub scheduling: String,
+    /// How the process ended: "completed", "terminated by signal", or an error.
+    pub ended: String,
+    /// Timing distributions.
+    pub latencies: Vec<NamedLatency>,
+    /// Counters (ticks, misses, overruns, lost samples, ...).
+    pub counters: BTreeMap<String, u64>,
+    /// Command age at use, in ticks -> number of ticks (plant only).
+    #[serde(default)]
+    pub command_age_ticks: BTreeMap<u64, u64>,
+}
+
+/// Collects a process's distributions and counters while it runs.
+#[derive(Debug)]
+pub struct Recorder {
+    process: String,
+    histograms: Vec<(String, String, LatencyHistogram)>,
+    /// Counters by name.
+    pub counters: BTreeMap<String, u64>,
+    /// Command age at use in ticks (plant only).
+    pub command_age_ticks: BTreeMap<u64, u64>,
+}
+
+impl Recorder {
+    /// A recorder for `process` with the named distributions (name, description).
+    pub fn new(process: &str, distributions: &[(&str, &str)]) -> Self {
+        Self {
+            process: process.into(),
+            histograms: distributions
+                .iter()
+                .map(|(n, d)| (format!("{process}.{n}"), d.to_string(), LatencyHistogram::new()))
+                .collect(),
+            counters: BTreeMap::new(),
+            command_age_ticks: BTreeMap::new(),
+        }
+    }
+
+    /// Record `value_ns` into distribution `index` (the order given to [`Recorder::new`]).
+    #[inline]
+    pub fn record(&mut self, index: usize, value_ns: i64) {
+        self.histograms[index].2.record_ns(value_ns);
+    }
+
+    /// Add `n` to a counter.
+    #[inline]
+    pub fn count(&mut self, counter: &str, n: u64) {
+        if let Some(c) = self.counters.get_mut(counter) {
+            *c += n;
+        } else {
+            self.counters.insert(counter.to_string(), n);
+        }
+    }
+
+    /// Make sure a counter shows up in the report even when it stays 0.
+    pub fn declare(&mut self, counters: &[&str]) {
+        for c in counters {
+            self.counters.entry(c.to_string()).or_insert(0);
+        }
+    }
+
+    /// Finish: the report, with `.hgrm` files written into `out_dir`.
+    pub fn finish(self, meta: ReportMeta, out_dir: &Path) -> std::io::Result<ProcessReport> {
+        std::fs::create_dir_all(out_dir)?;
+        let mut latencies = Vec::new();
+        for (name, description, h) in &self.histograms {
+            std::fs::write(out_dir.join(format!("{name}.hgrm")), h.hgrm())?;
+            latencies.push(NamedLatency {
+                name: name.clone(),
+                description: description.clone(),
+                summary: h.summary(),
+                percentile_points: h.percentile_points(),
+            });
+        }
+        let report = ProcessReport {
+            process: self.process.clone(),
+            pid: std::process::id(),
+            run_id: meta.run_id,
+            scenario: meta.scenario,
+            mode: meta.mode,
+            scheduling: meta.scheduling,
+            ended: meta.ended,
+            latencies,
+            counters: self.counters,
+            command_age_ticks: self.command_age_ticks,
+        };
+        std::fs::write(report_path(out_dir, &self.process), serde_json::to_string_pretty(&report)? + "\n")?;
+        Ok(report)
+    }
+}
+
+/// Identity and conditions of a process's report.
+#[derive(Debug, Clone)]
+pub struct ReportMeta {
+    /// Run id.
+    pub run_id: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// realtime or lockstep.
+    pub mode: String,
+    /// Scheduling obtained.
+    pub scheduling: String,
+    /// How it ended.
+    pub ended: String,
+}
+
+/// Where a process's report goes.
+pub fn report_path(out_dir: &Path, process: &str) -> PathBuf {
+    out_dir.join(format!("{process}.report.json"))
+}
+
+/// Read a process's report.
+pub fn read_report(out_dir: &Path, process: &str) -> anyhow::Result<ProcessReport> {
+    let path = report_path(out_dir, process);
+    let text = std::fs::read_to_string(&path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
+}
+
+/// The machine's conditions while a timing figure was taken.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct MachineConditions {
+    /// Online CPUs.
+    pub cpu_count: usize,
+    /// 1, 5 and 15 minute load averages (from /proc/loadavg).
+    pub load_average: [f64; 3],
+    /// Kernel release.
+    pub kernel: String,
+}
+
+impl MachineConditions {
+    /// Read them now.
+    pub fn now() -> Self {
+        let load_average = std::fs::read_to_string("/proc/loadavg")
+            .ok()
+            .map(|s| {
+                let v: Vec<f64> = s.split_whitespace().take(3).filter_map(|x| x.parse().ok()).collect();
+                [v.first().copied().unwrap_or(f64::NAN), v.get(1).copied().unwrap_or(f64::NAN), v.get(2).copied().unwrap_or(f64::NAN)]
+            })
+            .unwrap_or([f64::NAN; 3]);
+        Self {
+            cpu_count: std::thread::available_parallelism().map_or(0, |n| n.get()),
+            load_average,
+            kernel: std::fs::read_to_string("/proc/sys/kernel/osrelease").map(|s| s.trim().to_string()).unwrap_or_default(),
+        }
+    }
+}
+
+/// "SCHED_FIFO 80, memory locked" style text for a realtime request's outcome.
+pub fn scheduling_text(status: &crate::clock::RealtimeStatus) -> String {
+    format!("{}{}", status.policy, if status.memory_locked { ", memory locked" } else { "" })
+}
