@@ -11,6 +11,7 @@ pub mod actuator;
 pub mod bench;
 pub mod integrator;
 pub mod plant;
+pub mod plot;
 pub mod rng;
 pub mod trace;
 pub mod units;
