@@ -21,6 +21,7 @@ pub mod integrator;
 pub mod ipc;
 pub mod outputs;
 pub mod plant;
+pub mod plot;
 pub mod rig;
 pub mod rng;
 pub mod scenario;

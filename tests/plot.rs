@@ -1,0 +1,302 @@
+//! Plots: every figure is written as a real PNG and SVG, with its legends, from a synthetic trace that has sines,
+//! constant and all-zero columns and a NaN; a missing column is an error naming it.
+//!
+//! Set `SILRIG_PLOT_DIR=/some/dir` to keep the figures there for a look instead of a removed temp dir.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use silrig::plot::{
+    PlotError, TimelineEvent, plot_closed_loop, plot_overlay, plot_percentile_distributions, plot_timeline,
+};
+use silrig::trace::{Trace, columns};
+
+/// An output directory unique to the test; removed when dropped unless `SILRIG_PLOT_DIR` is set.
+struct OutDir {
+    path: PathBuf,
+    keep: bool,
+}
+
+impl OutDir {
+    fn new(test: &str) -> Self {
+        match std::env::var_os("SILRIG_PLOT_DIR") {
+            Some(dir) => {
+                let path = PathBuf::from(dir).join(test);
+                let _ = std::fs::remove_dir_all(&path);
+                Self { path, keep: true }
+            }
+            None => {
+                let path = std::env::temp_dir().join(format!("silrig-plot-{}-{test}", std::process::id()));
+                let _ = std::fs::remove_dir_all(&path);
+                Self { path, keep: false }
+            }
+        }
+    }
+}
+
+impl Drop for OutDir {
+    fn drop(&mut self) {
+        if !self.keep {
+            let _ = std::fs::remove_dir_all(&self.path);
+        }
+    }
+}
+
+const NODES: usize = 5;
+
+/// `rows` rows at 100 Hz: sines and decays, `psi_deg`, `s_psi` and the `w_psi_*` all zero, `rudder_cmd_deg` and
+/// `fhat_psi` constant, one NaN in `theta_deg`. `phase` shifts the sines so that runs differ.
+fn synthetic(rows: usize, phase: f64) -> Trace {
+    let names = columns(NODES);
+    let mut trace = Trace::new(names.clone());
+    for k in 0..rows {
+        let t = k as f64 * 0.01;
+        let row = names
+            .iter()
+            .map(|name| {
+                let s = |a: f64, w: f64| a * (w * t + phase).sin();
+                match name.as_str() {
+                    "t_s" => t,
+                    "phi_deg" => s(20.0, 0.8),
+                    "theta_deg" if k == rows / 2 => f64::NAN,
+                    "theta_deg" => 5.0 + s(8.0, 0.5),
+                    "psi_deg" => 0.0,
+                    "alpha_deg" => 6.8 + s(2.0, 0.5),
+                    "beta_deg" => s(0.5, 1.1),
+                    "p_dps" => s(16.0, 0.8 + 1.0) * (-0.1 * t).exp(),
+                    "q_dps" => s(4.0, 0.5 + 1.0),
+                    "r_dps" => s(1.0, 0.3),
+                    "vt_mps" => 150.0,
+                    "alt_ft" => 25_000.0 + 10.0 * t,
+                    "aileron_cmd_deg" => s(-10.0, 1.3),
+                    "aileron_deg" => s(-10.0, 1.3) * 0.95,
+                    "elevator_cmd_deg" => -0.56 + s(3.0, 0.7),
+                    "elevator_deg" => -0.56 + s(3.0, 0.7) * 0.9,
+                    "rudder_cmd_deg" => 2.0,
+                    "rudder_deg" => 2.0 * (1.0 - (-5.0 * t).exp()),
+                    "throttle" => 0.2586,
+                    "s_phi" => s(1.0, 2.0) * (-0.3 * t).exp(),
+                    "s_theta" => s(0.3, 1.5) * (-0.2 * t).exp(),
+                    "s_psi" => 0.0,
+                    "fhat_phi" => s(50.0, 0.8),
+                    "fhat_theta" => -3.0 + s(1.0, 0.4),
+                    "fhat_psi" => 0.5,
+                    w if w.starts_with("w_psi_") => 0.0,
+                    w if w.starts_with("w_") => {
+                        let node: f64 = w.rsplit('_').next().unwrap().parse().unwrap();
+                        (node - 3.0) * 0.01 * (1.0 - (-t / node).exp())
+                    }
+                    other => panic!("no synthetic data for {other}"),
+                }
+            })
+            .collect();
+        trace.rows.push(row);
+    }
+    trace
+}
+
+/// Every file exists; PNGs are real, non-trivial PNGs; SVGs are SVG and contain `needles` (legend text).
+fn check_files(paths: &[PathBuf], stems: &[&str], needles: &[&[&str]]) {
+    assert_eq!(paths.len(), 2 * stems.len(), "{paths:?}");
+    for (k, stem) in stems.iter().enumerate() {
+        let png = &paths[2 * k];
+        let svg = &paths[2 * k + 1];
+        assert_eq!(png.file_name().unwrap().to_str().unwrap(), format!("{stem}.png"));
+        assert_eq!(svg.file_name().unwrap().to_str().unwrap(), format!("{stem}.svg"));
+        let bytes = std::fs::read(png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
+        assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "{} is not a PNG", png.display());
+        assert!(bytes.len() > 10_000, "{} is only {} bytes", png.display(), bytes.len());
+        let text = std::fs::read_to_string(svg).unwrap_or_else(|e| panic!("{}: {e}", svg.display()));
+        assert!(text.contains("<svg"), "{} is not an SVG", svg.display());
+        for needle in needles[k] {
+            assert!(text.contains(needle), "{} lacks {needle:?}", svg.display());
+        }
+    }
+}
+
+fn timed<T>(what: &str, f: impl FnOnce() -> T) -> T {
+    let start = Instant::now();
+    let out = f();
+    eprintln!("{what}: {:.0} ms", start.elapsed().as_secs_f64() * 1e3);
+    out
+}
+
+#[test]
+fn closed_loop_figures_are_written_with_their_legends() {
+    let dir = OutDir::new("closed_loop");
+    let trace = synthetic(1000, 0.0);
+    let paths = timed("closed loop, 3 figures", || plot_closed_loop(&trace, &dir.path, "synthetic 10 s run"))
+        .expect("closed-loop figures");
+    check_files(
+        &paths,
+        &["fig1_states", "fig2_sliding", "fig3_weights"],
+        &[
+            &["synthetic 10 s run", "α", "φ roll", "θ pitch", "ψ yaw", "p roll", "aileron", "rudder cmd", "t (s)"],
+            &["s_phi", "s_theta", "s_psi", "fhat_phi", "fhat_theta", "fhat_psi"],
+            &["W1", "W5", "RBF weights"],
+        ],
+    );
+}
+
+#[test]
+fn weight_legend_follows_the_number_of_weight_columns() {
+    let dir = OutDir::new("weights_12");
+    let names = columns(12);
+    let mut trace = Trace::new(names.clone());
+    for k in 0..300 {
+        let t = k as f64 * 0.01;
+        trace
+            .rows
+            .push(names.iter().enumerate().map(|(i, _)| if i == 0 { t } else { (t * i as f64 * 0.1).sin() }).collect());
+    }
+    let paths = plot_closed_loop(&trace, &dir.path, "12 nodes").expect("figures");
+    let svg = std::fs::read_to_string(&paths[5]).unwrap();
+    assert!(svg.contains("\nW12\n"), "no W12 in the legend");
+    assert!(!svg.contains("\nW13\n"));
+}
+
+#[test]
+fn overlay_has_one_legend_entry_per_run() {
+    let dir = OutDir::new("overlay");
+    let runs = vec![
+        ("baseline".to_string(), synthetic(1000, 0.0)),
+        ("fault & gust".to_string(), synthetic(800, 0.7)),
+        ("no adaptation".to_string(), synthetic(1000, 1.9)),
+    ];
+    let paths = timed("overlay", || plot_overlay(&runs, &dir.path, "compare")).expect("overlay");
+    check_files(&paths, &["compare"], &[&["baseline", "fault &amp; gust", "no adaptation", "elevator", "rudder"]]);
+}
+
+#[test]
+fn percentile_distribution_on_the_nines_scale() {
+    let dir = OutDir::new("percentiles");
+    let curve = |base: f64, tail: f64| -> Vec<(f64, f64)> {
+        let mut points = Vec::new();
+        let mut p: f64 = 0.0;
+        while p < 99.999 {
+            let nines = (1.0 / (1.0 - p / 100.0)).log10();
+            points.push((p, base + tail * nines.powi(3)));
+            p += (100.0 - p) * 0.1; // HdrHistogram-like: denser towards the tail
+        }
+        points.push((100.0, 1e9)); // the 100th percentile is off the scale: skipped
+        points.push((50.0, f64::NAN)); // skipped
+        points
+    };
+    let series = vec![
+        ("tick period jitter".to_string(), curve(3.0, 2.0)),
+        ("plant step".to_string(), curve(1.1, 0.4)),
+        ("round trip".to_string(), curve(12.0, 8.0)),
+    ];
+    let paths = timed("percentiles", || plot_percentile_distributions(&series, &dir.path, "latency", "Loop latency"))
+        .expect("percentiles");
+    check_files(
+        &paths,
+        &["latency"],
+        &[&["tick period jitter", "plant step", "round trip", "99.9%", "99.99%", "90%", "µs", "Loop latency"]],
+    );
+}
+
+#[test]
+fn timeline_marks_events() {
+    let dir = OutDir::new("timeline");
+    let trace = synthetic(1000, 0.0);
+    let events = vec![
+        TimelineEvent { t_s: 2.0, label: "aileron stuck".into() },
+        TimelineEvent { t_s: 2.2, label: "sensor dropout".into() },
+        TimelineEvent { t_s: 7.5, label: "elevator 50 % effective".into() },
+        TimelineEvent { t_s: 9.8, label: "controller restarted".into() },
+        TimelineEvent { t_s: 42.0, label: "after the end".into() },
+    ];
+    let paths =
+        timed("timeline", || plot_timeline(&trace, &events, &dir.path, "faults", "Fault injection")).expect("timeline");
+    check_files(
+        &paths,
+        &["faults"],
+        &[&["aileron stuck", "sensor dropout", "elevator 50 % effective", "Euler angles", "φ roll", "rudder"]],
+    );
+    let svg = std::fs::read_to_string(&paths[1]).unwrap();
+    assert!(!svg.contains("after the end"), "an event outside the trace was drawn");
+}
+
+fn expect_missing(result: Result<Vec<PathBuf>, PlotError>, column: &str, file: &str) -> String {
+    let err = result.expect_err("a missing column must be an error");
+    let message = err.to_string();
+    assert!(matches!(&err, PlotError::MissingColumn { column: c, .. } if c == column), "{message}");
+    assert!(message.contains(&format!("`{column}`")) && message.contains(file), "{message}");
+    message
+}
+
+#[test]
+fn a_missing_column_is_an_error_naming_it() {
+    let dir = OutDir::new("missing");
+    let full = synthetic(50, 0.0);
+    let without = |column: &str| {
+        let i = full.index(column).unwrap();
+        let mut t = Trace::new(full.columns.clone());
+        t.columns.remove(i);
+        t.rows = full.rows.iter().map(|r| [&r[..i], &r[i + 1..]].concat()).collect();
+        t
+    };
+    expect_missing(plot_closed_loop(&without("alpha_deg"), &dir.path, "x"), "alpha_deg", "fig1_states.png");
+    expect_missing(plot_closed_loop(&without("fhat_theta"), &dir.path, "x"), "fhat_theta", "fig2_sliding.png");
+    assert!(!dir.path.join("fig1_states.png").exists(), "a figure was written before the missing column was found");
+    let mut no_weights = full.clone();
+    let first_weight = no_weights.index("w_phi_1").unwrap();
+    no_weights.columns.truncate(first_weight);
+    no_weights.rows.iter_mut().for_each(|r| r.truncate(first_weight));
+    expect_missing(plot_closed_loop(&no_weights, &dir.path, "x"), "w_phi_1", "fig3_weights.png");
+    let message = expect_missing(
+        plot_overlay(&[("good".into(), full.clone()), ("bad run".into(), without("rudder_deg"))], &dir.path, "cmp"),
+        "rudder_deg",
+        "cmp.png",
+    );
+    assert!(message.contains("run `bad run`"), "{message}");
+    expect_missing(plot_timeline(&without("t_s"), &[], &dir.path, "tl", "x"), "t_s", "tl.png");
+
+    // Nothing to draw is an error too, not a panic or an empty picture.
+    assert!(matches!(plot_overlay(&[], &dir.path, "none"), Err(PlotError::NoData { .. })));
+    assert!(matches!(plot_closed_loop(&Trace::new(columns(2)), &dir.path, "x"), Err(PlotError::NoData { .. })));
+}
+
+#[test]
+fn extreme_and_non_finite_values_do_not_panic() {
+    let dir = OutDir::new("extreme");
+    let mut trace = synthetic(200, 0.0);
+    let (alpha, theta, p) =
+        (trace.index("alpha_deg").unwrap(), trace.index("theta_deg").unwrap(), trace.index("p_dps").unwrap());
+    for (k, row) in trace.rows.iter_mut().enumerate() {
+        row[alpha] = if k % 2 == 0 { f64::MAX } else { -f64::MAX };
+        row[theta] = f64::NAN;
+        row[p] = if k == 3 { f64::INFINITY } else { 1e-300 * k as f64 };
+    }
+    let paths = plot_closed_loop(&trace, &dir.path, "extreme").expect("figures");
+    assert!(paths.iter().all(|p| p.exists()));
+    let one_row = synthetic(1, 0.0);
+    plot_timeline(&one_row, &[TimelineEvent { t_s: 0.0, label: "start".into() }], &dir.path, "one", "one row")
+        .expect("a one-row trace");
+    plot_percentile_distributions(&[("empty".into(), Vec::new())], &dir.path, "empty", "no points").expect("empty");
+}
+
+#[test]
+fn an_unwritable_output_directory_is_an_error_naming_it() {
+    let dir = OutDir::new("unwritable");
+    std::fs::create_dir_all(&dir.path).unwrap();
+    let file = dir.path.join("a-file");
+    std::fs::write(&file, "not a directory").unwrap();
+    let err = plot_timeline(&synthetic(50, 0.0), &[], &file.join("sub"), "tl", "x").unwrap_err();
+    assert!(matches!(err, PlotError::CreateDir { .. }), "{err}");
+    assert!(err.to_string().contains(&file.join("sub").display().to_string()), "{err}");
+}
+
+#[test]
+fn a_60_s_trace_plots_in_well_under_a_second_per_figure() {
+    let dir = OutDir::new("long");
+    let trace = synthetic(6000, 0.3);
+    let start = Instant::now();
+    let paths = plot_closed_loop(&trace, &dir.path, "60 s").unwrap();
+    let per_figure = start.elapsed().as_secs_f64() / 3.0;
+    eprintln!("60 s trace: {:.0} ms per figure (PNG + SVG)", per_figure * 1e3);
+    assert!(Path::new(&paths[0]).exists());
+    // Generous for a loaded 2-core CI machine; the measured figure is printed above.
+    assert!(per_figure < 3.0, "{per_figure} s per figure");
+}
