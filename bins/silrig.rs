@@ -148,14 +148,19 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Compare { configs, out } => {
             let out = out.unwrap_or_else(|| Path::new("out").join("compare"));
             let mut summaries = Vec::new();
+            let mut traces = Vec::new();
             for path in &configs {
                 let scenario = load_scenario(Some(path))?;
                 let trace = silrig::sim::run(&scenario)?;
                 let summary = silrig::summary::summarize(&trace, &scenario);
                 silrig::outputs::write_run(&out.join(&scenario.name), &scenario, &trace, &summary)?;
                 summaries.push(summary);
+                traces.push((scenario.name.clone(), trace));
             }
             print!("{}", silrig::outputs::compare_table(&summaries));
+            for f in silrig::plot::plot_overlay(&traces, &out, "overlay")? {
+                println!("wrote {}", f.display());
+            }
             println!("runs written under {}", out.display());
         }
         Command::Run { config, mode, duration_s, out, run_id, no_baseline, command_budget_ms } => {

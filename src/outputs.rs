@@ -1,5 +1,5 @@
-//! Files a run leaves behind: `trace.csv`, `summary.json`, the effective `scenario.toml`, and the side-by-side
-//! table of `silrig compare`.
+//! Files a run leaves behind: `trace.csv`, `summary.json`, the effective `scenario.toml`, the figures, and the
+//! side-by-side table of `silrig compare`.
 
 use crate::scenario::Scenario;
 use crate::summary::Summary;
@@ -7,7 +7,7 @@ use crate::trace::Trace;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 
-/// Write trace, summary and scenario into `out_dir` (created if needed); returns the paths written.
+/// Write trace, summary, scenario and figures into `out_dir` (created if needed); returns the paths written.
 pub fn write_run(
     out_dir: &Path,
     scenario: &Scenario,
@@ -23,7 +23,18 @@ pub fn write_run(
     let scenario_path = out_dir.join("scenario.toml");
     std::fs::write(&scenario_path, scenario.to_toml())
         .with_context(|| format!("writing {}", scenario_path.display()))?;
-    Ok(vec![trace_path, summary_path, scenario_path])
+    let mut files = vec![trace_path, summary_path, scenario_path];
+    files.extend(crate::plot::plot_closed_loop(trace, out_dir, &plot_title(scenario))?);
+    Ok(files)
+}
+
+/// Title of a scenario's figures: its name and what it shows.
+pub fn plot_title(scenario: &Scenario) -> String {
+    if scenario.description.is_empty() {
+        scenario.name.clone()
+    } else {
+        format!("{}: {}", scenario.name, scenario.description)
+    }
 }
 
 /// Summaries side by side, one column per run, with the RMS-rate ratio of each run against the first.

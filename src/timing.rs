@@ -166,7 +166,7 @@ fn sub_bucket_count() -> u64 {
 /// Header of [`summary_table`].
 pub fn summary_table_header() -> String {
     format!(
-        "{:<24} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "{:<36} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
         "(us)", "count", "min", "avg", "p50", "p90", "p99", "p99.9", "max"
     )
 }
@@ -174,7 +174,7 @@ pub fn summary_table_header() -> String {
 /// One cyclictest-style line for a named summary.
 pub fn summary_line(name: &str, s: &LatencySummary) -> String {
     format!(
-        "{:<24} {:>8} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1}",
+        "{:<36} {:>8} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>9.1}",
         name, s.count, s.min_us, s.avg_us, s.p50_us, s.p90_us, s.p99_us, s.p999_us, s.max_us
     )
 }

@@ -208,7 +208,10 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
                     if !ok {
                         failures.push(format!("plant: {}", describe(status)));
                     }
-                } else if p.name != "plant" && plant_done_at.is_none() && !failures.iter().any(|f| f.starts_with(p.name)) {
+                } else if p.name != "plant"
+                    && plant_done_at.is_none()
+                    && !failures.iter().any(|f| f.starts_with(p.name))
+                {
                     failures.push(format!("{}: {} before the end of the run", p.name, describe(status)));
                 }
             }
@@ -261,10 +264,12 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             Err(e) => failures.push(format!("{name}: no report ({e})")),
         }
     }
-    let control = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty()).map(|t| summarize(&t, &scenario));
+    let control =
+        Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty()).map(|t| summarize(&t, &scenario));
     let cleanup = ipc::cleanup_run(&run_id)?;
     let leftovers = if cleanup.is_clean() { Vec::new() } else { vec![format!("{cleanup:?}")] };
-    let ticks = processes.iter().find(|p| p.process == "plant").and_then(|p| p.counters.get("ticks").copied()).unwrap_or(0);
+    let ticks =
+        processes.iter().find(|p| p.process == "plant").and_then(|p| p.counters.get("ticks").copied()).unwrap_or(0);
     let report = RigReport {
         run_id: run_id.to_string(),
         scenario: scenario.name.clone(),
@@ -281,7 +286,32 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         leftovers,
     };
     std::fs::write(out.join("report.json"), serde_json::to_string_pretty(&report)? + "\n")?;
+    write_plots(&report, &out, &scenario)?;
     Ok(report)
+}
+
+/// The closed-loop figures of the logged trace and the latency distributions of every process.
+fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scenario::Scenario) -> anyhow::Result<()> {
+    if report.control.is_some() {
+        let trace = Trace::load(&out.join("trace.csv"))?;
+        // Rows without a command (a lost controller) have NaN command columns, which the plots skip.
+        crate::plot::plot_closed_loop(&trace, out, &crate::outputs::plot_title(scenario))?;
+    }
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = report
+        .processes
+        .iter()
+        .flat_map(|p| &p.latencies)
+        .filter(|l| l.summary.count > 0 && !l.name.ends_with("step_exec") && !l.name.ends_with("compute"))
+        .map(|l| (l.name.clone(), l.percentile_points.clone()))
+        .collect();
+    if let Some(b) = &report.timer_baseline {
+        series.push(("os-floor.wake_lateness".into(), b.percentile_points.clone()));
+    }
+    if !series.is_empty() {
+        let title = format!("{} ({}, run {}): latency distributions", report.scenario, report.mode, report.run_id);
+        crate::plot::plot_percentile_distributions(&series, out, "latency", &title)?;
+    }
+    Ok(())
 }
 
 impl RigReport {

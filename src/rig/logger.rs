@@ -7,8 +7,8 @@
 //! samples have arrived, with empty (NaN) command columns, and counted; samples lost on the wire show up as
 //! sequence gaps.
 
-use super::report::{ProcessReport, Recorder, ReportMeta};
 use super::ProcessArgs;
+use super::report::{ProcessReport, Recorder, ReportMeta};
 use crate::control::{ControllerDiagnostics, SurfaceCommand};
 use crate::ipc::{self, LoopEnd, Received, Stream};
 use crate::rig::controller::snapshot;
@@ -95,10 +95,17 @@ impl Writer {
         };
         writeln!(self.trace, "{}", Trace::format_row(&row))?;
         let p = &plant.sample.header;
-        let (cs, ce, ct, cr, cn) = command.map_or((String::new(), String::new(), String::new(), String::new(), String::new()), |c| {
-            let h = &c.sample.header;
-            (h.seq.to_string(), h.epoch.to_string(), h.t_send_ns.to_string(), c.t_recv_ns.to_string(), c.sample.compute_ns.to_string())
-        });
+        let (cs, ce, ct, cr, cn) =
+            command.map_or((String::new(), String::new(), String::new(), String::new(), String::new()), |c| {
+                let h = &c.sample.header;
+                (
+                    h.seq.to_string(),
+                    h.epoch.to_string(),
+                    h.t_send_ns.to_string(),
+                    c.t_recv_ns.to_string(),
+                    c.sample.compute_ns.to_string(),
+                )
+            });
         writeln!(
             self.timing,
             "{},{},{},{},{},{},{cs},{ce},{ct},{cr},{cn},{}",

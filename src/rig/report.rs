@@ -169,13 +169,19 @@ impl MachineConditions {
             .ok()
             .map(|s| {
                 let v: Vec<f64> = s.split_whitespace().take(3).filter_map(|x| x.parse().ok()).collect();
-                [v.first().copied().unwrap_or(f64::NAN), v.get(1).copied().unwrap_or(f64::NAN), v.get(2).copied().unwrap_or(f64::NAN)]
+                [
+                    v.first().copied().unwrap_or(f64::NAN),
+                    v.get(1).copied().unwrap_or(f64::NAN),
+                    v.get(2).copied().unwrap_or(f64::NAN),
+                ]
             })
             .unwrap_or([f64::NAN; 3]);
         Self {
             cpu_count: std::thread::available_parallelism().map_or(0, |n| n.get()),
             load_average,
-            kernel: std::fs::read_to_string("/proc/sys/kernel/osrelease").map(|s| s.trim().to_string()).unwrap_or_default(),
+            kernel: std::fs::read_to_string("/proc/sys/kernel/osrelease")
+                .map(|s| s.trim().to_string())
+                .unwrap_or_default(),
         }
     }
 }
