@@ -119,7 +119,7 @@ impl Writer {
         )?;
         self.rows += 1;
         self.last_tick = Some(p.tick);
-        if self.rows % FLUSH_EVERY_ROWS == 0 {
+        if self.rows.is_multiple_of(FLUSH_EVERY_ROWS) {
             self.flush()?;
         }
         Ok(())

@@ -148,7 +148,7 @@ pub fn report_path(out_dir: &Path, process: &str) -> PathBuf {
 pub fn read_report(out_dir: &Path, process: &str) -> anyhow::Result<ProcessReport> {
     let path = report_path(out_dir, process);
     let text = std::fs::read_to_string(&path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    Ok(serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
+    serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
 /// The machine's conditions while a timing figure was taken.

@@ -1,0 +1,235 @@
+//! The three-process rig with the real binaries: realtime and lockstep runs complete with every report field,
+//! lockstep reproduces `silrig sim` bit for bit, two rigs side by side do not interfere, and a second controller
+//! for a run is refused. Each test uses its own run id and output folder; the launcher reaps its children and
+//! removes the run's shared memory, and the test checks that it did. No timing figure is asserted as a bound.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("silrig-rig-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run_id(test: &str) -> String {
+    format!("t{}-{test}", std::process::id())
+}
+
+fn config(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(format!("{name}.toml")).display().to_string()
+}
+
+/// Wait for a child with a watchdog: past `limit` it is killed (by its pid) and reaped, and the test fails.
+fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().unwrap();
+            panic!("no end within {limit:?}; stderr: {}", String::from_utf8_lossy(&out.stderr));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn silrig_run(args: &[&str]) -> Child {
+    Command::new(SILRIG).arg("run").args(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap()
+}
+
+fn no_shared_memory_left(run_id: &str) {
+    let prefix = format!("sr_{run_id}_");
+    let left: Vec<String> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n.starts_with(&prefix))
+        .collect();
+    assert!(left.is_empty(), "shared memory left behind: {left:?}");
+    assert!(!Path::new(&format!("/tmp/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
+}
+
+fn report(out: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
+}
+
+fn process<'a>(r: &'a Value, name: &str) -> &'a Value {
+    r["processes"].as_array().unwrap().iter().find(|p| p["process"] == name).unwrap()
+}
+
+#[derive(PartialEq)]
+enum Mode {
+    Lockstep,
+    Realtime,
+    RealtimeWithBaseline,
+}
+
+fn check_report(r: &Value, ticks: u64, mode: Mode) {
+    let realtime = mode != Mode::Lockstep;
+    assert_eq!(r["failures"].as_array().unwrap().len(), 0, "{}", r["failures"]);
+    assert_eq!(r["leftovers"].as_array().unwrap().len(), 0, "{}", r["leftovers"]);
+    for key in ["run_id", "scenario", "mode", "conditions_start", "conditions_end", "wall_s", "cycles_per_s", "control"]
+    {
+        assert!(!r[key].is_null(), "report lacks {key}");
+    }
+    assert!(r["conditions_start"]["cpu_count"].as_u64().unwrap() >= 1);
+    let plant = process(r, "plant");
+    assert_eq!(plant["counters"]["ticks"], ticks);
+    assert_eq!(plant["ended"], "completed");
+    let logger = process(r, "logger");
+    assert_eq!(logger["counters"]["rows_written"], ticks);
+    for (p, counter) in [
+        ("logger", "plant_samples_lost"),
+        ("logger", "command_samples_lost"),
+        ("logger", "rows_without_command"),
+        ("controller", "plant_samples_lost"),
+        ("plant", "commands_lost"),
+    ] {
+        assert_eq!(process(r, p)["counters"][counter], 0, "{p}.{counter}");
+    }
+    for p in ["plant", "controller", "logger"] {
+        assert!(process(r, p)["scheduling"].as_str().unwrap().starts_with("SCHED_"), "{p}");
+        for l in process(r, p)["latencies"].as_array().unwrap() {
+            let s = &l["summary"];
+            let name = l["name"].as_str().unwrap();
+            if name == "plant.wake_lateness" && !realtime {
+                assert_eq!(s["count"], 0, "lockstep does not sleep");
+                continue;
+            }
+            assert!(s["count"].as_u64().unwrap() > 0, "{name} is empty");
+            let f = |k: &str| s[k].as_f64().unwrap();
+            assert!(f("min_us") <= f("p50_us") && f("p50_us") <= f("p90_us"), "{name}: {s}");
+            assert!(
+                f("p90_us") <= f("p99_us") && f("p99_us") <= f("p999_us") && f("p999_us") <= f("max_us"),
+                "{name}: {s}"
+            );
+        }
+    }
+    if mode == Mode::RealtimeWithBaseline {
+        assert!(r["timer_baseline"]["lateness"]["count"].as_u64().unwrap() > 0);
+    }
+}
+
+#[test]
+fn a_2_s_realtime_run_completes_with_every_report_field() {
+    let dir = temp_dir("realtime");
+    let id = run_id("rt");
+    let out = dir.join("out");
+    let child = silrig_run(&["--duration-s", "2", "--run-id", &id, "--out", out.to_str().unwrap()]);
+    let o = wait_with_watchdog(child, Duration::from_secs(60));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{text}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(text.contains("plant.wake_lateness") && text.contains("os-floor.wake_lateness"), "{text}");
+    check_report(&report(&out), 200, Mode::RealtimeWithBaseline);
+    for f in ["trace.csv", "timing.csv", "latency.png", "fig1_states.png", "plant.sense_to_actuate.hgrm"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let hgrm = std::fs::read_to_string(out.join("plant.wake_lateness.hgrm")).unwrap();
+    assert!(hgrm.contains("Percentile") && hgrm.contains("#[Max"), "{hgrm}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn lockstep_matches_sim(config_name: &str, test: &str) {
+    let dir = temp_dir(test);
+    let id = run_id(test);
+    let (rig_out, sim_out) = (dir.join("rig"), dir.join("sim"));
+    let child =
+        silrig_run(&[&config(config_name), "--mode", "lockstep", "--run-id", &id, "--out", rig_out.to_str().unwrap()]);
+    let o = wait_with_watchdog(child, Duration::from_secs(60));
+    assert!(o.status.success(), "{}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    check_report(&report(&rig_out), 1000, Mode::Lockstep);
+    let sim =
+        Command::new(SILRIG).args(["sim", &config(config_name), "--out", sim_out.to_str().unwrap()]).output().unwrap();
+    assert!(sim.status.success());
+    let (a, b) = (std::fs::read(rig_out.join("trace.csv")).unwrap(), std::fs::read(sim_out.join("trace.csv")).unwrap());
+    assert!(a == b, "lockstep trace differs from silrig sim for {config_name}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn lockstep_next_tick_equals_sim_bit_for_bit() {
+    lockstep_matches_sim("paper-next-tick", "lock-next");
+}
+
+#[test]
+fn lockstep_same_tick_equals_sim_bit_for_bit() {
+    lockstep_matches_sim("paper", "lock-same");
+}
+
+#[test]
+fn two_rigs_with_different_run_ids_do_not_interfere() {
+    let dir = temp_dir("two");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let (id_a, id_b) = (run_id("two-a"), run_id("two-b"));
+    // Different scenarios, so a crossed stream would show in the traces.
+    let ca = silrig_run(&[&config("paper"), "--mode", "lockstep", "--run-id", &id_a, "--out", a.to_str().unwrap()]);
+    let cb = silrig_run(&[&config("robust"), "--mode", "lockstep", "--run-id", &id_b, "--out", b.to_str().unwrap()]);
+    let (oa, ob) = (wait_with_watchdog(ca, Duration::from_secs(60)), wait_with_watchdog(cb, Duration::from_secs(60)));
+    assert!(
+        oa.status.success() && ob.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&oa.stdout),
+        String::from_utf8_lossy(&ob.stdout)
+    );
+    check_report(&report(&a), 1000, Mode::Lockstep);
+    check_report(&report(&b), 1000, Mode::Lockstep);
+    for (out, name) in [(&a, "paper"), (&b, "robust")] {
+        let sim_out = dir.join(format!("sim-{name}"));
+        Command::new(SILRIG).args(["sim", &config(name), "--out", sim_out.to_str().unwrap()]).output().unwrap();
+        assert!(
+            std::fs::read(out.join("trace.csv")).unwrap() == std::fs::read(sim_out.join("trace.csv")).unwrap(),
+            "{name}"
+        );
+    }
+    no_shared_memory_left(&id_a);
+    no_shared_memory_left(&id_b);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_second_controller_for_the_same_run_is_refused() {
+    let dir = temp_dir("second");
+    let id = run_id("second");
+    let out = dir.join("out");
+    let child = silrig_run(&["--duration-s", "3", "--run-id", &id, "--out", out.to_str().unwrap(), "--no-baseline"]);
+    // Wait until the rig is ticking (the logger has written rows).
+    let start = Instant::now();
+    while std::fs::read_to_string(out.join("trace.csv")).map_or(0, |t| t.lines().count()) < 20 {
+        assert!(start.elapsed() < Duration::from_secs(20), "the rig did not start");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let second = Command::new(env!("CARGO_BIN_EXE_silrig-controller"))
+        .args(["--run-id", &id, "--out", dir.join("second").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(second.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(err.contains("second controller") && err.contains("already"), "{err}");
+    // The running rig is unharmed.
+    let o = wait_with_watchdog(child, Duration::from_secs(60));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+    check_report(&report(&out), 300, Mode::Realtime);
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_output_folder_holding_a_run_is_never_overwritten() {
+    let dir = temp_dir("reuse");
+    std::fs::write(dir.join("trace.csv"), "t_s\n0\n").unwrap();
+    let o = Command::new(SILRIG).args(["run", "--mode", "lockstep", "--out", dir.to_str().unwrap()]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("already holds a run"));
+    assert_eq!(std::fs::read_to_string(dir.join("trace.csv")).unwrap(), "t_s\n0\n");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
