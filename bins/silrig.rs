@@ -76,6 +76,9 @@ enum Command {
         /// Same-tick mode: how long the plant waits for the command of the tick it just published, ms.
         #[arg(long, default_value_t = 2.0)]
         command_budget_ms: f64,
+        /// Realtime: how long the plant polls for the command before it blocks, µs (0: block at once).
+        #[arg(long, default_value_t = 400.0)]
+        command_spin_us: f64,
     },
     /// Micro-benchmarks of the model (median of batches; run on an idle machine).
     Bench,
@@ -163,7 +166,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             println!("runs written under {}", out.display());
         }
-        Command::Run { config, mode, duration_s, out, run_id, no_baseline, command_budget_ms } => {
+        Command::Run { config, mode, duration_s, out, run_id, no_baseline, command_budget_ms, command_spin_us } => {
             let opts = silrig::rig::launcher::LaunchOptions {
                 config,
                 mode,
@@ -172,6 +175,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 run_id,
                 baseline: !no_baseline,
                 command_budget_ms,
+                command_spin_us,
             };
             let report = silrig::rig::launcher::run(&opts)?;
             print!("{}", report.to_text());

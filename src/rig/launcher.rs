@@ -33,6 +33,8 @@ pub struct LaunchOptions {
     pub baseline: bool,
     /// Same-tick command budget, ms.
     pub command_budget_ms: f64,
+    /// How long the plant polls for a command before it blocks, µs.
+    pub command_spin_us: f64,
 }
 
 /// The merged report of one run (`report.json`).
@@ -125,6 +127,19 @@ pub fn binary_dir() -> anyhow::Result<PathBuf> {
     Ok(exe.parent().context("the executable has no folder")?.to_path_buf())
 }
 
+/// A rig binary older than the launcher was probably not rebuilt with it (`cargo run` builds only `silrig`).
+fn warn_if_stale(bin_dir: &Path) {
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    let Some(launcher) = std::env::current_exe().ok().and_then(|p| modified(&p)) else { return };
+    for name in ["plant", "controller", "logger"] {
+        if modified(&bin_dir.join(format!("silrig-{name}"))).is_some_and(|t| t < launcher) {
+            eprintln!(
+                "silrig run: warning: silrig-{name} is older than silrig; rebuild all binaries with `cargo build --release`"
+            );
+        }
+    }
+}
+
 fn spawn(bin_dir: &Path, name: &'static str, args: &[String], out_dir: &Path) -> anyhow::Result<Proc> {
     let exe = bin_dir.join(format!("silrig-{name}"));
     let log = std::fs::File::create(out_dir.join(format!("{name}.stderr.log")))?;
@@ -159,6 +174,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     anyhow::ensure!(pre.is_clean(), "run id {run_id} is in use by live processes: {pre:?}");
 
     let bin_dir = binary_dir()?;
+    warn_if_stale(&bin_dir);
     let args: Vec<String> = vec![
         scenario_path.display().to_string(),
         "--run-id".into(),
@@ -169,6 +185,8 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         out.display().to_string(),
         "--command-budget-ms".into(),
         opts.command_budget_ms.to_string(),
+        "--command-spin-us".into(),
+        opts.command_spin_us.to_string(),
     ];
     let conditions_start = MachineConditions::now();
     let started = Instant::now();

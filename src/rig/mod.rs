@@ -56,6 +56,10 @@ pub struct ProcessArgs {
     /// Same-tick mode: how long the plant waits for the command of the tick it just published, ms.
     #[arg(long, default_value_t = 2.0)]
     pub command_budget_ms: f64,
+    /// Realtime: after publishing, the plant polls for the command this long before it blocks, µs. A blocked
+    /// wait costs a vCPU wake-up (about 70 µs on this kind of VM); polling costs at most this much CPU per tick.
+    #[arg(long, default_value_t = 400.0)]
+    pub command_spin_us: f64,
     /// Consumers flag their input stale after this many periods without a sample.
     #[arg(long, default_value_t = 5)]
     pub stale_after_periods: u32,

@@ -110,6 +110,7 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let ticks = scenario.timing.ticks();
     let period = period_ns(&scenario);
     let budget_ns = (args.command_budget_ms * 1e6) as u64;
+    let spin_ns = if realtime { (args.command_spin_us * 1e3) as u64 } else { 0 };
     let timing = scenario.timing.command_timing;
     let mut rec = Recorder::new(
         "plant",
@@ -205,6 +206,10 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                 break;
             }
             let now = monotonic_ns();
+            if now < receipt.t_send_ns + spin_ns.min(budget_ns) {
+                std::hint::spin_loop();
+                continue;
+            }
             if now >= wait_until {
                 anyhow::ensure!(realtime, "lockstep: no command for tick {sim_tick} within {LOCKSTEP_PEER_TIMEOUT:?}");
                 break;
