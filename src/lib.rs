@@ -17,6 +17,7 @@ pub mod actuator;
 pub mod bench;
 pub mod clock;
 pub mod control;
+pub mod fault;
 pub mod integrator;
 pub mod ipc;
 pub mod outputs;

@@ -40,6 +40,9 @@ pub struct Scenario {
     pub actuators: ActuatorSetLimits,
     /// Step, duration and command timing.
     pub timing: Timing,
+    /// The fault plan (`[[faults]]`), in any order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faults: Vec<crate::fault::Fault>,
 }
 
 /// How the run starts.
@@ -336,6 +339,9 @@ impl Scenario {
         }
         if t.duration_s < t.dt_s {
             return err("timing.duration_s", format!("is shorter than one step ({} s)", t.dt_s));
+        }
+        for (i, f) in self.faults.iter().enumerate() {
+            f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
         }
         Ok(())
     }
