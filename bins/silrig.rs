@@ -79,6 +79,20 @@ enum Command {
         /// Realtime: how long the plant polls for the command before it blocks, µs (0: block at once).
         #[arg(long, default_value_t = 400.0)]
         command_spin_us: f64,
+        /// A fault to inject, added to the scenario's [[faults]]: TARGET:ACTION@TIME[,KEY=VALUE...], e.g.
+        /// `controller:kill@3s,restart_after=0.5s`, `logger:stop@2s,for=500ms`, `plant:delay@2s,delay=15ms`.
+        /// Repeatable.
+        #[arg(long = "fault", value_parser = silrig::fault::parse_fault_flag)]
+        faults: Vec<silrig::fault::Fault>,
+        /// What to do when a process dies without a planned fault: never (the run fails) or on-failure.
+        #[arg(long, default_value = "never", value_parser = ["never", "on-failure"])]
+        restart: String,
+        /// on-failure: restarts allowed per process.
+        #[arg(long, default_value_t = 3)]
+        max_restarts: u32,
+        /// on-failure: pause before the first restart, ms (doubling each time).
+        #[arg(long, default_value_t = 200.0)]
+        restart_backoff_ms: f64,
     },
     /// Micro-benchmarks of the model (median of batches; run on an idle machine).
     Bench,
@@ -166,7 +180,20 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             println!("runs written under {}", out.display());
         }
-        Command::Run { config, mode, duration_s, out, run_id, no_baseline, command_budget_ms, command_spin_us } => {
+        Command::Run {
+            config,
+            mode,
+            duration_s,
+            out,
+            run_id,
+            no_baseline,
+            command_budget_ms,
+            command_spin_us,
+            faults,
+            restart,
+            max_restarts,
+            restart_backoff_ms,
+        } => {
             let opts = silrig::rig::launcher::LaunchOptions {
                 config,
                 mode,
@@ -176,6 +203,14 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 baseline: !no_baseline,
                 command_budget_ms,
                 command_spin_us,
+                faults,
+                restart: match restart.as_str() {
+                    "on-failure" => silrig::rig::launcher::RestartPolicy::OnFailure {
+                        max_restarts,
+                        backoff_s: restart_backoff_ms / 1e3,
+                    },
+                    _ => silrig::rig::launcher::RestartPolicy::Never,
+                },
             };
             let report = silrig::rig::launcher::run(&opts)?;
             print!("{}", report.to_text());

@@ -207,6 +207,42 @@ impl PlantRunner {
     }
 }
 
+/// What a plant process saves so that a restarted plant continues the same flight.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PlantCheckpoint {
+    /// The next tick to run.
+    pub tick: u64,
+    /// The true state at that tick.
+    pub state: F16State,
+    /// Actuator positions: aileron, elevator, rudder (deg), throttle.
+    pub actuator_positions: [f64; 4],
+}
+
+impl PlantRunner {
+    /// The state to save now.
+    pub fn checkpoint(&self) -> PlantCheckpoint {
+        PlantCheckpoint {
+            tick: self.tick,
+            state: self.state,
+            actuator_positions: [
+                self.actuators[0].position,
+                self.actuators[1].position,
+                self.actuators[2].position,
+                self.actuators[3].position,
+            ],
+        }
+    }
+
+    /// Continue from a saved checkpoint.
+    pub fn restore(&mut self, c: &PlantCheckpoint) {
+        self.tick = c.tick;
+        self.state = c.state;
+        for (a, p) in self.actuators.iter_mut().zip(c.actuator_positions) {
+            a.position = p.clamp(a.limits.min, a.limits.max);
+        }
+    }
+}
+
 /// What the controller sees of a plant snapshot.
 #[inline]
 pub fn measurement(s: &PlantSnapshot) -> Measurement {

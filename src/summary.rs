@@ -121,7 +121,8 @@ fn settle_time(t: &[f64], x: &[f64], target: f64, band: f64) -> Option<f64> {
 
 fn rms(values: impl Iterator<Item = f64>) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
-    for v in values {
+    // Rows without a command (a lost controller) carry NaN; they are gaps, not data.
+    for v in values.filter(|v| v.is_finite()) {
         sum += v * v;
         n += 1;
     }

@@ -1,17 +1,27 @@
 //! `silrig-controller`: event-driven. A WaitSet wakes it on each plant sample (with a deadline that flags the
 //! plant stale); it runs the same [`crate::control::AttitudeController`] as `silrig sim` on the newest sample and
 //! publishes the command with a notify.
+//!
+//! A controller that joins a plant already flying (a restart) starts fresh, with zero RBF weights, and blends its
+//! output from the surfaces' current positions to its own command over [`BUMPLESS_BLEND_S`], so the switch from the
+//! plant's held or failsafe command causes no bump. While the plant is silent it idles and says so once.
 
+use super::events::EventLog;
+use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta, scheduling_text};
 use super::{ProcessArgs, RigMode, period_ns};
 use crate::clock::{self, monotonic_ns};
 use crate::control::AttitudeController;
+use crate::fault::FaultTarget;
 use crate::ipc::{self, LoopEnd, Stream};
 use crate::sim::{PlantSnapshot, measurement, setpoint_rad};
 use crate::wire::{CommandSample, MAX_RBF_NODES, PlantSample};
 use anyhow::Context;
 use iceoryx2::prelude::CallbackProgression;
 use std::time::Duration;
+
+/// How long a controller joining a running plant blends from the current surface positions to its command, s.
+pub const BUMPLESS_BLEND_S: f64 = 0.5;
 
 const IPC_PLANT_TO_CONTROLLER: usize = 0;
 const COMPUTE: usize = 1;
@@ -59,7 +69,20 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             ("compute", "controller step execution time"),
         ],
     );
-    rec.declare(&["commands_sent", "samples_skipped", "samples_invalid", "plant_stale_deadlines", "errors"]);
+    rec.declare(&[
+        "commands_sent",
+        "samples_skipped",
+        "samples_invalid",
+        "plant_stale_deadlines",
+        "errors",
+        "commands_dropped",
+    ]);
+    let events = EventLog::new(&args.out, "controller");
+    let mut loop_faults = LoopFaults::new(&scenario.faults, FaultTarget::Controller, dt, scenario.seed, events.clone());
+    let blend_ticks = (BUMPLESS_BLEND_S / dt).round().max(1.0) as u64;
+    // (first tick of the blend, ticks left): set when this controller's first sample is not the plant's tick 0.
+    let mut blend: Option<u64> = None;
+    let mut plant_stale = false;
 
     let waitset = ipc::rig_waitset()?;
     let stale_after = Duration::from_nanos(period_ns(&scenario) * u64::from(args.stale_after_periods.max(1)));
@@ -92,11 +115,39 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             if last_tick.is_some_and(|(epoch, tick)| epoch == h.epoch && tick >= h.tick) {
                 return CallbackProgression::Continue;
             }
+            match last_tick {
+                None if h.tick > 0 => {
+                    blend = Some(h.tick);
+                    events.emit(
+                        Some(h.tick),
+                        "controller-joined",
+                        format!("plant already at tick {}: fresh weights, {BUMPLESS_BLEND_S} s bumpless blend", h.tick),
+                    );
+                }
+                Some((epoch, _)) if epoch != h.epoch => {
+                    events.emit(Some(h.tick), "plant-restarted", "samples from a new plant epoch");
+                }
+                _ => {}
+            }
+            if plant_stale {
+                plant_stale = false;
+                events.emit(Some(h.tick), "plant-recovered", "samples resumed");
+            }
             last_tick = Some((h.epoch, h.tick));
             rec.record(IPC_PLANT_TO_CONTROLLER, r.age_ns() as i64);
             let t0 = monotonic_ns();
             let snap = snapshot(&r.sample);
-            let (command, diag) = controller.step(&measurement(&snap), &setpoint, dt);
+            let (mut command, diag) = controller.step(&measurement(&snap), &setpoint, dt);
+            if let Some(start) = blend {
+                let k = ((h.tick - start + 1) as f64 / blend_ticks as f64).min(1.0);
+                let mix = |now: f64, cmd: f64| now + k * (cmd - now);
+                command.aileron_deg = mix(snap.surfaces_deg[0], command.aileron_deg);
+                command.elevator_deg = mix(snap.surfaces_deg[1], command.elevator_deg);
+                command.rudder_deg = mix(snap.surfaces_deg[2], command.rudder_deg);
+                if k >= 1.0 {
+                    blend = None;
+                }
+            }
             let compute_ns = monotonic_ns() - t0;
             rec.record(COMPUTE, compute_ns as i64);
             let mut out = CommandSample {
@@ -112,6 +163,14 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             for (c, net) in controller.networks().iter().enumerate() {
                 out.weights[c * nodes..(c + 1) * nodes].copy_from_slice(&net.weights);
             }
+            let effect = if loop_faults.is_empty() { Default::default() } else { loop_faults.at(h.tick) };
+            if effect.sleep_ns > 0 {
+                std::thread::sleep(Duration::from_nanos(effect.sleep_ns));
+            }
+            if effect.drop {
+                rec.count("commands_dropped", 1);
+                return CallbackProgression::Continue;
+            }
             match publisher.send(h.tick, &out) {
                 Ok(_) => rec.count("commands_sent", 1),
                 Err(e) => {
@@ -123,6 +182,14 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         } else if id.has_missed_deadline(&guard) && last_tick.is_some() {
             // Only once the plant has been seen: waiting for it to start is not staleness.
             rec.count("plant_stale_deadlines", 1);
+            if !plant_stale {
+                plant_stale = true;
+                events.emit(
+                    last_tick.map(|(_, t)| t),
+                    "plant-stale",
+                    format!("no plant sample for {stale_after:?}; idling"),
+                );
+            }
             let _ = plant_stream.try_cleanup_dead_nodes();
         }
         CallbackProgression::Continue

@@ -35,6 +35,24 @@ pub struct LaunchOptions {
     pub command_budget_ms: f64,
     /// How long the plant polls for a command before it blocks, µs.
     pub command_spin_us: f64,
+    /// Faults from `--fault` flags, added to the scenario's plan.
+    pub faults: Vec<crate::fault::Fault>,
+    /// What to do when a process dies unplanned.
+    pub restart: RestartPolicy,
+}
+
+/// What the launcher does when a process dies without a planned fault.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RestartPolicy {
+    /// The run fails.
+    Never,
+    /// Start it again, at most `max_restarts` times per process, after `backoff_s` doubling each time.
+    OnFailure {
+        /// Restarts allowed per process.
+        max_restarts: u32,
+        /// Pause before the first restart, s.
+        backoff_s: f64,
+    },
 }
 
 /// The merged report of one run (`report.json`).
@@ -62,6 +80,8 @@ pub struct RigReport {
     pub timer_baseline: Option<BaselineReport>,
     /// Control quality of the logged trace (as `silrig sim` reports it).
     pub control: Option<Summary>,
+    /// Every fault of the plan and what became of it.
+    pub faults: Vec<super::fault_report::FaultRecord>,
     /// Processes that failed, and how.
     pub failures: Vec<String>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
@@ -75,10 +95,23 @@ pub fn fresh_run_id() -> RunId {
     RunId::new(&id).expect("generated run ids are valid")
 }
 
+/// A process fault of the plan and its progress.
+struct PlannedFault {
+    fault: crate::fault::Fault,
+    injected: bool,
+    /// When to send SIGCONT (stop faults).
+    follow_up: Option<Instant>,
+}
+
 struct Proc {
     name: &'static str,
     child: Child,
     status: Option<ExitStatus>,
+    /// The exit was caused by a planned kill or term.
+    planned_exit: bool,
+    restarts: u32,
+    /// When to start it again.
+    restart_at: Option<Instant>,
 }
 
 impl Proc {
@@ -150,7 +183,7 @@ fn spawn(bin_dir: &Path, name: &'static str, args: &[String], out_dir: &Path) ->
         .stderr(log)
         .spawn()
         .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
-    Ok(Proc { name, child, status: None })
+    Ok(Proc { name, child, status: None, planned_exit: false, restarts: 0, restart_at: None })
 }
 
 /// Run the three processes to the end of the scenario and return the merged report (also written as
@@ -158,7 +191,14 @@ fn spawn(bin_dir: &Path, name: &'static str, args: &[String], out_dir: &Path) ->
 /// `failures` filled in.
 pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     signals::install_termination_flag();
-    let scenario = load_scenario(opts.config.as_deref(), opts.duration_s)?;
+    let mut scenario = load_scenario(opts.config.as_deref(), opts.duration_s)?;
+    scenario.faults.extend(opts.faults.iter().cloned());
+    scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("fault plan: `{key}`: {problem}"))?;
+    if opts.mode == RigMode::Lockstep
+        && let Some(f) = scenario.faults.iter().find(|f| !f.action().is_plant_model_fault())
+    {
+        anyhow::bail!("fault plan: {} needs realtime mode (lockstep has no clock to fault)", f.describe());
+    }
     let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
     let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));
     anyhow::ensure!(
@@ -207,37 +247,127 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             .stderr(Stdio::null())
             .spawn()
             .context("starting the timer baseline")?;
-        Some(Proc { name: "timer-baseline", child, status: None })
+        Some(Proc { name: "timer-baseline", child, status: None, planned_exit: false, restarts: 0, restart_at: None })
     } else {
         None
     };
 
     let mut failures = Vec::new();
+    let events = super::events::EventLog::new(&out, "launcher");
+    let mut plan: Vec<PlannedFault> = scenario
+        .faults
+        .iter()
+        .filter(|f| f.action().is_process_fault())
+        .map(|f| PlannedFault { fault: f.clone(), injected: false, follow_up: None })
+        .collect();
     let timeout = Duration::from_secs_f64(scenario.timing.duration_s * 3.0 + 30.0);
     let mut plant_done_at: Option<Instant> = None;
     let mut wall_s = 0.0;
+    let mut t0_ns: Option<u64> = None;
     loop {
-        for p in procs.iter_mut() {
-            if let Some(status) = p.poll()? {
-                let ok = status.success();
-                if p.name == "plant" && plant_done_at.is_none() {
-                    plant_done_at = Some(Instant::now());
-                    wall_s = started.elapsed().as_secs_f64();
-                    if !ok {
-                        failures.push(format!("plant: {}", describe(status)));
+        let now_ns = crate::clock::monotonic_ns();
+        if t0_ns.is_none() {
+            t0_ns = super::fault_report::plant_t0_ns(&out);
+        }
+        // Faults due now, and their follow-ups (SIGCONT, restart).
+        if let Some(t0) = t0_ns {
+            for pf in plan.iter_mut() {
+                let f = &pf.fault;
+                let target = f.target().label();
+                let due = t0 + (f.at_s * 1e9) as u64;
+                if !pf.injected && now_ns >= due {
+                    pf.injected = true;
+                    let Some(p) = procs.iter_mut().find(|p| p.name == target) else { continue };
+                    if p.poll()?.is_some() {
+                        eprintln!("silrig run: warning: {} skipped: {target} is not running", f.describe());
+                        events.emit(None, "fault-skipped", format!("{}: {target} is not running", f.describe()));
+                        continue;
                     }
-                } else if p.name != "plant"
-                    && plant_done_at.is_none()
-                    // The logger ends by itself once it has written the last tick, which can be before the plant
-                    // has returned.
-                    && !(p.name == "logger" && ok)
-                    && !failures.iter().any(|f| f.starts_with(p.name))
+                    let (signal, name) = match f.action() {
+                        crate::fault::FaultAction::Kill => (libc::SIGKILL, "SIGKILL"),
+                        crate::fault::FaultAction::Term => (libc::SIGTERM, "SIGTERM"),
+                        _ => (libc::SIGSTOP, "SIGSTOP"),
+                    };
+                    events.emit(None, "fault-injected", format!("{} ({name} to pid {})", f.describe(), p.child.id()));
+                    p.signal(signal);
+                    match f.action() {
+                        crate::fault::FaultAction::Stop => {
+                            pf.follow_up = Some(Instant::now() + Duration::from_secs_f64(f.duration_s.unwrap_or(0.0)));
+                        }
+                        _ => {
+                            p.planned_exit = true;
+                            if let Some(r) = f.restart_after_s {
+                                p.restart_at = Some(Instant::now() + Duration::from_secs_f64(r));
+                            }
+                        }
+                    }
+                }
+                if let Some(at) = pf.follow_up
+                    && Instant::now() >= at
                 {
-                    failures.push(format!("{}: {} before the end of the run", p.name, describe(status)));
+                    pf.follow_up = None;
+                    if let Some(p) = procs.iter_mut().find(|p| p.name == target) {
+                        p.signal(libc::SIGCONT);
+                        events.emit(None, "fault-ended", format!("SIGCONT to {target} (pid {})", p.child.id()));
+                    }
                 }
             }
         }
-        let logger_done = procs.iter_mut().find(|p| p.name == "logger").is_some_and(|p| p.status.is_some());
+        for p in procs.iter_mut() {
+            if let Some(status) = p.poll()? {
+                let ok = status.success();
+                let planned = std::mem::take(&mut p.planned_exit);
+                if planned {
+                    events.emit(None, "process-ended", format!("{} {} (planned)", p.name, describe(status)));
+                    if p.restart_at.is_none() && p.name == "plant" && plant_done_at.is_none() {
+                        plant_done_at = Some(Instant::now());
+                        wall_s = started.elapsed().as_secs_f64();
+                    }
+                    continue;
+                }
+                if p.restart_at.is_some() {
+                    continue;
+                }
+                if p.name == "plant" && ok && plant_done_at.is_none() {
+                    plant_done_at = Some(Instant::now());
+                    wall_s = started.elapsed().as_secs_f64();
+                    continue;
+                }
+                // The logger ends by itself once it has written the last tick; the others end when told to.
+                if (p.name == "logger" && ok)
+                    || plant_done_at.is_some()
+                    || failures.iter().any(|f: &String| f.starts_with(p.name))
+                {
+                    continue;
+                }
+                let death = format!("{}: {} before the end of the run", p.name, describe(status));
+                events.emit(None, "process-died", death.clone());
+                match opts.restart {
+                    RestartPolicy::OnFailure { max_restarts, backoff_s } if p.restarts < max_restarts => {
+                        let pause = backoff_s * 2f64.powi(p.restarts as i32);
+                        eprintln!("silrig run: {death}; restarting in {pause:.2} s");
+                        p.restart_at = Some(Instant::now() + Duration::from_secs_f64(pause));
+                    }
+                    _ => failures.push(death),
+                }
+            }
+        }
+        for i in 0..procs.len() {
+            if procs[i].status.is_some() && procs[i].restart_at.is_some_and(|t| Instant::now() >= t) {
+                let name = procs[i].name;
+                let restarts = procs[i].restarts + 1;
+                let mut restart_args = args.clone();
+                if name == "plant" {
+                    restart_args.push("--resume".into());
+                }
+                let mut p = spawn(&bin_dir, name, &restart_args, &out)?;
+                p.restarts = restarts;
+                events.emit(None, "process-restarted", format!("{name} as pid {} (restart {restarts})", p.child.id()));
+                procs[i] = p;
+            }
+        }
+        let logger_done =
+            procs.iter_mut().find(|p| p.name == "logger").is_some_and(|p| p.status.is_some() && p.restart_at.is_none());
         if let Some(t) = plant_done_at
             && (logger_done || t.elapsed() > Duration::from_secs(2))
         {
@@ -251,7 +381,13 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             }
             break;
         }
-        std::thread::sleep(Duration::from_millis(10));
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    // A process left stopped by an interrupted plan must be continued to hear SIGTERM.
+    for pf in plan.iter().filter(|pf| pf.follow_up.is_some()) {
+        if let Some(p) = procs.iter_mut().find(|p| p.name == pf.fault.target().label()) {
+            p.signal(libc::SIGCONT);
+        }
     }
     if plant_done_at.is_none() {
         wall_s = started.elapsed().as_secs_f64();
@@ -260,9 +396,11 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         p.signal(libc::SIGTERM);
     }
     for p in procs.iter_mut() {
+        let already_ended = p.status.is_some();
         let status = p.finish(Duration::from_secs(5))?;
-        // The controller ends on our SIGTERM; anything else than a clean exit is a failure.
-        if !status.success() && !failures.iter().any(|f| f.starts_with(p.name)) {
+        // The controller ends on our SIGTERM; anything else than a clean exit is a failure, unless a planned
+        // fault ended the process already.
+        if !already_ended && !status.success() && !failures.iter().any(|f| f.starts_with(p.name)) {
             failures.push(format!("{}: {}", p.name, describe(status)));
         }
     }
@@ -303,6 +441,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         processes,
         timer_baseline,
         control,
+        faults: super::fault_report::fault_records(&scenario.faults, &out, scenario.timing.dt_s),
         failures,
         leftovers,
     };
@@ -331,6 +470,24 @@ fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scenario::Scena
     if !series.is_empty() {
         let title = format!("{} ({}, run {}): latency distributions", report.scenario, report.mode, report.run_id);
         crate::plot::plot_percentile_distributions(&series, out, "latency", &title)?;
+    }
+    if !report.faults.is_empty() && report.control.is_some() {
+        let trace = Trace::load(&out.join("trace.csv"))?;
+        let mut marks = Vec::new();
+        for f in &report.faults {
+            let short = f.fault.split(',').next().unwrap_or(&f.fault).to_string();
+            if let Some(t) = f.injected_at_s {
+                marks.push(crate::plot::TimelineEvent { t_s: t, label: short.clone() });
+            }
+            if let Some(t) = f.failsafe_at_s {
+                marks.push(crate::plot::TimelineEvent { t_s: t, label: "failsafe".into() });
+            }
+            if let Some(t) = f.recovered_at_s {
+                marks.push(crate::plot::TimelineEvent { t_s: t, label: "recovered".into() });
+            }
+        }
+        let title = format!("{} ({}, run {}): faults", report.scenario, report.mode, report.run_id);
+        crate::plot::plot_timeline(&trace, &marks, out, "faults", &title)?;
     }
     Ok(())
 }
@@ -386,6 +543,24 @@ impl RigReport {
         match &self.control {
             Some(s) => out += &s.to_text(),
             None => out += "no trace to summarise\n",
+        }
+        if !self.faults.is_empty() {
+            out += "\nfaults (s from tick 0)            injected  detected  by                               failsafe  recovered  plant lost  cmd lost\n";
+            let t = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
+            for f in &self.faults {
+                out += &format!(
+                    "  {}\n  {:<32} {:>8} {:>9}  {:<32} {:>8} {:>10} {:>11} {:>9}\n",
+                    f.fault,
+                    "",
+                    t(f.injected_at_s),
+                    t(f.detected_at_s),
+                    f.detected_by.clone().unwrap_or_else(|| "-".into()),
+                    t(f.failsafe_at_s),
+                    t(f.recovered_at_s),
+                    f.plant_samples_lost,
+                    f.command_samples_lost
+                );
+            }
         }
         if self.failures.is_empty() {
             out += "all processes ended cleanly\n";

@@ -8,8 +8,11 @@
 //! sequence gaps.
 
 use super::ProcessArgs;
+use super::events::EventLog;
+use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta};
 use crate::control::{ControllerDiagnostics, SurfaceCommand};
+use crate::fault::FaultTarget;
 use crate::ipc::{self, LoopEnd, Received, Stream};
 use crate::rig::controller::snapshot;
 use crate::sim::trace_row;
@@ -131,18 +134,33 @@ impl Writer {
     }
 }
 
+/// The last tick a previous logger of this run wrote to `trace.csv` (its last complete line), so a restarted
+/// logger continues after it instead of writing a tick twice.
+fn last_logged_tick(out_dir: &Path, dt_s: f64) -> Option<u64> {
+    let trace = Trace::load(&out_dir.join("trace.csv")).ok()?;
+    let t = trace.rows.last()?[trace.index("t_s")?];
+    Some((t / dt_s).round() as u64)
+}
+
 /// Run the logger until it has written every tick of the scenario (or SIGTERM), and write its report.
 pub fn run_logger(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let scenario = args.scenario()?;
     std::fs::create_dir_all(&args.out)?;
     let nodes = scenario.controller.rbf.nodes();
     let ticks = scenario.timing.ticks();
+    let events = EventLog::new(&args.out, "logger");
+    let resume_after = last_logged_tick(&args.out, scenario.timing.dt_s);
+    if let Some(t) = resume_after {
+        events.emit(Some(t), "logger-resumed", format!("continuing trace.csv after tick {t}"));
+    }
+    let mut loop_faults =
+        LoopFaults::new(&scenario.faults, FaultTarget::Logger, scenario.timing.dt_s, scenario.seed, events.clone());
     let mut writer = Writer {
         trace: open_append(&args.out, "trace.csv", &trace::columns(nodes).join(","))?,
         timing: open_append(&args.out, "timing.csv", &TIMING_COLUMNS.join(","))?,
         nodes,
         rows: 0,
-        last_tick: None,
+        last_tick: resume_after,
     };
 
     let node = ipc::create_node(&args.run_id, "logger")?;
@@ -174,6 +192,7 @@ pub fn run_logger(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let mut pending_command: BTreeMap<u64, Received<CommandSample>> = BTreeMap::new();
     let mut error: Option<anyhow::Error> = None;
     let mut done = false;
+    let mut missing_since: Option<u64> = None;
 
     let mut step = |rec: &mut Recorder, final_flush: bool| -> anyhow::Result<bool> {
         plant.drain(|r| {
@@ -182,7 +201,9 @@ pub fn run_logger(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                 return;
             }
             rec.record(IPC_PLANT_TO_LOGGER, r.age_ns() as i64);
-            pending_plant.insert(r.sample.header.tick, *r);
+            if resume_after.is_none_or(|t| r.sample.header.tick > t) {
+                pending_plant.insert(r.sample.header.tick, *r);
+            }
         })?;
         commands.drain(|r| {
             if r.invalid.is_some() {
@@ -204,10 +225,32 @@ pub fn run_logger(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                 && tick > last + 1
             {
                 rec.count("plant_ticks_missing", tick - last - 1);
+                events.emit(Some(tick), "plant-gap", format!("ticks {}..{} never arrived", last + 1, tick - 1));
+            }
+            if tick <= writer.last_tick.unwrap_or(0) && writer.rows + u64::from(resume_after.is_some()) > 0 {
+                // A restarted plant re-simulating ticks already logged: keep the first record of each tick.
+                continue;
             }
             let command = pending_command.remove(&tick);
+            match (&command, missing_since) {
+                (None, None) => {
+                    missing_since = Some(tick);
+                    events.emit(Some(tick), "commands-missing", "rows written without a command from here");
+                }
+                (Some(_), Some(from)) => {
+                    missing_since = None;
+                    events.emit(Some(tick), "commands-resumed", format!("{} rows without a command", tick - from));
+                }
+                _ => {}
+            }
             if command.is_none() {
                 rec.count("rows_without_command", 1);
+            }
+            if !loop_faults.is_empty() {
+                let effect = loop_faults.at(tick);
+                if effect.sleep_ns > 0 {
+                    std::thread::sleep(std::time::Duration::from_nanos(effect.sleep_ns));
+                }
             }
             writer.row(&sample, command.as_ref())?;
             rec.count("rows_written", 1);

@@ -6,8 +6,11 @@
 //! namespace (see [`crate::ipc::rig_config`]), so rigs side by side never see each other.
 
 pub mod controller;
+pub mod events;
+pub mod fault_report;
 pub mod launcher;
 pub mod logger;
+pub mod loop_faults;
 pub mod plant;
 pub mod report;
 pub mod signals;
@@ -63,6 +66,13 @@ pub struct ProcessArgs {
     /// Consumers flag their input stale after this many periods without a sample.
     #[arg(long, default_value_t = 5)]
     pub stale_after_periods: u32,
+    /// Plant: how long it holds the last command after the controller goes silent before it commands the trim
+    /// surfaces and flags failsafe, ms.
+    #[arg(long, default_value_t = 100.0)]
+    pub controller_hold_ms: f64,
+    /// Plant: continue from the checkpoint a previous plant of this run left in `--out` (a restart).
+    #[arg(long)]
+    pub resume: bool,
     /// How long the plant waits for the controller and logger to connect, s.
     #[arg(long, default_value_t = 10.0)]
     pub startup_timeout_s: f64,

@@ -7,10 +7,13 @@
 //! is an overrun: the missed ticks are skipped and counted, never caught up in a burst. Lockstep: no sleeping; the
 //! plant waits for every command, and never runs further ahead of the logger than its queue holds.
 
+use super::events::EventLog;
+use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta, scheduling_text};
 use super::{ProcessArgs, RigMode, period_ns, signals};
 use crate::clock::{self, TickSchedule, monotonic_ns};
 use crate::control::SurfaceCommand;
+use crate::fault::FaultTarget;
 use crate::ipc::{self, Stream};
 use crate::scenario::CommandTiming;
 use crate::sim::{ActuatorCommand, PlantRunner, PlantSnapshot, StepHits};
@@ -18,6 +21,9 @@ use crate::wire::{self, CommandSample, LogAckSample, PlantSample};
 use anyhow::Context;
 use std::collections::VecDeque;
 use std::time::Duration;
+
+/// A realtime plant with a fault plan saves a checkpoint this often, so a restarted plant continues the flight.
+pub const CHECKPOINT_EVERY_TICKS: u64 = 10;
 
 /// In lockstep the plant stays at most this many ticks ahead of the rows the logger has written (its queue holds
 /// `ipc::LOGGER_BUFFER`).
@@ -67,6 +73,20 @@ fn actuator_command(c: &CommandSample, throttle: f64) -> ActuatorCommand {
             rudder_deg: c.surface_cmd_deg[2],
         },
         throttle,
+    }
+}
+
+/// The trim surfaces of the scenario's initial airspeed and altitude, or `hold` when level flight has no trim
+/// there.
+fn failsafe_command(scenario: &crate::scenario::Scenario, hold: ActuatorCommand) -> ActuatorCommand {
+    let model = crate::plant::F16Model::new(scenario.plant.xcg);
+    let vt_fps = crate::units::m_to_ft(scenario.initial.airspeed_mps);
+    match crate::plant::trim::trim_level_flight(&model, vt_fps, scenario.initial.altitude_ft) {
+        Ok(trim) => ActuatorCommand {
+            surfaces: SurfaceCommand { aileron_deg: 0.0, elevator_deg: trim.elevator_deg, rudder_deg: 0.0 },
+            throttle: hold.throttle,
+        },
+        Err(_) => hold,
     }
 }
 
@@ -121,12 +141,46 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             ("ipc_controller_to_plant", "command publish to receive at the plant"),
         ],
     );
-    rec.declare(&["ticks", "overruns", "skipped_ticks", "command_misses", "commands_received", "commands_invalid"]);
+    rec.declare(&[
+        "ticks",
+        "overruns",
+        "skipped_ticks",
+        "command_misses",
+        "commands_received",
+        "commands_invalid",
+        "failsafe_ticks",
+        "samples_dropped",
+    ]);
+    let events = EventLog::new(&args.out, "plant");
+    let mut loop_faults =
+        LoopFaults::new(&scenario.faults, FaultTarget::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
+    // Failsafe: the trim surfaces of the scenario's flight condition (the initial hold if no trim exists there).
+    let failsafe = failsafe_command(&scenario, runner.initial_command());
+    let stale_after_ns = period * u64::from(args.stale_after_periods.max(1));
+    let hold_ns = (args.controller_hold_ms * 1e6) as u64;
 
     let started = wait_for_peers("controller and logger", args.startup_timeout_s, || {
         plant_stream.number_of_subscribers() >= 2 && command_stream.number_of_publishers() >= 1
     })?;
 
+    let checkpoint_path = args.out.join("plant.checkpoint.json");
+    if args.resume {
+        match std::fs::read_to_string(&checkpoint_path).map(|t| serde_json::from_str::<crate::sim::PlantCheckpoint>(&t))
+        {
+            Ok(Ok(c)) => {
+                runner.restore(&c);
+                events.emit(
+                    Some(c.tick),
+                    "plant-resumed",
+                    format!("continuing from the checkpoint at tick {}", c.tick),
+                );
+            }
+            _ => eprintln!(
+                "silrig-plant: warning: --resume without a readable {}; starting over",
+                checkpoint_path.display()
+            ),
+        }
+    }
     let throttle = runner.initial_command().throttle;
     let mut applied = runner.initial_command();
     // Tick whose sample the applied command answers (None: the initial hold, before any command).
@@ -136,8 +190,12 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let mut flags = 0u32;
     let mut rows_acked = 0u64;
     let schedule = TickSchedule::new(monotonic_ns() + 2 * period, period);
+    events.emit(Some(0), "ticking", format!("t0_ns={}", schedule.t0_ns));
+    let mut last_fresh_ns = schedule.t0_ns;
+    let mut command_epoch: Option<u64> = None;
+    let (mut stale, mut in_failsafe) = (false, false);
     let mut expected_wall_tick = 0u64;
-    let mut sim_tick = 0u64;
+    let mut sim_tick = runner.snapshot().tick;
     let mut ended = if started { "completed".to_string() } else { "terminated by signal".to_string() };
 
     while started && sim_tick < ticks {
@@ -152,6 +210,15 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             if outcome.skipped > 0 {
                 rec.count("overruns", 1);
                 rec.count("skipped_ticks", outcome.skipped);
+                events.emit(
+                    Some(sim_tick),
+                    "overrun",
+                    format!(
+                        "woke {:.2} ms late; {} tick(s) skipped",
+                        outcome.wake_lateness_ns as f64 / 1e6,
+                        outcome.skipped
+                    ),
+                );
             }
             expected_wall_tick = outcome.next_tick;
         } else {
@@ -172,7 +239,16 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         }
 
         let snap = runner.snapshot();
-        let receipt = publisher.send(sim_tick, &plant_sample(&snap, flags))?;
+        let effect = if loop_faults.is_empty() { Default::default() } else { loop_faults.at(sim_tick) };
+        if effect.sleep_ns > 0 {
+            std::thread::sleep(Duration::from_nanos(effect.sleep_ns));
+        }
+        let receipt = if effect.drop {
+            rec.count("samples_dropped", 1);
+            ipc::SendReceipt { delivered: 0, t_send_ns: monotonic_ns() }
+        } else {
+            publisher.send(sim_tick, &plant_sample(&snap, flags))?
+        };
         publish_ns[(sim_tick % 16) as usize] = receipt.t_send_ns;
 
         // The command this tick applies answers `target`: this tick (same-tick) or the previous one (next-tick).
@@ -190,6 +266,11 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                     return;
                 }
                 rec.count("commands_received", 1);
+                let epoch = r.sample.header.epoch;
+                if command_epoch.is_some_and(|e| e != epoch) {
+                    events.emit(Some(sim_tick), "controller-restarted", "commands from a new controller epoch");
+                }
+                command_epoch = Some(epoch);
                 rec.record(IPC_CONTROLLER_TO_PLANT, r.age_ns() as i64);
                 let answers = r.sample.answers_tick;
                 if answers <= sim_tick && sim_tick - answers < 16 {
@@ -219,11 +300,19 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         }
 
         let fresh = target.and_then(|t| received.iter().find(|c| c.answers_tick == t).copied());
+        let now = monotonic_ns();
         let held = match (target, fresh) {
             (None, _) => false,
             (Some(t), Some(c)) => {
                 applied = actuator_command(&c, throttle);
                 applied_answers = Some(t);
+                last_fresh_ns = now;
+                if stale || in_failsafe {
+                    let how = if in_failsafe { "failsafe released, " } else { "" };
+                    events.emit(Some(sim_tick), "controller-recovered", format!("{how}commands resumed"));
+                    stale = false;
+                    in_failsafe = false;
+                }
                 false
             }
             (Some(_), None) => {
@@ -231,6 +320,29 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                 true
             }
         };
+        // Watchdog on the controller: stale after a few periods without a fresh command, failsafe after the hold.
+        if realtime && held {
+            let silent_ns = now.saturating_sub(last_fresh_ns);
+            if !stale && silent_ns >= stale_after_ns {
+                stale = true;
+                events.emit(Some(sim_tick), "controller-stale", format!("no command for {} ms", silent_ns / 1_000_000));
+            }
+            if !in_failsafe && silent_ns >= hold_ns {
+                in_failsafe = true;
+                events.emit(
+                    Some(sim_tick),
+                    "failsafe-engaged",
+                    format!(
+                        "trim surfaces: aileron {:.3}, elevator {:.3}, rudder {:.3} deg",
+                        failsafe.surfaces.aileron_deg, failsafe.surfaces.elevator_deg, failsafe.surfaces.rudder_deg
+                    ),
+                );
+            }
+            if in_failsafe {
+                applied = failsafe;
+                rec.count("failsafe_ticks", 1);
+            }
+        }
         if let Some(a) = applied_answers {
             *rec.command_age_ticks.entry(sim_tick - a).or_insert(0) += 1;
         }
@@ -238,7 +350,18 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         let t0 = monotonic_ns();
         let hits = runner.step(&applied);
         rec.record(STEP_EXEC, (monotonic_ns() - t0) as i64);
-        flags = step_flags(&hits, held);
+        flags = step_flags(&hits, held) | if in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
+        if realtime && !scenario.faults.is_empty() && (sim_tick + 1) % CHECKPOINT_EVERY_TICKS == 0 {
+            // Written beside, then renamed: a kill mid-write leaves the previous checkpoint whole.
+            let tmp = checkpoint_path.with_extension("tmp");
+            let saved = serde_json::to_string(&runner.checkpoint())
+                .map_err(std::io::Error::other)
+                .and_then(|t| std::fs::write(&tmp, t))
+                .and_then(|_| std::fs::rename(&tmp, &checkpoint_path));
+            if let Err(e) = saved {
+                eprintln!("silrig-plant: cannot write {}: {e}", checkpoint_path.display());
+            }
+        }
         sim_tick += 1;
         rec.count("ticks", 1);
     }

@@ -1,0 +1,89 @@
+//! Loop faults a process injects into itself, from the scenario's fault plan: `delay` (sleep inside the loop,
+//! once or every k ticks), `jitter` (a random extra sleep each tick) and `drop` (skip publishing for N ticks, or
+//! with a probability). Judged on simulated time `tick * dt`; announced in the event log when they first act.
+
+use crate::fault::{Fault, FaultAction, FaultTarget};
+use crate::rig::events::EventLog;
+use crate::rng::SplitMix64;
+
+/// What the loop must do at one tick.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LoopFaultEffect {
+    /// Sleep this long before publishing, ns.
+    pub sleep_ns: u64,
+    /// Do not publish this tick.
+    pub drop: bool,
+}
+
+/// The loop faults of one process.
+#[derive(Debug)]
+pub struct LoopFaults {
+    faults: Vec<(Fault, bool)>,
+    dt_s: f64,
+    rng: SplitMix64,
+    events: EventLog,
+}
+
+impl LoopFaults {
+    /// The delay, jitter and drop faults of `target` from `plan`.
+    pub fn new(plan: &[Fault], target: FaultTarget, dt_s: f64, seed: u64, events: EventLog) -> Self {
+        let faults = plan
+            .iter()
+            .filter(|f| {
+                f.target() == target
+                    && matches!(f.action(), FaultAction::Delay | FaultAction::Jitter | FaultAction::Drop)
+            })
+            .map(|f| (f.clone(), false))
+            .collect();
+        Self { faults, dt_s, rng: SplitMix64::new(seed ^ (target as u64 + 1).wrapping_mul(0x9E37_79B9)), events }
+    }
+
+    /// Whether there is anything to do at all (skips the per-tick work when not).
+    pub fn is_empty(&self) -> bool {
+        self.faults.is_empty()
+    }
+
+    /// The effect at `tick`.
+    pub fn at(&mut self, tick: u64) -> LoopFaultEffect {
+        let mut effect = LoopFaultEffect::default();
+        let t_s = tick as f64 * self.dt_s;
+        for (f, announced) in self.faults.iter_mut() {
+            if !f.active_at(t_s) {
+                continue;
+            }
+            let first_tick = (f.at_s / self.dt_s).round() as u64;
+            let since = tick.saturating_sub(first_tick);
+            let acts = match f.action() {
+                FaultAction::Delay => {
+                    let hit = match f.every_ticks {
+                        None => since == 0,
+                        Some(k) => since % k == 0,
+                    };
+                    if hit {
+                        effect.sleep_ns += (f.delay_ms.unwrap_or(0.0) * 1e6) as u64;
+                    }
+                    hit
+                }
+                FaultAction::Jitter => {
+                    effect.sleep_ns += (self.rng.uniform() * f.max_us.unwrap_or(0.0) * 1e3) as u64;
+                    true
+                }
+                FaultAction::Drop => {
+                    let hit = match (f.ticks, f.probability) {
+                        (Some(n), _) => since < n,
+                        (None, Some(p)) => self.rng.uniform() < p,
+                        _ => false,
+                    };
+                    effect.drop |= hit;
+                    hit
+                }
+                _ => false,
+            };
+            if acts && !*announced {
+                *announced = true;
+                self.events.emit(Some(tick), "fault-injected", f.describe());
+            }
+        }
+        effect
+    }
+}
