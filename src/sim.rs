@@ -6,12 +6,19 @@
 //! controller; its command acts from tick k (`same-tick`) or from tick k+1 (`next-tick`); the actuators then move
 //! over [t_k, t_k+1) under the applied command, and RK4 integrates the plant over that step with the new surface
 //! positions and the throttle held.
+//!
+//! Plant-model faults of the scenario's plan act here, so `silrig sim` and the rig apply them identically: actuator
+//! faults in [`PlantRunner::step`] (over the step that starts at a tick inside the fault's window), sensor faults on
+//! what [`PlantRunner::snapshot`] reports (never on the integrated state). Windows are judged on simulated time
+//! `tick * dt`, never on a clock.
 
-use crate::actuator::{Actuator, LimitHits};
+use crate::actuator::{Actuator, ActuatorFault, LimitHits};
 use crate::control::{AttitudeController, ControllerDiagnostics, Measurement, SurfaceCommand};
+use crate::fault::{Fault, FaultAction, SENSOR_CHANNELS, SURFACES};
 use crate::integrator::rk4_step;
 use crate::plant::trim::trim_level_flight;
-use crate::plant::{ControlInputs, ExternalForcing, F16Model, F16State, engine};
+use crate::plant::{ControlInputs, ExternalForcing, F16Model, F16State, STATE_NAMES, engine};
+use crate::rng::SplitMix64;
 use crate::scenario::{CommandTiming, InitialMode, Scenario};
 use crate::trace::{self, Trace};
 use crate::units::{M_PER_FT, deg_to_rad, m_to_ft, rad_to_deg};
@@ -32,6 +39,17 @@ pub enum SetupError {
         /// VT_dot at throttle 1, ft/s^2.
         at_full: f64,
     },
+    /// A plant-model fault of the plan is malformed (a scenario built in code rather than through
+    /// [`Scenario::validate`]).
+    #[error("faults[{index}].{key}: {problem}")]
+    Fault {
+        /// Position in the plan.
+        index: usize,
+        /// The key at fault.
+        key: String,
+        /// What is wrong.
+        problem: String,
+    },
 }
 
 /// What the plant reports each tick.
@@ -41,7 +59,7 @@ pub struct PlantSnapshot {
     pub tick: u64,
     /// Simulated time, s.
     pub t_s: f64,
-    /// The 13 states.
+    /// The 13 states as measured: the true state plus any active sensor fault (see [`PlantRunner::true_state`]).
     pub state: F16State,
     /// Surface positions held by the actuators at t_s: aileron, elevator, rudder, deg.
     pub surfaces_deg: [f64; 3],
@@ -61,7 +79,47 @@ pub struct ActuatorCommand {
 /// Which limits bound each actuator in one step: aileron, elevator, rudder, throttle.
 pub type StepHits = [LimitHits; 4];
 
+/// Mixed into `scenario.seed` for the sensor-noise stream, so another random source seeded from the same scenario
+/// seed never draws the same sequence as the noise.
+const SENSOR_NOISE_STREAM: u64 = 0x5E45_0A15_E000_0001;
+
+/// A sensor fault of the plan, resolved to a state index.
+#[derive(Debug, Clone)]
+struct SensorFault {
+    /// The plan entry (for its window).
+    fault: Fault,
+    /// Index of the channel in [`F16State::to_array`].
+    index: usize,
+    /// Constant offset, or the standard deviation of Gaussian noise, in the channel's unit.
+    kind: SensorFaultKind,
+}
+
+/// What a sensor fault adds to its channel.
+#[derive(Debug, Clone, Copy)]
+enum SensorFaultKind {
+    /// A constant offset.
+    Bias(f64),
+    /// Gaussian noise of this standard deviation, one draw per tick.
+    Noise { std: f64 },
+}
+
+/// An actuator fault of the plan, resolved to a surface index and mode.
+#[derive(Debug, Clone)]
+struct SurfaceFault {
+    /// The plan entry (for its window).
+    fault: Fault,
+    /// 0 aileron, 1 elevator, 2 rudder (the order of [`PlantRunner`]'s actuators).
+    surface: usize,
+    /// The failure mode while the window is open.
+    mode: ActuatorFault,
+}
+
 /// The plant side of the loop: model, actuators and state.
+///
+/// It also carries the scenario's plant-model faults. Sensor noise comes from one SplitMix64 stream seeded from
+/// `scenario.seed`, drawn once per tick per active noise fault (in plan order) when that tick's state becomes
+/// current, not when it is read: the reported sample is a function of the tick alone, however often
+/// [`PlantRunner::snapshot`] is called, so `silrig sim` and the rig's plant report the same bits.
 #[derive(Debug, Clone)]
 pub struct PlantRunner {
     model: F16Model,
@@ -70,10 +128,16 @@ pub struct PlantRunner {
     disturbance_mask: [bool; 3],
     /// Aileron, elevator, rudder, throttle.
     actuators: [Actuator; 4],
+    /// The true, integrated state.
     state: F16State,
+    /// `state` as the sensors report it at `tick` (equal to `state` while no sensor fault is active).
+    measured: F16State,
     tick: u64,
     dt_s: f64,
     initial_command: ActuatorCommand,
+    sensor_faults: Vec<SensorFault>,
+    surface_faults: Vec<SurfaceFault>,
+    noise: SplitMix64,
 }
 
 /// Throttle that gives VT_dot = 0 at `state` with the engine at its equilibrium power, by bisection.
@@ -145,17 +209,75 @@ impl PlantRunner {
             },
             throttle: actuators[3].position,
         };
-        Ok(Self {
+        for (index, f) in s.faults.iter().enumerate() {
+            if f.action.is_some_and(FaultAction::is_plant_model_fault) {
+                f.validate(s.timing.duration_s).map_err(|(key, problem)| SetupError::Fault { index, key, problem })?;
+            }
+        }
+        let (sensor_faults, surface_faults) = plant_model_faults(&s.faults);
+        let mut runner = Self {
             model,
             forcing: ExternalForcing { speed_hold: s.plant.speed_hold, ..Default::default() },
             disturbance: s.disturbance.clone(),
             disturbance_mask: s.disturbance.channel_mask(),
             actuators,
             state,
+            measured: state,
             tick: 0,
             dt_s: s.timing.dt_s,
             initial_command,
-        })
+            sensor_faults,
+            surface_faults,
+            noise: SplitMix64::new(s.seed ^ SENSOR_NOISE_STREAM),
+        };
+        runner.measure();
+        Ok(runner)
+    }
+
+    /// Simulated time of the current tick, s (what fault windows are judged on).
+    fn t_s(&self) -> f64 {
+        self.tick as f64 * self.dt_s
+    }
+
+    /// Set `measured` for the current tick: the true state plus every active sensor fault. Called exactly once per
+    /// tick, so each active noise fault draws exactly one sample per tick.
+    fn measure(&mut self) {
+        if self.sensor_faults.is_empty() {
+            self.measured = self.state;
+            return;
+        }
+        let t = self.t_s();
+        let mut x = self.state.to_array();
+        for f in &self.sensor_faults {
+            if f.fault.active_at(t) {
+                x[f.index] += match f.kind {
+                    SensorFaultKind::Bias(b) => b,
+                    SensorFaultKind::Noise { std } => std * self.noise.normal(),
+                };
+            }
+        }
+        self.measured = F16State::from_array(&x);
+    }
+
+    /// The failure mode of each surface (aileron, elevator, rudder) over the step starting at the current tick.
+    /// Where windows overlap on one surface, the fault that started last wins (the later plan entry on a tie).
+    fn surface_modes(&self) -> [ActuatorFault; 3] {
+        let t = self.t_s();
+        let mut modes = [ActuatorFault::None; 3];
+        let mut since = [f64::NEG_INFINITY; 3];
+        for f in &self.surface_faults {
+            if f.fault.active_at(t) && f.fault.at_s >= since[f.surface] {
+                modes[f.surface] = f.mode;
+                since[f.surface] = f.fault.at_s;
+            }
+        }
+        modes
+    }
+
+    /// The true, integrated state now, as no sensor fault distorts it (what [`PlantRunner::snapshot`] reports
+    /// while no sensor fault is active).
+    pub fn true_state(&self) -> F16State {
+        self.state
     }
 
     /// The command that holds the initial surfaces and throttle (used before any controller command exists).
@@ -163,25 +285,28 @@ impl PlantRunner {
         self.initial_command
     }
 
-    /// The state and surface positions now.
+    /// The state as measured (with any active sensor fault) and the surface positions now. Cheap, and the same
+    /// however often it is called within a tick: the sensor noise of a tick is drawn when the tick begins.
     pub fn snapshot(&self) -> PlantSnapshot {
         PlantSnapshot {
             tick: self.tick,
-            t_s: self.tick as f64 * self.dt_s,
-            state: self.state,
+            t_s: self.t_s(),
+            state: self.measured,
             surfaces_deg: [self.actuators[0].position, self.actuators[1].position, self.actuators[2].position],
             throttle: self.actuators[3].position,
         }
     }
 
-    /// Move the actuators under `command` and integrate one step.
+    /// Move the actuators under `command` (each surface in the failure mode its active fault gives, if any) and
+    /// integrate one step; then take the next tick's measurement.
     pub fn step(&mut self, command: &ActuatorCommand) -> StepHits {
         let dt = self.dt_s;
         let c = &command.surfaces;
+        let modes = if self.surface_faults.is_empty() { [ActuatorFault::None; 3] } else { self.surface_modes() };
         let hits = [
-            self.actuators[0].update(c.aileron_deg, dt),
-            self.actuators[1].update(c.elevator_deg, dt),
-            self.actuators[2].update(c.rudder_deg, dt),
+            self.actuators[0].update_with_fault(c.aileron_deg, dt, modes[0]),
+            self.actuators[1].update_with_fault(c.elevator_deg, dt, modes[1]),
+            self.actuators[2].update_with_fault(c.rudder_deg, dt, modes[2]),
             self.actuators[3].update(command.throttle, dt),
         ];
         let inputs = ControlInputs {
@@ -203,6 +328,7 @@ impl PlantRunner {
         );
         self.state = F16State::from_array(&x);
         self.tick += 1;
+        self.measure();
         hits
     }
 }
@@ -212,7 +338,7 @@ impl PlantRunner {
 pub struct PlantCheckpoint {
     /// The next tick to run.
     pub tick: u64,
-    /// The true state at that tick.
+    /// The true state at that tick (not the measured one).
     pub state: F16State,
     /// Actuator positions: aileron, elevator, rudder (deg), throttle.
     pub actuator_positions: [f64; 4],
@@ -240,7 +366,40 @@ impl PlantRunner {
         for (a, p) in self.actuators.iter_mut().zip(c.actuator_positions) {
             a.position = p.clamp(a.limits.min, a.limits.max);
         }
+        // The noise sequence of a restarted plant is not the one the killed plant would have drawn.
+        self.measure();
     }
+}
+
+/// The plant-model faults of a plan, resolved once so the loop does no string lookups. Other faults (process and
+/// loop faults) are left to the launcher and the processes. Expects validated entries (channel and surface names
+/// known, `std`, `bias` and `limit` given where required); [`PlantRunner::new`] checks that first.
+fn plant_model_faults(plan: &[Fault]) -> (Vec<SensorFault>, Vec<SurfaceFault>) {
+    let (mut sensors, mut surfaces) = (Vec::new(), Vec::new());
+    for f in plan.iter().filter(|f| f.action.is_some_and(FaultAction::is_plant_model_fault)) {
+        let channel = f.channel.as_deref().filter(|c| SENSOR_CHANNELS.contains(c));
+        let index = channel.and_then(|c| STATE_NAMES.iter().position(|n| *n == c));
+        // SURFACES lists aileron, elevator, rudder: the order of the runner's actuators.
+        let surface = f.surface.as_deref().and_then(|s| SURFACES.iter().position(|n| *n == s));
+        let sensor = |kind| index.map(|index| SensorFault { fault: f.clone(), index, kind });
+        let actuator = |mode| surface.map(|surface| SurfaceFault { fault: f.clone(), surface, mode });
+        match f.action() {
+            FaultAction::SensorBias => sensors.extend(f.bias.and_then(|b| sensor(SensorFaultKind::Bias(b)))),
+            FaultAction::SensorNoise => sensors.extend(f.std.and_then(|std| sensor(SensorFaultKind::Noise { std }))),
+            FaultAction::ActuatorStuck => surfaces.extend(actuator(ActuatorFault::Stuck)),
+            FaultAction::ActuatorRateFrozen => surfaces.extend(actuator(ActuatorFault::RateFrozen)),
+            FaultAction::ActuatorHardOver => {
+                let to_max = match f.limit.as_deref() {
+                    Some("max") => Some(true),
+                    Some("min") => Some(false),
+                    _ => None,
+                };
+                surfaces.extend(to_max.and_then(|to_max| actuator(ActuatorFault::HardOver { to_max })));
+            }
+            _ => {}
+        }
+    }
+    (sensors, surfaces)
 }
 
 /// What the controller sees of a plant snapshot.

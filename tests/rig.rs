@@ -138,32 +138,80 @@ fn a_2_s_realtime_run_completes_with_every_report_field() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-fn lockstep_matches_sim(config_name: &str, test: &str) {
+fn lockstep_matches_sim(scenario: &str, test: &str) {
     let dir = temp_dir(test);
     let id = run_id(test);
     let (rig_out, sim_out) = (dir.join("rig"), dir.join("sim"));
-    let child =
-        silrig_run(&[&config(config_name), "--mode", "lockstep", "--run-id", &id, "--out", rig_out.to_str().unwrap()]);
+    let child = silrig_run(&[scenario, "--mode", "lockstep", "--run-id", &id, "--out", rig_out.to_str().unwrap()]);
     let o = wait_with_watchdog(child, Duration::from_secs(60));
     assert!(o.status.success(), "{}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     check_report(&report(&rig_out), 1000, Mode::Lockstep);
-    let sim =
-        Command::new(SILRIG).args(["sim", &config(config_name), "--out", sim_out.to_str().unwrap()]).output().unwrap();
+    let sim = Command::new(SILRIG).args(["sim", scenario, "--out", sim_out.to_str().unwrap()]).output().unwrap();
     assert!(sim.status.success());
     let (a, b) = (std::fs::read(rig_out.join("trace.csv")).unwrap(), std::fs::read(sim_out.join("trace.csv")).unwrap());
-    assert!(a == b, "lockstep trace differs from silrig sim for {config_name}");
+    assert!(a == b, "lockstep trace differs from silrig sim for {scenario}");
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn lockstep_next_tick_equals_sim_bit_for_bit() {
-    lockstep_matches_sim("paper-next-tick", "lock-next");
+    lockstep_matches_sim(&config("paper-next-tick"), "lock-next");
 }
 
 #[test]
 fn lockstep_same_tick_equals_sim_bit_for_bit() {
-    lockstep_matches_sim("paper", "lock-same");
+    lockstep_matches_sim(&config("paper"), "lock-same");
+}
+
+/// Every plant-model fault at once: the rig's plant applies them through the same runner, and draws the same
+/// sensor noise from the seed, so its trace still equals `silrig sim`'s bit for bit.
+#[test]
+fn lockstep_with_plant_faults_equals_sim_bit_for_bit() {
+    let dir = temp_dir("lock-faults-scenario");
+    let scenario = dir.join("faults.toml");
+    let plan = r#"
+[[faults]]
+at_s = 1.0
+target = "plant"
+action = "sensor-noise"
+channel = "phi_rad"
+std = 0.005
+
+[[faults]]
+at_s = 2.0
+duration_s = 3.0
+target = "plant"
+action = "sensor-bias"
+channel = "q_radps"
+bias = 0.01
+
+[[faults]]
+at_s = 3.0
+duration_s = 1.0
+target = "plant"
+action = "actuator-stuck"
+surface = "rudder"
+
+[[faults]]
+at_s = 5.0
+duration_s = 0.3
+target = "plant"
+action = "actuator-hard-over"
+surface = "aileron"
+limit = "min"
+
+[[faults]]
+at_s = 6.0
+duration_s = 0.5
+target = "plant"
+action = "actuator-rate-frozen"
+surface = "elevator"
+"#;
+    let base = std::fs::read_to_string(config("paper-next-tick")).unwrap();
+    std::fs::write(&scenario, format!("{base}\n{plan}")).unwrap();
+    lockstep_matches_sim(scenario.to_str().unwrap(), "lock-faults");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
