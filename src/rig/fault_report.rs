@@ -58,7 +58,7 @@ const RECOVERIES: [&str; 6] = [
 pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultRecord> {
     let events = read_events(out_dir);
     let Some(t0) = plant_t0_ns(out_dir) else {
-        return plan.iter().map(|f| empty(f)).collect();
+        return plan.iter().map(empty).collect();
     };
     let rel = |t_ns: u64| (t_ns as f64 - t0 as f64) / 1e9;
     let timing = read_timing(out_dir);

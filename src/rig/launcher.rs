@@ -352,10 +352,10 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
                 }
             }
         }
-        for i in 0..procs.len() {
-            if procs[i].status.is_some() && procs[i].restart_at.is_some_and(|t| Instant::now() >= t) {
-                let name = procs[i].name;
-                let restarts = procs[i].restarts + 1;
+        for slot in procs.iter_mut() {
+            if slot.status.is_some() && slot.restart_at.is_some_and(|t| Instant::now() >= t) {
+                let name = slot.name;
+                let restarts = slot.restarts + 1;
                 let mut restart_args = args.clone();
                 if name == "plant" {
                     restart_args.push("--resume".into());
@@ -363,7 +363,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
                 let mut p = spawn(&bin_dir, name, &restart_args, &out)?;
                 p.restarts = restarts;
                 events.emit(None, "process-restarted", format!("{name} as pid {} (restart {restarts})", p.child.id()));
-                procs[i] = p;
+                *slot = p;
             }
         }
         let logger_done =

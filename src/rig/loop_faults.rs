@@ -57,7 +57,7 @@ impl LoopFaults {
                 FaultAction::Delay => {
                     let hit = match f.every_ticks {
                         None => since == 0,
-                        Some(k) => since % k == 0,
+                        Some(k) => since.is_multiple_of(k),
                     };
                     if hit {
                         effect.sleep_ns += (f.delay_ms.unwrap_or(0.0) * 1e6) as u64;

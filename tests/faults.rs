@@ -1,0 +1,267 @@
+//! Fault injection with the real processes: each test runs `silrig run` in realtime with its own run id and
+//! folder and reads the report, the event log and `timing.csv`. Counts and orderings are asserted, never how fast
+//! something happened in wall time (the machine is shared); the failsafe delay is checked in plant ticks.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("silrig-faults-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A test's folder, removed when the test ends.
+struct Folder(PathBuf);
+
+impl Drop for Folder {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+impl std::ops::Deref for Folder {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+/// `silrig run` with a watchdog; returns (exit code, stdout and stderr, report, output folder).
+fn run(test: &str, args: &[&str]) -> (Option<i32>, String, Value, Folder) {
+    let out = temp_dir(test);
+    let id = format!("f{}-{test}", std::process::id());
+    let mut child = Command::new(SILRIG)
+        .args(["run", "--no-baseline", "--run-id", &id, "--out", out.to_str().unwrap()])
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(90) {
+            let _ = child.kill();
+            let o = child.wait_with_output().unwrap();
+            panic!("no end; {}", String::from_utf8_lossy(&o.stderr));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let o = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    let report =
+        std::fs::read_to_string(out.join("report.json")).map_or(Value::Null, |t| serde_json::from_str(&t).unwrap());
+    let prefix = format!("sr_{id}_");
+    let left = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .any(|e| e.file_name().to_string_lossy().starts_with(&prefix));
+    assert!(!left, "shared memory left behind by {id}");
+    (o.status.code(), stdout, report, Folder(out))
+}
+
+fn process<'a>(r: &'a Value, name: &str) -> &'a Value {
+    r["processes"].as_array().unwrap().iter().find(|p| p["process"] == name).unwrap()
+}
+
+fn events(out: &Path) -> Vec<Value> {
+    std::fs::read_to_string(out.join("events.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+fn first<'a>(events: &'a [Value], process: &str, kind: &str) -> Option<&'a Value> {
+    events.iter().find(|e| e["process"] == process && e["kind"] == kind)
+}
+
+fn trace_rows(out: &Path) -> usize {
+    std::fs::read_to_string(out.join("trace.csv")).unwrap().lines().count() - 1
+}
+
+#[test]
+fn controller_sigkill_and_restart_failsafe_then_resume_with_the_gap_marked() {
+    let (code, text, r, out) =
+        run("ctl-kill", &["--duration-s", "4", "--fault", "controller:kill@1.5s,restart_after=0.5s"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert_eq!(process(&r, "plant")["counters"]["ticks"], 400, "the plant kept ticking");
+    let ev = events(&out);
+    let stale = first(&ev, "plant", "controller-stale").expect("detected");
+    let failsafe = first(&ev, "plant", "failsafe-engaged").expect("failsafe");
+    let recovered = first(&ev, "plant", "controller-recovered").expect("recovered");
+    assert!(first(&ev, "controller", "controller-joined").is_some(), "bumpless join announced");
+    // Failsafe within the 100 ms hold (10 ticks) plus two ticks of the last command the plant received.
+    let missing = first(&ev, "logger", "commands-missing").expect("gap marked")["tick"].as_u64().unwrap();
+    let engaged = failsafe["tick"].as_u64().unwrap();
+    assert!(
+        engaged >= missing && engaged - missing <= 10 + 2,
+        "failsafe at tick {engaged}, commands missing from {missing}"
+    );
+    assert!(
+        stale["t_ns"].as_u64() <= failsafe["t_ns"].as_u64() && failsafe["t_ns"].as_u64() < recovered["t_ns"].as_u64()
+    );
+    assert!(process(&r, "plant")["counters"]["failsafe_ticks"].as_u64().unwrap() > 0);
+    // The log is complete, with the gap marked in the rows and in timing.csv.
+    assert_eq!(trace_rows(&out), 400);
+    let without = process(&r, "logger")["counters"]["rows_without_command"].as_u64().unwrap();
+    assert!(without > 0);
+    let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();
+    assert_eq!(timing.lines().skip(1).filter(|l| l.ends_with(",1")).count() as u64, without);
+    let fault = &r["faults"][0];
+    assert!(fault["detected_at_s"].as_f64().unwrap() >= fault["injected_at_s"].as_f64().unwrap());
+    assert!(fault["recovered_at_s"].as_f64().unwrap() > fault["failsafe_at_s"].as_f64().unwrap());
+    assert!(out.join("faults.png").exists());
+}
+
+#[test]
+fn plant_sigkill_and_restart_continues_the_flight_from_its_checkpoint() {
+    let (code, text, r, out) = run("plant-kill", &["--duration-s", "3", "--fault", "plant:kill@1s,restart_after=0.3s"]);
+    assert_eq!(code, Some(0), "{text}");
+    let ev = events(&out);
+    assert!(first(&ev, "controller", "plant-stale").is_some(), "the controller noticed");
+    assert!(first(&ev, "plant", "plant-resumed").is_some());
+    assert!(first(&ev, "controller", "plant-recovered").is_some());
+    // Every tick is logged exactly once, in order.
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let t: Vec<f64> = trace.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert_eq!(t.len(), 300);
+    assert!(t.windows(2).all(|w| w[1] > w[0]), "ticks out of order or repeated");
+    assert_eq!(r["failures"].as_array().unwrap().len(), 0);
+}
+
+#[test]
+fn logger_stopped_500_ms_loses_no_sample() {
+    let (code, text, r, out) = run("log-stop", &["--duration-s", "3", "--fault", "logger:stop@1s,for=500ms"]);
+    assert_eq!(code, Some(0), "{text}");
+    let logger = process(&r, "logger");
+    for c in ["plant_samples_lost", "command_samples_lost", "rows_without_command", "plant_ticks_missing"] {
+        assert_eq!(logger["counters"][c], 0, "{c}");
+    }
+    assert_eq!(trace_rows(&out), 300);
+    assert!(first(&events(&out), "launcher", "fault-ended").is_some());
+}
+
+#[test]
+fn controller_stopped_500_ms_is_detected_and_recovered() {
+    let (code, text, r, out) = run("ctl-stop", &["--duration-s", "3", "--fault", "controller:stop@1s,for=500ms"]);
+    assert_eq!(code, Some(0), "{text}");
+    let ev = events(&out);
+    assert!(first(&ev, "plant", "controller-stale").is_some());
+    assert!(first(&ev, "plant", "failsafe-engaged").is_some());
+    assert!(first(&ev, "plant", "controller-recovered").is_some());
+    assert_eq!(process(&r, "controller")["ended"], "terminated by signal", "SIGCONT did not end its loop");
+    assert_eq!(trace_rows(&out), 300);
+}
+
+/// Publishes that follow the previous one by less than 1 ms: the mark of ticks run back to back. The plant
+/// always sleeps to the next grid point, so outside a stall this never happens.
+fn back_to_back_publishes(out: &Path) -> usize {
+    let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();
+    let sends: Vec<u64> = timing.lines().skip(1).map(|l| l.split(',').nth(3).unwrap().parse().unwrap()).collect();
+    sends.windows(2).filter(|w| w[1] - w[0] < 1_000_000).count()
+}
+
+#[test]
+fn a_15_ms_delay_in_the_plant_is_one_overrun_and_no_burst() {
+    let (code, text, r, out) = run("plant-delay", &["--duration-s", "2", "--fault", "plant:delay@1s,delay=15ms"]);
+    assert_eq!(code, Some(0), "{text}");
+    let plant = process(&r, "plant");
+    // The delayed tick's work ends 5 ms past the next tick's due time: one overrun. That next tick then starts
+    // 5 ms late, less than a period, so it runs at once (the only back-to-back publish) and the loop is back on
+    // its grid.
+    assert!(plant["counters"]["overruns"].as_u64().unwrap() >= 1);
+    assert_eq!(plant["counters"]["ticks"], 200);
+    assert!(first(&events(&out), "plant", "overrun").is_some());
+    assert!(first(&events(&out), "plant", "fault-injected").is_some());
+    assert!(back_to_back_publishes(&out) <= 1);
+}
+
+#[test]
+fn a_35_ms_delay_skips_the_missed_ticks_instead_of_bursting() {
+    let (code, text, r, out) = run("plant-delay35", &["--duration-s", "2", "--fault", "plant:delay@1s,delay=35ms"]);
+    assert_eq!(code, Some(0), "{text}");
+    let plant = process(&r, "plant");
+    // 35 ms: the next start is 25 ms late, two whole periods: two ticks skipped, counted with the stall as one
+    // overrun, and no run of back-to-back ticks to catch up.
+    assert!(plant["counters"]["skipped_ticks"].as_u64().unwrap() >= 2, "{}", plant["counters"]);
+    assert!(plant["counters"]["overruns"].as_u64().unwrap() >= 1);
+    assert!(back_to_back_publishes(&out) <= 1);
+    assert_eq!(plant["counters"]["ticks"], 200, "the flight still has all its ticks");
+}
+
+#[test]
+fn leftovers_of_a_killed_run_are_cleaned_by_the_next() {
+    let dir = temp_dir("leftovers");
+    let id = format!("f{}-left", std::process::id());
+    // A controller and a logger of a run whose launcher died: SIGKILL them, leaving dead nodes and shared memory.
+    let mut kids: Vec<std::process::Child> = ["silrig-controller", "silrig-logger"]
+        .iter()
+        .map(|b| {
+            let exe = Path::new(SILRIG).with_file_name(b);
+            Command::new(exe).args(["--run-id", &id, "--out", dir.join("old").to_str().unwrap()]).spawn().unwrap()
+        })
+        .collect();
+    let prefix = format!("sr_{id}_");
+    let shm = || {
+        std::fs::read_dir("/dev/shm")
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+            .count()
+    };
+    let start = Instant::now();
+    while shm() == 0 && start.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    for k in kids.iter_mut() {
+        k.kill().unwrap();
+        k.wait().unwrap();
+    }
+    assert!(shm() > 0, "the killed run left nothing to clean");
+    let o = Command::new(SILRIG)
+        .args([
+            "run",
+            "--mode",
+            "lockstep",
+            "--duration-s",
+            "1",
+            "--run-id",
+            &id,
+            "--out",
+            dir.join("new").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert_eq!(shm(), 0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn malformed_fault_plans_are_rejected_naming_the_problem() {
+    let bad = |args: &[&str], needle: &str| {
+        let o =
+            Command::new(SILRIG).arg("run").args(args).args(["--out", "/nonexistent/never-created"]).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    };
+    bad(&["--fault", "pilot:kill@1s"], "unknown target \"pilot\"");
+    bad(&["--fault", "controller:explode@1s"], "unknown action \"explode\"");
+    bad(&["--fault", "controller:kill@60s"], "beyond the run");
+    bad(&["--fault", "controller:stop@1s"], "duration_s");
+    bad(&["--mode", "lockstep", "--fault", "controller:kill@1s"], "needs realtime mode");
+    let dir = temp_dir("plan");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robust.toml")).unwrap()
+        + "\n[[faults]]\nat_s = 1.0\ntarget = \"controller\"\naction = \"kill\"\nrestart = true\n";
+    std::fs::write(dir.join("bad.toml"), text).unwrap();
+    bad(&[dir.join("bad.toml").to_str().unwrap()], "unknown field `restart`");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
