@@ -248,6 +248,9 @@ impl Fault {
                 return err(key, format!("is required for action \"{}\"", action.label()));
             }
         }
+        if action == FaultAction::Drop && target == FaultTarget::Logger {
+            return err("target", "drop needs a publisher the loop depends on: plant or controller".into());
+        }
         if action.is_plant_model_fault() && target != FaultTarget::Plant {
             return err(
                 "target",

@@ -68,7 +68,7 @@ pub struct Oscillation {
 pub struct ChannelFigures {
     /// phi, theta or psi.
     pub name: String,
-    /// |S| at the end, rad/s.
+    /// |S| at the end (the last logged value), rad/s.
     pub final_abs_s: f64,
     /// Largest |W| entry over the run.
     pub max_abs_w: f64,
@@ -245,7 +245,9 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
                 .map(|(i, _)| i)
                 .collect();
             let max_abs_w = trace.rows.iter().flat_map(|r| w_cols.iter().map(move |i| r[*i].abs())).fold(0.0, f64::max);
-            ChannelFigures { name: ch.to_string(), final_abs_s: s.last().map_or(f64::NAN, |v| v.abs()), max_abs_w }
+            // Rows without a command (a lost controller) carry NaN: report the last known |S|.
+            let final_abs_s = s.iter().rev().find(|v| v.is_finite()).map_or(f64::NAN, |v| v.abs());
+            ChannelFigures { name: ch.to_string(), final_abs_s, max_abs_w }
         })
         .collect();
     Summary {

@@ -183,6 +183,22 @@ impl AttitudeController {
         &self.networks
     }
 
+    /// Replace the RBF weights (a restarted controller resuming from a checkpoint); `weights[c]` must have one
+    /// entry per node. Returns false, changing nothing, when the sizes do not match.
+    pub fn set_weights(&mut self, weights: &[Vec<f64>; 3]) -> bool {
+        if weights
+            .iter()
+            .zip(&self.networks)
+            .any(|(w, n)| w.len() != n.weights.len() || w.iter().any(|x| !x.is_finite()))
+        {
+            return false;
+        }
+        for (n, w) in self.networks.iter_mut().zip(weights) {
+            n.weights.copy_from_slice(w);
+        }
+        true
+    }
+
     /// g(x): Euler-angle acceleration per degree of (aileron, elevator, rudder) at this measurement.
     pub fn control_effectiveness(&self, m: &Measurement) -> Matrix3<f64> {
         let qbar_psf = air_data(m.vt_fps, m.alt_ft).qbar_psf;

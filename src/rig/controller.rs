@@ -2,9 +2,10 @@
 //! plant stale); it runs the same [`crate::control::AttitudeController`] as `silrig sim` on the newest sample and
 //! publishes the command with a notify.
 //!
-//! A controller that joins a plant already flying (a restart) starts fresh, with zero RBF weights, and blends its
-//! output from the surfaces' current positions to its own command over [`BUMPLESS_BLEND_S`], so the switch from the
-//! plant's held or failsafe command causes no bump. While the plant is silent it idles and says so once.
+//! A controller that joins a plant already flying (a restart) blends its output from the surfaces' current
+//! positions to its own command over [`BUMPLESS_BLEND_S`], so the switch from the plant's held or failsafe command
+//! causes no bump. With a fault plan it saves its RBF weights every few ticks; restarted with `--resume`, it starts
+//! from them instead of from zero, so it need not re-learn. While the plant is silent it idles and says so once.
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
@@ -59,6 +60,20 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
 
     let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
     let mut controller = AttitudeController::new(scenario.controller.clone(), tables);
+    let checkpoint_path = args.out.join("controller.checkpoint.json");
+    let save_weights = !scenario.faults.is_empty() && args.mode == RigMode::Realtime;
+    if args.resume {
+        let loaded = std::fs::read_to_string(&checkpoint_path)
+            .ok()
+            .and_then(|t| serde_json::from_str::<[Vec<f64>; 3]>(&t).ok())
+            .is_some_and(|w| controller.set_weights(&w));
+        if !loaded {
+            eprintln!(
+                "silrig-controller: warning: --resume without usable weights in {}; starting from zero",
+                checkpoint_path.display()
+            );
+        }
+    }
     let setpoint = setpoint_rad(&scenario);
     let dt = scenario.timing.dt_s;
     let nodes = scenario.controller.rbf.nodes();
@@ -121,7 +136,11 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                     events.emit(
                         Some(h.tick),
                         "controller-joined",
-                        format!("plant already at tick {}: fresh weights, {BUMPLESS_BLEND_S} s bumpless blend", h.tick),
+                        format!(
+                            "plant already at tick {}: {} weights, {BUMPLESS_BLEND_S} s bumpless blend",
+                            h.tick,
+                            if args.resume { "checkpointed" } else { "fresh" }
+                        ),
                     );
                 }
                 Some((epoch, _)) if epoch != h.epoch => {
@@ -162,6 +181,18 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             };
             for (c, net) in controller.networks().iter().enumerate() {
                 out.weights[c * nodes..(c + 1) * nodes].copy_from_slice(&net.weights);
+            }
+            if save_weights && h.tick.is_multiple_of(10) {
+                let weights: [&Vec<f64>; 3] = std::array::from_fn(|c| &controller.networks()[c].weights);
+                // Written beside, then renamed: a kill mid-write leaves the previous checkpoint whole.
+                let tmp = checkpoint_path.with_extension("tmp");
+                let saved = serde_json::to_string(&weights)
+                    .map_err(std::io::Error::other)
+                    .and_then(|t| std::fs::write(&tmp, t))
+                    .and_then(|_| std::fs::rename(&tmp, &checkpoint_path));
+                if let Err(e) = saved {
+                    eprintln!("silrig-controller: cannot save weights: {e}");
+                }
             }
             let effect = if loop_faults.is_empty() { Default::default() } else { loop_faults.at(h.tick) };
             if effect.sleep_ns > 0 {

@@ -160,12 +160,14 @@ pub fn binary_dir() -> anyhow::Result<PathBuf> {
     Ok(exe.parent().context("the executable has no folder")?.to_path_buf())
 }
 
-/// A rig binary older than the launcher was probably not rebuilt with it (`cargo run` builds only `silrig`).
+/// A rig binary much older than the launcher was probably not rebuilt with it (`cargo run` builds only `silrig`).
+/// Cargo links the binaries of one build within seconds of each other, hence the tolerance.
 fn warn_if_stale(bin_dir: &Path) {
     let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
     let Some(launcher) = std::env::current_exe().ok().and_then(|p| modified(&p)) else { return };
     for name in ["plant", "controller", "logger"] {
-        if modified(&bin_dir.join(format!("silrig-{name}"))).is_some_and(|t| t < launcher) {
+        let stale = |t: std::time::SystemTime| launcher.duration_since(t).is_ok_and(|d| d > Duration::from_secs(30));
+        if modified(&bin_dir.join(format!("silrig-{name}"))).is_some_and(stale) {
             eprintln!(
                 "silrig run: warning: silrig-{name} is older than silrig; rebuild all binaries with `cargo build --release`"
             );
@@ -348,7 +350,15 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
                         eprintln!("silrig run: {death}; restarting in {pause:.2} s");
                         p.restart_at = Some(Instant::now() + Duration::from_secs_f64(pause));
                     }
-                    _ => failures.push(death),
+                    _ => {
+                        // The survivors carry on (the plant in failsafe, the logger marking the gap): the run goes
+                        // to its end and reports the failure. Without a plant there is nothing left to run.
+                        if p.name == "plant" {
+                            plant_done_at = Some(Instant::now());
+                            wall_s = started.elapsed().as_secs_f64();
+                        }
+                        failures.push(death);
+                    }
                 }
             }
         }
@@ -357,7 +367,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
                 let name = slot.name;
                 let restarts = slot.restarts + 1;
                 let mut restart_args = args.clone();
-                if name == "plant" {
+                if name == "plant" || name == "controller" {
                     restart_args.push("--resume".into());
                 }
                 let mut p = spawn(&bin_dir, name, &restart_args, &out)?;
@@ -373,7 +383,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         {
             break;
         }
-        if !failures.is_empty() || signals::termination_requested() || started.elapsed() > timeout {
+        if signals::termination_requested() || started.elapsed() > timeout {
             if signals::termination_requested() {
                 failures.push("silrig run: interrupted".into());
             } else if started.elapsed() > timeout {

@@ -70,7 +70,8 @@ pub struct ProcessArgs {
     /// surfaces and flags failsafe, ms.
     #[arg(long, default_value_t = 100.0)]
     pub controller_hold_ms: f64,
-    /// Plant: continue from the checkpoint a previous plant of this run left in `--out` (a restart).
+    /// Plant: continue from the state a previous plant of this run saved in `--out`; controller: start from the
+    /// RBF weights a previous controller saved there (a restart).
     #[arg(long)]
     pub resume: bool,
     /// How long the plant waits for the controller and logger to connect, s.
