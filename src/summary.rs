@@ -126,7 +126,7 @@ fn rms(values: impl Iterator<Item = f64>) -> f64 {
         sum += v * v;
         n += 1;
     }
-    if n == 0 { 0.0 } else { (sum / n as f64).sqrt() }
+    if n == 0 { f64::NAN } else { (sum / n as f64).sqrt() }
 }
 
 fn oscillation(signal: &str, t: &[f64], x: &[f64]) -> Oscillation {
@@ -192,8 +192,11 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
         })
         .collect();
     let alpha = col(trace, "alpha_deg");
+    // NaN when the run ends before `from`: there is nothing to judge, which is not the same as zero.
     let late = |name: &str, from: f64| -> f64 {
-        col(trace, name).iter().zip(&t).filter(|(_, ti)| **ti >= from).fold(0.0, |m, (v, _)| m.max(v.abs()))
+        let late: Vec<f64> =
+            col(trace, name).iter().zip(&t).filter(|(_, ti)| **ti >= from).map(|(v, _)| v.abs()).collect();
+        if late.is_empty() { f64::NAN } else { late.iter().fold(0.0, |m, v| m.max(*v)) }
     };
     let limits = [
         ("aileron", &scenario.actuators.aileron_deg),
@@ -287,7 +290,11 @@ impl Summary {
         }
         out += &format!("  alpha: final {:.3} deg, peak {:.3} deg\n", self.alpha_final_deg, self.alpha_peak_deg);
         let [p, q, r] = self.body_rate_max_late_dps;
-        out += &format!("  max |p|, |q|, |r| after {RATES_FROM_S} s: {p:.3}, {q:.3}, {r:.3} deg/s\n");
+        if p.is_nan() {
+            out += &format!("  max |p|, |q|, |r| after {RATES_FROM_S} s: n/a (the run is shorter)\n");
+        } else {
+            out += &format!("  max |p|, |q|, |r| after {RATES_FROM_S} s: {p:.3}, {q:.3}, {r:.3} deg/s\n");
+        }
         out += "  surface   peak(deg)  rate-limit  pos-limit  rms rate(dps)  after 5 s  rms cmd rate\n";
         for s in &self.surfaces {
             out += &format!(

@@ -107,8 +107,12 @@ struct Proc {
     name: &'static str,
     child: Child,
     status: Option<ExitStatus>,
-    /// The exit was caused by a planned kill or term.
+    /// A planned kill or term was sent and its exit not yet seen.
     planned_exit: bool,
+    /// This instance ended by a planned kill or term.
+    killed_by_plan: bool,
+    /// Its exit has been dealt with (each exit is handled once).
+    exit_handled: bool,
     restarts: u32,
     /// When to start it again.
     restart_at: Option<Instant>,
@@ -185,7 +189,16 @@ fn spawn(bin_dir: &Path, name: &'static str, args: &[String], out_dir: &Path) ->
         .stderr(log)
         .spawn()
         .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
-    Ok(Proc { name, child, status: None, planned_exit: false, restarts: 0, restart_at: None })
+    Ok(Proc {
+        name,
+        child,
+        status: None,
+        planned_exit: false,
+        killed_by_plan: false,
+        exit_handled: false,
+        restarts: 0,
+        restart_at: None,
+    })
 }
 
 /// Run the three processes to the end of the scenario and return the merged report (also written as
@@ -249,7 +262,16 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             .stderr(Stdio::null())
             .spawn()
             .context("starting the timer baseline")?;
-        Some(Proc { name: "timer-baseline", child, status: None, planned_exit: false, restarts: 0, restart_at: None })
+        Some(Proc {
+            name: "timer-baseline",
+            child,
+            status: None,
+            planned_exit: false,
+            killed_by_plan: false,
+            exit_handled: false,
+            restarts: 0,
+            restart_at: None,
+        })
     } else {
         None
     };
@@ -316,10 +338,13 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             }
         }
         for p in procs.iter_mut() {
-            if let Some(status) = p.poll()? {
+            if let Some(status) = p.poll()?
+                && !std::mem::replace(&mut p.exit_handled, true)
+            {
                 let ok = status.success();
                 let planned = std::mem::take(&mut p.planned_exit);
                 if planned {
+                    p.killed_by_plan = true;
                     events.emit(None, "process-ended", format!("{} {} (planned)", p.name, describe(status)));
                     if p.restart_at.is_none() && p.name == "plant" && plant_done_at.is_none() {
                         plant_done_at = Some(Instant::now());
@@ -393,6 +418,11 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         }
         std::thread::sleep(Duration::from_millis(5));
     }
+    let ended_by_plan: Vec<&str> = procs
+        .iter()
+        .filter(|p| p.status.is_some() && p.restart_at.is_none() && p.killed_by_plan)
+        .map(|p| p.name)
+        .collect();
     // A process left stopped by an interrupted plan must be continued to hear SIGTERM.
     for pf in plan.iter().filter(|pf| pf.follow_up.is_some()) {
         if let Some(p) = procs.iter_mut().find(|p| p.name == pf.fault.target().label()) {
@@ -430,6 +460,8 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     for name in ["plant", "controller", "logger"] {
         match read_report(&out, name) {
             Ok(r) => processes.push(r),
+            // A process a planned fault killed for good has no report to give; anything else should have one.
+            Err(_) if ended_by_plan.contains(&name) => {}
             Err(e) => failures.push(format!("{name}: no report ({e})")),
         }
     }

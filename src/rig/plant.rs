@@ -331,6 +331,8 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             if !stale && silent_ns >= stale_after_ns {
                 stale = true;
                 events.emit(Some(sim_tick), "controller-stale", format!("no command for {} ms", silent_ns / 1_000_000));
+                // A dead controller's publisher must go before a new one can take its place; a stopped one stays.
+                let _ = command_stream.try_cleanup_dead_nodes();
             }
             if !in_failsafe && silent_ns >= hold_ns {
                 in_failsafe = true;
