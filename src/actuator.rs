@@ -74,6 +74,15 @@ impl Actuator {
         Self { limits, position: position.clamp(limits.min, limits.max) }
     }
 
+    /// `delta` cut to what the rate limit allows in `dt_s`, and whether it had to be cut.
+    #[inline]
+    fn rate_limited(&self, delta: f64, dt_s: f64) -> (f64, bool) {
+        match self.limits.rate_limit_per_s {
+            Some(rate) if delta.abs() > rate * dt_s => ((rate * dt_s).copysign(delta), true),
+            _ => (delta, false),
+        }
+    }
+
     /// Advance the actuator over `dt_s` seconds with `command` held, and return which limits were active.
     /// The lag is integrated exactly for a held command.
     #[inline]
@@ -82,15 +91,8 @@ impl Actuator {
             Some(tau) => command + (self.position - command) * (-dt_s / tau).exp(),
             None => command,
         };
-        let mut delta = target - self.position;
-        let mut hits = LimitHits::default();
-        if let Some(rate) = self.limits.rate_limit_per_s {
-            let max_step = rate * dt_s;
-            if delta.abs() > max_step {
-                delta = max_step.copysign(delta);
-                hits.rate = true;
-            }
-        }
+        let (delta, rate_limited) = self.rate_limited(target - self.position, dt_s);
+        let mut hits = LimitHits { rate: rate_limited, position: false };
         let unclamped = self.position + delta;
         self.position = unclamped.clamp(self.limits.min, self.limits.max);
         let pinned = (self.position == self.limits.max && command > self.limits.max)
@@ -115,15 +117,8 @@ impl Actuator {
                 // A runaway servo drives at full rate, not through the command lag; without a rate limit the fastest
                 // motion is instant.
                 let stop = if to_max { self.limits.max } else { self.limits.min };
-                let mut delta = stop - self.position;
-                let mut hits = LimitHits::default();
-                if let Some(rate) = self.limits.rate_limit_per_s {
-                    let max_step = rate * dt_s;
-                    if delta.abs() > max_step {
-                        delta = max_step.copysign(delta);
-                        hits.rate = true;
-                    }
-                }
+                let (delta, rate_limited) = self.rate_limited(stop - self.position, dt_s);
+                let mut hits = LimitHits { rate: rate_limited, position: false };
                 self.position = (self.position + delta).clamp(self.limits.min, self.limits.max);
                 // Snap onto the stop when the step reaches it, so rounding never leaves it a hair short.
                 if !hits.rate {

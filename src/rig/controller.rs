@@ -9,9 +9,9 @@
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
-use super::report::{ProcessReport, Recorder, ReportMeta, scheduling_text};
+use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, period_ns};
-use crate::clock::{self, monotonic_ns};
+use crate::clock::monotonic_ns;
 use crate::control::AttitudeController;
 use crate::fault::FaultTarget;
 use crate::ipc::{self, LoopEnd, Stream};
@@ -46,11 +46,7 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         "the rig carries at most {MAX_RBF_NODES} RBF nodes per channel, the scenario has {}",
         scenario.controller.rbf.nodes()
     );
-    let rt = (args.mode == RigMode::Realtime).then(|| clock::try_realtime(79));
-    if let Some(w) = rt.as_ref().and_then(|s| s.warning.as_ref()) {
-        eprintln!("silrig-controller: warning: {w}");
-    }
-    let scheduling = rt.as_ref().map_or_else(|| clock::current_policy().to_string(), scheduling_text);
+    let scheduling = request_scheduling("controller", args.mode == RigMode::Realtime, 79);
 
     let node = ipc::create_node(&args.run_id, "controller")?;
     let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;

@@ -55,7 +55,7 @@ const RECOVERIES: [&str; 6] = [
 ];
 
 /// Records for every fault of `plan`.
-pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultRecord> {
+pub fn fault_records(plan: &[Fault], out_dir: &Path) -> Vec<FaultRecord> {
     let events = read_events(out_dir);
     let Some(t0) = plant_t0_ns(out_dir) else {
         return plan.iter().map(empty).collect();
@@ -88,7 +88,7 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
                 .iter()
                 .find(|e| RECOVERIES.contains(&e.kind.as_str()) && detection.is_none_or(|d| e.t_ns >= d.t_ns));
             let end_ns = recovery.map_or(next_ns.min(inj + 2_000_000_000), |e| e.t_ns);
-            let (plant_lost, command_lost) = losses(&timing, inj, end_ns, dt_s);
+            let (plant_lost, command_lost) = losses(&timing, inj, end_ns);
             FaultRecord {
                 fault: desc,
                 injected_at_s: Some(rel(inj)),
@@ -129,7 +129,7 @@ fn read_timing(out_dir: &Path) -> Vec<(u64, u64, bool)> {
 }
 
 /// Plant ticks missing and rows without a command among the rows published in [from_ns, to_ns].
-fn losses(timing: &[(u64, u64, bool)], from_ns: u64, to_ns: u64, _dt_s: f64) -> (u64, u64) {
+fn losses(timing: &[(u64, u64, bool)], from_ns: u64, to_ns: u64) -> (u64, u64) {
     let rows: Vec<&(u64, u64, bool)> = timing.iter().filter(|r| r.1 >= from_ns && r.1 <= to_ns).collect();
     let command_lost = rows.iter().filter(|r| r.2).count() as u64;
     // Gaps in the tick sequence from the last row before the window to the first row after it.

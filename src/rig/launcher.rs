@@ -119,6 +119,19 @@ struct Proc {
 }
 
 impl Proc {
+    fn new(name: &'static str, child: Child) -> Self {
+        Self {
+            name,
+            child,
+            status: None,
+            planned_exit: false,
+            killed_by_plan: false,
+            exit_handled: false,
+            restarts: 0,
+            restart_at: None,
+        }
+    }
+
     fn poll(&mut self) -> std::io::Result<Option<ExitStatus>> {
         if self.status.is_none() {
             self.status = self.child.try_wait()?;
@@ -189,16 +202,7 @@ fn spawn(bin_dir: &Path, name: &'static str, args: &[String], out_dir: &Path) ->
         .stderr(log)
         .spawn()
         .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
-    Ok(Proc {
-        name,
-        child,
-        status: None,
-        planned_exit: false,
-        killed_by_plan: false,
-        exit_handled: false,
-        restarts: 0,
-        restart_at: None,
-    })
+    Ok(Proc::new(name, child))
 }
 
 /// Run the three processes to the end of the scenario and return the merged report (also written as
@@ -262,16 +266,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             .stderr(Stdio::null())
             .spawn()
             .context("starting the timer baseline")?;
-        Some(Proc {
-            name: "timer-baseline",
-            child,
-            status: None,
-            planned_exit: false,
-            killed_by_plan: false,
-            exit_handled: false,
-            restarts: 0,
-            restart_at: None,
-        })
+        Some(Proc::new("timer-baseline", child))
     } else {
         None
     };
@@ -483,7 +478,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         processes,
         timer_baseline,
         control,
-        faults: super::fault_report::fault_records(&scenario.faults, &out, scenario.timing.dt_s),
+        faults: super::fault_report::fault_records(&scenario.faults, &out),
         failures,
         leftovers,
     };

@@ -9,7 +9,7 @@
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
-use super::report::{ProcessReport, Recorder, ReportMeta, scheduling_text};
+use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, period_ns, signals};
 use crate::clock::{self, TickSchedule, monotonic_ns};
 use crate::control::SurfaceCommand;
@@ -111,12 +111,7 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     signals::install_termination_flag();
     let scenario = args.scenario()?;
     let realtime = args.mode == RigMode::Realtime;
-    // Lockstep blocks on its peers rather than on a clock; FIFO there would only starve them on a small machine.
-    let rt = if realtime { Some(clock::try_realtime(80)) } else { None };
-    if let Some(w) = rt.as_ref().and_then(|s| s.warning.as_ref()) {
-        eprintln!("silrig-plant: warning: {w}");
-    }
-    let scheduling = rt.as_ref().map_or_else(|| clock::current_policy().to_string(), scheduling_text);
+    let scheduling = request_scheduling("plant", realtime, 80);
 
     let node = ipc::create_node(&args.run_id, "plant")?;
     let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;

@@ -186,7 +186,16 @@ impl MachineConditions {
     }
 }
 
-/// "SCHED_FIFO 80, memory locked" style text for a realtime request's outcome.
-pub fn scheduling_text(status: &crate::clock::RealtimeStatus) -> String {
+/// Ask for SCHED_FIFO at `priority` and mlockall when `realtime` (one warning line on stderr when refused), and
+/// return the scheduling obtained as report text ("SCHED_FIFO 80, memory locked"). Lockstep processes block on each
+/// other rather than on a clock; FIFO there would only starve their peers on a small machine.
+pub fn request_scheduling(process: &str, realtime: bool, priority: i32) -> String {
+    if !realtime {
+        return crate::clock::current_policy().to_string();
+    }
+    let status = crate::clock::try_realtime(priority);
+    if let Some(w) = &status.warning {
+        eprintln!("silrig-{process}: warning: {w}");
+    }
     format!("{}{}", status.policy, if status.memory_locked { ", memory locked" } else { "" })
 }
