@@ -180,12 +180,9 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             }
             if save_weights && h.tick.is_multiple_of(10) {
                 let weights: [&Vec<f64>; 3] = std::array::from_fn(|c| &controller.networks()[c].weights);
-                // Written beside, then renamed: a kill mid-write leaves the previous checkpoint whole.
-                let tmp = checkpoint_path.with_extension("tmp");
                 let saved = serde_json::to_string(&weights)
                     .map_err(std::io::Error::other)
-                    .and_then(|t| std::fs::write(&tmp, t))
-                    .and_then(|_| std::fs::rename(&tmp, &checkpoint_path));
+                    .and_then(|t| super::write_atomically(&checkpoint_path, &t));
                 if let Err(e) = saved {
                     eprintln!("silrig-controller: cannot save weights: {e}");
                 }
@@ -230,13 +227,7 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         (None, LoopEnd::Stopped) => "completed".into(),
     };
     rec.count("interrupted_waits", exit.interrupts);
-    let meta = ReportMeta {
-        run_id: args.run_id.to_string(),
-        scenario: scenario.name.clone(),
-        mode: args.mode.label().into(),
-        scheduling,
-        ended,
-    };
+    let meta = ReportMeta::new(args, &scenario.name, scheduling, ended);
     let report = rec.finish(meta, &args.out)?;
     match error {
         Some(e) => Err(e),

@@ -300,13 +300,7 @@ pub fn run_logger(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         (None, LoopEnd::TerminationRequest, false) => "terminated by signal".into(),
         (None, LoopEnd::Stopped, false) => "stopped".into(),
     };
-    let meta = ReportMeta {
-        run_id: args.run_id.to_string(),
-        scenario: scenario.name.clone(),
-        mode: args.mode.label().into(),
-        scheduling: crate::clock::current_policy().to_string(),
-        ended,
-    };
+    let meta = ReportMeta::new(args, &scenario.name, crate::clock::current_policy().to_string(), ended);
     let report = rec.finish(meta, &args.out)?;
     match error {
         Some(e) => Err(e),

@@ -103,3 +103,11 @@ pub fn load_scenario(path: Option<&Path>, duration_s: Option<f64>) -> anyhow::Re
 pub fn period_ns(scenario: &Scenario) -> u64 {
     (scenario.timing.dt_s * 1e9).round() as u64
 }
+
+/// Write `text` beside `path`, then rename it over `path`: a process killed mid-write leaves the previous file
+/// whole (the checkpoints a restarted plant or controller resumes from).
+pub fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text)?;
+    std::fs::rename(&tmp, path)
+}

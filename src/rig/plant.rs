@@ -367,12 +367,9 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             }
         }
         if realtime && !scenario.faults.is_empty() && (sim_tick + 1) % CHECKPOINT_EVERY_TICKS == 0 {
-            // Written beside, then renamed: a kill mid-write leaves the previous checkpoint whole.
-            let tmp = checkpoint_path.with_extension("tmp");
             let saved = serde_json::to_string(&runner.checkpoint())
                 .map_err(std::io::Error::other)
-                .and_then(|t| std::fs::write(&tmp, t))
-                .and_then(|_| std::fs::rename(&tmp, &checkpoint_path));
+                .and_then(|t| super::write_atomically(&checkpoint_path, &t));
             if let Err(e) = saved {
                 eprintln!("silrig-plant: cannot write {}: {e}", checkpoint_path.display());
             }
@@ -383,12 +380,6 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let stats = commands.stats();
     rec.count("commands_lost", stats.lost);
     rec.count("controller_restarts", stats.publisher_restarts);
-    let meta = ReportMeta {
-        run_id: args.run_id.to_string(),
-        scenario: scenario.name.clone(),
-        mode: args.mode.label().into(),
-        scheduling,
-        ended,
-    };
+    let meta = ReportMeta::new(args, &scenario.name, scheduling, ended);
     Ok(rec.finish(meta, &args.out)?)
 }

@@ -139,6 +139,19 @@ pub struct ReportMeta {
     pub ended: String,
 }
 
+impl ReportMeta {
+    /// The identity a process of this run reports under.
+    pub fn new(args: &super::ProcessArgs, scenario: &str, scheduling: String, ended: String) -> Self {
+        Self {
+            run_id: args.run_id.to_string(),
+            scenario: scenario.into(),
+            mode: args.mode.label().into(),
+            scheduling,
+            ended,
+        }
+    }
+}
+
 /// Where a process's report goes.
 pub fn report_path(out_dir: &Path, process: &str) -> PathBuf {
     out_dir.join(format!("{process}.report.json"))
