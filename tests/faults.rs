@@ -96,13 +96,12 @@ fn controller_sigkill_and_restart_failsafe_then_resume_with_the_gap_marked() {
     let failsafe = first(&ev, "plant", "failsafe-engaged").expect("failsafe");
     let recovered = first(&ev, "plant", "controller-recovered").expect("recovered");
     assert!(first(&ev, "controller", "controller-joined").is_some(), "bumpless join announced");
-    // Failsafe within the 100 ms hold (10 ticks) plus two ticks of the last command the plant received.
-    let missing = first(&ev, "logger", "commands-missing").expect("gap marked")["tick"].as_u64().unwrap();
-    let engaged = failsafe["tick"].as_u64().unwrap();
-    assert!(
-        engaged >= missing && engaged - missing <= 10 + 2,
-        "failsafe at tick {engaged}, commands missing from {missing}"
-    );
+    // Failsafe within the 100 ms hold (10 ticks) plus two ticks of the last command the plant received, counted in
+    // the plant's own ticks (which a loaded machine can only make fewer).
+    let detail = failsafe["detail"].as_str().unwrap();
+    let silent_ticks: u64 = detail.split(' ').next().unwrap().parse().unwrap();
+    assert!(silent_ticks <= 10 + 2, "{detail}");
+    assert!(first(&ev, "logger", "commands-missing").is_some(), "gap marked in the log");
     assert!(
         stale["t_ns"].as_u64() <= failsafe["t_ns"].as_u64() && failsafe["t_ns"].as_u64() < recovered["t_ns"].as_u64()
     );
@@ -140,10 +139,14 @@ fn logger_stopped_500_ms_loses_no_sample() {
     let (code, text, r, out) = run("log-stop", &["--duration-s", "3", "--fault", "logger:stop@1s,for=500ms"]);
     assert_eq!(code, Some(0), "{text}");
     let logger = process(&r, "logger");
-    for c in ["plant_samples_lost", "command_samples_lost", "rows_without_command", "plant_ticks_missing"] {
+    for c in ["plant_samples_lost", "command_samples_lost", "plant_ticks_missing"] {
         assert_eq!(logger["counters"][c], 0, "{c}");
     }
     assert_eq!(trace_rows(&out), 300);
+    // Every command the controller sent is in the log (on a loaded machine the controller may skip a stale sample,
+    // which leaves a row without a command that the logger did not lose).
+    let with_command = 300 - logger["counters"]["rows_without_command"].as_u64().unwrap();
+    assert_eq!(with_command, process(&r, "controller")["counters"]["commands_sent"].as_u64().unwrap());
     assert!(first(&events(&out), "launcher", "fault-ended").is_some());
 }
 
@@ -159,12 +162,14 @@ fn controller_stopped_500_ms_is_detected_and_recovered() {
     assert_eq!(trace_rows(&out), 300);
 }
 
-/// Publishes that follow the previous one by less than 1 ms: the mark of ticks run back to back. The plant
-/// always sleeps to the next grid point, so outside a stall this never happens.
-fn back_to_back_publishes(out: &Path) -> usize {
+/// Runs of ticks published back to back (two consecutive intervals under 1 ms): what catching up in a burst looks
+/// like. A single short interval is only the tick after a stall starting late; the plant always sleeps to the next
+/// grid point after it.
+fn bursts(out: &Path) -> usize {
     let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();
     let sends: Vec<u64> = timing.lines().skip(1).map(|l| l.split(',').nth(3).unwrap().parse().unwrap()).collect();
-    sends.windows(2).filter(|w| w[1] - w[0] < 1_000_000).count()
+    let short: Vec<bool> = sends.windows(2).map(|w| w[1] - w[0] < 1_000_000).collect();
+    short.windows(2).filter(|w| w[0] && w[1]).count()
 }
 
 #[test]
@@ -179,7 +184,7 @@ fn a_15_ms_delay_in_the_plant_is_one_overrun_and_no_burst() {
     assert_eq!(plant["counters"]["ticks"], 200);
     assert!(first(&events(&out), "plant", "overrun").is_some());
     assert!(first(&events(&out), "plant", "fault-injected").is_some());
-    assert!(back_to_back_publishes(&out) <= 1);
+    assert_eq!(bursts(&out), 0);
 }
 
 #[test]
@@ -191,7 +196,7 @@ fn a_35_ms_delay_skips_the_missed_ticks_instead_of_bursting() {
     // overrun, and no run of back-to-back ticks to catch up.
     assert!(plant["counters"]["skipped_ticks"].as_u64().unwrap() >= 2, "{}", plant["counters"]);
     assert!(plant["counters"]["overruns"].as_u64().unwrap() >= 1);
-    assert!(back_to_back_publishes(&out) <= 1);
+    assert_eq!(bursts(&out), 0);
     assert_eq!(plant["counters"]["ticks"], 200, "the flight still has all its ticks");
 }
 

@@ -86,14 +86,20 @@ fn check_report(r: &Value, ticks: u64, mode: Mode) {
     assert_eq!(plant["ended"], "completed");
     let logger = process(r, "logger");
     assert_eq!(logger["counters"]["rows_written"], ticks);
-    for (p, counter) in [
-        ("logger", "plant_samples_lost"),
-        ("logger", "command_samples_lost"),
-        ("logger", "rows_without_command"),
-        ("controller", "plant_samples_lost"),
-        ("plant", "commands_lost"),
-    ] {
+    for (p, counter) in
+        [("logger", "plant_samples_lost"), ("logger", "command_samples_lost"), ("plant", "commands_lost")]
+    {
         assert_eq!(process(r, p)["counters"][counter], 0, "{p}.{counter}");
+    }
+    let without = logger["counters"]["rows_without_command"].as_u64().unwrap();
+    if realtime {
+        // Nothing sent is lost: on a loaded machine the controller may act on the newest of several waiting samples,
+        // leaving a tick it never answered, but every command it sent is in the log.
+        let sent = process(r, "controller")["counters"]["commands_sent"].as_u64().unwrap();
+        assert_eq!(ticks - without, sent);
+    } else {
+        assert_eq!(without, 0, "lockstep answers every tick");
+        assert_eq!(process(r, "controller")["counters"]["plant_samples_lost"], 0);
     }
     for p in ["plant", "controller", "logger"] {
         assert!(process(r, p)["scheduling"].as_str().unwrap().starts_with("SCHED_"), "{p}");

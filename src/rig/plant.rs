@@ -90,6 +90,11 @@ fn failsafe_command(scenario: &crate::scenario::Scenario, hold: ActuatorCommand)
     }
 }
 
+/// The tick a (possibly resumed) plant starts at.
+fn sim_tick_start(runner: &PlantRunner) -> u64 {
+    runner.snapshot().tick
+}
+
 /// Wait until `ready()` or time out; SIGTERM ends the wait early.
 fn wait_for_peers(what: &str, timeout_s: f64, ready: impl Fn() -> bool) -> anyhow::Result<bool> {
     let deadline = monotonic_ns() + (timeout_s * 1e9) as u64;
@@ -187,10 +192,11 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let schedule = TickSchedule::new(monotonic_ns() + 2 * period, period);
     events.emit(Some(0), "ticking", format!("t0_ns={}", schedule.t0_ns));
     let mut last_fresh_ns = schedule.t0_ns;
+    let mut last_fresh_tick = sim_tick_start(&runner);
     let mut command_epoch: Option<u64> = None;
     let (mut stale, mut in_failsafe) = (false, false);
     let mut expected_wall_tick = 0u64;
-    let mut sim_tick = runner.snapshot().tick;
+    let mut sim_tick = sim_tick_start(&runner);
     let mut overrun_counted = false;
     let mut ended = if started { "completed".to_string() } else { "terminated by signal".to_string() };
 
@@ -307,6 +313,7 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                 applied = actuator_command(&c, throttle);
                 applied_answers = Some(t);
                 last_fresh_ns = now;
+                last_fresh_tick = sim_tick;
                 if stale || in_failsafe {
                     let how = if in_failsafe { "failsafe released, " } else { "" };
                     events.emit(Some(sim_tick), "controller-recovered", format!("{how}commands resumed"));
@@ -335,8 +342,11 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                     Some(sim_tick),
                     "failsafe-engaged",
                     format!(
-                        "trim surfaces: aileron {:.3}, elevator {:.3}, rudder {:.3} deg",
-                        failsafe.surfaces.aileron_deg, failsafe.surfaces.elevator_deg, failsafe.surfaces.rudder_deg
+                        "{} ticks after the last fresh command; trim surfaces: aileron {:.3}, elevator {:.3}, rudder {:.3} deg",
+                        sim_tick - last_fresh_tick,
+                        failsafe.surfaces.aileron_deg,
+                        failsafe.surfaces.elevator_deg,
+                        failsafe.surfaces.rudder_deg
                     ),
                 );
             }
