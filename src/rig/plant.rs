@@ -376,7 +376,7 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
                 );
             }
         }
-        if realtime && !scenario.faults.is_empty() && (sim_tick + 1) % CHECKPOINT_EVERY_TICKS == 0 {
+        if realtime && !scenario.faults.is_empty() && (sim_tick + 1).is_multiple_of(CHECKPOINT_EVERY_TICKS) {
             let saved = serde_json::to_string(&runner.checkpoint())
                 .map_err(std::io::Error::other)
                 .and_then(|t| super::write_atomically(&checkpoint_path, &t));
