@@ -1,7 +1,6 @@
 //! `silrig-logger`: the logger process of the rig. A thin shell over [`silrig::rig::logger::run_logger`].
 
 use clap::Parser;
-use std::process::ExitCode;
 
 /// The logger process of a silrig run (normally started by `silrig run`).
 #[derive(Parser)]
@@ -11,17 +10,7 @@ struct Cli {
     args: silrig::rig::ProcessArgs,
 }
 
-fn main() -> ExitCode {
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    match silrig::rig::logger::run_logger(&cli.args) {
-        Ok(report) if report.ended.starts_with("error") => {
-            eprintln!("silrig-logger: {}", report.ended);
-            ExitCode::FAILURE
-        }
-        Ok(_) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("silrig-logger: error: {e:#}");
-            ExitCode::from(2)
-        }
-    }
+    silrig::rig::exit_status("logger", silrig::rig::logger::run_logger(&cli.args))
 }

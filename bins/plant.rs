@@ -1,7 +1,6 @@
 //! `silrig-plant`: the plant process of the rig. A thin shell over [`silrig::rig::plant::run_plant`].
 
 use clap::Parser;
-use std::process::ExitCode;
 
 /// The plant process of a silrig run (normally started by `silrig run`).
 #[derive(Parser)]
@@ -11,17 +10,7 @@ struct Cli {
     args: silrig::rig::ProcessArgs,
 }
 
-fn main() -> ExitCode {
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    match silrig::rig::plant::run_plant(&cli.args) {
-        Ok(report) if report.ended.starts_with("error") => {
-            eprintln!("silrig-plant: {}", report.ended);
-            ExitCode::FAILURE
-        }
-        Ok(_) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("silrig-plant: error: {e:#}");
-            ExitCode::from(2)
-        }
-    }
+    silrig::rig::exit_status("plant", silrig::rig::plant::run_plant(&cli.args))
 }

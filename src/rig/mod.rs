@@ -111,3 +111,19 @@ pub fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
     std::fs::write(&tmp, text)?;
     std::fs::rename(&tmp, path)
 }
+
+/// The exit status of a rig process: 0 when it ended cleanly, 1 when it ended on an error it reported, 2 when it
+/// could not run at all (bad arguments, scenario or peer); the reason goes to stderr.
+pub fn exit_status(process: &str, result: anyhow::Result<report::ProcessReport>) -> std::process::ExitCode {
+    match result {
+        Ok(report) if report.ended.starts_with("error") => {
+            eprintln!("silrig-{process}: {}", report.ended);
+            std::process::ExitCode::FAILURE
+        }
+        Ok(_) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("silrig-{process}: error: {e:#}");
+            std::process::ExitCode::from(2)
+        }
+    }
+}
