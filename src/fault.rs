@@ -3,30 +3,8 @@
 //! with signals; loop faults (delay, jitter, drop) by the target process itself; plant faults (sensor noise and
 //! bias, actuator stuck, hard-over, rate-frozen) by the plant model, identically in `silrig sim` and the rig.
 
+use crate::topology::Role;
 use serde::{Deserialize, Serialize};
-
-/// Which process a fault hits.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
-#[serde(rename_all = "kebab-case")]
-pub enum FaultTarget {
-    /// The plant process (time master).
-    Plant,
-    /// The controller process.
-    Controller,
-    /// The logger process.
-    Logger,
-}
-
-impl FaultTarget {
-    /// Name as in plans and messages.
-    pub fn label(self) -> &'static str {
-        match self {
-            FaultTarget::Plant => "plant",
-            FaultTarget::Controller => "controller",
-            FaultTarget::Logger => "logger",
-        }
-    }
-}
 
 /// What happens.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -121,7 +99,7 @@ pub struct Fault {
     /// When, s of simulated time from the start of the run.
     pub at_s: f64,
     /// Which process.
-    pub target: Option<FaultTarget>,
+    pub target: Option<Role>,
     /// What happens.
     pub action: Option<FaultAction>,
     /// Length of a stop, or of a delay/jitter/drop/sensor/actuator window (default: to the end of the run), s.
@@ -164,8 +142,8 @@ pub struct Fault {
 
 impl Fault {
     /// The target (validated faults always have one).
-    pub fn target(&self) -> FaultTarget {
-        self.target.unwrap_or(FaultTarget::Plant)
+    pub fn target(&self) -> Role {
+        self.target.unwrap_or(Role::Plant)
     }
 
     /// The action (validated faults always have one).
@@ -248,10 +226,10 @@ impl Fault {
                 return err(key, format!("is required for action \"{}\"", action.label()));
             }
         }
-        if action == FaultAction::Drop && target == FaultTarget::Logger {
+        if action == FaultAction::Drop && target == Role::Logger {
             return err("target", "drop needs a publisher the loop depends on: plant or controller".into());
         }
-        if action.is_plant_model_fault() && target != FaultTarget::Plant {
+        if action.is_plant_model_fault() && target != Role::Plant {
             return err(
                 "target",
                 format!("action \"{}\" acts on the plant model: target must be plant", action.label()),
@@ -318,12 +296,10 @@ pub fn parse_fault_flag(text: &str) -> Result<Fault, String> {
     let bad = |why: String| format!("--fault {text:?}: {why}");
     let (head, rest) = text.split_once('@').ok_or_else(|| bad("expected TARGET:ACTION@TIME".into()))?;
     let (target, action) = head.split_once(':').ok_or_else(|| bad("expected TARGET:ACTION before '@'".into()))?;
-    let target: FaultTarget = match target.trim() {
-        "plant" => FaultTarget::Plant,
-        "controller" => FaultTarget::Controller,
-        "logger" => FaultTarget::Logger,
-        other => return Err(bad(format!("unknown target {other:?}; plant, controller or logger"))),
-    };
+    let target = Role::ALL
+        .into_iter()
+        .find(|r| r.label() == target.trim())
+        .ok_or_else(|| bad(format!("unknown target {:?}; plant, controller or logger", target.trim())))?;
     let action = FaultAction::ALL
         .iter()
         .copied()
@@ -388,7 +364,7 @@ mod tests {
     #[test]
     fn flags_parse_into_the_same_faults_as_plans() {
         let f = parse_fault_flag("controller:kill@3s,restart_after=0.5s").unwrap();
-        assert_eq!(f.target, Some(FaultTarget::Controller));
+        assert_eq!(f.target, Some(Role::Controller));
         assert_eq!(f.action, Some(FaultAction::Kill));
         assert_eq!((f.at_s, f.restart_after_s), (3.0, Some(0.5)));
         let f = parse_fault_flag("plant:delay@2s,delay=15ms").unwrap();

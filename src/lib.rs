@@ -29,6 +29,7 @@ pub mod scenario;
 pub mod sim;
 pub mod summary;
 pub mod timing;
+pub mod topology;
 pub mod trace;
 pub mod units;
 pub mod wire;

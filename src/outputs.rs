@@ -1,5 +1,6 @@
-//! Files a run leaves behind: `trace.csv`, `summary.json`, the effective `scenario.toml`, the figures, and the
-//! side-by-side table of `silrig compare`.
+//! Files a run leaves behind: `trace.csv`, `summary.json`, the effective `scenario.toml`, the figures; and the two
+//! single-process workflows built on them, `silrig sim` ([`simulate`]) and `silrig compare` ([`compare`], with its
+//! side-by-side table).
 
 use crate::scenario::Scenario;
 use crate::summary::Summary;
@@ -26,6 +27,40 @@ pub fn write_run(
     let mut files = vec![trace_path, summary_path, scenario_path];
     files.extend(crate::plot::plot_closed_loop(trace, out_dir, &plot_title(scenario))?);
     Ok(files)
+}
+
+/// `silrig sim`: fly the scenario's closed loop in one process and write its run into `out_dir`; returns the
+/// summary and the files written.
+pub fn simulate(scenario: &Scenario, out_dir: &Path) -> anyhow::Result<(Summary, Vec<PathBuf>)> {
+    let trace = crate::sim::run(scenario)?;
+    let summary = crate::summary::summarize(&trace, scenario);
+    let files = write_run(out_dir, scenario, &trace, &summary)?;
+    Ok((summary, files))
+}
+
+/// What [`compare`] produced.
+#[derive(Debug)]
+pub struct Comparison {
+    /// One summary per scenario, in order.
+    pub summaries: Vec<Summary>,
+    /// The overlay figure's files.
+    pub overlay: Vec<PathBuf>,
+}
+
+/// `silrig compare`: fly each scenario in one process, write each run under `out_dir/<scenario name>`, and draw
+/// the runs over each other in `out_dir/overlay.{png,svg}`.
+pub fn compare(scenarios: &[Scenario], out_dir: &Path) -> anyhow::Result<Comparison> {
+    let mut summaries = Vec::new();
+    let mut traces = Vec::new();
+    for scenario in scenarios {
+        let trace = crate::sim::run(scenario)?;
+        let summary = crate::summary::summarize(&trace, scenario);
+        write_run(&out_dir.join(&scenario.name), scenario, &trace, &summary)?;
+        summaries.push(summary);
+        traces.push((scenario.name.clone(), trace));
+    }
+    let overlay = crate::plot::plot_overlay(&traces, out_dir, "overlay")?;
+    Ok(Comparison { summaries, overlay })
 }
 
 /// Title of a scenario's figures: its name and what it shows.

@@ -201,6 +201,12 @@ impl Timing {
     pub fn ticks(&self) -> u64 {
         (self.duration_s / self.dt_s).round() as u64
     }
+
+    /// The loop period, ns: the one figure every clock of the rig (the plant's ticks, the consumers' staleness
+    /// deadlines, the OS-floor baseline beside a run) takes its period from.
+    pub fn period_ns(&self) -> u64 {
+        (self.dt_s * 1e9).round() as u64
+    }
 }
 
 /// A scenario that cannot be used, with where the problem is.

@@ -5,9 +5,9 @@
 use iceoryx2::prelude::*;
 use silrig::clock::{TickSchedule, monotonic_ns};
 use silrig::ipc::{
-    self, CONSUMER_BUFFER, IpcError, LOGGER_BUFFER, LoopEnd, RunId, Stream, TickTimer, cleanup_run, create_node,
-    open_stream, rig_waitset, run_waitset,
+    self, IpcError, LoopEnd, RunId, TickTimer, cleanup_run, create_node, open_stream, rig_waitset, run_waitset,
 };
+use silrig::topology::{CONSUMER_BUFFER, LOGGER_BUFFER, Stream};
 use silrig::wire::{CommandSample, PlantSample, SampleHeader, WireError, WireSample};
 use std::sync::mpsc;
 use std::time::Duration;
@@ -114,7 +114,7 @@ fn a_second_publisher_is_refused_with_a_clear_error_and_a_restart_is_not() {
     let first = svc_a.publisher().unwrap();
 
     let err = svc_b.publisher().unwrap_err();
-    assert!(matches!(err, IpcError::PublisherAlreadyActive { stream: Stream::Command, .. }), "{err:?}");
+    assert!(matches!(err, IpcError::PublisherAlreadyActive { stream: "command", .. }), "{err:?}");
     let msg = err.to_string();
     assert!(msg.contains("stream `command`") && msg.contains("already has a live publisher"), "{msg}");
     assert!(msg.contains("node `ctl-a`") && msg.contains(&format!("pid {}", std::process::id())), "{msg}");
@@ -157,7 +157,7 @@ fn a_peer_with_another_wire_layout_gets_a_clear_error() {
 
     let old = create_node(&t.run, "old-logger").unwrap();
     let err = open_stream::<OldPlantSample>(&old, Stream::Plant).unwrap_err();
-    assert!(matches!(err, IpcError::OtherWireLayout { stream: Stream::Plant, .. }), "{err:?}");
+    assert!(matches!(err, IpcError::OtherWireLayout { stream: "plant", .. }), "{err:?}");
     let msg = err.to_string();
     assert!(msg.starts_with("peer built with another wire layout: expected silrig::PlantSample::v0"), "{msg}");
     assert!(msg.contains("the service carries silrig::PlantSample::v1 (192 B, align 8)"), "{msg}");

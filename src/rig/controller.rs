@@ -6,231 +6,332 @@
 //! positions to its own command over [`BUMPLESS_BLEND_S`], so the switch from the plant's held or failsafe command
 //! causes no bump. With a fault plan it saves its RBF weights every few ticks; restarted with `--resume`, it starts
 //! from them instead of from zero, so it need not re-learn. While the plant is silent it idles and says so once.
+//!
+//! Phases: [`ControllerLoop::setup`] (scenario, control law, recorder), [`ControllerPorts::connect`], the event loop
+//! ([`ControllerLoop::on_samples`] per wake-up, [`ControllerLoop::on_plant_silent`] per missed deadline), and
+//! [`ControllerLoop::finish`].
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
+use super::plant::snapshot;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
-use super::{ProcessArgs, RigMode, period_ns};
+use super::{ProcessArgs, RigMode};
 use crate::clock::monotonic_ns;
 use crate::control::AttitudeController;
-use crate::fault::FaultTarget;
-use crate::ipc::{self, LoopEnd, Stream};
-use crate::sim::{PlantSnapshot, measurement, setpoint_rad};
+use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamService, StreamSubscriber};
+use crate::scenario::Scenario;
+use crate::sim::{measurement, setpoint_rad};
+use crate::topology::{Role, Stream};
 use crate::wire::{CommandSample, MAX_RBF_NODES, PlantSample};
 use anyhow::Context;
 use iceoryx2::prelude::CallbackProgression;
+use std::path::PathBuf;
 use std::time::Duration;
 
 /// How long a controller joining a running plant blends from the current surface positions to its command, s.
 pub const BUMPLESS_BLEND_S: f64 = 0.5;
 
+/// With a fault plan, the controller saves its weights every this many ticks.
+const CHECKPOINT_EVERY_TICKS: u64 = 10;
+
 const IPC_PLANT_TO_CONTROLLER: usize = 0;
 const COMPUTE: usize = 1;
 
-/// The snapshot a plant sample carries.
-pub fn snapshot(s: &PlantSample) -> PlantSnapshot {
-    PlantSnapshot {
-        tick: s.header.tick,
-        t_s: s.t_sim_s,
-        state: crate::plant::F16State::from_array(&s.state),
-        surfaces_deg: s.surfaces_deg,
-        throttle: s.throttle,
+/// The controller's side of the run's streams.
+pub struct ControllerPorts {
+    plant_stream: StreamService<PlantSample>,
+    samples: StreamSubscriber<PlantSample>,
+    publisher: StreamPublisher<CommandSample>,
+    // Dropped last: the services and ports above belong to it.
+    _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
+}
+
+impl ControllerPorts {
+    /// Open the controller's streams: read plant samples, publish commands (refused if the run has a controller).
+    pub fn connect(args: &ProcessArgs) -> anyhow::Result<Self> {
+        let node = ipc::create_node(&args.run_id, Role::Controller.label())?;
+        let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
+        let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
+        let samples = plant_stream.subscriber(Stream::Plant.queue_depth(Role::Controller))?;
+        let publisher = command_stream.publisher().context("refusing to start a second controller for this run")?;
+        Ok(Self { plant_stream, samples, publisher, _node: node })
+    }
+}
+
+/// Everything the event loop keeps between wake-ups.
+pub struct ControllerLoop {
+    scenario: Scenario,
+    scheduling: String,
+    controller: AttitudeController,
+    setpoint: [f64; 3],
+    rec: Recorder,
+    events: EventLog,
+    loop_faults: LoopFaults,
+    checkpoint_path: PathBuf,
+    save_weights: bool,
+    resumed: bool,
+    blend_ticks: u64,
+    /// First tick of the bumpless blend: set when this controller's first sample is not the plant's tick 0.
+    blend: Option<u64>,
+    plant_stale: bool,
+    /// (epoch, tick) of the last sample acted on.
+    last_tick: Option<(u64, u64)>,
+    error: Option<anyhow::Error>,
+}
+
+impl ControllerLoop {
+    /// Phase 1: the scenario, the control law (with the weights a predecessor saved, on `--resume`), the recorder.
+    pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
+        let scenario = args.scenario()?;
+        anyhow::ensure!(
+            scenario.controller.rbf.nodes() <= MAX_RBF_NODES,
+            "the rig carries at most {MAX_RBF_NODES} RBF nodes per channel, the scenario has {}",
+            scenario.controller.rbf.nodes()
+        );
+        let scheduling = request_scheduling(Role::Controller, args.mode == RigMode::Realtime);
+        let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
+        let mut rec = Recorder::new(
+            Role::Controller.label(),
+            &[
+                ("ipc_plant_to_controller", "plant publish to receive at the controller"),
+                ("compute", "controller step execution time"),
+            ],
+        );
+        rec.declare(&[
+            "commands_sent",
+            "samples_skipped",
+            "samples_invalid",
+            "plant_stale_deadlines",
+            "errors",
+            "commands_dropped",
+        ]);
+        let dt = scenario.timing.dt_s;
+        let events = EventLog::new(&args.out, Role::Controller.label());
+        let mut this = Self {
+            controller: AttitudeController::new(scenario.controller.clone(), tables),
+            setpoint: setpoint_rad(&scenario),
+            loop_faults: LoopFaults::new(&scenario.faults, Role::Controller, dt, scenario.seed, events.clone()),
+            events,
+            rec,
+            checkpoint_path: args.out.join("controller.checkpoint.json"),
+            save_weights: !scenario.faults.is_empty() && args.mode == RigMode::Realtime,
+            resumed: args.resume,
+            blend_ticks: (BUMPLESS_BLEND_S / dt).round().max(1.0) as u64,
+            blend: None,
+            plant_stale: false,
+            last_tick: None,
+            error: None,
+            scheduling,
+            scenario,
+        };
+        if args.resume {
+            this.resume_weights();
+        }
+        Ok(this)
+    }
+
+    fn resume_weights(&mut self) {
+        let loaded = std::fs::read_to_string(&self.checkpoint_path)
+            .ok()
+            .and_then(|t| serde_json::from_str::<[Vec<f64>; 3]>(&t).ok())
+            .is_some_and(|w| self.controller.set_weights(&w));
+        if !loaded {
+            eprintln!(
+                "silrig-controller: warning: --resume without usable weights in {}; starting from zero",
+                self.checkpoint_path.display()
+            );
+        }
+    }
+
+    /// Phase 3: wait for plant samples until SIGTERM (or an error); returns how the loop ended.
+    pub fn serve(&mut self, args: &ProcessArgs, ports: &mut ControllerPorts) -> anyhow::Result<ipc::LoopExit> {
+        let waitset = ipc::rig_waitset()?;
+        let period_ns = self.scenario.timing.period_ns();
+        let stale_after = Duration::from_nanos(period_ns * u64::from(args.options.stale_after_periods.max(1)));
+        let guard = waitset
+            .attach_deadline(ports.samples.listener(), stale_after)
+            .map_err(|e| anyhow::anyhow!("attaching the plant stream to the WaitSet: {e:?}"))?;
+        Ok(ipc::run_waitset(&waitset, |id| {
+            if id.has_event_from(&guard) {
+                return self.on_samples(&ports.samples, &mut ports.publisher);
+            }
+            if id.has_missed_deadline(&guard) {
+                self.on_plant_silent(&ports.plant_stream, stale_after);
+            }
+            CallbackProgression::Continue
+        })?)
+    }
+
+    /// Samples arrived: act on the newest valid one.
+    fn on_samples(
+        &mut self,
+        samples: &StreamSubscriber<PlantSample>,
+        publisher: &mut StreamPublisher<CommandSample>,
+    ) -> CallbackProgression {
+        let mut newest: Option<Received<PlantSample>> = None;
+        let mut fresh = 0u64;
+        let drained = samples.drain(|r| {
+            if r.invalid.is_some() {
+                self.rec.count("samples_invalid", 1);
+            } else {
+                fresh += 1;
+                newest = Some(*r);
+            }
+        });
+        if let Err(e) = drained {
+            self.error = Some(e.into());
+            return CallbackProgression::Stop;
+        }
+        // After a stall several samples wait; acting on stale ones would only delay the newest.
+        self.rec.count("samples_skipped", fresh.saturating_sub(1));
+        let Some(r) = newest else { return CallbackProgression::Continue };
+        let h = r.sample.header;
+        if self.last_tick.is_some_and(|(epoch, tick)| epoch == h.epoch && tick >= h.tick) {
+            return CallbackProgression::Continue;
+        }
+        self.note_plant(h.epoch, h.tick);
+        self.rec.record(IPC_PLANT_TO_CONTROLLER, r.age_ns() as i64);
+        let command = self.compute(&r.sample);
+        if self.save_weights && h.tick.is_multiple_of(CHECKPOINT_EVERY_TICKS) {
+            self.save_checkpoint();
+        }
+        self.publish(publisher, h.tick, &command);
+        CallbackProgression::Continue
+    }
+
+    /// What this sample says about the plant: a first sample past tick 0 (we joined a flying plant: blend), a new
+    /// plant epoch (it restarted), samples back after silence.
+    fn note_plant(&mut self, epoch: u64, tick: u64) {
+        match self.last_tick {
+            None if tick > 0 => {
+                self.blend = Some(tick);
+                let weights = if self.resumed { "checkpointed" } else { "fresh" };
+                let detail =
+                    format!("plant already at tick {tick}: {weights} weights, {BUMPLESS_BLEND_S} s bumpless blend");
+                self.events.emit(Some(tick), "controller-joined", detail);
+            }
+            Some((last_epoch, _)) if last_epoch != epoch => {
+                self.events.emit(Some(tick), "plant-restarted", "samples from a new plant epoch");
+            }
+            _ => {}
+        }
+        if self.plant_stale {
+            self.plant_stale = false;
+            self.events.emit(Some(tick), "plant-recovered", "samples resumed");
+        }
+        self.last_tick = Some((epoch, tick));
+    }
+
+    /// The control law on one sample, blended while joining, as a command sample with its diagnostics.
+    fn compute(&mut self, sample: &PlantSample) -> CommandSample {
+        let t0 = monotonic_ns();
+        let tick = sample.header.tick;
+        let snap = snapshot(sample);
+        let dt = self.scenario.timing.dt_s;
+        let (mut command, diag) = self.controller.step(&measurement(&snap), &self.setpoint, dt);
+        if let Some(start) = self.blend {
+            let k = ((tick - start + 1) as f64 / self.blend_ticks as f64).min(1.0);
+            let mix = |now: f64, cmd: f64| now + k * (cmd - now);
+            command.aileron_deg = mix(snap.surfaces_deg[0], command.aileron_deg);
+            command.elevator_deg = mix(snap.surfaces_deg[1], command.elevator_deg);
+            command.rudder_deg = mix(snap.surfaces_deg[2], command.rudder_deg);
+            if k >= 1.0 {
+                self.blend = None;
+            }
+        }
+        let compute_ns = monotonic_ns() - t0;
+        self.rec.record(COMPUTE, compute_ns as i64);
+        let nodes = self.scenario.controller.rbf.nodes();
+        let mut out = CommandSample {
+            answers_tick: tick,
+            surface_cmd_deg: [command.aileron_deg, command.elevator_deg, command.rudder_deg],
+            throttle_cmd: sample.throttle,
+            sliding_surface: diag.sliding_surface,
+            f_hat: diag.f_hat,
+            compute_ns,
+            rbf_nodes: nodes as u32,
+            ..CommandSample::zeroed()
+        };
+        for (c, net) in self.controller.networks().iter().enumerate() {
+            out.weights[c * nodes..(c + 1) * nodes].copy_from_slice(&net.weights);
+        }
+        out
+    }
+
+    fn save_checkpoint(&self) {
+        let weights: [&Vec<f64>; 3] = std::array::from_fn(|c| &self.controller.networks()[c].weights);
+        let saved = serde_json::to_string(&weights)
+            .map_err(std::io::Error::other)
+            .and_then(|t| super::write_atomically(&self.checkpoint_path, &t));
+        if let Err(e) = saved {
+            eprintln!("silrig-controller: cannot save weights: {e}");
+        }
+    }
+
+    /// Send the command, after any delay fault, unless a drop fault swallows it.
+    fn publish(&mut self, publisher: &mut StreamPublisher<CommandSample>, tick: u64, command: &CommandSample) {
+        let effect = if self.loop_faults.is_empty() { Default::default() } else { self.loop_faults.at(tick) };
+        if effect.sleep_ns > 0 {
+            std::thread::sleep(Duration::from_nanos(effect.sleep_ns));
+        }
+        if effect.drop {
+            self.rec.count("commands_dropped", 1);
+            return;
+        }
+        match publisher.send(tick, command) {
+            Ok(_) => self.rec.count("commands_sent", 1),
+            Err(e) => {
+                // A NaN command is refused by the transport: say so and keep running on the next sample.
+                eprintln!("silrig-controller: tick {tick}: {e}");
+                self.rec.count("errors", 1);
+            }
+        }
+    }
+
+    /// No sample within the deadline: once the plant has been seen (waiting for it to start is not staleness),
+    /// flag it stale once, and clean up its node if it died so a restarted plant can take its place.
+    fn on_plant_silent(&mut self, plant_stream: &StreamService<PlantSample>, stale_after: Duration) {
+        if self.last_tick.is_none() {
+            return;
+        }
+        self.rec.count("plant_stale_deadlines", 1);
+        if !self.plant_stale {
+            self.plant_stale = true;
+            let tick = self.last_tick.map(|(_, t)| t);
+            self.events.emit(tick, "plant-stale", format!("no plant sample for {stale_after:?}; idling"));
+        }
+        let _ = plant_stream.try_cleanup_dead_nodes();
+    }
+
+    /// Phase 4: the report; an error that stopped the loop is returned after the report is written.
+    pub fn finish(
+        mut self,
+        args: &ProcessArgs,
+        ports: &ControllerPorts,
+        exit: ipc::LoopExit,
+    ) -> anyhow::Result<ProcessReport> {
+        let stats = ports.samples.stats();
+        self.rec.count("plant_samples_lost", stats.lost);
+        self.rec.count("plant_restarts", stats.publisher_restarts);
+        let ended = match (&self.error, exit.end) {
+            (Some(e), _) => format!("error: {e}"),
+            (None, LoopEnd::TerminationRequest) => "terminated by signal".into(),
+            (None, LoopEnd::Stopped) => "completed".into(),
+        };
+        self.rec.count("interrupted_waits", exit.interrupts);
+        let meta = ReportMeta::new(args, &self.scenario.name, self.scheduling, ended);
+        let report = self.rec.finish(meta, &args.out)?;
+        match self.error {
+            Some(e) => Err(e),
+            None => Ok(report),
+        }
     }
 }
 
 /// Run the controller until SIGTERM and write its report.
 pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
-    let scenario = args.scenario()?;
-    anyhow::ensure!(
-        scenario.controller.rbf.nodes() <= MAX_RBF_NODES,
-        "the rig carries at most {MAX_RBF_NODES} RBF nodes per channel, the scenario has {}",
-        scenario.controller.rbf.nodes()
-    );
-    let scheduling = request_scheduling("controller", args.mode == RigMode::Realtime, 79);
-
-    let node = ipc::create_node(&args.run_id, "controller")?;
-    let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
-    let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
-    let samples = plant_stream.subscriber(ipc::CONSUMER_BUFFER)?;
-    let mut publisher = command_stream.publisher().context("refusing to start a second controller for this run")?;
-
-    let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
-    let mut controller = AttitudeController::new(scenario.controller.clone(), tables);
-    let checkpoint_path = args.out.join("controller.checkpoint.json");
-    let save_weights = !scenario.faults.is_empty() && args.mode == RigMode::Realtime;
-    if args.resume {
-        let loaded = std::fs::read_to_string(&checkpoint_path)
-            .ok()
-            .and_then(|t| serde_json::from_str::<[Vec<f64>; 3]>(&t).ok())
-            .is_some_and(|w| controller.set_weights(&w));
-        if !loaded {
-            eprintln!(
-                "silrig-controller: warning: --resume without usable weights in {}; starting from zero",
-                checkpoint_path.display()
-            );
-        }
-    }
-    let setpoint = setpoint_rad(&scenario);
-    let dt = scenario.timing.dt_s;
-    let nodes = scenario.controller.rbf.nodes();
-    let mut rec = Recorder::new(
-        "controller",
-        &[
-            ("ipc_plant_to_controller", "plant publish to receive at the controller"),
-            ("compute", "controller step execution time"),
-        ],
-    );
-    rec.declare(&[
-        "commands_sent",
-        "samples_skipped",
-        "samples_invalid",
-        "plant_stale_deadlines",
-        "errors",
-        "commands_dropped",
-    ]);
-    let events = EventLog::new(&args.out, "controller");
-    let mut loop_faults = LoopFaults::new(&scenario.faults, FaultTarget::Controller, dt, scenario.seed, events.clone());
-    let blend_ticks = (BUMPLESS_BLEND_S / dt).round().max(1.0) as u64;
-    // (first tick of the blend, ticks left): set when this controller's first sample is not the plant's tick 0.
-    let mut blend: Option<u64> = None;
-    let mut plant_stale = false;
-
-    let waitset = ipc::rig_waitset()?;
-    let stale_after = Duration::from_nanos(period_ns(&scenario) * u64::from(args.stale_after_periods.max(1)));
-    let guard = waitset
-        .attach_deadline(samples.listener(), stale_after)
-        .map_err(|e| anyhow::anyhow!("attaching the plant stream to the WaitSet: {e:?}"))?;
-    let mut last_tick: Option<(u64, u64)> = None;
-    let mut error: Option<anyhow::Error> = None;
-
-    let exit = ipc::run_waitset(&waitset, |id| {
-        if id.has_event_from(&guard) {
-            let mut newest: Option<ipc::Received<PlantSample>> = None;
-            let mut fresh = 0u64;
-            let drained = samples.drain(|r| {
-                if r.invalid.is_some() {
-                    rec.count("samples_invalid", 1);
-                } else {
-                    fresh += 1;
-                    newest = Some(*r);
-                }
-            });
-            if let Err(e) = drained {
-                error = Some(e.into());
-                return CallbackProgression::Stop;
-            }
-            // After a stall several samples wait; acting on stale ones would only delay the newest.
-            rec.count("samples_skipped", fresh.saturating_sub(1));
-            let Some(r) = newest else { return CallbackProgression::Continue };
-            let h = r.sample.header;
-            if last_tick.is_some_and(|(epoch, tick)| epoch == h.epoch && tick >= h.tick) {
-                return CallbackProgression::Continue;
-            }
-            match last_tick {
-                None if h.tick > 0 => {
-                    blend = Some(h.tick);
-                    events.emit(
-                        Some(h.tick),
-                        "controller-joined",
-                        format!(
-                            "plant already at tick {}: {} weights, {BUMPLESS_BLEND_S} s bumpless blend",
-                            h.tick,
-                            if args.resume { "checkpointed" } else { "fresh" }
-                        ),
-                    );
-                }
-                Some((epoch, _)) if epoch != h.epoch => {
-                    events.emit(Some(h.tick), "plant-restarted", "samples from a new plant epoch");
-                }
-                _ => {}
-            }
-            if plant_stale {
-                plant_stale = false;
-                events.emit(Some(h.tick), "plant-recovered", "samples resumed");
-            }
-            last_tick = Some((h.epoch, h.tick));
-            rec.record(IPC_PLANT_TO_CONTROLLER, r.age_ns() as i64);
-            let t0 = monotonic_ns();
-            let snap = snapshot(&r.sample);
-            let (mut command, diag) = controller.step(&measurement(&snap), &setpoint, dt);
-            if let Some(start) = blend {
-                let k = ((h.tick - start + 1) as f64 / blend_ticks as f64).min(1.0);
-                let mix = |now: f64, cmd: f64| now + k * (cmd - now);
-                command.aileron_deg = mix(snap.surfaces_deg[0], command.aileron_deg);
-                command.elevator_deg = mix(snap.surfaces_deg[1], command.elevator_deg);
-                command.rudder_deg = mix(snap.surfaces_deg[2], command.rudder_deg);
-                if k >= 1.0 {
-                    blend = None;
-                }
-            }
-            let compute_ns = monotonic_ns() - t0;
-            rec.record(COMPUTE, compute_ns as i64);
-            let mut out = CommandSample {
-                answers_tick: h.tick,
-                surface_cmd_deg: [command.aileron_deg, command.elevator_deg, command.rudder_deg],
-                throttle_cmd: r.sample.throttle,
-                sliding_surface: diag.sliding_surface,
-                f_hat: diag.f_hat,
-                compute_ns,
-                rbf_nodes: nodes as u32,
-                ..CommandSample::zeroed()
-            };
-            for (c, net) in controller.networks().iter().enumerate() {
-                out.weights[c * nodes..(c + 1) * nodes].copy_from_slice(&net.weights);
-            }
-            if save_weights && h.tick.is_multiple_of(10) {
-                let weights: [&Vec<f64>; 3] = std::array::from_fn(|c| &controller.networks()[c].weights);
-                let saved = serde_json::to_string(&weights)
-                    .map_err(std::io::Error::other)
-                    .and_then(|t| super::write_atomically(&checkpoint_path, &t));
-                if let Err(e) = saved {
-                    eprintln!("silrig-controller: cannot save weights: {e}");
-                }
-            }
-            let effect = if loop_faults.is_empty() { Default::default() } else { loop_faults.at(h.tick) };
-            if effect.sleep_ns > 0 {
-                std::thread::sleep(Duration::from_nanos(effect.sleep_ns));
-            }
-            if effect.drop {
-                rec.count("commands_dropped", 1);
-                return CallbackProgression::Continue;
-            }
-            match publisher.send(h.tick, &out) {
-                Ok(_) => rec.count("commands_sent", 1),
-                Err(e) => {
-                    // A NaN command is refused by the transport: say so and keep running on the next sample.
-                    eprintln!("silrig-controller: tick {}: {e}", h.tick);
-                    rec.count("errors", 1);
-                }
-            }
-        } else if id.has_missed_deadline(&guard) && last_tick.is_some() {
-            // Only once the plant has been seen: waiting for it to start is not staleness.
-            rec.count("plant_stale_deadlines", 1);
-            if !plant_stale {
-                plant_stale = true;
-                events.emit(
-                    last_tick.map(|(_, t)| t),
-                    "plant-stale",
-                    format!("no plant sample for {stale_after:?}; idling"),
-                );
-            }
-            let _ = plant_stream.try_cleanup_dead_nodes();
-        }
-        CallbackProgression::Continue
-    })?;
-    let stats = samples.stats();
-    rec.count("plant_samples_lost", stats.lost);
-    rec.count("plant_restarts", stats.publisher_restarts);
-    let ended = match (&error, exit.end) {
-        (Some(e), _) => format!("error: {e}"),
-        (None, LoopEnd::TerminationRequest) => "terminated by signal".into(),
-        (None, LoopEnd::Stopped) => "completed".into(),
-    };
-    rec.count("interrupted_waits", exit.interrupts);
-    let meta = ReportMeta::new(args, &scenario.name, scheduling, ended);
-    let report = rec.finish(meta, &args.out)?;
-    match error {
-        Some(e) => Err(e),
-        None => Ok(report),
-    }
+    let mut controller = ControllerLoop::setup(args)?;
+    let mut ports = ControllerPorts::connect(args)?;
+    let exit = controller.serve(args, &mut ports)?;
+    controller.finish(args, &ports, exit)
 }

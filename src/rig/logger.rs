@@ -6,16 +6,21 @@
 //! A plant sample whose command never comes (controller late, dead or stopped) is written once a few newer
 //! samples have arrived, with empty (NaN) command columns, and counted; samples lost on the wire show up as
 //! sequence gaps.
+//!
+//! Phases: [`LoggerLoop::setup`] (the files, continued after a previous logger's last row), [`LoggerPorts::connect`],
+//! the event loop ([`LoggerLoop::serve`]: take samples, write the rows that are ready, acknowledge), and
+//! [`LoggerLoop::finish`].
 
 use super::ProcessArgs;
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
-use super::report::{ProcessReport, Recorder, ReportMeta};
+use super::plant::snapshot;
+use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use crate::control::{ControllerDiagnostics, SurfaceCommand};
-use crate::fault::FaultTarget;
-use crate::ipc::{self, LoopEnd, Received, Stream};
-use crate::rig::controller::snapshot;
+use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
+use crate::scenario::Scenario;
 use crate::sim::trace_row;
+use crate::topology::{Role, Stream};
 use crate::trace::{self, Trace};
 use crate::wire::{CommandSample, LogAckSample, PlantSample};
 use iceoryx2::prelude::CallbackProgression;
@@ -142,168 +147,260 @@ fn last_logged_tick(out_dir: &Path, dt_s: f64) -> Option<u64> {
     Some((t / dt_s).round() as u64)
 }
 
-/// Run the logger until it has written every tick of the scenario (or SIGTERM), and write its report.
-pub fn run_logger(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
-    let scenario = args.scenario()?;
-    std::fs::create_dir_all(&args.out)?;
-    let nodes = scenario.controller.rbf.nodes();
-    let ticks = scenario.timing.ticks();
-    let events = EventLog::new(&args.out, "logger");
-    let resume_after = last_logged_tick(&args.out, scenario.timing.dt_s);
-    if let Some(t) = resume_after {
-        events.emit(Some(t), "logger-resumed", format!("continuing trace.csv after tick {t}"));
+/// The logger's side of the run's streams.
+pub struct LoggerPorts {
+    inputs: LoggerInputs,
+    acks: StreamPublisher<LogAckSample>,
+    // Dropped last: the ports above belong to it.
+    _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
+}
+
+impl LoggerPorts {
+    /// Open the logger's streams: read plant samples and commands with deep queues, publish acknowledgements.
+    pub fn connect(args: &ProcessArgs) -> anyhow::Result<Self> {
+        let node = ipc::create_node(&args.run_id, Role::Logger.label())?;
+        let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
+        let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
+        let ack_stream = ipc::open_stream::<LogAckSample>(&node, Stream::LogAck)?;
+        let plant = plant_stream.subscriber(Stream::Plant.queue_depth(Role::Logger))?;
+        let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Logger))?;
+        let acks = ack_stream.publisher()?;
+        Ok(Self { inputs: LoggerInputs { plant, commands }, acks, _node: node })
     }
-    let mut loop_faults =
-        LoopFaults::new(&scenario.faults, FaultTarget::Logger, scenario.timing.dt_s, scenario.seed, events.clone());
-    let mut writer = Writer {
-        trace: open_append(&args.out, "trace.csv", &trace::columns(nodes).join(","))?,
-        timing: open_append(&args.out, "timing.csv", &TIMING_COLUMNS.join(","))?,
-        nodes,
-        rows: 0,
-        last_tick: resume_after,
-    };
+}
 
-    let node = ipc::create_node(&args.run_id, "logger")?;
-    let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
-    let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
-    let ack_stream = ipc::open_stream::<LogAckSample>(&node, Stream::LogAck)?;
-    let plant = plant_stream.subscriber(ipc::LOGGER_BUFFER)?;
-    let commands = command_stream.subscriber(ipc::LOGGER_BUFFER)?;
-    let mut acks = ack_stream.publisher()?;
+/// The streams the logger reads.
+pub struct LoggerInputs {
+    plant: StreamSubscriber<PlantSample>,
+    commands: StreamSubscriber<CommandSample>,
+}
 
-    let mut rec = Recorder::new(
-        "logger",
-        &[
-            ("ipc_plant_to_logger", "plant publish to receive at the logger"),
-            ("ipc_command_to_logger", "command publish to receive at the logger"),
-        ],
-    );
-    rec.declare(&["rows_written", "rows_without_command", "plant_ticks_missing", "invalid_samples"]);
+/// Everything the logger keeps between wake-ups: the files, the samples waiting for their partner, the counters.
+pub struct LoggerLoop {
+    scenario: Scenario,
+    ticks: u64,
+    writer: Writer,
+    rec: Recorder,
+    events: EventLog,
+    loop_faults: LoopFaults,
+    /// The last tick a previous logger of this run wrote (a restart), which this one continues after.
+    resume_after: Option<u64>,
+    pending_plant: BTreeMap<u64, Received<PlantSample>>,
+    /// Commands by the tick they answer.
+    pending_command: BTreeMap<u64, Received<CommandSample>>,
+    /// First tick of the current run of rows written without a command.
+    missing_since: Option<u64>,
+    done: bool,
+    error: Option<anyhow::Error>,
+}
 
-    let waitset = ipc::rig_waitset()?;
-    let plant_guard = waitset
-        .attach_notification(plant.listener())
-        .map_err(|e| anyhow::anyhow!("attaching the plant stream: {e:?}"))?;
-    let command_guard = waitset
-        .attach_notification(commands.listener())
-        .map_err(|e| anyhow::anyhow!("attaching the command stream: {e:?}"))?;
+impl LoggerLoop {
+    /// Phase 1: the scenario, and the files, opened for appending after whatever a previous logger wrote.
+    pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
+        let scenario = args.scenario()?;
+        std::fs::create_dir_all(&args.out)?;
+        let nodes = scenario.controller.rbf.nodes();
+        let events = EventLog::new(&args.out, Role::Logger.label());
+        let resume_after = last_logged_tick(&args.out, scenario.timing.dt_s);
+        if let Some(t) = resume_after {
+            events.emit(Some(t), "logger-resumed", format!("continuing trace.csv after tick {t}"));
+        }
+        let loop_faults =
+            LoopFaults::new(&scenario.faults, Role::Logger, scenario.timing.dt_s, scenario.seed, events.clone());
+        let writer = Writer {
+            trace: open_append(&args.out, "trace.csv", &trace::columns(nodes).join(","))?,
+            timing: open_append(&args.out, "timing.csv", &TIMING_COLUMNS.join(","))?,
+            nodes,
+            rows: 0,
+            last_tick: resume_after,
+        };
+        let mut rec = Recorder::new(
+            Role::Logger.label(),
+            &[
+                ("ipc_plant_to_logger", "plant publish to receive at the logger"),
+                ("ipc_command_to_logger", "command publish to receive at the logger"),
+            ],
+        );
+        rec.declare(&["rows_written", "rows_without_command", "plant_ticks_missing", "invalid_samples"]);
+        Ok(Self {
+            ticks: scenario.timing.ticks(),
+            scenario,
+            writer,
+            rec,
+            events,
+            loop_faults,
+            resume_after,
+            pending_plant: BTreeMap::new(),
+            pending_command: BTreeMap::new(),
+            missing_since: None,
+            done: false,
+            error: None,
+        })
+    }
 
-    let mut pending_plant: BTreeMap<u64, Received<PlantSample>> = BTreeMap::new();
-    let mut pending_command: BTreeMap<u64, Received<CommandSample>> = BTreeMap::new();
-    let mut error: Option<anyhow::Error> = None;
-    let mut done = false;
-    let mut missing_since: Option<u64> = None;
+    /// Phase 3: write rows as samples arrive until the last tick is written or SIGTERM, then whatever arrived
+    /// before the end, with or without its command.
+    pub fn serve(&mut self, ports: &mut LoggerPorts) -> anyhow::Result<ipc::LoopExit> {
+        let waitset = ipc::rig_waitset()?;
+        let plant_guard = waitset
+            .attach_notification(ports.inputs.plant.listener())
+            .map_err(|e| anyhow::anyhow!("attaching the plant stream: {e:?}"))?;
+        let command_guard = waitset
+            .attach_notification(ports.inputs.commands.listener())
+            .map_err(|e| anyhow::anyhow!("attaching the command stream: {e:?}"))?;
+        let exit = ipc::run_waitset(&waitset, |id| {
+            if id.has_event_from(&plant_guard) || id.has_event_from(&command_guard) {
+                match self.step(&ports.inputs, &mut ports.acks, false) {
+                    Ok(true) => {
+                        self.done = true;
+                        return CallbackProgression::Stop;
+                    }
+                    Ok(false) => {}
+                    Err(e) => {
+                        self.error = Some(e);
+                        return CallbackProgression::Stop;
+                    }
+                }
+            }
+            CallbackProgression::Continue
+        })?;
+        if self.error.is_none()
+            && let Err(e) = self.step(&ports.inputs, &mut ports.acks, true)
+        {
+            self.error = Some(e);
+        }
+        self.writer.flush()?;
+        Ok(exit)
+    }
 
-    let mut step = |rec: &mut Recorder, final_flush: bool| -> anyhow::Result<bool> {
-        plant.drain(|r| {
+    /// Take what arrived, write every row that is ready, acknowledge; true once the last tick is written.
+    fn step(
+        &mut self,
+        inputs: &LoggerInputs,
+        acks: &mut StreamPublisher<LogAckSample>,
+        final_flush: bool,
+    ) -> anyhow::Result<bool> {
+        self.take_samples(inputs)?;
+        let rows_before = self.writer.rows;
+        self.write_ready_rows(final_flush)?;
+        if self.writer.rows != rows_before {
+            self.writer.flush()?;
+            acks.send(self.writer.last_tick.unwrap_or(0), &LogAckSample::new(self.writer.rows))?;
+        }
+        Ok(self.writer.last_tick.is_some_and(|t| t + 1 >= self.ticks))
+    }
+
+    fn take_samples(&mut self, inputs: &LoggerInputs) -> anyhow::Result<()> {
+        inputs.plant.drain(|r| {
             if r.invalid.is_some() {
-                rec.count("invalid_samples", 1);
+                self.rec.count("invalid_samples", 1);
                 return;
             }
-            rec.record(IPC_PLANT_TO_LOGGER, r.age_ns() as i64);
-            if resume_after.is_none_or(|t| r.sample.header.tick > t) {
-                pending_plant.insert(r.sample.header.tick, *r);
+            self.rec.record(IPC_PLANT_TO_LOGGER, r.age_ns() as i64);
+            if self.resume_after.is_none_or(|t| r.sample.header.tick > t) {
+                self.pending_plant.insert(r.sample.header.tick, *r);
             }
         })?;
-        commands.drain(|r| {
+        inputs.commands.drain(|r| {
             if r.invalid.is_some() {
-                rec.count("invalid_samples", 1);
+                self.rec.count("invalid_samples", 1);
                 return;
             }
-            rec.record(IPC_COMMAND_TO_LOGGER, r.age_ns() as i64);
-            pending_command.insert(r.sample.answers_tick, *r);
+            self.rec.record(IPC_COMMAND_TO_LOGGER, r.age_ns() as i64);
+            self.pending_command.insert(r.sample.answers_tick, *r);
         })?;
-        let rows_before = writer.rows;
-        while let Some((&tick, _)) = pending_plant.first_key_value() {
-            let newest = *pending_plant.keys().next_back().expect("non-empty");
-            let has_command = pending_command.contains_key(&tick);
+        Ok(())
+    }
+
+    /// Write the oldest waiting plant samples, each with the command answering it; one whose command has not come
+    /// while [`MISSING_COMMAND_WINDOW`] newer samples arrived (or at the end) is written without one.
+    fn write_ready_rows(&mut self, final_flush: bool) -> anyhow::Result<()> {
+        while let Some((&tick, _)) = self.pending_plant.first_key_value() {
+            let newest = *self.pending_plant.keys().next_back().expect("non-empty");
+            let has_command = self.pending_command.contains_key(&tick);
             if !(has_command || final_flush || newest >= tick + MISSING_COMMAND_WINDOW) {
                 break;
             }
-            let sample = pending_plant.remove(&tick).expect("present");
-            if let Some(last) = writer.last_tick
+            let sample = self.pending_plant.remove(&tick).expect("present");
+            if let Some(last) = self.writer.last_tick
                 && tick > last + 1
             {
-                rec.count("plant_ticks_missing", tick - last - 1);
-                events.emit(Some(tick), "plant-gap", format!("ticks {}..{} never arrived", last + 1, tick - 1));
+                self.rec.count("plant_ticks_missing", tick - last - 1);
+                self.events.emit(Some(tick), "plant-gap", format!("ticks {}..{} never arrived", last + 1, tick - 1));
             }
-            if tick <= writer.last_tick.unwrap_or(0) && writer.rows + u64::from(resume_after.is_some()) > 0 {
+            if tick <= self.writer.last_tick.unwrap_or(0)
+                && self.writer.rows + u64::from(self.resume_after.is_some()) > 0
+            {
                 // A restarted plant re-simulating ticks already logged: keep the first record of each tick.
                 continue;
             }
-            let command = pending_command.remove(&tick);
-            match (&command, missing_since) {
-                (None, None) => {
-                    missing_since = Some(tick);
-                    events.emit(Some(tick), "commands-missing", "rows written without a command from here");
-                }
-                (Some(_), Some(from)) => {
-                    missing_since = None;
-                    events.emit(Some(tick), "commands-resumed", format!("{} rows without a command", tick - from));
-                }
-                _ => {}
-            }
-            if command.is_none() {
-                rec.count("rows_without_command", 1);
-            }
-            if !loop_faults.is_empty() {
-                let effect = loop_faults.at(tick);
+            let command = self.pending_command.remove(&tick);
+            self.note_command_gap(tick, command.is_some());
+            if !self.loop_faults.is_empty() {
+                let effect = self.loop_faults.at(tick);
                 if effect.sleep_ns > 0 {
                     std::thread::sleep(std::time::Duration::from_nanos(effect.sleep_ns));
                 }
             }
-            writer.row(&sample, command.as_ref())?;
-            rec.count("rows_written", 1);
+            self.writer.row(&sample, command.as_ref())?;
+            self.rec.count("rows_written", 1);
             // Commands answering ticks already written can no longer be used.
-            pending_command.retain(|t, _| *t > tick);
+            self.pending_command.retain(|t, _| *t > tick);
         }
-        if writer.rows != rows_before {
-            writer.flush()?;
-            acks.send(writer.last_tick.unwrap_or(0), &LogAckSample::new(writer.rows))?;
-        }
-        Ok(writer.last_tick.is_some_and(|t| t + 1 >= ticks))
-    };
+        Ok(())
+    }
 
-    let exit = ipc::run_waitset(&waitset, |id| {
-        if id.has_event_from(&plant_guard) || id.has_event_from(&command_guard) {
-            match step(&mut rec, false) {
-                Ok(true) => {
-                    done = true;
-                    return CallbackProgression::Stop;
-                }
-                Ok(false) => {}
-                Err(e) => {
-                    error = Some(e);
-                    return CallbackProgression::Stop;
-                }
+    /// Mark where rows start and stop going without a command.
+    fn note_command_gap(&mut self, tick: u64, has_command: bool) {
+        match (has_command, self.missing_since) {
+            (false, None) => {
+                self.missing_since = Some(tick);
+                self.events.emit(Some(tick), "commands-missing", "rows written without a command from here");
             }
+            (true, Some(from)) => {
+                self.missing_since = None;
+                self.events.emit(Some(tick), "commands-resumed", format!("{} rows without a command", tick - from));
+            }
+            _ => {}
         }
-        CallbackProgression::Continue
-    })?;
-    // Whatever arrived before the end is written, with or without its command.
-    if error.is_none()
-        && let Err(e) = step(&mut rec, true)
-    {
-        error = Some(e);
+        if !has_command {
+            self.rec.count("rows_without_command", 1);
+        }
     }
-    writer.flush()?;
-    let plant_stats = plant.stats();
-    let command_stats = commands.stats();
-    rec.count("plant_samples_lost", plant_stats.lost);
-    rec.count("command_samples_lost", command_stats.lost);
-    rec.count("plant_restarts", plant_stats.publisher_restarts);
-    rec.count("controller_restarts", command_stats.publisher_restarts);
-    rec.count("interrupted_waits", exit.interrupts);
-    let ended = match (&error, exit.end, done) {
-        (Some(e), _, _) => format!("error: {e}"),
-        (None, _, true) => "completed".into(),
-        (None, LoopEnd::TerminationRequest, false) => "terminated by signal".into(),
-        (None, LoopEnd::Stopped, false) => "stopped".into(),
-    };
-    let meta = ReportMeta::new(args, &scenario.name, crate::clock::current_policy().to_string(), ended);
-    let report = rec.finish(meta, &args.out)?;
-    match error {
-        Some(e) => Err(e),
-        None => Ok(report),
+
+    /// Phase 4: the report; an error that stopped the loop is returned after the report is written.
+    pub fn finish(
+        mut self,
+        args: &ProcessArgs,
+        ports: &LoggerPorts,
+        exit: ipc::LoopExit,
+    ) -> anyhow::Result<ProcessReport> {
+        let plant_stats = ports.inputs.plant.stats();
+        let command_stats = ports.inputs.commands.stats();
+        self.rec.count("plant_samples_lost", plant_stats.lost);
+        self.rec.count("command_samples_lost", command_stats.lost);
+        self.rec.count("plant_restarts", plant_stats.publisher_restarts);
+        self.rec.count("controller_restarts", command_stats.publisher_restarts);
+        self.rec.count("interrupted_waits", exit.interrupts);
+        let ended = match (&self.error, exit.end, self.done) {
+            (Some(e), _, _) => format!("error: {e}"),
+            (None, _, true) => "completed".into(),
+            (None, LoopEnd::TerminationRequest, false) => "terminated by signal".into(),
+            (None, LoopEnd::Stopped, false) => "stopped".into(),
+        };
+        let meta = ReportMeta::new(args, &self.scenario.name, request_scheduling(Role::Logger, false), ended);
+        let report = self.rec.finish(meta, &args.out)?;
+        match self.error {
+            Some(e) => Err(e),
+            None => Ok(report),
+        }
     }
+}
+
+/// Run the logger until it has written every tick of the scenario (or SIGTERM), and write its report.
+pub fn run_logger(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
+    let mut logger = LoggerLoop::setup(args)?;
+    let mut ports = LoggerPorts::connect(args)?;
+    let exit = logger.serve(&mut ports)?;
+    logger.finish(args, &ports, exit)
 }

@@ -2,9 +2,10 @@
 //! once or every k ticks), `jitter` (a random extra sleep each tick) and `drop` (skip publishing for N ticks, or
 //! with a probability). Judged on simulated time `tick * dt`; announced in the event log when they first act.
 
-use crate::fault::{Fault, FaultAction, FaultTarget};
+use crate::fault::{Fault, FaultAction};
 use crate::rig::events::EventLog;
 use crate::rng::SplitMix64;
+use crate::topology::Role;
 
 /// What the loop must do at one tick.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -26,7 +27,7 @@ pub struct LoopFaults {
 
 impl LoopFaults {
     /// The delay, jitter and drop faults of `target` from `plan`.
-    pub fn new(plan: &[Fault], target: FaultTarget, dt_s: f64, seed: u64, events: EventLog) -> Self {
+    pub fn new(plan: &[Fault], target: Role, dt_s: f64, seed: u64, events: EventLog) -> Self {
         let faults = plan
             .iter()
             .filter(|f| {

@@ -8,12 +8,15 @@
 pub mod controller;
 pub mod events;
 pub mod fault_report;
+pub mod fault_schedule;
 pub mod launcher;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;
 pub mod report;
+pub mod run_report;
 pub mod signals;
+pub mod supervision;
 
 use crate::ipc::RunId;
 use crate::scenario::Scenario;
@@ -39,6 +42,48 @@ impl RigMode {
     }
 }
 
+/// Tuning of the rig processes' loops and watchdogs: the same flags on `silrig run`, which passes them on, and on each
+/// process started by hand.
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+pub struct ProcessOptions {
+    /// Same-tick mode: how long the plant waits for the command of the tick it just published, ms.
+    #[arg(long, default_value_t = 2.0)]
+    pub command_budget_ms: f64,
+    /// Realtime: after publishing, the plant polls for the command this long before it blocks, µs (0: block at
+    /// once). A blocked wait costs a vCPU wake-up (about 70 µs on this kind of VM); polling costs at most this much
+    /// CPU per tick.
+    #[arg(long, default_value_t = 400.0)]
+    pub command_spin_us: f64,
+    /// Consumers flag their input stale after this many periods without a sample.
+    #[arg(long, default_value_t = 5)]
+    pub stale_after_periods: u32,
+    /// Plant: how long it holds the last command after the controller goes silent before it commands the trim
+    /// surfaces and flags failsafe, ms.
+    #[arg(long, default_value_t = 100.0)]
+    pub controller_hold_ms: f64,
+    /// How long the plant waits for the controller and logger to connect, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub startup_timeout_s: f64,
+}
+
+impl ProcessOptions {
+    /// The flags that give these options to a process.
+    pub fn to_argv(&self) -> Vec<String> {
+        vec![
+            "--command-budget-ms".into(),
+            self.command_budget_ms.to_string(),
+            "--command-spin-us".into(),
+            self.command_spin_us.to_string(),
+            "--stale-after-periods".into(),
+            self.stale_after_periods.to_string(),
+            "--controller-hold-ms".into(),
+            self.controller_hold_ms.to_string(),
+            "--startup-timeout-s".into(),
+            self.startup_timeout_s.to_string(),
+        ]
+    }
+}
+
 /// Arguments every rig process takes (the launcher passes the same ones to all three).
 #[derive(Debug, Clone, clap::Args)]
 pub struct ProcessArgs {
@@ -56,33 +101,34 @@ pub struct ProcessArgs {
     /// Folder for this process's report (and, for the logger, trace.csv and timing.csv).
     #[arg(long, default_value = "out/rig")]
     pub out: PathBuf,
-    /// Same-tick mode: how long the plant waits for the command of the tick it just published, ms.
-    #[arg(long, default_value_t = 2.0)]
-    pub command_budget_ms: f64,
-    /// Realtime: after publishing, the plant polls for the command this long before it blocks, µs. A blocked
-    /// wait costs a vCPU wake-up (about 70 µs on this kind of VM); polling costs at most this much CPU per tick.
-    #[arg(long, default_value_t = 400.0)]
-    pub command_spin_us: f64,
-    /// Consumers flag their input stale after this many periods without a sample.
-    #[arg(long, default_value_t = 5)]
-    pub stale_after_periods: u32,
-    /// Plant: how long it holds the last command after the controller goes silent before it commands the trim
-    /// surfaces and flags failsafe, ms.
-    #[arg(long, default_value_t = 100.0)]
-    pub controller_hold_ms: f64,
     /// Plant: continue from the state a previous plant of this run saved in `--out`; controller: start from the
     /// RBF weights a previous controller saved there (a restart).
     #[arg(long)]
     pub resume: bool,
-    /// How long the plant waits for the controller and logger to connect, s.
-    #[arg(long, default_value_t = 10.0)]
-    pub startup_timeout_s: f64,
+    /// Loop and watchdog tuning.
+    #[command(flatten)]
+    pub options: ProcessOptions,
 }
 
 impl ProcessArgs {
     /// The scenario with the duration override applied, validated.
     pub fn scenario(&self) -> anyhow::Result<Scenario> {
         load_scenario(self.config.as_deref(), self.duration_s)
+    }
+
+    /// The command line that gives these arguments to a rig process.
+    pub fn to_argv(&self) -> Vec<String> {
+        let mut argv: Vec<String> = self.config.iter().map(|c| c.display().to_string()).collect();
+        argv.extend(["--run-id".into(), self.run_id.to_string(), "--mode".into(), self.mode.label().into()]);
+        if let Some(d) = self.duration_s {
+            argv.extend(["--duration-s".into(), d.to_string()]);
+        }
+        argv.extend(["--out".into(), self.out.display().to_string()]);
+        if self.resume {
+            argv.push("--resume".into());
+        }
+        argv.extend(self.options.to_argv());
+        argv
     }
 }
 
@@ -97,11 +143,6 @@ pub fn load_scenario(path: Option<&Path>, duration_s: Option<f64>) -> anyhow::Re
         scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("--duration-s: `{key}`: {problem}"))?;
     }
     Ok(scenario)
-}
-
-/// Period of the scenario in ns.
-pub fn period_ns(scenario: &Scenario) -> u64 {
-    (scenario.timing.dt_s * 1e9).round() as u64
 }
 
 /// Write `text` beside `path`, then rename it over `path`: a process killed mid-write leaves the previous file

@@ -6,27 +6,32 @@
 //! Realtime: absolute-deadline ticks with `clock_nanosleep(TIMER_ABSTIME)`; a tick that starts a whole period late
 //! is an overrun: the missed ticks are skipped and counted, never caught up in a burst. Lockstep: no sleeping; the
 //! plant waits for every command, and never runs further ahead of the logger than its queue holds.
+//!
+//! The process runs in four phases: [`PlantLoop::setup`] (scenario, model, recorder, watchdog settings),
+//! [`PlantPorts::connect`] (streams, then waiting for the peers), the tick loop ([`PlantLoop::tick`], one tick in
+//! named steps), and [`PlantLoop::finish`] (the report).
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
-use super::{ProcessArgs, RigMode, period_ns, signals};
+use super::{ProcessArgs, RigMode, signals};
 use crate::clock::{self, TickSchedule, monotonic_ns};
 use crate::control::SurfaceCommand;
-use crate::fault::FaultTarget;
-use crate::ipc::{self, Stream};
-use crate::scenario::CommandTiming;
-use crate::sim::{ActuatorCommand, PlantRunner, PlantSnapshot, StepHits};
+use crate::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
+use crate::scenario::{CommandTiming, Scenario};
+use crate::sim::{ActuatorCommand, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
+use crate::topology::{Role, Stream};
 use crate::wire::{self, CommandSample, LogAckSample, PlantSample};
 use anyhow::Context;
 use std::collections::VecDeque;
+use std::path::PathBuf;
 use std::time::Duration;
 
 /// A realtime plant with a fault plan saves a checkpoint this often, so a restarted plant continues the flight.
 pub const CHECKPOINT_EVERY_TICKS: u64 = 10;
 
 /// In lockstep the plant stays at most this many ticks ahead of the rows the logger has written (its queue holds
-/// `ipc::LOGGER_BUFFER`).
+/// [`crate::topology::LOGGER_BUFFER`]).
 pub const LOCKSTEP_LOGGER_WINDOW: u64 = 64;
 /// In lockstep, a peer silent for this long is an error rather than a slow peer.
 pub const LOCKSTEP_PEER_TIMEOUT: Duration = Duration::from_secs(5);
@@ -35,6 +40,9 @@ const WAKE_LATENESS: usize = 0;
 const STEP_EXEC: usize = 1;
 const SENSE_TO_ACTUATE: usize = 2;
 const IPC_CONTROLLER_TO_PLANT: usize = 3;
+
+/// Publish stamps kept to measure sense-to-actuate of commands answering recent ticks.
+const PUBLISH_STAMPS: usize = 16;
 
 /// The wire sample for a snapshot.
 pub fn plant_sample(snap: &PlantSnapshot, flags: u32) -> PlantSample {
@@ -45,6 +53,17 @@ pub fn plant_sample(snap: &PlantSnapshot, flags: u32) -> PlantSample {
         t_sim_s: snap.t_s,
         flags,
         ..PlantSample::zeroed()
+    }
+}
+
+/// The snapshot a plant sample carries (the inverse of [`plant_sample`]).
+pub fn snapshot(s: &PlantSample) -> PlantSnapshot {
+    PlantSnapshot {
+        tick: s.header.tick,
+        t_s: s.t_sim_s,
+        state: crate::plant::F16State::from_array(&s.state),
+        surfaces_deg: s.surfaces_deg,
+        throttle: s.throttle,
     }
 }
 
@@ -78,7 +97,7 @@ fn actuator_command(c: &CommandSample, throttle: f64) -> ActuatorCommand {
 
 /// The trim surfaces of the scenario's initial airspeed and altitude, or `hold` when level flight has no trim
 /// there.
-fn failsafe_command(scenario: &crate::scenario::Scenario, hold: ActuatorCommand) -> ActuatorCommand {
+fn failsafe_command(scenario: &Scenario, hold: ActuatorCommand) -> ActuatorCommand {
     let model = crate::plant::F16Model::new(scenario.plant.xcg);
     let vt_fps = crate::units::m_to_ft(scenario.initial.airspeed_mps);
     match crate::plant::trim::trim_level_flight(&model, vt_fps, scenario.initial.altitude_ft) {
@@ -90,306 +109,446 @@ fn failsafe_command(scenario: &crate::scenario::Scenario, hold: ActuatorCommand)
     }
 }
 
-/// The tick a (possibly resumed) plant starts at.
-fn sim_tick_start(runner: &PlantRunner) -> u64 {
-    runner.snapshot().tick
+/// The plant's side of the run's streams.
+pub struct PlantPorts {
+    plant_stream: StreamService<PlantSample>,
+    command_stream: StreamService<CommandSample>,
+    publisher: StreamPublisher<PlantSample>,
+    commands: StreamSubscriber<CommandSample>,
+    acks: StreamSubscriber<LogAckSample>,
+    // Dropped last: the services and ports above belong to it.
+    _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
 }
 
-/// Wait until `ready()` or time out; SIGTERM ends the wait early.
-fn wait_for_peers(what: &str, timeout_s: f64, ready: impl Fn() -> bool) -> anyhow::Result<bool> {
-    let deadline = monotonic_ns() + (timeout_s * 1e9) as u64;
-    while !ready() {
-        if signals::termination_requested() {
-            return Ok(false);
-        }
-        anyhow::ensure!(
-            monotonic_ns() < deadline,
-            "no {what} connected within {timeout_s} s (start silrig-controller and silrig-logger with the same --run-id)"
-        );
-        std::thread::sleep(Duration::from_millis(5));
+impl PlantPorts {
+    /// Open the plant's streams: publish plant samples, read commands and the logger's acknowledgements.
+    pub fn connect(args: &ProcessArgs) -> anyhow::Result<Self> {
+        let node = ipc::create_node(&args.run_id, Role::Plant.label())?;
+        let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
+        let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
+        let ack_stream = ipc::open_stream::<LogAckSample>(&node, Stream::LogAck)?;
+        let publisher = plant_stream.publisher().context("the plant stream")?;
+        let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Plant))?;
+        let acks = ack_stream.subscriber(Stream::LogAck.queue_depth(Role::Plant))?;
+        Ok(Self { plant_stream, command_stream, publisher, commands, acks, _node: node })
     }
-    Ok(true)
+
+    /// Wait until the controller and the logger are connected, or time out; SIGTERM ends the wait early (false).
+    pub fn wait_for_peers(&self, timeout_s: f64) -> anyhow::Result<bool> {
+        let ready =
+            || self.plant_stream.number_of_subscribers() >= 2 && self.command_stream.number_of_publishers() >= 1;
+        let deadline = monotonic_ns() + (timeout_s * 1e9) as u64;
+        while !ready() {
+            if signals::termination_requested() {
+                return Ok(false);
+            }
+            anyhow::ensure!(
+                monotonic_ns() < deadline,
+                "no controller and logger connected within {timeout_s} s (start silrig-controller and silrig-logger \
+                 with the same --run-id)"
+            );
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        Ok(true)
+    }
+}
+
+/// The controller watchdog: stale after a few periods without a fresh command, failsafe after the hold.
+#[derive(Debug)]
+struct Watchdog {
+    stale_after_ns: u64,
+    hold_ns: u64,
+    /// The trim surfaces of the scenario's flight condition (the initial hold if no trim exists there).
+    failsafe: ActuatorCommand,
+    last_fresh_ns: u64,
+    last_fresh_tick: u64,
+    stale: bool,
+    in_failsafe: bool,
+}
+
+/// Everything the tick loop keeps from one tick to the next.
+pub struct PlantLoop {
+    scenario: Scenario,
+    realtime: bool,
+    scheduling: String,
+    runner: PlantRunner,
+    rec: Recorder,
+    events: EventLog,
+    loop_faults: LoopFaults,
+    checkpoint_path: PathBuf,
+    ticks: u64,
+    budget_ns: u64,
+    spin_ns: u64,
+    throttle: f64,
+    /// The command the actuators follow now.
+    applied: ActuatorCommand,
+    /// Tick whose sample the applied command answers (None: the initial hold, before any command).
+    applied_answers: Option<u64>,
+    /// The newest commands received, oldest first.
+    received: VecDeque<CommandSample>,
+    publish_ns: [u64; PUBLISH_STAMPS],
+    /// Flags of the next sample, from the step that leads to it.
+    flags: u32,
+    rows_acked: u64,
+    schedule: TickSchedule,
+    command_epoch: Option<u64>,
+    watchdog: Watchdog,
+    expected_wall_tick: u64,
+    sim_tick: u64,
+    /// This stall was already counted as an overrun when the tick's work ran past the next due time.
+    overrun_counted: bool,
+}
+
+impl PlantLoop {
+    /// Phase 1: the scenario, the model at its initial condition, the recorder and the watchdog settings.
+    pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
+        let scenario = args.scenario()?;
+        let realtime = args.mode == RigMode::Realtime;
+        let scheduling = request_scheduling(Role::Plant, realtime);
+        let runner = PlantRunner::new(&scenario)?;
+        let period = scenario.timing.period_ns();
+        let o = &args.options;
+        let mut rec = Recorder::new(
+            Role::Plant.label(),
+            &[
+                ("wake_lateness", "actual minus ideal tick start (realtime only)"),
+                ("step_exec", "actuators + RK4 step execution time"),
+                ("sense_to_actuate", "plant publish of tick k to the command answering k received at the plant"),
+                ("ipc_controller_to_plant", "command publish to receive at the plant"),
+            ],
+        );
+        rec.declare(&[
+            "ticks",
+            "overruns",
+            "skipped_ticks",
+            "command_misses",
+            "commands_received",
+            "commands_invalid",
+            "failsafe_ticks",
+            "samples_dropped",
+        ]);
+        let events = EventLog::new(&args.out, Role::Plant.label());
+        let loop_faults =
+            LoopFaults::new(&scenario.faults, Role::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
+        let initial = runner.initial_command();
+        let watchdog = Watchdog {
+            stale_after_ns: period * u64::from(o.stale_after_periods.max(1)),
+            hold_ns: (o.controller_hold_ms * 1e6) as u64,
+            failsafe: failsafe_command(&scenario, initial),
+            last_fresh_ns: 0,
+            last_fresh_tick: 0,
+            stale: false,
+            in_failsafe: false,
+        };
+        Ok(Self {
+            ticks: scenario.timing.ticks(),
+            budget_ns: (o.command_budget_ms * 1e6) as u64,
+            spin_ns: if realtime { (o.command_spin_us * 1e3) as u64 } else { 0 },
+            throttle: initial.throttle,
+            applied: initial,
+            applied_answers: None,
+            received: VecDeque::with_capacity(8),
+            publish_ns: [0; PUBLISH_STAMPS],
+            flags: 0,
+            rows_acked: 0,
+            schedule: TickSchedule::new(0, period),
+            command_epoch: None,
+            watchdog,
+            expected_wall_tick: 0,
+            sim_tick: 0,
+            overrun_counted: false,
+            checkpoint_path: args.out.join("plant.checkpoint.json"),
+            scenario,
+            realtime,
+            scheduling,
+            runner,
+            rec,
+            events,
+            loop_faults,
+        })
+    }
+
+    /// A restarted plant (`--resume`) continues the flight from the checkpoint its predecessor saved.
+    pub fn resume_from_checkpoint(&mut self) {
+        let path = &self.checkpoint_path;
+        match std::fs::read_to_string(path).map(|t| serde_json::from_str::<PlantCheckpoint>(&t)) {
+            Ok(Ok(c)) => {
+                self.runner.restore(&c);
+                let detail = format!("continuing from the checkpoint at tick {}", c.tick);
+                self.events.emit(Some(c.tick), "plant-resumed", detail);
+            }
+            _ => eprintln!("silrig-plant: warning: --resume without a readable {}; starting over", path.display()),
+        }
+    }
+
+    /// Phase 3: tick until the end of the scenario or SIGTERM; returns how the loop ended.
+    pub fn fly(&mut self, ports: &mut PlantPorts) -> anyhow::Result<String> {
+        self.start_clock();
+        while self.sim_tick < self.ticks {
+            if signals::termination_requested() {
+                return Ok("terminated by signal".into());
+            }
+            self.tick(ports)?;
+        }
+        Ok("completed".into())
+    }
+
+    /// Tick 0 is due two periods from now, giving the peers' first wake-ups a margin.
+    fn start_clock(&mut self) {
+        let period = self.schedule.period_ns;
+        self.schedule = TickSchedule::new(monotonic_ns() + 2 * period, period);
+        self.events.emit(Some(0), "ticking", format!("t0_ns={}", self.schedule.t0_ns));
+        self.watchdog.last_fresh_ns = self.schedule.t0_ns;
+        self.sim_tick = self.runner.snapshot().tick;
+        self.watchdog.last_fresh_tick = self.sim_tick;
+    }
+
+    /// One tick: wait for its time, publish the sample, gather the command, check the controller, step.
+    fn tick(&mut self, ports: &mut PlantPorts) -> anyhow::Result<()> {
+        if self.realtime {
+            self.sleep_until_due();
+        } else {
+            self.stay_within_logger_window(ports)?;
+        }
+        let receipt = self.publish(ports)?;
+        self.gather_commands(ports, receipt.t_send_ns)?;
+        let held = self.choose_command();
+        if self.realtime && held {
+            self.watch_controller(ports);
+        }
+        if let Some(a) = self.applied_answers {
+            *self.rec.command_age_ticks.entry(self.sim_tick - a).or_insert(0) += 1;
+        }
+        self.step(held);
+        self.sim_tick += 1;
+        self.rec.count("ticks", 1);
+        Ok(())
+    }
+
+    /// Realtime: sleep to the tick's absolute due time; a wake-up a whole period late skips to the newest due tick.
+    fn sleep_until_due(&mut self) {
+        clock::sleep_until_ns(self.schedule.deadline_ns(self.expected_wall_tick));
+        let outcome = self.schedule.on_wake(self.expected_wall_tick, monotonic_ns());
+        self.rec.record(WAKE_LATENESS, outcome.wake_lateness_ns);
+        if outcome.skipped > 0 {
+            // One stall is one overrun, whether it showed first as work past the deadline or as a late start.
+            if !std::mem::take(&mut self.overrun_counted) {
+                self.rec.count("overruns", 1);
+            }
+            self.rec.count("skipped_ticks", outcome.skipped);
+            let late_ms = outcome.wake_lateness_ns as f64 / 1e6;
+            let detail = format!("woke {late_ms:.2} ms late; {} tick(s) skipped", outcome.skipped);
+            self.events.emit(Some(self.sim_tick), "overrun", detail);
+        }
+        self.expected_wall_tick = outcome.next_tick;
+        self.overrun_counted = false;
+    }
+
+    /// Lockstep: keep within the logger's queue, so nothing is overwritten however slow the disk.
+    fn stay_within_logger_window(&mut self, ports: &PlantPorts) -> anyhow::Result<()> {
+        let deadline = monotonic_ns() + LOCKSTEP_PEER_TIMEOUT.as_nanos() as u64;
+        while self.sim_tick >= self.rows_acked + LOCKSTEP_LOGGER_WINDOW {
+            let rows_acked = &mut self.rows_acked;
+            ports.acks.drain(|r| {
+                if r.invalid.is_none() {
+                    *rows_acked = (*rows_acked).max(r.sample.rows_written);
+                }
+            })?;
+            if self.sim_tick < self.rows_acked + LOCKSTEP_LOGGER_WINDOW || signals::termination_requested() {
+                break;
+            }
+            anyhow::ensure!(monotonic_ns() < deadline, "lockstep: the logger stopped acknowledging rows");
+            let _ = ports.acks.listener().timed_wait(|_| {}, Duration::from_millis(50));
+        }
+        Ok(())
+    }
+
+    /// Publish this tick's sample (unless a drop fault swallows it), after any delay fault.
+    fn publish(&mut self, ports: &mut PlantPorts) -> anyhow::Result<ipc::SendReceipt> {
+        let snap = self.runner.snapshot();
+        let effect = if self.loop_faults.is_empty() { Default::default() } else { self.loop_faults.at(self.sim_tick) };
+        if effect.sleep_ns > 0 {
+            std::thread::sleep(Duration::from_nanos(effect.sleep_ns));
+        }
+        let receipt = if effect.drop {
+            self.rec.count("samples_dropped", 1);
+            ipc::SendReceipt { delivered: 0, t_send_ns: monotonic_ns() }
+        } else {
+            ports.publisher.send(self.sim_tick, &plant_sample(&snap, self.flags))?
+        };
+        self.publish_ns[(self.sim_tick % PUBLISH_STAMPS as u64) as usize] = receipt.t_send_ns;
+        Ok(receipt)
+    }
+
+    /// Wait for the answer to this tick whichever timing applies: next-tick applies it one tick later, but
+    /// receiving it now measures the transport honestly, and lockstep never runs ahead of the controller.
+    /// Realtime: poll for `spin_ns`, then block, up to the budget; lockstep: up to the peer timeout.
+    fn gather_commands(&mut self, ports: &PlantPorts, t_send_ns: u64) -> anyhow::Result<()> {
+        let wait_until =
+            t_send_ns + if self.realtime { self.budget_ns } else { LOCKSTEP_PEER_TIMEOUT.as_nanos() as u64 };
+        loop {
+            self.take_commands(ports)?;
+            if self.received.iter().any(|c| c.answers_tick == self.sim_tick) || signals::termination_requested() {
+                return Ok(());
+            }
+            let now = monotonic_ns();
+            if now < t_send_ns + self.spin_ns.min(self.budget_ns) {
+                std::hint::spin_loop();
+                continue;
+            }
+            if now >= wait_until {
+                anyhow::ensure!(
+                    self.realtime,
+                    "lockstep: no command for tick {} within {LOCKSTEP_PEER_TIMEOUT:?}",
+                    self.sim_tick
+                );
+                return Ok(());
+            }
+            // EINTR (SIGSTOP/SIGCONT, SIGTERM) just ends this wait early; the loop looks again.
+            let _ = ports.commands.listener().timed_wait(|_| {}, Duration::from_nanos(wait_until - now));
+        }
+    }
+
+    /// Drain the command queue: count, time and keep the newest valid commands.
+    fn take_commands(&mut self, ports: &PlantPorts) -> anyhow::Result<()> {
+        let tick = self.sim_tick;
+        ports.commands.drain(|r| {
+            if r.invalid.is_some() {
+                self.rec.count("commands_invalid", 1);
+                return;
+            }
+            self.rec.count("commands_received", 1);
+            let epoch = r.sample.header.epoch;
+            if self.command_epoch.is_some_and(|e| e != epoch) {
+                self.events.emit(Some(tick), "controller-restarted", "commands from a new controller epoch");
+            }
+            self.command_epoch = Some(epoch);
+            self.rec.record(IPC_CONTROLLER_TO_PLANT, r.age_ns() as i64);
+            let answers = r.sample.answers_tick;
+            if answers <= tick && tick - answers < PUBLISH_STAMPS as u64 {
+                let sent = self.publish_ns[(answers % PUBLISH_STAMPS as u64) as usize];
+                self.rec.record(SENSE_TO_ACTUATE, r.t_recv_ns as i64 - sent as i64);
+            }
+            if self.received.len() == 8 {
+                self.received.pop_front();
+            }
+            self.received.push_back(r.sample);
+        })?;
+        Ok(())
+    }
+
+    /// Apply the command this tick wants (the answer to this tick, same-tick, or to the previous one, next-tick);
+    /// returns true when it is missing and the last command is held (a miss).
+    fn choose_command(&mut self) -> bool {
+        let target = match self.scenario.timing.command_timing {
+            CommandTiming::SameTick => Some(self.sim_tick),
+            CommandTiming::NextTick => self.sim_tick.checked_sub(1),
+        };
+        let Some(target) = target else { return false };
+        let Some(fresh) = self.received.iter().find(|c| c.answers_tick == target).copied() else {
+            self.rec.count("command_misses", 1);
+            return true;
+        };
+        self.applied = actuator_command(&fresh, self.throttle);
+        self.applied_answers = Some(target);
+        let w = &mut self.watchdog;
+        w.last_fresh_ns = monotonic_ns();
+        w.last_fresh_tick = self.sim_tick;
+        if w.stale || w.in_failsafe {
+            let how = if w.in_failsafe { "failsafe released, " } else { "" };
+            self.events.emit(Some(self.sim_tick), "controller-recovered", format!("{how}commands resumed"));
+            w.stale = false;
+            w.in_failsafe = false;
+        }
+        false
+    }
+
+    /// A held command: the controller is stale after a few periods without a fresh command, and after the hold
+    /// the plant flies the failsafe (trim) surfaces until commands return.
+    fn watch_controller(&mut self, ports: &PlantPorts) {
+        let tick = self.sim_tick;
+        let w = &mut self.watchdog;
+        let silent_ns = monotonic_ns().saturating_sub(w.last_fresh_ns);
+        if !w.stale && silent_ns >= w.stale_after_ns {
+            w.stale = true;
+            self.events.emit(Some(tick), "controller-stale", format!("no command for {} ms", silent_ns / 1_000_000));
+            // A dead controller's publisher must go before a new one can take its place; a stopped one stays.
+            let _ = ports.command_stream.try_cleanup_dead_nodes();
+        }
+        if !w.in_failsafe && silent_ns >= w.hold_ns {
+            w.in_failsafe = true;
+            let f = &w.failsafe.surfaces;
+            let detail = format!(
+                "{} ticks after the last fresh command; trim surfaces: aileron {:.3}, elevator {:.3}, rudder {:.3} deg",
+                tick - w.last_fresh_tick,
+                f.aileron_deg,
+                f.elevator_deg,
+                f.rudder_deg
+            );
+            self.events.emit(Some(tick), "failsafe-engaged", detail);
+        }
+        if w.in_failsafe {
+            self.applied = w.failsafe;
+            self.rec.count("failsafe_ticks", 1);
+        }
+    }
+
+    /// Move the actuators and integrate one step; count an overrun if the work ran past the next tick's due time;
+    /// save a checkpoint every few ticks when a fault plan may kill the plant.
+    fn step(&mut self, held: bool) {
+        let t0 = monotonic_ns();
+        let hits = self.runner.step(&self.applied);
+        self.rec.record(STEP_EXEC, (monotonic_ns() - t0) as i64);
+        self.flags = step_flags(&hits, held) | if self.watchdog.in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
+        if self.realtime {
+            let late_ns = monotonic_ns() as i64 - self.schedule.deadline_ns(self.expected_wall_tick) as i64;
+            if late_ns > 0 {
+                // The work of this tick ran past the next tick's due time: an overrun (the Simulink/dSPACE sense).
+                self.rec.count("overruns", 1);
+                self.overrun_counted = true;
+                let detail = format!("tick work ended {:.2} ms after the next tick was due", late_ns as f64 / 1e6);
+                self.events.emit(Some(self.sim_tick), "overrun", detail);
+            }
+        }
+        if self.realtime
+            && !self.scenario.faults.is_empty()
+            && (self.sim_tick + 1).is_multiple_of(CHECKPOINT_EVERY_TICKS)
+        {
+            self.save_checkpoint();
+        }
+    }
+
+    fn save_checkpoint(&self) {
+        let saved = serde_json::to_string(&self.runner.checkpoint())
+            .map_err(std::io::Error::other)
+            .and_then(|t| super::write_atomically(&self.checkpoint_path, &t));
+        if let Err(e) = saved {
+            eprintln!("silrig-plant: cannot write {}: {e}", self.checkpoint_path.display());
+        }
+    }
+
+    /// Phase 4: the report, with what the command subscriber counted.
+    pub fn finish(mut self, args: &ProcessArgs, ports: &PlantPorts, ended: String) -> anyhow::Result<ProcessReport> {
+        let stats = ports.commands.stats();
+        self.rec.count("commands_lost", stats.lost);
+        self.rec.count("controller_restarts", stats.publisher_restarts);
+        let meta = ReportMeta::new(args, &self.scenario.name, self.scheduling, ended);
+        Ok(self.rec.finish(meta, &args.out)?)
+    }
 }
 
 /// Run the plant process to the end of the scenario (or SIGTERM) and write its report.
 pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     signals::install_termination_flag();
-    let scenario = args.scenario()?;
-    let realtime = args.mode == RigMode::Realtime;
-    let scheduling = request_scheduling("plant", realtime, 80);
-
-    let node = ipc::create_node(&args.run_id, "plant")?;
-    let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
-    let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
-    let ack_stream = ipc::open_stream::<LogAckSample>(&node, Stream::LogAck)?;
-    let mut publisher = plant_stream.publisher().context("the plant stream")?;
-    let commands = command_stream.subscriber(ipc::CONSUMER_BUFFER)?;
-    let acks = ack_stream.subscriber(ipc::CONSUMER_BUFFER)?;
-
-    let mut runner = PlantRunner::new(&scenario)?;
-    let ticks = scenario.timing.ticks();
-    let period = period_ns(&scenario);
-    let budget_ns = (args.command_budget_ms * 1e6) as u64;
-    let spin_ns = if realtime { (args.command_spin_us * 1e3) as u64 } else { 0 };
-    let timing = scenario.timing.command_timing;
-    let mut rec = Recorder::new(
-        "plant",
-        &[
-            ("wake_lateness", "actual minus ideal tick start (realtime only)"),
-            ("step_exec", "actuators + RK4 step execution time"),
-            ("sense_to_actuate", "plant publish of tick k to the command answering k received at the plant"),
-            ("ipc_controller_to_plant", "command publish to receive at the plant"),
-        ],
-    );
-    rec.declare(&[
-        "ticks",
-        "overruns",
-        "skipped_ticks",
-        "command_misses",
-        "commands_received",
-        "commands_invalid",
-        "failsafe_ticks",
-        "samples_dropped",
-    ]);
-    let events = EventLog::new(&args.out, "plant");
-    let mut loop_faults =
-        LoopFaults::new(&scenario.faults, FaultTarget::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
-    // Failsafe: the trim surfaces of the scenario's flight condition (the initial hold if no trim exists there).
-    let failsafe = failsafe_command(&scenario, runner.initial_command());
-    let stale_after_ns = period * u64::from(args.stale_after_periods.max(1));
-    let hold_ns = (args.controller_hold_ms * 1e6) as u64;
-
-    let started = wait_for_peers("controller and logger", args.startup_timeout_s, || {
-        plant_stream.number_of_subscribers() >= 2 && command_stream.number_of_publishers() >= 1
-    })?;
-
-    let checkpoint_path = args.out.join("plant.checkpoint.json");
-    if args.resume {
-        match std::fs::read_to_string(&checkpoint_path).map(|t| serde_json::from_str::<crate::sim::PlantCheckpoint>(&t))
-        {
-            Ok(Ok(c)) => {
-                runner.restore(&c);
-                events.emit(
-                    Some(c.tick),
-                    "plant-resumed",
-                    format!("continuing from the checkpoint at tick {}", c.tick),
-                );
-            }
-            _ => eprintln!(
-                "silrig-plant: warning: --resume without a readable {}; starting over",
-                checkpoint_path.display()
-            ),
+    let mut plant = PlantLoop::setup(args)?;
+    let mut ports = PlantPorts::connect(args)?;
+    let ended = if ports.wait_for_peers(args.options.startup_timeout_s)? {
+        if args.resume {
+            plant.resume_from_checkpoint();
         }
-    }
-    let throttle = runner.initial_command().throttle;
-    let mut applied = runner.initial_command();
-    // Tick whose sample the applied command answers (None: the initial hold, before any command).
-    let mut applied_answers: Option<u64> = None;
-    let mut received: VecDeque<CommandSample> = VecDeque::with_capacity(8);
-    let mut publish_ns = [0u64; 16];
-    let mut flags = 0u32;
-    let mut rows_acked = 0u64;
-    let schedule = TickSchedule::new(monotonic_ns() + 2 * period, period);
-    events.emit(Some(0), "ticking", format!("t0_ns={}", schedule.t0_ns));
-    let mut last_fresh_ns = schedule.t0_ns;
-    let mut last_fresh_tick = sim_tick_start(&runner);
-    let mut command_epoch: Option<u64> = None;
-    let (mut stale, mut in_failsafe) = (false, false);
-    let mut expected_wall_tick = 0u64;
-    let mut sim_tick = sim_tick_start(&runner);
-    let mut overrun_counted = false;
-    let mut ended = if started { "completed".to_string() } else { "terminated by signal".to_string() };
-
-    while started && sim_tick < ticks {
-        if signals::termination_requested() {
-            ended = "terminated by signal".into();
-            break;
-        }
-        if realtime {
-            clock::sleep_until_ns(schedule.deadline_ns(expected_wall_tick));
-            let outcome = schedule.on_wake(expected_wall_tick, monotonic_ns());
-            rec.record(WAKE_LATENESS, outcome.wake_lateness_ns);
-            if outcome.skipped > 0 {
-                // One stall is one overrun, whether it showed first as work past the deadline or as a late start.
-                if !std::mem::take(&mut overrun_counted) {
-                    rec.count("overruns", 1);
-                }
-                rec.count("skipped_ticks", outcome.skipped);
-                events.emit(
-                    Some(sim_tick),
-                    "overrun",
-                    format!(
-                        "woke {:.2} ms late; {} tick(s) skipped",
-                        outcome.wake_lateness_ns as f64 / 1e6,
-                        outcome.skipped
-                    ),
-                );
-            }
-            expected_wall_tick = outcome.next_tick;
-            overrun_counted = false;
-        } else {
-            // Lockstep: keep within the logger's queue, so nothing is overwritten however slow the disk.
-            let deadline = monotonic_ns() + LOCKSTEP_PEER_TIMEOUT.as_nanos() as u64;
-            while sim_tick >= rows_acked + LOCKSTEP_LOGGER_WINDOW {
-                acks.drain(|r| {
-                    if r.invalid.is_none() {
-                        rows_acked = rows_acked.max(r.sample.rows_written);
-                    }
-                })?;
-                if sim_tick < rows_acked + LOCKSTEP_LOGGER_WINDOW || signals::termination_requested() {
-                    break;
-                }
-                anyhow::ensure!(monotonic_ns() < deadline, "lockstep: the logger stopped acknowledging rows");
-                let _ = acks.listener().timed_wait(|_| {}, Duration::from_millis(50));
-            }
-        }
-
-        let snap = runner.snapshot();
-        let effect = if loop_faults.is_empty() { Default::default() } else { loop_faults.at(sim_tick) };
-        if effect.sleep_ns > 0 {
-            std::thread::sleep(Duration::from_nanos(effect.sleep_ns));
-        }
-        let receipt = if effect.drop {
-            rec.count("samples_dropped", 1);
-            ipc::SendReceipt { delivered: 0, t_send_ns: monotonic_ns() }
-        } else {
-            publisher.send(sim_tick, &plant_sample(&snap, flags))?
-        };
-        publish_ns[(sim_tick % 16) as usize] = receipt.t_send_ns;
-
-        // The command this tick applies answers `target`: this tick (same-tick) or the previous one (next-tick).
-        let target = match timing {
-            CommandTiming::SameTick => Some(sim_tick),
-            CommandTiming::NextTick => sim_tick.checked_sub(1),
-        };
-        // Wait for the answer to this tick whichever timing applies: next-tick applies it one tick later, but
-        // receiving it now measures the transport honestly, and lockstep never runs ahead of the controller.
-        let wait_until = receipt.t_send_ns + if realtime { budget_ns } else { LOCKSTEP_PEER_TIMEOUT.as_nanos() as u64 };
-        loop {
-            commands.drain(|r| {
-                if r.invalid.is_some() {
-                    rec.count("commands_invalid", 1);
-                    return;
-                }
-                rec.count("commands_received", 1);
-                let epoch = r.sample.header.epoch;
-                if command_epoch.is_some_and(|e| e != epoch) {
-                    events.emit(Some(sim_tick), "controller-restarted", "commands from a new controller epoch");
-                }
-                command_epoch = Some(epoch);
-                rec.record(IPC_CONTROLLER_TO_PLANT, r.age_ns() as i64);
-                let answers = r.sample.answers_tick;
-                if answers <= sim_tick && sim_tick - answers < 16 {
-                    let sent = publish_ns[(answers % 16) as usize];
-                    rec.record(SENSE_TO_ACTUATE, r.t_recv_ns as i64 - sent as i64);
-                }
-                if received.len() == 8 {
-                    received.pop_front();
-                }
-                received.push_back(r.sample);
-            })?;
-            let have = |t: u64| received.iter().any(|c| c.answers_tick == t);
-            if have(sim_tick) || signals::termination_requested() {
-                break;
-            }
-            let now = monotonic_ns();
-            if now < receipt.t_send_ns + spin_ns.min(budget_ns) {
-                std::hint::spin_loop();
-                continue;
-            }
-            if now >= wait_until {
-                anyhow::ensure!(realtime, "lockstep: no command for tick {sim_tick} within {LOCKSTEP_PEER_TIMEOUT:?}");
-                break;
-            }
-            // EINTR (SIGSTOP/SIGCONT, SIGTERM) just ends this wait early; the loop looks again.
-            let _ = commands.listener().timed_wait(|_| {}, Duration::from_nanos(wait_until - now));
-        }
-
-        let fresh = target.and_then(|t| received.iter().find(|c| c.answers_tick == t).copied());
-        let now = monotonic_ns();
-        let held = match (target, fresh) {
-            (None, _) => false,
-            (Some(t), Some(c)) => {
-                applied = actuator_command(&c, throttle);
-                applied_answers = Some(t);
-                last_fresh_ns = now;
-                last_fresh_tick = sim_tick;
-                if stale || in_failsafe {
-                    let how = if in_failsafe { "failsafe released, " } else { "" };
-                    events.emit(Some(sim_tick), "controller-recovered", format!("{how}commands resumed"));
-                    stale = false;
-                    in_failsafe = false;
-                }
-                false
-            }
-            (Some(_), None) => {
-                rec.count("command_misses", 1);
-                true
-            }
-        };
-        // Watchdog on the controller: stale after a few periods without a fresh command, failsafe after the hold.
-        if realtime && held {
-            let silent_ns = now.saturating_sub(last_fresh_ns);
-            if !stale && silent_ns >= stale_after_ns {
-                stale = true;
-                events.emit(Some(sim_tick), "controller-stale", format!("no command for {} ms", silent_ns / 1_000_000));
-                // A dead controller's publisher must go before a new one can take its place; a stopped one stays.
-                let _ = command_stream.try_cleanup_dead_nodes();
-            }
-            if !in_failsafe && silent_ns >= hold_ns {
-                in_failsafe = true;
-                events.emit(
-                    Some(sim_tick),
-                    "failsafe-engaged",
-                    format!(
-                        "{} ticks after the last fresh command; trim surfaces: aileron {:.3}, elevator {:.3}, rudder {:.3} deg",
-                        sim_tick - last_fresh_tick,
-                        failsafe.surfaces.aileron_deg,
-                        failsafe.surfaces.elevator_deg,
-                        failsafe.surfaces.rudder_deg
-                    ),
-                );
-            }
-            if in_failsafe {
-                applied = failsafe;
-                rec.count("failsafe_ticks", 1);
-            }
-        }
-        if let Some(a) = applied_answers {
-            *rec.command_age_ticks.entry(sim_tick - a).or_insert(0) += 1;
-        }
-
-        let t0 = monotonic_ns();
-        let hits = runner.step(&applied);
-        rec.record(STEP_EXEC, (monotonic_ns() - t0) as i64);
-        flags = step_flags(&hits, held) | if in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
-        if realtime {
-            let late_ns = monotonic_ns() as i64 - schedule.deadline_ns(expected_wall_tick) as i64;
-            if late_ns > 0 {
-                // The work of this tick ran past the next tick's due time: an overrun (the Simulink/dSPACE sense).
-                rec.count("overruns", 1);
-                overrun_counted = true;
-                events.emit(
-                    Some(sim_tick),
-                    "overrun",
-                    format!("tick work ended {:.2} ms after the next tick was due", late_ns as f64 / 1e6),
-                );
-            }
-        }
-        if realtime && !scenario.faults.is_empty() && (sim_tick + 1).is_multiple_of(CHECKPOINT_EVERY_TICKS) {
-            let saved = serde_json::to_string(&runner.checkpoint())
-                .map_err(std::io::Error::other)
-                .and_then(|t| super::write_atomically(&checkpoint_path, &t));
-            if let Err(e) = saved {
-                eprintln!("silrig-plant: cannot write {}: {e}", checkpoint_path.display());
-            }
-        }
-        sim_tick += 1;
-        rec.count("ticks", 1);
-    }
-    let stats = commands.stats();
-    rec.count("commands_lost", stats.lost);
-    rec.count("controller_restarts", stats.publisher_restarts);
-    let meta = ReportMeta::new(args, &scenario.name, scheduling, ended);
-    Ok(rec.finish(meta, &args.out)?)
+        plant.fly(&mut ports)?
+    } else {
+        "terminated by signal".into()
+    };
+    plant.finish(args, &ports, ended)
 }

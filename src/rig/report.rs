@@ -2,6 +2,7 @@
 //! the conditions a timing figure needs to be read honestly: scheduling policy, CPU count, load average.
 
 use crate::timing::{LatencyHistogram, LatencySummary};
+use crate::topology::Role;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -199,16 +200,16 @@ impl MachineConditions {
     }
 }
 
-/// Ask for SCHED_FIFO at `priority` and mlockall when `realtime` (one warning line on stderr when refused), and
+/// Ask for SCHED_FIFO at the role's priority and mlockall when `realtime` (one warning line on stderr when refused), and
 /// return the scheduling obtained as report text ("SCHED_FIFO 80, memory locked"). Lockstep processes block on each
 /// other rather than on a clock; FIFO there would only starve their peers on a small machine.
-pub fn request_scheduling(process: &str, realtime: bool, priority: i32) -> String {
-    if !realtime {
+pub fn request_scheduling(role: Role, realtime: bool) -> String {
+    let Some(priority) = role.fifo_priority().filter(|_| realtime) else {
         return crate::clock::current_policy().to_string();
-    }
+    };
     let status = crate::clock::try_realtime(priority);
     if let Some(w) = &status.warning {
-        eprintln!("silrig-{process}: warning: {w}");
+        eprintln!("silrig-{role}: warning: {w}");
     }
     format!("{}{}", status.policy, if status.memory_locked { ", memory locked" } else { "" })
 }

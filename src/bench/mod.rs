@@ -1,6 +1,8 @@
 //! Benchmarks run by `silrig bench`: the cost of one plant derivative, one RK4 step, and closed-loop steps per
 //! second in one process. Each figure is the median (and spread) of many batches, so one descheduled batch on a
-//! shared machine does not move it.
+//! shared machine does not move it. Beside them, the OS timer floor ([`timer_baseline`]).
+
+pub mod timer_baseline;
 
 use crate::integrator::rk4_step;
 use crate::plant::{ExternalForcing, F16Model, trim::trim_level_flight};

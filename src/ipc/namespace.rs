@@ -1,0 +1,211 @@
+//! One run, one namespace: a run id gives its processes an iceoryx2 root dir and file prefix no other run sees
+//! ([`RunId`], [`rig_config`]), nodes are created in it ([`create_node`]), and everything the run left behind is
+//! removed at its end, or by the next run after a crash ([`cleanup_run`]).
+
+use super::IpcError;
+use iceoryx2::node::NodeView;
+use iceoryx2::prelude::*;
+use std::path::PathBuf;
+
+/// Longest run id; keeps the prefix, and every shm name built from it, short.
+pub const RUN_ID_MAX_LEN: usize = 24;
+
+/// The name of one rig run: its processes share an iceoryx2 namespace that no other run sees.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct RunId(String);
+
+impl RunId {
+    /// Validate: 1..=24 characters of `[a-z0-9-]`. No `_`, so one run's prefix `sr_<run>_` can never be the start of
+    /// another run's prefix, and cleanup of one run cannot touch another run's files.
+    pub fn new(id: &str) -> Result<Self, IpcError> {
+        let bad = |reason| Err(IpcError::InvalidRunId { given: id.to_string(), reason });
+        if id.is_empty() {
+            return bad("it is empty");
+        }
+        if id.len() > RUN_ID_MAX_LEN {
+            return bad("it is too long");
+        }
+        if !id.bytes().all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'-') {
+            return bad("it contains a character outside [a-z0-9-]");
+        }
+        Ok(Self(id.to_string()))
+    }
+
+    /// The id.
+    pub fn as_str(&self) -> &str {
+        &self.0
+    }
+
+    /// Prefix of every iceoryx2 file of the run, in `/dev/shm` and under the root dir: `sr_<run>_`.
+    pub fn prefix(&self) -> String {
+        format!("sr_{}_", self.0)
+    }
+
+    /// Root directory of the run's iceoryx2 files: `/tmp/silrig_<run>/`.
+    pub fn root_dir(&self) -> PathBuf {
+        PathBuf::from(format!("/tmp/silrig_{}/", self.0))
+    }
+}
+
+impl std::fmt::Display for RunId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::str::FromStr for RunId {
+    type Err = IpcError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::new(s)
+    }
+}
+
+/// The iceoryx2 config of a run: its own root dir and file prefix, defaults otherwise. Every process of the run must
+/// use exactly this config (passed explicitly, so no `./config/iceoryx2.toml` in the working directory can change
+/// it).
+pub fn rig_config(run: &RunId) -> Config {
+    let mut cfg = Config::default();
+    // A validated RunId gives an absolute path and a file name of [a-z0-9_-], both far below iceoryx2's length
+    // limits, so these conversions cannot fail.
+    let root = run.root_dir();
+    let root = root.to_string_lossy();
+    let root = Path::new(root.as_bytes()).expect("a validated run id gives a valid iceoryx2 path");
+    cfg.global.set_root_path(&root);
+    cfg.global.prefix = FileName::new(run.prefix().as_bytes()).expect("a validated run id gives a valid prefix");
+    cfg
+}
+
+/// Create a node of the run with the run's config.
+pub fn create_node(run: &RunId, name: &str) -> Result<Node<ipc::Service>, IpcError> {
+    let node_name = NodeName::new(name).map_err(|e| IpcError::Name { name: name.into(), detail: format!("{e:?}") })?;
+    NodeBuilder::new().name(&node_name).config(&rig_config(run)).create::<ipc::Service>().map_err(|e| IpcError::Node {
+        run: run.to_string(),
+        node: name.into(),
+        detail: e.to_string(),
+    })
+}
+
+/// A node found during cleanup.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct NodeSummary {
+    /// Node name ("?" if its details are gone).
+    pub name: String,
+    /// Process id (0 if unknown).
+    pub pid: i64,
+}
+
+/// What [`cleanup_run`] did.
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+pub struct CleanupReport {
+    /// Run id.
+    pub run: String,
+    /// Nodes still alive: when not empty, nothing was removed.
+    pub alive: Vec<NodeSummary>,
+    /// Dead nodes whose resources were removed.
+    pub dead_cleaned: Vec<NodeSummary>,
+    /// Dead nodes whose cleanup failed (or that another process was cleaning).
+    pub dead_failed: Vec<NodeSummary>,
+    /// Nodes that could not be inspected (permissions, half-written state).
+    pub unknown: usize,
+    /// The run's root dir was removed.
+    pub removed_root_dir: bool,
+    /// Files removed from `/dev/shm`.
+    pub removed_shm_files: Vec<String>,
+}
+
+impl CleanupReport {
+    /// Nothing of the run is left on disk.
+    pub fn is_clean(&self) -> bool {
+        self.alive.is_empty()
+    }
+}
+
+fn summary_of(details: &Option<iceoryx2::node::NodeDetails>) -> NodeSummary {
+    match details {
+        Some(d) => NodeSummary { name: d.name().to_string(), pid: i64::from(d.process_id().value()) },
+        None => NodeSummary { name: "?".into(), pid: 0 },
+    }
+}
+
+/// Directory where iceoryx2 puts shared memory on Linux.
+pub const SHM_DIR: &str = "/dev/shm";
+
+/// End-of-run cleanup: remove the resources of the run's dead nodes through iceoryx2, then, only if no node of the
+/// run is alive, delete the run's root dir and its `/dev/shm/<prefix>*` files (both, never only one: iceoryx2 #601).
+/// With live nodes, reports them and removes nothing. Reap child processes first: a zombie still holds its node's
+/// liveness lock.
+pub fn cleanup_run(run: &RunId) -> Result<CleanupReport, IpcError> {
+    let cfg = rig_config(run);
+    let mut report = CleanupReport { run: run.to_string(), ..Default::default() };
+    let root = run.root_dir();
+    if root.exists() {
+        Node::<ipc::Service>::list(&cfg, |state| {
+            match state {
+                NodeState::Alive(view) => report.alive.push(summary_of(view.details())),
+                NodeState::Dead(view) => {
+                    let who = summary_of(view.details());
+                    match view.try_remove_stale_resources() {
+                        Ok(()) => report.dead_cleaned.push(who),
+                        Err(_) => report.dead_failed.push(who),
+                    }
+                }
+                NodeState::Inaccessible(_) | NodeState::Undefined(_) => report.unknown += 1,
+            }
+            CallbackProgression::Continue
+        })
+        .map_err(|e| IpcError::Cleanup { run: run.to_string(), detail: format!("listing nodes: {e:?}") })?;
+    }
+    if !report.alive.is_empty() {
+        return Ok(report);
+    }
+    if root.exists() {
+        std::fs::remove_dir_all(&root).map_err(|e| IpcError::Cleanup {
+            run: run.to_string(),
+            detail: format!("removing {}: {e}", root.display()),
+        })?;
+        report.removed_root_dir = true;
+    }
+    let prefix = run.prefix();
+    let entries = std::fs::read_dir(SHM_DIR)
+        .map_err(|e| IpcError::Cleanup { run: run.to_string(), detail: format!("reading {SHM_DIR}: {e}") })?;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with(&prefix) {
+            match std::fs::remove_file(entry.path()) {
+                Ok(()) => report.removed_shm_files.push(name),
+                // Another cleaner got there first.
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => {
+                    return Err(IpcError::Cleanup {
+                        run: run.to_string(),
+                        detail: format!("removing {SHM_DIR}/{name}: {e}"),
+                    });
+                }
+            }
+        }
+    }
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_id_is_validated() {
+        assert!(RunId::new("r42").is_ok());
+        assert!(RunId::new("a-b-0").is_ok());
+        assert!(RunId::new(&"x".repeat(24)).is_ok());
+        for bad in ["", "Run1", "a_b", "a/b", "a b", "ü"] {
+            let e = RunId::new(bad).unwrap_err().to_string();
+            assert!(e.contains("invalid run id") && e.contains("a-z, 0-9 and '-'"), "{e}");
+        }
+        assert!(RunId::new(&"x".repeat(25)).unwrap_err().to_string().contains("too long"));
+        let r = RunId::new("r42").unwrap();
+        assert_eq!(r.prefix(), "sr_r42_");
+        assert_eq!(r.root_dir(), PathBuf::from("/tmp/silrig_r42/"));
+        let cfg = rig_config(&r);
+        assert_eq!(cfg.global.prefix.as_str(), "sr_r42_");
+        assert_eq!(cfg.global.root_path().to_string(), "/tmp/silrig_r42/");
+    }
+}
