@@ -4,7 +4,7 @@
 //! here, not there. This is also the part of the wire contract that is not a sample layout.
 
 use crate::ipc::{StreamSettings, StreamSpec};
-use crate::wire::{self, WireSample};
+use crate::wire;
 use serde::{Deserialize, Serialize};
 
 /// A process of the rig; also what a fault targets.

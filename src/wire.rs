@@ -2,24 +2,79 @@
 //! its layout version and its validity check.
 //!
 //! iceoryx2 matches a service's payload by type *name*, size and alignment only; field order and meaning are not
-//! checked. The type names therefore carry [`WIRE_LAYOUT_VERSION`]: whenever a field is added, removed, reordered or
-//! changes meaning, bump the version and the `#[type_name]`s together, so that a peer built from the old layout gets
-//! `IncompatibleTypes` on open (turned into [`crate::ipc::IpcError::OtherWireLayout`]) instead of misreading bytes.
+//! checked. The type names therefore carry [`WIRE_LAYOUT_VERSION`] (each is built from it by the `wire_type!` macro):
+//! whenever a field is added, removed, reordered or changes meaning, bump the version, so that a peer built from the
+//! old layout gets `IncompatibleTypes` on open (turned into [`crate::ipc::IpcError::OtherWireLayout`]) instead of misreading bytes.
 
 use iceoryx2::prelude::ZeroCopySend;
 
+/// The layout version as a literal, so that the type names can be built from it with `concat!`.
+macro_rules! layout_version {
+    () => {
+        1
+    };
+}
+
 /// Version of the wire layout; every sample carries it in [`SampleHeader::layout_version`], and every type name
 /// ends in `::v<version>`.
-pub const WIRE_LAYOUT_VERSION: u32 = 1;
+pub const WIRE_LAYOUT_VERSION: u32 = layout_version!();
 
-/// The iceoryx2 type name of [`PlantSample`].
-pub const PLANT_SAMPLE_TYPE_NAME: &str = "silrig::PlantSample::v1";
-/// The iceoryx2 type name of [`CommandSample`].
-pub const COMMAND_SAMPLE_TYPE_NAME: &str = "silrig::CommandSample::v1";
-/// The iceoryx2 type name of [`SampleHeader`] (not a payload on its own; named so that no crate path leaks in).
-pub const SAMPLE_HEADER_TYPE_NAME: &str = "silrig::SampleHeader::v1";
-/// Type name of [`LogAckSample`].
-pub const LOG_ACK_SAMPLE_TYPE_NAME: &str = "silrig::LogAckSample::v1";
+/// Declares a type that crosses a process boundary: `#[repr(C)]`, with the iceoryx2 identity
+/// `silrig::<Name>::v<WIRE_LAYOUT_VERSION>` (its `TYPE_NAME`). `ZeroCopySend` is implemented here rather than
+/// derived because the derive takes a type name only as a literal; the check the derive makes (every field is itself
+/// `ZeroCopySend`) is kept. `with header` also makes it a [`WireSample`] whose `validate` checks the layout version
+/// and then calls the type's own `check`.
+macro_rules! wire_type {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident { $($(#[doc = $doc:literal])* pub $field:ident: $ty:ty,)* }
+    ) => {
+        $(#[$meta])*
+        #[repr(C)]
+        pub struct $name { $($(#[doc = $doc])* pub $field: $ty,)* }
+
+        impl $name {
+            /// The iceoryx2 type name.
+            pub const TYPE_NAME: &'static str = concat!("silrig::", stringify!($name), "::v", layout_version!());
+        }
+
+        // SAFETY: `#[repr(C)]` and every field is ZeroCopySend (checked below, as the derive does): numbers and
+        // arrays of numbers, no pointers, no Drop, the same layout in every process built from this definition.
+        unsafe impl ZeroCopySend for $name {
+            unsafe fn type_name() -> &'static str {
+                Self::TYPE_NAME
+            }
+
+            fn __is_zero_copy_send(&self) {
+                $(ZeroCopySend::__is_zero_copy_send(&self.$field);)*
+            }
+        }
+    };
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident with header { $($body:tt)* }
+    ) => {
+        wire_type! { $(#[$meta])* pub struct $name { $($body)* } }
+
+        impl WireSample for $name {
+            const TYPE_NAME: &'static str = $name::TYPE_NAME;
+
+            fn header(&self) -> &SampleHeader {
+                &self.header
+            }
+
+            fn header_mut(&mut self) -> &mut SampleHeader {
+                &mut self.header
+            }
+
+            fn validate(&self) -> Result<(), WireError> {
+                check_layout(Self::TYPE_NAME, &self.header)?;
+                self.check()
+            }
+        }
+    };
+}
+
 /// Largest RBF network (nodes per channel) a command sample carries.
 pub const MAX_RBF_NODES: usize = 16;
 
@@ -37,10 +92,9 @@ pub const SURFACE_NAMES: [&str; 3] = ["aileron", "elevator", "rudder"];
 /// Names of the three controller channels, in the order of `sliding_surface`, `f_hat` and the `weights` blocks.
 pub const CHANNEL_NAMES: [&str; 3] = ["phi", "theta", "psi"];
 
+wire_type! {
 /// Bookkeeping that precedes every sample: loss detection, timing and restart detection.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
-#[type_name("silrig::SampleHeader::v1")]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct SampleHeader {
     /// Per-publisher counter, starting at 0 for each epoch; a jump means samples were lost.
     pub seq: u64,
@@ -55,12 +109,12 @@ pub struct SampleHeader {
     /// Explicit padding, always 0.
     pub _pad: u32,
 }
+}
 
+wire_type! {
 /// What the plant publishes every tick.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("silrig::PlantSample::v1")]
-pub struct PlantSample {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlantSample with header {
     /// Bookkeeping.
     pub header: SampleHeader,
     /// The 13 states in `F16State` order and book units: vt_fps, alpha_rad, beta_rad, phi_rad, theta_rad, psi_rad,
@@ -77,12 +131,12 @@ pub struct PlantSample {
     /// Explicit padding, always 0.
     pub _pad: u32,
 }
+}
 
+wire_type! {
 /// What the controller publishes in answer to a plant sample.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("silrig::CommandSample::v1")]
-pub struct CommandSample {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CommandSample with header {
     /// Bookkeeping.
     pub header: SampleHeader,
     /// Tick of the plant sample this command was computed from.
@@ -105,17 +159,18 @@ pub struct CommandSample {
     /// `FLAG_*` bits.
     pub flags: u32,
 }
+}
 
+wire_type! {
 /// What the logger publishes after writing rows, so a lockstep plant never runs further ahead of it than the
 /// logger's queue holds (lockstep must lose nothing, however slow the disk).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("silrig::LogAckSample::v1")]
-pub struct LogAckSample {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogAckSample with header {
     /// Bookkeeping (`tick` is the last tick written).
     pub header: SampleHeader,
     /// Rows written to `trace.csv` so far.
     pub rows_written: u64,
+}
 }
 
 // The sizes are part of the wire contract: iceoryx2 compares them on open, and a change here without a version bump
@@ -222,20 +277,10 @@ impl PlantSample {
     }
 }
 
-impl WireSample for PlantSample {
-    const TYPE_NAME: &'static str = PLANT_SAMPLE_TYPE_NAME;
-
-    fn header(&self) -> &SampleHeader {
-        &self.header
-    }
-
-    fn header_mut(&mut self) -> &mut SampleHeader {
-        &mut self.header
-    }
-
-    fn validate(&self) -> Result<(), WireError> {
+impl PlantSample {
+    /// Rejects NaN/inf in any float field, naming it.
+    fn check(&self) -> Result<(), WireError> {
         let t = Self::TYPE_NAME;
-        check_layout(t, &self.header)?;
         check_finite(t, &STATE_FIELDS, &self.state)?;
         check_finite(
             t,
@@ -264,20 +309,10 @@ impl CommandSample {
     }
 }
 
-impl WireSample for CommandSample {
-    const TYPE_NAME: &'static str = COMMAND_SAMPLE_TYPE_NAME;
-
-    fn header(&self) -> &SampleHeader {
-        &self.header
-    }
-
-    fn header_mut(&mut self) -> &mut SampleHeader {
-        &mut self.header
-    }
-
-    fn validate(&self) -> Result<(), WireError> {
+impl CommandSample {
+    /// Rejects NaN/inf in any float field and an RBF node count beyond the layout, naming the field.
+    fn check(&self) -> Result<(), WireError> {
         let t = Self::TYPE_NAME;
-        check_layout(t, &self.header)?;
         check_finite(
             t,
             &["surface_cmd_deg[0] aileron", "surface_cmd_deg[1] elevator", "surface_cmd_deg[2] rudder"],
@@ -315,19 +350,10 @@ impl LogAckSample {
     }
 }
 
-impl WireSample for LogAckSample {
-    const TYPE_NAME: &'static str = LOG_ACK_SAMPLE_TYPE_NAME;
-
-    fn header(&self) -> &SampleHeader {
-        &self.header
-    }
-
-    fn header_mut(&mut self) -> &mut SampleHeader {
-        &mut self.header
-    }
-
-    fn validate(&self) -> Result<(), WireError> {
-        check_layout(Self::TYPE_NAME, &self.header)
+impl LogAckSample {
+    /// Nothing beyond the header to check.
+    fn check(&self) -> Result<(), WireError> {
+        Ok(())
     }
 }
 
@@ -345,11 +371,13 @@ mod tests {
         assert_eq!(core::mem::align_of::<CommandSample>(), 8);
         // Safety of `type_name`: only reads the string the derive generated.
         unsafe {
-            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), PLANT_SAMPLE_TYPE_NAME);
-            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), COMMAND_SAMPLE_TYPE_NAME);
-            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), SAMPLE_HEADER_TYPE_NAME);
+            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v1");
+            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v1");
+            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v1");
+            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v1");
         }
-        for name in [PLANT_SAMPLE_TYPE_NAME, COMMAND_SAMPLE_TYPE_NAME, SAMPLE_HEADER_TYPE_NAME] {
+        for name in [PlantSample::TYPE_NAME, CommandSample::TYPE_NAME, SampleHeader::TYPE_NAME, LogAckSample::TYPE_NAME]
+        {
             assert!(name.ends_with(&format!("::v{WIRE_LAYOUT_VERSION}")), "{name}");
         }
     }
