@@ -1,0 +1,63 @@
+//! Golden traces: the `trace.csv` of every shipped scenario (and of the embedded default), as `silrig sim` writes
+//! it, is fingerprinted and compared with the fingerprint recorded when the trace last changed on purpose. A
+//! refactoring that claims to change no behaviour must leave every fingerprint as it is; a change that moves the
+//! traces must update this table in the same commit, saying why. (The rig's lockstep traces equal these bit for
+//! bit: `tests/rig.rs`.)
+//!
+//! The fingerprints are FNV-1a 64 of the CSV bytes, recorded on x86_64 Linux with glibc's libm; another libm may
+//! round `exp`/`sin` differently in the last bit, which shows here first.
+
+use silrig::scenario::Scenario;
+use std::path::Path;
+
+/// (scenario, FNV-1a 64 of trace.csv, rows, theta_deg in the last row).
+const GOLDEN: [(&str, u64, usize, f64); 7] = [
+    ("embedded default", 0x14c5_5400_0f36_d31e, 1000, 9.94750178256039),
+    ("faults-demo", 0x9c28_1e72_94f3_e695, 1000, 9.9483440999551),
+    ("paper", 0x5857_0e0c_bf10_9bee, 1000, 10.383176340008399),
+    ("paper-ideal", 0xd6ab_8397_80e5_7e43, 1000, 9.97183871222924),
+    ("paper-ideal-sign", 0xccb3_9a3d_35c1_4a7d, 1000, 9.99022091257509),
+    ("paper-next-tick", 0x0161_74b2_2f95_7826, 1000, 13.17071640441258),
+    ("robust", 0x14c5_5400_0f36_d31e, 1000, 9.94750178256039),
+];
+
+fn fnv1a64(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3))
+}
+
+fn scenario(name: &str) -> Scenario {
+    if name == "embedded default" {
+        return Scenario::embedded_default();
+    }
+    Scenario::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(format!("{name}.toml"))).unwrap()
+}
+
+#[test]
+fn every_shipped_scenario_flies_its_golden_trace() {
+    let mut moved = Vec::new();
+    for (name, fingerprint, rows, final_theta_deg) in GOLDEN {
+        let trace = silrig::sim::run(&scenario(name)).unwrap();
+        let mut csv = Vec::new();
+        trace.write_csv(&mut csv).unwrap();
+        let theta = trace.column("theta_deg").unwrap();
+        let got = (fnv1a64(&csv), trace.rows.len(), *theta.last().unwrap());
+        if got != (fingerprint, rows, final_theta_deg) {
+            moved.push(format!(
+                "{name}: fingerprint {:#018x}, {} rows, final theta {} deg (golden {fingerprint:#018x}, {rows}, {final_theta_deg})",
+                got.0, got.1, got.2
+            ));
+        }
+    }
+    assert!(moved.is_empty(), "traces moved:\n{}", moved.join("\n"));
+}
+
+#[test]
+fn every_shipped_scenario_has_a_golden_trace() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let Ok(scenario) = Scenario::load(&path) else { continue };
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        assert!(GOLDEN.iter().any(|g| g.0 == name), "{} has no golden trace ({})", path.display(), scenario.name);
+    }
+}
