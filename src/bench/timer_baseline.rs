@@ -272,6 +272,27 @@ pub fn timer_baseline_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Baseline {
+        #[command(flatten)]
+        args: BaselineArgs,
+    }
+
+    #[test]
+    fn baseline_arguments_survive_their_command_line() {
+        let args = BaselineArgs {
+            duration_s: 3.5,
+            period_ms: 2.5,
+            fifo_priority: 0,
+            timerfd: true,
+            hgrm: Some("a dir/x.hgrm".into()),
+            json: true,
+        };
+        let argv = std::iter::once(SUBCOMMAND.to_string()).chain(args.to_argv());
+        assert_eq!(Baseline::parse_from(argv).args, args);
+    }
 
     #[test]
     fn baseline_runs_and_counts_every_wakeup() {

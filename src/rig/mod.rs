@@ -85,7 +85,7 @@ impl ProcessOptions {
 }
 
 /// Arguments every rig process takes (the launcher passes the same ones to all three).
-#[derive(Debug, Clone, clap::Args)]
+#[derive(Debug, Clone, PartialEq, clap::Args)]
 pub struct ProcessArgs {
     /// Scenario file (TOML); without it, the embedded default scenario.
     pub config: Option<PathBuf>,
@@ -166,5 +166,41 @@ pub fn exit_status(process: &str, result: anyhow::Result<report::ProcessReport>)
             eprintln!("silrig-{process}: error: {e:#}");
             std::process::ExitCode::from(2)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Process {
+        #[command(flatten)]
+        args: ProcessArgs,
+    }
+
+    #[test]
+    fn process_arguments_survive_their_command_line() {
+        let args = ProcessArgs {
+            config: Some("some dir/scenario.toml".into()),
+            run_id: RunId::new("r1-a").unwrap(),
+            mode: RigMode::Lockstep,
+            duration_s: Some(2.5),
+            out: "out dir/x".into(),
+            resume: true,
+            options: ProcessOptions {
+                command_budget_ms: 1.25,
+                command_spin_us: 0.0,
+                stale_after_periods: 7,
+                controller_hold_ms: 250.0,
+                startup_timeout_s: 3.0,
+            },
+        };
+        let argv = std::iter::once("silrig-plant".to_string()).chain(args.to_argv());
+        assert_eq!(Process::parse_from(argv).args, args);
+        let defaults = Process::parse_from(["silrig-plant", "--run-id", "r2"]).args;
+        let argv = std::iter::once("silrig-plant".to_string()).chain(defaults.to_argv());
+        assert_eq!(Process::parse_from(argv).args, defaults);
     }
 }

@@ -87,8 +87,33 @@ pub(super) fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scen
 }
 
 impl RigReport {
-    /// The report as a person reads it: conditions, a cyclictest-style table, counters, control quality.
+    /// The report as a person reads it: conditions, a cyclictest-style table, counters, control quality, faults,
+    /// failures.
     pub fn to_text(&self) -> String {
+        let mut out = self.conditions_text();
+        out += &self.timing_text();
+        out += &self.counters_text();
+        match &self.control {
+            Some(s) => out += &s.to_text(),
+            None => out += "no trace to summarise\n",
+        }
+        out += &self.faults_text();
+        if self.failures.is_empty() {
+            out += "all processes ended cleanly\n";
+        } else {
+            for f in &self.failures {
+                out += &format!("FAILED: {f}\n");
+            }
+        }
+        if !self.leftovers.is_empty() {
+            out += &format!("iceoryx2 leftovers after cleanup: {}\n", self.leftovers.join("; "));
+        }
+        out += &format!("report: {}/report.json\n", self.out_dir);
+        out
+    }
+
+    /// The run, the machine, and how each process ran and ended.
+    fn conditions_text(&self) -> String {
         let c = &self.conditions_start;
         let mut out = format!(
             "silrig run {}: scenario {}, {} mode, {} CPUs, load average {:.2} {:.2} {:.2} (end {:.2}), kernel {}\n",
@@ -105,13 +130,14 @@ impl RigReport {
         for p in &self.processes {
             out += &format!("  {:<10} pid {:<7} {:<34} {}\n", p.process, p.pid, p.scheduling, p.ended);
         }
-        out += &format!("\n{}\n", summary_table_header());
-        for p in &self.processes {
-            for l in &p.latencies {
-                if l.summary.count > 0 {
-                    out += &format!("{}\n", summary_line(&l.name, &l.summary));
-                }
-            }
+        out
+    }
+
+    /// Every distribution, the OS floor's last, and the plant's wake-up read against it.
+    fn timing_text(&self) -> String {
+        let mut out = format!("\n{}\n", summary_table_header());
+        for l in self.processes.iter().flat_map(|p| &p.latencies).filter(|l| l.summary.count > 0) {
+            out += &format!("{}\n", summary_line(&l.name, &l.summary));
         }
         if let Some(b) = &self.timer_baseline {
             out += &format!("{}\n", summary_line("os-floor.wake_lateness", &b.lateness));
@@ -125,6 +151,12 @@ impl RigReport {
             }
         }
         out.push('\n');
+        out
+    }
+
+    /// Each process's counters, the command ages, the throughput.
+    fn counters_text(&self) -> String {
+        let mut out = String::new();
         for p in &self.processes {
             let counters: Vec<String> = p.counters.iter().map(|(k, v)| format!("{k} {v}")).collect();
             out += &format!("  {:<10} {}\n", p.process, counters.join(", "));
@@ -134,39 +166,30 @@ impl RigReport {
             }
         }
         out += &format!("  wall time {:.3} s, {:.0} plant cycles/s\n\n", self.wall_s, self.cycles_per_s);
-        match &self.control {
-            Some(s) => out += &s.to_text(),
-            None => out += "no trace to summarise\n",
+        out
+    }
+
+    /// The fault table (empty without faults).
+    fn faults_text(&self) -> String {
+        if self.faults.is_empty() {
+            return String::new();
         }
-        if !self.faults.is_empty() {
-            out += "\nfaults (s from tick 0)            injected  detected  by                               failsafe  recovered  plant lost  cmd lost\n";
-            let t = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
-            for f in &self.faults {
-                out += &format!(
-                    "  {}\n  {:<32} {:>8} {:>9}  {:<32} {:>8} {:>10} {:>11} {:>9}\n",
-                    f.fault,
-                    "",
-                    t(f.injected_at_s),
-                    t(f.detected_at_s),
-                    f.detected_by.clone().unwrap_or_else(|| "-".into()),
-                    t(f.failsafe_at_s),
-                    t(f.recovered_at_s),
-                    f.plant_samples_lost,
-                    f.command_samples_lost
-                );
-            }
+        let mut out = "\nfaults (s from tick 0)            injected  detected  by                               failsafe  recovered  plant lost  cmd lost\n".to_string();
+        let t = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
+        for f in &self.faults {
+            out += &format!(
+                "  {}\n  {:<32} {:>8} {:>9}  {:<32} {:>8} {:>10} {:>11} {:>9}\n",
+                f.fault,
+                "",
+                t(f.injected_at_s),
+                t(f.detected_at_s),
+                f.detected_by.clone().unwrap_or_else(|| "-".into()),
+                t(f.failsafe_at_s),
+                t(f.recovered_at_s),
+                f.plant_samples_lost,
+                f.command_samples_lost
+            );
         }
-        if self.failures.is_empty() {
-            out += "all processes ended cleanly\n";
-        } else {
-            for f in &self.failures {
-                out += &format!("FAILED: {f}\n");
-            }
-        }
-        if !self.leftovers.is_empty() {
-            out += &format!("iceoryx2 leftovers after cleanup: {}\n", self.leftovers.join("; "));
-        }
-        out += &format!("report: {}/report.json\n", self.out_dir);
         out
     }
 
