@@ -56,6 +56,15 @@ enum Command {
     },
     /// Run the three-process rig (plant, controller, logger over iceoryx2) and report control quality and timing.
     Run(silrig::rig::launcher::LaunchOptions),
+    /// Print the wire contract a peer of the rig must match, or write it as a C header or a Python ctypes module.
+    Contract {
+        /// Write the C header (C11 or C++11) to this file.
+        #[arg(long)]
+        c_header: Option<PathBuf>,
+        /// Write the Python ctypes module to this file.
+        #[arg(long)]
+        python: Option<PathBuf>,
+    },
     /// Micro-benchmarks of the model (median of batches; run on an idle machine).
     Bench,
     /// Measure the OS timer floor: a bare absolute-deadline loop, wake-up lateness as cyclictest reports it.
@@ -119,6 +128,19 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             print!("{}", report.to_text());
             if !report.failures.is_empty() {
                 return Ok(ExitCode::FAILURE);
+            }
+        }
+        Command::Contract { c_header, python } => {
+            let files =
+                [(c_header, silrig::contract::c_header as fn() -> String), (python, silrig::contract::python_module)];
+            if files.iter().all(|(path, _)| path.is_none()) {
+                print!("{}", silrig::contract::text());
+            }
+            for (path, render) in files {
+                if let Some(path) = path {
+                    std::fs::write(&path, render()).with_context(|| format!("writing {}", path.display()))?;
+                    println!("wrote {}", path.display());
+                }
             }
         }
         Command::Bench => {

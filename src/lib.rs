@@ -16,6 +16,7 @@
 pub mod actuator;
 pub mod bench;
 pub mod clock;
+pub mod contract;
 pub mod control;
 pub mod fault;
 pub mod integrator;

@@ -36,6 +36,20 @@ macro_rules! wire_type {
         impl $name {
             /// The iceoryx2 type name.
             pub const TYPE_NAME: &'static str = concat!("silrig::", stringify!($name), "::v", layout_version!());
+            /// Every field in memory order, with its offset and size taken from this very type.
+            pub const FIELDS: &'static [WireField] = &[$(WireField {
+                name: stringify!($field),
+                rust_type: stringify!($ty),
+                offset: core::mem::offset_of!($name, $field),
+                size: core::mem::size_of::<$ty>(),
+                doc: concat!($($doc, "\n",)*),
+            },)*];
+        }
+
+        impl WireType for $name {
+            const NAME: &'static str = stringify!($name);
+            const TYPE_NAME: &'static str = $name::TYPE_NAME;
+            const FIELDS: &'static [WireField] = $name::FIELDS;
         }
 
         // SAFETY: `#[repr(C)]` and every field is ZeroCopySend (checked below, as the derive does): numbers and
@@ -73,6 +87,31 @@ macro_rules! wire_type {
             }
         }
     };
+}
+
+/// One field of a wire type, as the contract describes it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WireField {
+    /// Field name.
+    pub name: &'static str,
+    /// Its Rust type as written in the definition (`u64`, `[f64; 3]`, `SampleHeader`).
+    pub rust_type: &'static str,
+    /// Byte offset in the type (`core::mem::offset_of!`).
+    pub offset: usize,
+    /// Size in bytes.
+    pub size: usize,
+    /// Its doc comment, one line per source line: what it is, in which unit.
+    pub doc: &'static str,
+}
+
+/// What the contract needs to know of every type that crosses a process boundary.
+pub trait WireType {
+    /// The Rust name.
+    const NAME: &'static str;
+    /// The iceoryx2 type name.
+    const TYPE_NAME: &'static str;
+    /// Every field in memory order.
+    const FIELDS: &'static [WireField];
 }
 
 /// Largest RBF network (nodes per channel) a command sample carries.
