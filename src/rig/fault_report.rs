@@ -4,6 +4,7 @@
 
 use super::events::{Event, read_events};
 use crate::fault::Fault;
+use crate::topology::Role;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -32,7 +33,7 @@ pub struct FaultRecord {
 pub fn plant_t0_ns(out_dir: &Path) -> Option<u64> {
     read_events(out_dir)
         .iter()
-        .find(|e| e.process == "plant" && e.kind == "ticking")
+        .find(|e| e.process == Role::Plant.label() && e.kind == "ticking")
         .and_then(|e| e.detail.strip_prefix("t0_ns=")?.parse().ok())
 }
 
