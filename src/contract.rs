@@ -166,20 +166,26 @@ fn c_struct_name(rust_name: &str) -> String {
     format!("silrig_{snake}_t")
 }
 
+/// Rust scalar types and their C and Python ctypes names.
+const SCALARS: [(&str, &str, &str); 10] = [
+    ("u8", "uint8_t", "ctypes.c_uint8"),
+    ("i8", "int8_t", "ctypes.c_int8"),
+    ("u16", "uint16_t", "ctypes.c_uint16"),
+    ("i16", "int16_t", "ctypes.c_int16"),
+    ("u32", "uint32_t", "ctypes.c_uint32"),
+    ("i32", "int32_t", "ctypes.c_int32"),
+    ("u64", "uint64_t", "ctypes.c_uint64"),
+    ("i64", "int64_t", "ctypes.c_int64"),
+    ("f32", "float", "ctypes.c_float"),
+    ("f64", "double", "ctypes.c_double"),
+];
+
 fn c_scalar(t: &str) -> String {
-    match t {
-        "u8" => "uint8_t".into(),
-        "i8" => "int8_t".into(),
-        "u16" => "uint16_t".into(),
-        "i16" => "int16_t".into(),
-        "u32" => "uint32_t".into(),
-        "i32" => "int32_t".into(),
-        "u64" => "uint64_t".into(),
-        "i64" => "int64_t".into(),
-        "f32" => "float".into(),
-        "f64" => "double".into(),
-        other => c_struct_name(other),
-    }
+    SCALARS.iter().find(|s| s.0 == t).map_or_else(|| c_struct_name(t), |s| s.1.to_string())
+}
+
+fn py_scalar(t: &str) -> String {
+    SCALARS.iter().find(|s| s.0 == t).map_or_else(|| t.to_string(), |s| s.2.to_string())
 }
 
 fn comment_lines(doc: &str, indent: &str, lead: &str) -> String {
@@ -236,22 +242,6 @@ pub fn c_header() -> String {
     }
     out += "\n#endif /* SILRIG_CONTRACT_H */\n";
     out
-}
-
-fn py_scalar(t: &str) -> String {
-    match t {
-        "u8" => "ctypes.c_uint8".into(),
-        "i8" => "ctypes.c_int8".into(),
-        "u16" => "ctypes.c_uint16".into(),
-        "i16" => "ctypes.c_int16".into(),
-        "u32" => "ctypes.c_uint32".into(),
-        "i32" => "ctypes.c_int32".into(),
-        "u64" => "ctypes.c_uint64".into(),
-        "i64" => "ctypes.c_int64".into(),
-        "f32" => "ctypes.c_float".into(),
-        "f64" => "ctypes.c_double".into(),
-        other => other.to_string(),
-    }
 }
 
 /// The contract as a Python `ctypes` module, with the `type_name()` static methods iceoryx2's Python binding
