@@ -1,5 +1,6 @@
 //! The closed-loop figures of a trace: the states figure (fig1: angle of attack, Euler angles, body rates, control
-//! surfaces with their commands), whatever controller flew, and the figures of our adaptive SMC/RBF controller.
+//! surfaces with their commands), whatever controller flew, and the figures of our adaptive SMC/RBF controller where
+//! the trace has their columns.
 
 use std::path::{Path, PathBuf};
 
@@ -13,13 +14,16 @@ use crate::trace::Trace;
 const STATES: &str = "fig1_states";
 
 /// Draw the closed-loop figures of `trace` into `out_dir` (created if missing), each as PNG and SVG:
-/// `fig1_states` (alpha; Euler angles; body rates; surfaces and their commands), `fig2_sliding` (sliding surfaces and
-/// RBF estimates, 3x2) and `fig3_weights` (the RBF weights `w_<channel>_<k>` of each channel). `title` goes on top
-/// of every figure. Every column is checked before any file is written. Returns the files written, PNG before SVG,
-/// figure by figure.
+/// `fig1_states` (alpha; Euler angles; body rates; surfaces and their commands) always, its columns required;
+/// `fig2_sliding` (sliding surfaces `s_<channel>` and RBF estimates `fhat_<channel>`, 3x2) if the trace has any of
+/// those columns, and `fig3_weights` (the RBF weights `w_<channel>_<k>` of each channel) if it has any weight column;
+/// such a figure with only some of its columns is an error naming a missing one. `title` goes on top of every figure.
+/// Every column is checked before any file is written. Returns the files written, PNG before SVG, figure by figure.
 pub fn plot_closed_loop(trace: &Trace, out_dir: &Path, title: &str) -> Result<Vec<PathBuf>, PlotError> {
     let mut figures = vec![(states(trace, out_dir, title)?, STATES)];
     figures.extend(smc_rbf::figures(trace, out_dir, title)?);
+    // All figures are built, and so all columns checked, before the first file is written: a trace that fails leaves
+    // no partial set of figures behind.
     let mut written = Vec::new();
     for (fig, stem) in &figures {
         written.extend(write_figure(fig, out_dir, stem)?);

@@ -11,9 +11,19 @@ use crate::trace::{CHANNELS, Trace};
 const SLIDING: &str = "fig2_sliding";
 const WEIGHTS: &str = "fig3_weights";
 
-/// The controller's figures of `trace`, each with its file stem, every column checked.
+/// The controller's figures that `trace` has columns for, each with its file stem: fig2 if it has any `s_<ch>` or
+/// `fhat_<ch>` column, fig3 if it has any `w_<ch>_<k>` column. A trace of another controller has none and gets none;
+/// a figure with only some of its columns is an error naming a missing one, as that trace is ours but damaged.
 pub(super) fn figures(trace: &Trace, out_dir: &Path, title: &str) -> Result<Vec<(Figure, &'static str)>, PlotError> {
-    Ok(vec![(sliding(trace, out_dir, title)?, SLIDING), (weights(trace, out_dir, title)?, WEIGHTS)])
+    let mut figures = Vec::new();
+    let sliding_column = |ch: &&str| [format!("s_{ch}"), format!("fhat_{ch}")].iter().any(|c| trace.index(c).is_some());
+    if CHANNELS.iter().any(sliding_column) {
+        figures.push((sliding(trace, out_dir, title)?, SLIDING));
+    }
+    if CHANNELS.iter().any(|ch| !weight_nodes(trace, ch).is_empty()) {
+        figures.push((weights(trace, out_dir, title)?, WEIGHTS));
+    }
+    Ok(figures)
 }
 
 /// Sliding surfaces (left) and RBF estimates (right), a row per channel.
