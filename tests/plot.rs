@@ -1,5 +1,6 @@
 //! Plots: every figure is written as a real PNG and SVG, with its legends, from a synthetic trace that has sines,
-//! constant and all-zero columns and a NaN; a missing column is an error naming it.
+//! constant and all-zero columns and a NaN; a missing column is an error naming it; a trace without our controller's
+//! columns still gets its states figure.
 //!
 //! Set `SILRIG_PLOT_DIR=/some/dir` to keep the figures there for a look instead of a removed temp dir.
 
@@ -240,11 +241,15 @@ fn a_missing_column_is_an_error_naming_it() {
     expect_missing(plot_closed_loop(&without("alpha_deg"), &dir.path, "x"), "alpha_deg", "fig1_states.png");
     expect_missing(plot_closed_loop(&without("fhat_theta"), &dir.path, "x"), "fhat_theta", "fig2_sliding.png");
     assert!(!dir.path.join("fig1_states.png").exists(), "a figure was written before the missing column was found");
+    // Without any weight column there is no weights figure to draw, and nothing is missing.
     let mut no_weights = full.clone();
     let first_weight = no_weights.index("w_phi_1").unwrap();
     no_weights.columns.truncate(first_weight);
     no_weights.rows.iter_mut().for_each(|r| r.truncate(first_weight));
-    expect_missing(plot_closed_loop(&no_weights, &dir.path, "x"), "w_phi_1", "fig3_weights.png");
+    let no_weights_dir = dir.path.join("no_weights");
+    let paths = plot_closed_loop(&no_weights, &no_weights_dir, "x").expect("a trace without weights");
+    check_files(&paths, &["fig1_states", "fig2_sliding"], &[&["α"], &["s_phi", "fhat_psi"]]);
+    assert!(!no_weights_dir.join("fig3_weights.png").exists() && !no_weights_dir.join("fig3_weights.svg").exists());
     let message = expect_missing(
         plot_overlay(&[("good".into(), full.clone()), ("bad run".into(), without("rudder_deg"))], &dir.path, "cmp"),
         "rudder_deg",
@@ -256,6 +261,51 @@ fn a_missing_column_is_an_error_naming_it() {
     // Nothing to draw is an error too, not a panic or an empty picture.
     assert!(matches!(plot_overlay(&[], &dir.path, "none"), Err(PlotError::NoData { .. })));
     assert!(matches!(plot_closed_loop(&Trace::new(columns(2)), &dir.path, "x"), Err(PlotError::NoData { .. })));
+}
+
+/// `trace` with only the columns `keep` accepts.
+fn only(trace: &Trace, keep: impl Fn(&str) -> bool) -> Trace {
+    let kept: Vec<usize> = (0..trace.columns.len()).filter(|&i| keep(&trace.columns[i])).collect();
+    let mut t = Trace::new(kept.iter().map(|&i| trace.columns[i].clone()).collect());
+    t.rows = trace.rows.iter().map(|r| kept.iter().map(|&i| r[i]).collect()).collect();
+    t
+}
+
+fn is_controller_column(column: &str) -> bool {
+    ["s_", "fhat_", "w_"].iter().any(|prefix| column.starts_with(prefix))
+}
+
+#[test]
+fn a_trace_of_another_controller_gets_the_states_figure_only() {
+    let dir = OutDir::new("states_only");
+    let full = synthetic(300, 0.0);
+    let states = only(&full, |c| !is_controller_column(c));
+    let paths = plot_closed_loop(&states, &dir.path, "another controller").expect("the states figure");
+    check_files(&paths, &["fig1_states"], &[&["another controller", "α", "φ roll", "rudder cmd", "t (s)"]]);
+    let mut written: Vec<_> = std::fs::read_dir(&dir.path).unwrap().map(|e| e.unwrap().file_name()).collect();
+    written.sort();
+    assert_eq!(written, ["fig1_states.png", "fig1_states.svg"]);
+
+    // The states figure does not depend on the controller's columns.
+    let with_controller = dir.path.join("with_controller");
+    let all = plot_closed_loop(&full, &with_controller, "another controller").expect("all figures");
+    assert_eq!(all.len(), 6);
+    for (a, b) in paths.iter().zip(&all) {
+        assert!(std::fs::read(a).unwrap() == std::fs::read(b).unwrap(), "{} and {} differ", a.display(), b.display());
+    }
+}
+
+#[test]
+fn a_partly_present_controller_figure_is_an_error_naming_the_missing_column() {
+    let dir = OutDir::new("partly");
+    let full = synthetic(50, 0.0);
+    let no_psi_weights = only(&full, |c| !c.starts_with("w_psi_"));
+    expect_missing(plot_closed_loop(&no_psi_weights, &dir.path, "x"), "w_psi_1", "fig3_weights.png");
+    let one_surface = only(&full, |c| !is_controller_column(c) || c == "s_phi");
+    expect_missing(plot_closed_loop(&one_surface, &dir.path, "x"), "fhat_phi", "fig2_sliding.png");
+    let no_fhat_theta = only(&full, |c| !c.starts_with("w_") && c != "fhat_theta");
+    expect_missing(plot_closed_loop(&no_fhat_theta, &dir.path, "x"), "fhat_theta", "fig2_sliding.png");
+    assert!(!dir.path.exists(), "a figure was written before the missing column was found");
 }
 
 #[test]

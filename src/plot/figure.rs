@@ -1,0 +1,258 @@
+//! The figure model: a figure is plain data (a grid of panels, each with its series, strokes and legend entries),
+//! built by the figure families and read by layout and rendering. Also the data ranges a panel's axes start from.
+
+use plotters::prelude::*;
+
+/// Colours of matplotlib's "tab10" cycle: distinct, print and colour-blind friendly enough.
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+pub(super) fn palette(k: usize) -> RGBColor {
+    PALETTE[k % PALETTE.len()]
+}
+
+/// How a line is stroked.
+#[derive(Clone, Copy, PartialEq)]
+pub(super) enum Dash {
+    Solid,
+    Dashed,
+}
+
+/// A line's look, shared by the series and its legend entry.
+#[derive(Clone, Copy)]
+pub(super) struct Stroke {
+    pub(super) color: RGBColor,
+    pub(super) width: u32,
+    pub(super) dash: Dash,
+}
+
+impl Stroke {
+    /// The k-th of many lines: the palette, then the palette dashed, and so on.
+    fn cycled(k: usize) -> Self {
+        let dash = if (k / PALETTE.len()).is_multiple_of(2) { Dash::Solid } else { Dash::Dashed };
+        Self { color: palette(k), width: 2, dash }
+    }
+
+    pub(super) fn style(&self) -> ShapeStyle {
+        let width = self.width;
+        match self.dash {
+            Dash::Solid => self.color.stroke_width(width),
+            // A dashed line drawn over a solid one of the same colour stays visible if it is lighter.
+            Dash::Dashed => self.color.mix(0.9).stroke_width(width),
+        }
+    }
+}
+
+pub(super) struct Series {
+    pub(super) label: String,
+    pub(super) points: Vec<(f64, f64)>,
+    pub(super) stroke: Stroke,
+}
+
+impl Series {
+    pub(super) fn solid(label: &str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label: label.to_string(), points, stroke: Stroke { color, width: 2, dash: Dash::Solid } }
+    }
+
+    pub(super) fn command(label: &str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self { label: label.to_string(), points, stroke: Stroke { color, width: 1, dash: Dash::Dashed } }
+    }
+
+    pub(super) fn cycled(label: &str, points: Vec<(f64, f64)>, k: usize) -> Self {
+        Self { label: label.to_string(), points, stroke: Stroke::cycled(k) }
+    }
+
+    /// Runs of consecutive finite points.
+    pub(super) fn segments(&self) -> impl Iterator<Item = &[(f64, f64)]> {
+        self.points.split(|(x, y)| !(x.is_finite() && y.is_finite())).filter(|s| !s.is_empty())
+    }
+}
+
+pub(super) struct LegendEntry {
+    pub(super) label: String,
+    pub(super) stroke: Stroke,
+}
+
+impl LegendEntry {
+    pub(super) fn cycled(label: &str, k: usize) -> Self {
+        Self { label: label.to_string(), stroke: Stroke::cycled(k) }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq)]
+pub(super) enum XScale {
+    /// Time in seconds.
+    Linear,
+    /// Percentiles on the number-of-nines scale.
+    Nines,
+}
+
+pub(super) struct Panel {
+    pub(super) caption: String,
+    pub(super) y_desc: String,
+    pub(super) x_desc: String,
+    pub(super) x_scale: XScale,
+    pub(super) series: Vec<Series>,
+    /// Draw a legend of the series to the right of the plot.
+    pub(super) legend: bool,
+    /// Start the y axis at zero (if no value is negative).
+    pub(super) y_from_zero: bool,
+    /// Vertical markers (time, label).
+    pub(super) events: Vec<(f64, String)>,
+    /// Write the markers' labels above this panel.
+    pub(super) event_labels: bool,
+}
+
+impl Panel {
+    pub(super) fn new(caption: &str, y_desc: &str, series: Vec<Series>) -> Self {
+        Self {
+            caption: caption.to_string(),
+            y_desc: y_desc.to_string(),
+            x_desc: "t (s)".into(),
+            x_scale: XScale::Linear,
+            series,
+            legend: true,
+            y_from_zero: false,
+            events: Vec::new(),
+            event_labels: false,
+        }
+    }
+
+    pub(super) fn legend_entries(&self) -> Vec<LegendEntry> {
+        if !self.legend {
+            return Vec::new();
+        }
+        self.series.iter().map(|s| LegendEntry { label: s.label.clone(), stroke: s.stroke }).collect()
+    }
+
+    fn finite(&self) -> impl Iterator<Item = &(f64, f64)> {
+        self.series.iter().flat_map(|s| s.points.iter()).filter(|(x, y)| x.is_finite() && y.is_finite())
+    }
+
+    pub(super) fn x_range(&self) -> (f64, f64) {
+        let (lo, hi) = min_max(self.finite().map(|p| p.0));
+        match self.x_scale {
+            XScale::Linear => match (lo, hi) {
+                (Some(lo), Some(hi)) if hi - lo > 1e-9 * lo.abs().max(hi.abs()) => (lo, hi),
+                (Some(lo), Some(hi)) => symmetric(0.5 * (lo + hi)),
+                _ => (0.0, 1.0),
+            },
+            XScale::Nines => (0.0, hi.map_or(4.0, |hi| hi.ceil().max(4.0))),
+        }
+    }
+
+    pub(super) fn y_range(&self) -> (f64, f64) {
+        let (lo, hi) = min_max(self.finite().map(|p| p.1));
+        let (Some(lo), Some(hi)) = (lo, hi) else { return (-1.0, 1.0) };
+        if self.y_from_zero && lo >= 0.0 && hi > 0.0 {
+            return (0.0, hi * 1.05);
+        }
+        padded(lo, hi)
+    }
+}
+
+fn min_max(values: impl Iterator<Item = f64>) -> (Option<f64>, Option<f64>) {
+    values.fold((None, None), |(lo, hi), v| {
+        (Some(lo.map_or(v, |l: f64| l.min(v))), Some(hi.map_or(v, |h: f64| h.max(v))))
+    })
+}
+
+/// A small symmetric range around a constant: ±1 around zero, ±10 % around anything else.
+fn symmetric(v: f64) -> (f64, f64) {
+    let half = if v == 0.0 { 1.0 } else { 0.1 * v.abs() };
+    (v - half, v + half)
+}
+
+/// The data range padded by 5 % each side; a (numerically) constant range gets [`symmetric`].
+fn padded(lo: f64, hi: f64) -> (f64, f64) {
+    let scale = lo.abs().max(hi.abs());
+    if hi - lo <= 1e-9 * scale || hi - lo < 1e-300 {
+        return symmetric(0.5 * (lo + hi));
+    }
+    let pad = 0.05 * hi - 0.05 * lo;
+    ((lo - pad).max(-f64::MAX), (hi + pad).min(f64::MAX))
+}
+
+/// Where the legend of the whole figure goes.
+pub(super) enum FigureLegend {
+    None,
+    /// A strip under the title, entries left to right.
+    Top(Vec<LegendEntry>),
+    /// An empty grid cell (row-major index).
+    Cell(usize, Vec<LegendEntry>),
+}
+
+pub(super) struct Figure {
+    pub(super) title: String,
+    pub(super) size: (u32, u32),
+    pub(super) rows: usize,
+    pub(super) cols: usize,
+    /// Row-major; `None` leaves the cell empty.
+    pub(super) cells: Vec<Option<Panel>>,
+    pub(super) legend: FigureLegend,
+    /// Panels in one column share the time axis: tick labels and the axis name only on the lowest.
+    pub(super) shared_x: bool,
+}
+
+impl Figure {
+    pub(super) fn stacked(title: &str, size: (u32, u32), panels: Vec<Panel>) -> Self {
+        let rows = panels.len();
+        Self {
+            title: title.to_string(),
+            size,
+            rows,
+            cols: 1,
+            cells: panels.into_iter().map(Some).collect(),
+            legend: FigureLegend::None,
+            shared_x: true,
+        }
+    }
+
+    pub(super) fn grid(
+        title: &str,
+        size: (u32, u32),
+        rows: usize,
+        cols: usize,
+        cells: Vec<Option<Panel>>,
+        legend: FigureLegend,
+    ) -> Self {
+        Self { title: title.to_string(), size, rows, cols, cells, legend, shared_x: false }
+    }
+
+    pub(super) fn cell(&self, r: usize, c: usize) -> Option<&Panel> {
+        self.cells.get(r * self.cols + c).and_then(Option::as_ref)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_are_padded_and_constant_series_get_a_symmetric_range() {
+        assert_eq!(padded(0.0, 10.0), (-0.5, 10.5));
+        assert_eq!(padded(0.0, 0.0), (-1.0, 1.0));
+        assert_eq!(padded(5.0, 5.0), (4.5, 5.5));
+        assert_eq!(padded(-2.0, -2.0), (-2.2, -1.8));
+        let p = Panel::new("", "", vec![Series::solid("x", vec![(0.0, f64::NAN), (1.0, f64::NAN)], BLACK)]);
+        assert_eq!(p.y_range(), (-1.0, 1.0));
+    }
+
+    #[test]
+    fn nan_splits_a_series_into_segments() {
+        let s = Series::solid("x", vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0), (3.0, 4.0)], BLACK);
+        let segs: Vec<_> = s.segments().collect();
+        assert_eq!(segs.len(), 2);
+        assert_eq!(segs[1].len(), 2);
+    }
+}
