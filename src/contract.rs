@@ -56,7 +56,7 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
         ("FLAG_SATURATED", u64::from(wire::FLAG_SATURATED), "a surface or the throttle is at its position limit"),
         ("FLAG_FAILSAFE", u64::from(wire::FLAG_FAILSAFE), "the failsafe output is active"),
         ("FLAG_RATE_LIMITED", u64::from(wire::FLAG_RATE_LIMITED), "a surface moved at its rate limit this tick"),
-        ("MAX_RBF_NODES", wire::MAX_RBF_NODES as u64, "RBF nodes per channel a command sample carries"),
+        ("MAX_DIAGNOSTICS", wire::MAX_DIAGNOSTICS as u64, "diagnostics a command sample carries at most"),
         ("EVENT_SAMPLE_SENT", StreamEvent::SampleSent.id() as u64, "event id to notify after every send"),
         ("EVENT_PUBLISHER_DEAD", StreamEvent::PublisherDead.id() as u64, "event id of a cleaned-up dead publisher"),
     ]
@@ -297,7 +297,7 @@ mod tests {
     fn array_shapes_come_from_sizes() {
         assert_eq!(array_shape("u64", 8), ("u64", vec![]));
         assert_eq!(array_shape("[f64; 13]", 104), ("f64", vec![13]));
-        assert_eq!(array_shape("[f64; 3 * MAX_RBF_NODES]", 384), ("f64", vec![48]));
+        assert_eq!(array_shape("[f64; 3 * N]", 384), ("f64", vec![48]));
         assert_eq!(array_shape("[[u8; 32]; 4]", 128), ("u8", vec![4, 32]));
         assert_eq!(c_struct_name("LogAckSample"), "silrig_log_ack_sample_t");
     }

@@ -413,16 +413,11 @@ pub fn measurement(s: &PlantSnapshot) -> Measurement {
     }
 }
 
-/// One `trace.csv` row (see [`crate::trace::columns`]): the snapshot at t_k, the controller's command and
-/// diagnostics for that tick, and the weights after that tick's adaptation.
-pub fn trace_row(
-    snap: &PlantSnapshot,
-    command: &SurfaceCommand,
-    diag: &ControllerDiagnostics,
-    weights: [&[f64]; 3],
-) -> Vec<f64> {
+/// The loop part of a `trace.csv` row ([`crate::trace::LOOP_COLUMNS`]): the snapshot at t_k and the command
+/// acting on it; the controller's diagnostics follow.
+pub fn trace_row(snap: &PlantSnapshot, command: &SurfaceCommand, diagnostics: &[f64]) -> Vec<f64> {
     let x = &snap.state;
-    let mut row = Vec::with_capacity(trace::BASE_COLUMNS.len() + 3 * weights[0].len());
+    let mut row = Vec::with_capacity(trace::LOOP_COLUMNS.len() + diagnostics.len());
     row.extend_from_slice(&[
         snap.t_s,
         rad_to_deg(x.phi_rad),
@@ -443,12 +438,26 @@ pub fn trace_row(
         snap.surfaces_deg[2],
         snap.throttle,
     ]);
-    row.extend_from_slice(&diag.sliding_surface);
-    row.extend_from_slice(&diag.f_hat);
-    for w in weights {
-        row.extend_from_slice(w);
-    }
+    row.extend_from_slice(diagnostics);
     row
+}
+
+/// Write the paper's controller's diagnostics of one step into `out`, in the order of
+/// [`crate::trace::attitude_diagnostic_names`]: S and f_hat per channel, then the weights after this step's
+/// adaptation, channel by channel. Returns how many were written; `out` must hold `6 + 3 * nodes`.
+pub fn write_attitude_diagnostics(
+    out: &mut [f64],
+    diag: &ControllerDiagnostics,
+    controller: &AttitudeController,
+) -> usize {
+    out[..3].copy_from_slice(&diag.sliding_surface);
+    out[3..6].copy_from_slice(&diag.f_hat);
+    let mut n = 6;
+    for net in controller.networks() {
+        out[n..n + net.weights.len()].copy_from_slice(&net.weights);
+        n += net.weights.len();
+    }
+    n
 }
 
 /// The set points in rad.
@@ -466,11 +475,12 @@ pub fn run(s: &Scenario) -> Result<Trace, SetupError> {
     let mut trace = Trace::new(trace::columns(s.controller.rbf.nodes()));
     trace.rows.reserve(ticks as usize);
     let mut previous = plant.initial_command();
+    let mut diagnostics = vec![0.0; trace.columns.len() - trace::LOOP_COLUMNS.len()];
     for _ in 0..ticks {
         let snap = plant.snapshot();
         let (surfaces, diag) = controller.step(&measurement(&snap), &setpoint, dt);
-        let n = controller.networks();
-        trace.rows.push(trace_row(&snap, &surfaces, &diag, [&n[0].weights, &n[1].weights, &n[2].weights]));
+        write_attitude_diagnostics(&mut diagnostics, &diag, &controller);
+        trace.rows.push(trace_row(&snap, &surfaces, &diagnostics));
         let command = ActuatorCommand { surfaces, throttle: previous.throttle };
         let applied = match s.timing.command_timing {
             CommandTiming::SameTick => command,

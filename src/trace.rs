@@ -4,9 +4,9 @@
 use std::io::{BufRead, Write};
 use std::path::Path;
 
-/// Columns every closed-loop trace starts with, in order. The RBF weight columns `w_<channel>_<k>` follow, one per
-/// node and channel.
-pub const BASE_COLUMNS: [&str; 24] = [
+/// Columns every closed-loop trace starts with, in order: the plant's state and surfaces and the command, whatever
+/// the controller. The controller's diagnostics follow (see [`attitude_diagnostic_names`] for ours).
+pub const LOOP_COLUMNS: [&str; 18] = [
     "t_s",
     "phi_deg",
     "theta_deg",
@@ -25,25 +25,29 @@ pub const BASE_COLUMNS: [&str; 24] = [
     "elevator_deg",
     "rudder_deg",
     "throttle",
-    "s_phi",
-    "s_theta",
-    "s_psi",
-    "fhat_phi",
-    "fhat_theta",
-    "fhat_psi",
 ];
 
 /// Controller channels in column-name form.
 pub const CHANNELS: [&str; 3] = ["phi", "theta", "psi"];
 
-/// Column names for a controller with `nodes` RBF nodes per channel.
-pub fn columns(nodes: usize) -> Vec<String> {
-    let mut names: Vec<String> = BASE_COLUMNS.iter().map(|s| s.to_string()).collect();
+/// The diagnostics of the paper's controller with `nodes` RBF nodes per channel, in the order it reports them:
+/// the sliding surface `s_<channel>` and the RBF estimate `fhat_<channel>` per channel, then the RBF weights
+/// `w_<channel>_<k>`, channel by channel.
+pub fn attitude_diagnostic_names(nodes: usize) -> Vec<String> {
+    let mut names: Vec<String> = CHANNELS.iter().map(|ch| format!("s_{ch}")).collect();
+    names.extend(CHANNELS.iter().map(|ch| format!("fhat_{ch}")));
     for ch in CHANNELS {
         for k in 1..=nodes {
             names.push(format!("w_{ch}_{k}"));
         }
     }
+    names
+}
+
+/// Column names of a trace of the paper's controller with `nodes` RBF nodes per channel.
+pub fn columns(nodes: usize) -> Vec<String> {
+    let mut names: Vec<String> = LOOP_COLUMNS.iter().map(|s| s.to_string()).collect();
+    names.extend(attitude_diagnostic_names(nodes));
     names
 }
 

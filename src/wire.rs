@@ -11,7 +11,7 @@ use iceoryx2::prelude::ZeroCopySend;
 /// The layout version as a literal, so that the type names can be built from it with `concat!`.
 macro_rules! layout_version {
     () => {
-        1
+        2
     };
 }
 
@@ -114,8 +114,9 @@ pub trait WireType {
     const FIELDS: &'static [WireField];
 }
 
-/// Largest RBF network (nodes per channel) a command sample carries.
-pub const MAX_RBF_NODES: usize = 16;
+/// Diagnostics a command sample carries at most (the paper's controller with 5 RBF nodes per channel reports 21;
+/// with 19, 63).
+pub const MAX_DIAGNOSTICS: usize = 64;
 
 /// `PlantSample::flags`/`CommandSample::flags`: the command the plant applied is older than the staleness limit.
 pub const FLAG_COMMAND_STALE: u32 = 1 << 0;
@@ -128,8 +129,6 @@ pub const FLAG_RATE_LIMITED: u32 = 1 << 3;
 
 /// Names of the three surfaces, in the order of every `[f64; 3]` surface array on the wire.
 pub const SURFACE_NAMES: [&str; 3] = ["aileron", "elevator", "rudder"];
-/// Names of the three controller channels, in the order of `sliding_surface`, `f_hat` and the `weights` blocks.
-pub const CHANNEL_NAMES: [&str; 3] = ["phi", "theta", "psi"];
 
 wire_type! {
 /// Bookkeeping that precedes every sample: loss detection, timing and restart detection.
@@ -173,10 +172,11 @@ pub struct PlantSample with header {
 }
 
 wire_type! {
-/// What the controller publishes in answer to a plant sample.
+/// What a controller publishes in answer to a plant sample: what every controller has (the tick it answers, its
+/// commands, its compute time, flags), then its own diagnostics.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CommandSample with header {
-    /// Bookkeeping.
+    /// Bookkeeping; `tick` is the tick this command answers.
     pub header: SampleHeader,
     /// Tick of the plant sample this command was computed from.
     pub answers_tick: u64,
@@ -184,19 +184,15 @@ pub struct CommandSample with header {
     pub surface_cmd_deg: [f64; 3],
     /// Commanded throttle, 0..1.
     pub throttle_cmd: f64,
-    /// Sliding surface per channel (phi, theta, psi).
-    pub sliding_surface: [f64; 3],
-    /// RBF estimate of the unknown dynamics per channel.
-    pub f_hat: [f64; 3],
-    /// RBF weights after this tick's adaptation: channel phi's `rbf_nodes` weights, then theta's, then psi's, then
-    /// zeros. All of them, not a norm, so the logger's trace equals the single-process one.
-    pub weights: [f64; 3 * MAX_RBF_NODES],
     /// Time the controller spent computing this command, ns.
     pub compute_ns: u64,
-    /// RBF nodes per channel in `weights` (at most [`MAX_RBF_NODES`]).
-    pub rbf_nodes: u32,
     /// `FLAG_*` bits.
     pub flags: u32,
+    /// Entries of `diagnostics` in use, at most MAX_DIAGNOSTICS.
+    pub diagnostics_len: u32,
+    /// The controller's own values for this tick, whatever it wants logged and plotted (the paper's controller:
+    /// S and f_hat per channel, then its RBF weights, channel by channel); entries past `diagnostics_len` are 0.
+    pub diagnostics: [f64; MAX_DIAGNOSTICS],
 }
 }
 
@@ -218,7 +214,7 @@ const _: () = assert!(core::mem::size_of::<SampleHeader>() == 40);
 const _: () = assert!(core::mem::align_of::<SampleHeader>() == 8);
 const _: () = assert!(core::mem::size_of::<PlantSample>() == 192);
 const _: () = assert!(core::mem::align_of::<PlantSample>() == 8);
-const _: () = assert!(core::mem::size_of::<CommandSample>() == 528);
+const _: () = assert!(core::mem::size_of::<CommandSample>() == 608);
 const _: () = assert!(core::mem::size_of::<LogAckSample>() == 48);
 const _: () = assert!(core::mem::align_of::<CommandSample>() == 8);
 
@@ -338,18 +334,20 @@ impl CommandSample {
             answers_tick: 0,
             surface_cmd_deg: [0.0; 3],
             throttle_cmd: 0.0,
-            sliding_surface: [0.0; 3],
-            f_hat: [0.0; 3],
-            weights: [0.0; 3 * MAX_RBF_NODES],
             compute_ns: 0,
-            rbf_nodes: 0,
             flags: 0,
+            diagnostics_len: 0,
+            diagnostics: [0.0; MAX_DIAGNOSTICS],
         }
     }
-}
 
-impl CommandSample {
-    /// Rejects NaN/inf in any float field and an RBF node count beyond the layout, naming the field.
+    /// The diagnostics in use.
+    pub fn diagnostics(&self) -> &[f64] {
+        &self.diagnostics[..(self.diagnostics_len as usize).min(MAX_DIAGNOSTICS)]
+    }
+
+    /// Rejects NaN/inf in a command or a diagnostic in use, and a diagnostics count beyond the layout, naming the
+    /// field.
     fn check(&self) -> Result<(), WireError> {
         let t = Self::TYPE_NAME;
         check_finite(
@@ -358,27 +356,14 @@ impl CommandSample {
             &self.surface_cmd_deg,
         )?;
         check_finite(t, &["throttle_cmd"], &[self.throttle_cmd])?;
-        check_finite(
-            t,
-            &["sliding_surface[0] phi", "sliding_surface[1] theta", "sliding_surface[2] psi"],
-            &self.sliding_surface,
-        )?;
-        check_finite(t, &["f_hat[0] phi", "f_hat[1] theta", "f_hat[2] psi"], &self.f_hat)?;
-        if let Some(value) = self.weights.iter().find(|w| !w.is_finite()) {
-            return Err(WireError::NotFinite { type_name: t, field: "weights", value: *value });
+        if self.diagnostics_len as usize > MAX_DIAGNOSTICS {
+            let value = f64::from(self.diagnostics_len);
+            return Err(WireError::OutOfRange { type_name: t, field: "diagnostics_len", value });
         }
-        if self.rbf_nodes as usize > MAX_RBF_NODES {
-            return Err(WireError::OutOfRange { type_name: t, field: "rbf_nodes", value: self.rbf_nodes as f64 });
+        if let Some(value) = self.diagnostics().iter().find(|w| !w.is_finite()) {
+            return Err(WireError::NotFinite { type_name: t, field: "diagnostics", value: *value });
         }
         Ok(())
-    }
-}
-
-impl CommandSample {
-    /// The weights of channel `channel` (0 phi, 1 theta, 2 psi).
-    pub fn channel_weights(&self, channel: usize) -> &[f64] {
-        let n = (self.rbf_nodes as usize).min(MAX_RBF_NODES);
-        &self.weights[channel * n..(channel + 1) * n]
     }
 }
 
@@ -405,15 +390,15 @@ mod tests {
     fn sizes_alignment_and_type_names_are_the_contract() {
         assert_eq!(core::mem::size_of::<SampleHeader>(), 40);
         assert_eq!(core::mem::size_of::<PlantSample>(), 192);
-        assert_eq!(core::mem::size_of::<CommandSample>(), 528);
+        assert_eq!(core::mem::size_of::<CommandSample>(), 608);
         assert_eq!(core::mem::align_of::<PlantSample>(), 8);
         assert_eq!(core::mem::align_of::<CommandSample>(), 8);
         // Safety of `type_name`: only reads the string the derive generated.
         unsafe {
-            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v1");
-            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v1");
-            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v1");
-            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v1");
+            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v2");
+            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v2");
+            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v2");
+            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v2");
         }
         for name in [PlantSample::TYPE_NAME, CommandSample::TYPE_NAME, SampleHeader::TYPE_NAME, LogAckSample::TYPE_NAME]
         {
@@ -436,7 +421,7 @@ mod tests {
         let mut p = PlantSample::zeroed();
         p.state[3] = f64::NAN;
         let msg = p.validate().unwrap_err().to_string();
-        assert!(msg.contains("silrig::PlantSample::v1") && msg.contains("state[3] phi_rad"), "{msg}");
+        assert!(msg.contains("silrig::PlantSample::v2") && msg.contains("state[3] phi_rad"), "{msg}");
         assert!(msg.contains("NaN"), "{msg}");
 
         let mut p = PlantSample::zeroed();
@@ -444,9 +429,15 @@ mod tests {
         assert!(p.validate().unwrap_err().to_string().contains("`t_sim_s`"));
 
         let mut c = CommandSample::zeroed();
-        c.f_hat[2] = f64::NEG_INFINITY;
+        c.diagnostics_len = 3;
+        c.diagnostics[2] = f64::NEG_INFINITY;
         let msg = c.validate().unwrap_err().to_string();
-        assert!(msg.contains("f_hat[2] psi") && msg.contains("-inf"), "{msg}");
+        assert!(msg.contains("`diagnostics`") && msg.contains("-inf"), "{msg}");
+        // Only the diagnostics in use count; too many is out of range.
+        c.diagnostics_len = 2;
+        assert_eq!(c.validate(), Ok(()));
+        c.diagnostics_len = MAX_DIAGNOSTICS as u32 + 1;
+        assert!(matches!(c.validate(), Err(WireError::OutOfRange { field: "diagnostics_len", .. })));
 
         let mut c = CommandSample::zeroed();
         c.surface_cmd_deg[1] = f64::NAN;

@@ -91,7 +91,7 @@ fn two_runs_are_bit_identical_and_next_tick_differs_from_same_tick() {
 #[test]
 fn trace_has_the_documented_columns() {
     let (_, trace, _) = run("paper-ideal");
-    for c in silrig::trace::BASE_COLUMNS {
+    for c in silrig::trace::LOOP_COLUMNS.iter().copied().chain(["s_phi", "s_theta", "s_psi", "fhat_phi", "fhat_psi"]) {
         assert!(trace.index(c).is_some(), "{c}");
     }
     assert_eq!(trace.index("w_psi_5"), Some(trace.columns.len() - 1));

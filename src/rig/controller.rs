@@ -20,9 +20,9 @@ use crate::clock::monotonic_ns;
 use crate::control::AttitudeController;
 use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamService, StreamSubscriber};
 use crate::scenario::Scenario;
-use crate::sim::{measurement, setpoint_rad};
+use crate::sim::{measurement, setpoint_rad, write_attitude_diagnostics};
 use crate::topology::{Role, Stream};
-use crate::wire::{CommandSample, MAX_RBF_NODES, PlantSample};
+use crate::wire::{CommandSample, MAX_DIAGNOSTICS, PlantSample};
 use anyhow::Context;
 use iceoryx2::prelude::CallbackProgression;
 use std::path::PathBuf;
@@ -83,10 +83,13 @@ impl ControllerLoop {
     /// Phase 1: the scenario, the control law (with the weights a predecessor saved, on `--resume`), the recorder.
     pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
         let scenario = args.scenario()?;
+        let diagnostics = 6 + 3 * scenario.controller.rbf.nodes();
         anyhow::ensure!(
-            scenario.controller.rbf.nodes() <= MAX_RBF_NODES,
-            "the rig carries at most {MAX_RBF_NODES} RBF nodes per channel, the scenario has {}",
-            scenario.controller.rbf.nodes()
+            diagnostics <= MAX_DIAGNOSTICS,
+            "a command carries at most {MAX_DIAGNOSTICS} diagnostics; the scenario's controller has {diagnostics} \
+             ({} RBF nodes per channel: at most {} fit)",
+            scenario.controller.rbf.nodes(),
+            (MAX_DIAGNOSTICS - 6) / 3
         );
         let scheduling = request_scheduling(Role::Controller, args.mode == RigMode::Realtime);
         let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
@@ -241,20 +244,14 @@ impl ControllerLoop {
         }
         let compute_ns = monotonic_ns() - t0;
         self.rec.record(COMPUTE, compute_ns as i64);
-        let nodes = self.scenario.controller.rbf.nodes();
         let mut out = CommandSample {
             answers_tick: tick,
             surface_cmd_deg: [command.aileron_deg, command.elevator_deg, command.rudder_deg],
             throttle_cmd: sample.throttle,
-            sliding_surface: diag.sliding_surface,
-            f_hat: diag.f_hat,
             compute_ns,
-            rbf_nodes: nodes as u32,
             ..CommandSample::zeroed()
         };
-        for (c, net) in self.controller.networks().iter().enumerate() {
-            out.weights[c * nodes..(c + 1) * nodes].copy_from_slice(&net.weights);
-        }
+        out.diagnostics_len = write_attitude_diagnostics(&mut out.diagnostics, &diag, &self.controller) as u32;
         out
     }
 

@@ -16,7 +16,7 @@ use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::plant::snapshot;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
-use crate::control::{ControllerDiagnostics, SurfaceCommand};
+use crate::control::SurfaceCommand;
 use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
 use crate::scenario::Scenario;
 use crate::sim::trace_row;
@@ -74,7 +74,8 @@ fn open_append(dir: &Path, name: &str, header: &str) -> std::io::Result<BufWrite
 struct Writer {
     trace: BufWriter<File>,
     timing: BufWriter<File>,
-    nodes: usize,
+    /// Diagnostic columns of the trace.
+    diagnostics: usize,
     rows: u64,
     last_tick: Option<u64>,
 }
@@ -91,14 +92,16 @@ impl Writer {
                     elevator_deg: s.surface_cmd_deg[1],
                     rudder_deg: s.surface_cmd_deg[2],
                 };
-                let diag = ControllerDiagnostics { sliding_surface: s.sliding_surface, f_hat: s.f_hat };
-                trace_row(&snap, &cmd, &diag, [s.channel_weights(0), s.channel_weights(1), s.channel_weights(2)])
+                // The trace's columns are fixed by its header: missing diagnostics are empty, extra ones dropped.
+                let mut diagnostics = vec![nan; self.diagnostics];
+                let given = s.diagnostics();
+                let n = given.len().min(self.diagnostics);
+                diagnostics[..n].copy_from_slice(&given[..n]);
+                trace_row(&snap, &cmd, &diagnostics)
             }
             None => {
                 let cmd = SurfaceCommand { aileron_deg: nan, elevator_deg: nan, rudder_deg: nan };
-                let diag = ControllerDiagnostics { sliding_surface: [nan; 3], f_hat: [nan; 3] };
-                let w = vec![nan; self.nodes];
-                trace_row(&snap, &cmd, &diag, [&w, &w, &w])
+                trace_row(&snap, &cmd, &vec![nan; self.diagnostics])
             }
         };
         writeln!(self.trace, "{}", Trace::format_row(&row))?;
@@ -199,7 +202,7 @@ impl LoggerLoop {
     pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
         let scenario = args.scenario()?;
         std::fs::create_dir_all(&args.out)?;
-        let nodes = scenario.controller.rbf.nodes();
+        let columns = trace::columns(scenario.controller.rbf.nodes());
         let events = EventLog::new(&args.out, Role::Logger.label());
         let resume_after = last_logged_tick(&args.out, scenario.timing.dt_s);
         if let Some(t) = resume_after {
@@ -208,9 +211,9 @@ impl LoggerLoop {
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Logger, scenario.timing.dt_s, scenario.seed, events.clone());
         let writer = Writer {
-            trace: open_append(&args.out, "trace.csv", &trace::columns(nodes).join(","))?,
+            trace: open_append(&args.out, "trace.csv", &columns.join(","))?,
             timing: open_append(&args.out, "timing.csv", &TIMING_COLUMNS.join(","))?,
-            nodes,
+            diagnostics: columns.len() - trace::LOOP_COLUMNS.len(),
             rows: 0,
             last_tick: resume_after,
         };
