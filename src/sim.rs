@@ -444,7 +444,7 @@ pub fn trace_row(snap: &PlantSnapshot, command: &SurfaceCommand, diagnostics: &[
 
 /// Write the paper's controller's diagnostics of one step into `out`, in the order of
 /// [`crate::trace::attitude_diagnostic_names`]: S and f_hat per channel, then the weights after this step's
-/// adaptation, channel by channel. Returns how many were written; `out` must hold `6 + 3 * nodes`.
+/// adaptation, channel by channel. Returns how many were written; `out` must hold as many as there are names.
 pub fn write_attitude_diagnostics(
     out: &mut [f64],
     diag: &ControllerDiagnostics,

@@ -287,3 +287,27 @@ fn an_output_folder_holding_a_run_is_never_overwritten() {
     assert_eq!(std::fs::read_to_string(dir.join("trace.csv")).unwrap(), "t_s\n0\n");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_controller_with_more_diagnostics_than_a_command_carries_is_refused_before_it_connects() {
+    let dir = temp_dir("too-many");
+    let centres: Vec<String> = (0..20).map(|k| format!("[{}.0, 0.0]", k)).collect();
+    let base = std::fs::read_to_string(config("robust")).unwrap();
+    let scenario = format!(
+        "{base}\n[controller.rbf]\ncentres = [{}]\nwidths = [{}]\n",
+        centres.join(", "),
+        vec!["1.0"; 20].join(", ")
+    );
+    let path = dir.join("big.toml");
+    std::fs::write(&path, scenario).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_silrig-controller"))
+        .arg(&path)
+        .args(["--run-id", &run_id("too-many"), "--out", dir.join("out").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("at most 64 diagnostics") && err.contains("reports 66"), "{err}");
+    no_shared_memory_left(&run_id("too-many"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -83,13 +83,12 @@ impl ControllerLoop {
     /// Phase 1: the scenario, the control law (with the weights a predecessor saved, on `--resume`), the recorder.
     pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
         let scenario = args.scenario()?;
-        let diagnostics = 6 + 3 * scenario.controller.rbf.nodes();
+        let nodes = scenario.controller.rbf.nodes();
+        let diagnostics = crate::trace::attitude_diagnostic_names(nodes).len();
         anyhow::ensure!(
             diagnostics <= MAX_DIAGNOSTICS,
-            "a command carries at most {MAX_DIAGNOSTICS} diagnostics; the scenario's controller has {diagnostics} \
-             ({} RBF nodes per channel: at most {} fit)",
-            scenario.controller.rbf.nodes(),
-            (MAX_DIAGNOSTICS - 6) / 3
+            "a command carries at most {MAX_DIAGNOSTICS} diagnostics; the scenario's controller reports \
+             {diagnostics} (S and f_hat per channel, and {nodes} RBF weights per channel)"
         );
         let scheduling = request_scheduling(Role::Controller, args.mode == RigMode::Realtime);
         let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
