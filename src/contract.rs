@@ -39,12 +39,16 @@ fn entry<T: WireType>(doc: &'static str) -> ContractType {
 }
 
 /// Every wire type, the header first (the others embed it).
-pub fn types() -> [ContractType; 4] {
+pub fn types() -> [ContractType; 5] {
     [
         entry::<wire::SampleHeader>("Bookkeeping that precedes every sample."),
         entry::<wire::PlantSample>("What the plant publishes every tick (stream `plant`)."),
         entry::<wire::CommandSample>("What the controller publishes in answer to a plant sample (stream `command`)."),
         entry::<wire::LogAckSample>("Rows the logger has written (stream `log-ack`, lockstep flow control)."),
+        entry::<wire::ControllerInfo>(
+            "The names of a controller's diagnostics, announced once per epoch before its first command (stream \
+             `controller-info`).",
+        ),
     ]
 }
 
@@ -57,6 +61,7 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
         ("FLAG_FAILSAFE", u64::from(wire::FLAG_FAILSAFE), "the failsafe output is active"),
         ("FLAG_RATE_LIMITED", u64::from(wire::FLAG_RATE_LIMITED), "a surface moved at its rate limit this tick"),
         ("MAX_DIAGNOSTICS", wire::MAX_DIAGNOSTICS as u64, "diagnostics a command sample carries at most"),
+        ("DIAGNOSTIC_NAME_BYTES", wire::DIAGNOSTIC_NAME_BYTES as u64, "bytes of a diagnostic name, NUL-padded"),
         ("EVENT_SAMPLE_SENT", StreamEvent::SampleSent.id() as u64, "event id to notify after every send"),
         ("EVENT_PUBLISHER_DEAD", StreamEvent::PublisherDead.id() as u64, "event id of a cleaned-up dead publisher"),
     ]
@@ -138,12 +143,14 @@ fn array_shape(rust_type: &str, size: usize) -> (&str, Vec<usize>) {
     (t, Vec::new())
 }
 
-/// Size of a scalar, a wire type, or an array of them with a literal length.
+/// Size of a scalar, a wire type, or an array of them with a literal length or one of the contract's constants.
 fn type_size(rust_type: &str) -> usize {
     let t = rust_type.trim();
     if let Some(inner) = t.strip_prefix('[').and_then(|x| x.strip_suffix(']')) {
         let (elem, len) = inner.rsplit_once(';').expect("an array type has a length");
-        let len: usize = len.trim().parse().expect("nested array lengths are literals");
+        let len = len.trim();
+        let len = len.parse().ok().or_else(|| constants().iter().find(|c| c.0 == len).map(|c| c.1 as usize));
+        let len = len.expect("nested array lengths are literals or contract constants");
         return type_size(elem) * len;
     }
     match t {
@@ -299,6 +306,7 @@ mod tests {
         assert_eq!(array_shape("[f64; 13]", 104), ("f64", vec![13]));
         assert_eq!(array_shape("[f64; 3 * N]", 384), ("f64", vec![48]));
         assert_eq!(array_shape("[[u8; 32]; 4]", 128), ("u8", vec![4, 32]));
+        assert_eq!(array_shape("[[u8; DIAGNOSTIC_NAME_BYTES]; MAX_DIAGNOSTICS]", 2048), ("u8", vec![64, 32]));
         assert_eq!(c_struct_name("LogAckSample"), "silrig_log_ack_sample_t");
     }
 

@@ -98,11 +98,13 @@ pub enum Stream {
     Command,
     /// Logger -> plant: [`wire::LogAckSample`], rows written (lockstep flow control).
     LogAck,
+    /// Controller -> logger: [`wire::ControllerInfo`], the names of its diagnostics, once per epoch.
+    ControllerInfo,
 }
 
 impl Stream {
     /// Every stream.
-    pub const ALL: [Stream; 3] = [Stream::Plant, Stream::Command, Stream::LogAck];
+    pub const ALL: [Stream; 4] = [Stream::Plant, Stream::Command, Stream::LogAck, Stream::ControllerInfo];
 
     /// Short name, as in messages.
     pub fn label(self) -> &'static str {
@@ -110,6 +112,7 @@ impl Stream {
             Stream::Plant => "plant",
             Stream::Command => "command",
             Stream::LogAck => "log-ack",
+            Stream::ControllerInfo => "controller-info",
         }
     }
 
@@ -119,6 +122,7 @@ impl Stream {
             Stream::Plant => "silrig/plant",
             Stream::Command => "silrig/command",
             Stream::LogAck => "silrig/log-ack",
+            Stream::ControllerInfo => "silrig/controller-info",
         }
     }
 
@@ -128,6 +132,7 @@ impl Stream {
             Stream::Plant => wire::PlantSample::TYPE_NAME,
             Stream::Command => wire::CommandSample::TYPE_NAME,
             Stream::LogAck => wire::LogAckSample::TYPE_NAME,
+            Stream::ControllerInfo => wire::ControllerInfo::TYPE_NAME,
         }
     }
 
@@ -137,6 +142,7 @@ impl Stream {
             Stream::Plant => Role::Plant,
             Stream::Command => Role::Controller,
             Stream::LogAck => Role::Logger,
+            Stream::ControllerInfo => Role::Controller,
         }
     }
 
@@ -146,6 +152,7 @@ impl Stream {
             Stream::Plant => &[(Role::Controller, CONSUMER_BUFFER), (Role::Logger, LOGGER_BUFFER)],
             Stream::Command => &[(Role::Plant, CONSUMER_BUFFER), (Role::Logger, LOGGER_BUFFER)],
             Stream::LogAck => &[(Role::Plant, CONSUMER_BUFFER)],
+            Stream::ControllerInfo => &[(Role::Logger, CONSUMER_BUFFER)],
         }
     }
 

@@ -196,6 +196,26 @@ pub struct CommandSample with header {
 }
 }
 
+/// Bytes of one diagnostic name in [`ControllerInfo`], NUL-padded (so at most 31 characters).
+pub const DIAGNOSTIC_NAME_BYTES: usize = 32;
+
+wire_type! {
+/// What a controller announces once per epoch, before its first command: the names of its diagnostics, which the
+/// logger makes the trace's columns and the plots label.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControllerInfo with header {
+    /// Bookkeeping; `epoch` is the controller's, as in its commands.
+    pub header: SampleHeader,
+    /// Names in use, at most MAX_DIAGNOSTICS.
+    pub diagnostics_len: u32,
+    /// Explicit padding, always 0.
+    pub _pad: u32,
+    /// The name of each diagnostic, in the order of `CommandSample::diagnostics`: ASCII letters, digits and '_',
+    /// NUL-padded.
+    pub diagnostic_names: [[u8; DIAGNOSTIC_NAME_BYTES]; MAX_DIAGNOSTICS],
+}
+}
+
 wire_type! {
 /// What the logger publishes after writing rows, so a lockstep plant never runs further ahead of it than the
 /// logger's queue holds (lockstep must lose nothing, however slow the disk).
@@ -367,6 +387,61 @@ impl CommandSample {
     }
 }
 
+impl ControllerInfo {
+    /// The announcement of `names`; an error names the first name that does not fit the layout.
+    pub fn new(names: &[String]) -> Result<Self, String> {
+        if names.len() > MAX_DIAGNOSTICS {
+            return Err(format!("{} diagnostics; a command carries at most {MAX_DIAGNOSTICS}", names.len()));
+        }
+        let mut info = Self {
+            header: SampleHeader { layout_version: WIRE_LAYOUT_VERSION, ..SampleHeader::default() },
+            diagnostics_len: names.len() as u32,
+            _pad: 0,
+            diagnostic_names: [[0; DIAGNOSTIC_NAME_BYTES]; MAX_DIAGNOSTICS],
+        };
+        for (slot, name) in info.diagnostic_names.iter_mut().zip(names) {
+            if !valid_diagnostic_name(name.as_bytes()) {
+                return Err(format!(
+                    "diagnostic name {name:?}: use 1..={} of ASCII letters, digits and '_'",
+                    DIAGNOSTIC_NAME_BYTES - 1
+                ));
+            }
+            slot[..name.len()].copy_from_slice(name.as_bytes());
+        }
+        Ok(info)
+    }
+
+    /// The names in use.
+    pub fn names(&self) -> Vec<String> {
+        let n = (self.diagnostics_len as usize).min(MAX_DIAGNOSTICS);
+        self.diagnostic_names[..n]
+            .iter()
+            .map(|raw| String::from_utf8_lossy(&raw[..raw.iter().position(|b| *b == 0).unwrap_or(raw.len())]).into())
+            .collect()
+    }
+
+    /// Rejects a count beyond the layout and a name that is empty, unterminated or not ASCII letters, digits and
+    /// '_'.
+    fn check(&self) -> Result<(), WireError> {
+        let t = Self::TYPE_NAME;
+        if self.diagnostics_len as usize > MAX_DIAGNOSTICS {
+            let value = f64::from(self.diagnostics_len);
+            return Err(WireError::OutOfRange { type_name: t, field: "diagnostics_len", value });
+        }
+        for (k, raw) in self.diagnostic_names[..self.diagnostics_len as usize].iter().enumerate() {
+            let len = raw.iter().position(|b| *b == 0).unwrap_or(raw.len());
+            if len == raw.len() || !valid_diagnostic_name(&raw[..len]) {
+                return Err(WireError::OutOfRange { type_name: t, field: "diagnostic_names", value: k as f64 });
+            }
+        }
+        Ok(())
+    }
+}
+
+fn valid_diagnostic_name(name: &[u8]) -> bool {
+    (1..DIAGNOSTIC_NAME_BYTES).contains(&name.len()) && name.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+}
+
 impl LogAckSample {
     /// An acknowledgement of `rows_written` rows.
     pub fn new(rows_written: u64) -> Self {
@@ -404,6 +479,22 @@ mod tests {
         {
             assert!(name.ends_with(&format!("::v{WIRE_LAYOUT_VERSION}")), "{name}");
         }
+    }
+
+    #[test]
+    fn diagnostic_names_round_trip_and_bad_ones_are_refused() {
+        let names: Vec<String> = crate::trace::attitude_diagnostic_names(5);
+        let info = ControllerInfo::new(&names).unwrap();
+        assert_eq!(info.names(), names);
+        assert_eq!(info.validate(), Ok(()));
+        assert!(ControllerInfo::new(&["bad name".to_string()]).unwrap_err().contains("\"bad name\""));
+        assert!(ControllerInfo::new(&["x".repeat(32)]).is_err());
+        assert!(ControllerInfo::new(&vec!["x".to_string(); MAX_DIAGNOSTICS + 1]).unwrap_err().contains("at most"));
+        let mut bad = info;
+        bad.diagnostic_names[3][0] = b'-';
+        assert!(
+            matches!(bad.validate(), Err(WireError::OutOfRange { field: "diagnostic_names", value, .. }) if value == 3.0)
+        );
     }
 
     #[test]

@@ -87,13 +87,15 @@ fn the_header_compiles_as_c_and_cpp_with_every_assertion_holding() {
 
 #[test]
 fn python_ctypes_offsets_equal_rusts() {
+    let names: Vec<String> = contract::types().iter().map(|t| format!("'{}'", t.name)).collect();
     let script = "import json, silrig_contract as c\n\
                   out = {}\n\
-                  for name in ['SampleHeader', 'PlantSample', 'CommandSample', 'LogAckSample']:\n\
+                  for name in [NAMES]:\n\
                   \x20   t = getattr(c, name)\n\
                   \x20   out[name] = {'size': c.ctypes.sizeof(t), 'type_name': t.type_name(),\n\
                   \x20                'fields': [[f[0], getattr(t, f[0]).offset, getattr(t, f[0]).size] for f in t._fields_]}\n\
-                  print(json.dumps(out))\n";
+                  print(json.dumps(out))\n"
+        .replace("NAMES", &names.join(", "));
     let stdout = run(Command::new("python3").arg("-c").arg(script).env("PYTHONPATH", root().join("examples/python")));
     let got: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     for t in contract::types() {

@@ -57,6 +57,15 @@ fn no_shared_memory_left(run_id: &str) {
     assert!(!Path::new(&format!("/tmp/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
 }
 
+/// The trace's diagnostic columns came from the controller's announcement, not from the logger's fallback (checked
+/// in lockstep, where row 0 always waits for the command answering tick 0, which follows the announcement; in
+/// realtime a controller that falls 10 ticks behind at its start is allowed to leave the fallback in place).
+fn diagnostics_were_announced(out: &Path) {
+    let events = std::fs::read_to_string(out.join("events.jsonl")).unwrap_or_default();
+    assert!(!events.contains("controller-unannounced"), "the logger fell back on the scenario's names:\n{events}");
+    assert!(!events.contains("diagnostics-renamed"), "{events}");
+}
+
 fn report(out: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
 }
@@ -152,6 +161,7 @@ fn lockstep_matches_sim(scenario: &str, test: &str) {
     let o = wait_with_watchdog(child, Duration::from_secs(60));
     assert!(o.status.success(), "{}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     check_report(&report(&rig_out), 1000, Mode::Lockstep);
+    diagnostics_were_announced(&rig_out);
     let sim = Command::new(SILRIG).args(["sim", scenario, "--out", sim_out.to_str().unwrap()]).output().unwrap();
     assert!(sim.status.success());
     let (a, b) = (std::fs::read(rig_out.join("trace.csv")).unwrap(), std::fs::read(sim_out.join("trace.csv")).unwrap());

@@ -36,6 +36,8 @@
 #define SILRIG_FLAG_RATE_LIMITED 8u
 /* diagnostics a command sample carries at most */
 #define SILRIG_MAX_DIAGNOSTICS 64u
+/* bytes of a diagnostic name, NUL-padded */
+#define SILRIG_DIAGNOSTIC_NAME_BYTES 32u
 /* event id to notify after every send */
 #define SILRIG_EVENT_SAMPLE_SENT 0u
 /* event id of a cleaned-up dead publisher */
@@ -47,6 +49,8 @@
 #define SILRIG_TYPE_NAME_COMMAND "silrig::CommandSample::v2"
 #define SILRIG_SERVICE_LOG_ACK "silrig/log-ack"
 #define SILRIG_TYPE_NAME_LOG_ACK "silrig::LogAckSample::v2"
+#define SILRIG_SERVICE_CONTROLLER_INFO "silrig/controller-info"
+#define SILRIG_TYPE_NAME_CONTROLLER_INFO "silrig::ControllerInfo::v2"
 
 /* Bookkeeping that precedes every sample. iceoryx2 type name "silrig::SampleHeader::v2". */
 typedef struct silrig_sample_header_t {
@@ -142,5 +146,24 @@ SILRIG_STATIC_ASSERT(sizeof(silrig_log_ack_sample_t) == 48, "size of LogAckSampl
 SILRIG_STATIC_ASSERT(SILRIG_ALIGNOF(silrig_log_ack_sample_t) == 8, "alignment of LogAckSample");
 SILRIG_STATIC_ASSERT(offsetof(silrig_log_ack_sample_t, header) == 0, "offset of LogAckSample.header");
 SILRIG_STATIC_ASSERT(offsetof(silrig_log_ack_sample_t, rows_written) == 40, "offset of LogAckSample.rows_written");
+
+/* The names of a controller's diagnostics, announced once per epoch before its first command (stream `controller-info`). iceoryx2 type name "silrig::ControllerInfo::v2". */
+typedef struct silrig_controller_info_t {
+    // Bookkeeping; `epoch` is the controller's, as in its commands.
+    silrig_sample_header_t header;
+    // Names in use, at most MAX_DIAGNOSTICS.
+    uint32_t diagnostics_len;
+    // Explicit padding, always 0.
+    uint32_t _pad;
+    // The name of each diagnostic, in the order of `CommandSample::diagnostics`: ASCII letters, digits and '_',
+    // NUL-padded.
+    uint8_t diagnostic_names[64][32];
+} silrig_controller_info_t;
+SILRIG_STATIC_ASSERT(sizeof(silrig_controller_info_t) == 2096, "size of ControllerInfo");
+SILRIG_STATIC_ASSERT(SILRIG_ALIGNOF(silrig_controller_info_t) == 8, "alignment of ControllerInfo");
+SILRIG_STATIC_ASSERT(offsetof(silrig_controller_info_t, header) == 0, "offset of ControllerInfo.header");
+SILRIG_STATIC_ASSERT(offsetof(silrig_controller_info_t, diagnostics_len) == 40, "offset of ControllerInfo.diagnostics_len");
+SILRIG_STATIC_ASSERT(offsetof(silrig_controller_info_t, _pad) == 44, "offset of ControllerInfo._pad");
+SILRIG_STATIC_ASSERT(offsetof(silrig_controller_info_t, diagnostic_names) == 48, "offset of ControllerInfo.diagnostic_names");
 
 #endif /* SILRIG_CONTRACT_H */

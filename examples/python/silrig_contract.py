@@ -20,6 +20,7 @@ FLAG_SATURATED = 2  # a surface or the throttle is at its position limit
 FLAG_FAILSAFE = 4  # the failsafe output is active
 FLAG_RATE_LIMITED = 8  # a surface moved at its rate limit this tick
 MAX_DIAGNOSTICS = 64  # diagnostics a command sample carries at most
+DIAGNOSTIC_NAME_BYTES = 32  # bytes of a diagnostic name, NUL-padded
 EVENT_SAMPLE_SENT = 0  # event id to notify after every send
 EVENT_PUBLISHER_DEAD = 254  # event id of a cleaned-up dead publisher
 
@@ -27,6 +28,7 @@ SERVICES = {
     "plant": "silrig/plant",
     "command": "silrig/command",
     "log-ack": "silrig/log-ack",
+    "controller-info": "silrig/controller-info",
 }
 
 
@@ -159,3 +161,31 @@ assert ctypes.sizeof(LogAckSample) == 48, "size of LogAckSample"
 assert ctypes.alignment(LogAckSample) == 8, "alignment of LogAckSample"
 assert LogAckSample.header.offset == 0, "offset of LogAckSample.header"
 assert LogAckSample.rows_written.offset == 40, "offset of LogAckSample.rows_written"
+
+
+class ControllerInfo(ctypes.Structure):
+    """The names of a controller's diagnostics, announced once per epoch before its first command (stream `controller-info`)."""
+
+    _fields_ = [
+        # Bookkeeping; `epoch` is the controller's, as in its commands.
+        ("header", SampleHeader),
+        # Names in use, at most MAX_DIAGNOSTICS.
+        ("diagnostics_len", ctypes.c_uint32),
+        # Explicit padding, always 0.
+        ("_pad", ctypes.c_uint32),
+        # The name of each diagnostic, in the order of `CommandSample::diagnostics`: ASCII letters, digits and '_',
+        # NUL-padded.
+        ("diagnostic_names", ctypes.c_uint8 * 32 * 64),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "silrig::ControllerInfo::v2"
+
+
+assert ctypes.sizeof(ControllerInfo) == 2096, "size of ControllerInfo"
+assert ctypes.alignment(ControllerInfo) == 8, "alignment of ControllerInfo"
+assert ControllerInfo.header.offset == 0, "offset of ControllerInfo.header"
+assert ControllerInfo.diagnostics_len.offset == 40, "offset of ControllerInfo.diagnostics_len"
+assert ControllerInfo._pad.offset == 44, "offset of ControllerInfo._pad"
+assert ControllerInfo.diagnostic_names.offset == 48, "offset of ControllerInfo.diagnostic_names"

@@ -22,7 +22,7 @@ use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamService, Stream
 use crate::scenario::Scenario;
 use crate::sim::{measurement, setpoint_rad, write_attitude_diagnostics};
 use crate::topology::{Role, Stream};
-use crate::wire::{CommandSample, MAX_DIAGNOSTICS, PlantSample};
+use crate::wire::{CommandSample, ControllerInfo, MAX_DIAGNOSTICS, PlantSample};
 use anyhow::Context;
 use iceoryx2::prelude::CallbackProgression;
 use std::path::PathBuf;
@@ -41,21 +41,38 @@ const COMPUTE: usize = 1;
 pub struct ControllerPorts {
     plant_stream: StreamService<PlantSample>,
     samples: StreamSubscriber<PlantSample>,
-    publisher: StreamPublisher<CommandSample>,
+    outputs: ControllerOutputs,
     // Dropped last: the services and ports above belong to it.
     _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
 }
 
 impl ControllerPorts {
-    /// Open the controller's streams: read plant samples, publish commands (refused if the run has a controller).
-    pub fn connect(args: &ProcessArgs) -> anyhow::Result<Self> {
+    /// Open the controller's streams: read plant samples, announce the names of its diagnostics, then publish
+    /// commands. The announcement goes out before the command publisher exists, which is what the plant waits for,
+    /// and again with the first command (iceoryx2 hands a late subscriber the last announcement only on a later
+    /// send, and the logger's subscriber may come after this one), so the logger knows the trace's columns before
+    /// its first row. A run that has a controller refuses this one before it announces anything.
+    pub fn connect(args: &ProcessArgs, diagnostic_names: &[String]) -> anyhow::Result<Self> {
+        let info = ControllerInfo::new(diagnostic_names).map_err(|e| anyhow::anyhow!("announcing diagnostics: {e}"))?;
         let node = ipc::create_node(&args.run_id, Role::Controller.label())?;
         let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
         let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
+        let info_stream = ipc::open_stream::<ControllerInfo>(&node, Stream::ControllerInfo)?;
+        let second = "refusing to start a second controller for this run";
+        let mut announcer = info_stream.publisher().context(second)?;
         let samples = plant_stream.subscriber(Stream::Plant.queue_depth(Role::Controller))?;
-        let publisher = command_stream.publisher().context("refusing to start a second controller for this run")?;
-        Ok(Self { plant_stream, samples, publisher, _node: node })
+        announcer.send(0, &info)?;
+        let commands = command_stream.publisher().context(second)?;
+        Ok(Self { plant_stream, samples, outputs: ControllerOutputs { commands, announcer, info }, _node: node })
     }
+}
+
+/// What the controller publishes: its announcement and its commands.
+struct ControllerOutputs {
+    commands: StreamPublisher<CommandSample>,
+    // Held for the run, so a second controller is refused before it could announce other names.
+    announcer: StreamPublisher<ControllerInfo>,
+    info: ControllerInfo,
 }
 
 /// Everything the event loop keeps between wake-ups.
@@ -155,7 +172,7 @@ impl ControllerLoop {
             .map_err(|e| anyhow::anyhow!("attaching the plant stream to the WaitSet: {e:?}"))?;
         Ok(ipc::run_waitset(&waitset, |id| {
             if id.has_event_from(&guard) {
-                return self.on_samples(&ports.samples, &mut ports.publisher);
+                return self.on_samples(&ports.samples, &mut ports.outputs);
             }
             if id.has_missed_deadline(&guard) {
                 self.on_plant_silent(&ports.plant_stream, stale_after);
@@ -168,7 +185,7 @@ impl ControllerLoop {
     fn on_samples(
         &mut self,
         samples: &StreamSubscriber<PlantSample>,
-        publisher: &mut StreamPublisher<CommandSample>,
+        outputs: &mut ControllerOutputs,
     ) -> CallbackProgression {
         let mut newest: Option<Received<PlantSample>> = None;
         let mut fresh = 0u64;
@@ -191,13 +208,19 @@ impl ControllerLoop {
         if self.last_tick.is_some_and(|(epoch, tick)| epoch == h.epoch && tick >= h.tick) {
             return CallbackProgression::Continue;
         }
+        if self.last_tick.is_none()
+            && let Err(e) = outputs.announcer.send(h.tick, &outputs.info)
+        {
+            self.error = Some(e.into());
+            return CallbackProgression::Stop;
+        }
         self.note_plant(h.epoch, h.tick);
         self.rec.record(IPC_PLANT_TO_CONTROLLER, r.age_ns() as i64);
         let command = self.compute(&r.sample);
         if self.save_weights && h.tick.is_multiple_of(CHECKPOINT_EVERY_TICKS) {
             self.save_checkpoint();
         }
-        self.publish(publisher, h.tick, &command);
+        self.publish(&mut outputs.commands, h.tick, &command);
         CallbackProgression::Continue
     }
 
@@ -327,7 +350,8 @@ impl ControllerLoop {
 /// Run the controller until SIGTERM and write its report.
 pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let mut controller = ControllerLoop::setup(args)?;
-    let mut ports = ControllerPorts::connect(args)?;
+    let names = crate::trace::attitude_diagnostic_names(controller.scenario.controller.rbf.nodes());
+    let mut ports = ControllerPorts::connect(args, &names)?;
     let exit = controller.serve(args, &mut ports)?;
     controller.finish(args, &ports, exit)
 }

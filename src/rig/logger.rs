@@ -22,12 +22,12 @@ use crate::scenario::Scenario;
 use crate::sim::trace_row;
 use crate::topology::{Role, Stream};
 use crate::trace::{self, Trace};
-use crate::wire::{CommandSample, LogAckSample, PlantSample};
+use crate::wire::{CommandSample, ControllerInfo, LogAckSample, PlantSample};
 use iceoryx2::prelude::CallbackProgression;
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A plant sample waits this many newer samples for its command before it is written without one.
 pub const MISSING_COMMAND_WINDOW: u64 = 10;
@@ -72,15 +72,29 @@ fn open_append(dir: &Path, name: &str, header: &str) -> std::io::Result<BufWrite
 }
 
 struct Writer {
-    trace: BufWriter<File>,
+    out_dir: PathBuf,
+    /// Opened with the first row, whose header names the diagnostics the controller announced; already open when
+    /// a previous logger of the run wrote one.
+    trace: Option<BufWriter<File>>,
     timing: BufWriter<File>,
-    /// Diagnostic columns of the trace.
-    diagnostics: usize,
+    /// The diagnostic columns of the trace, after its loop columns.
+    diagnostic_names: Vec<String>,
     rows: u64,
     last_tick: Option<u64>,
 }
 
 impl Writer {
+    /// Start `trace.csv` with these diagnostic columns, unless it has started.
+    fn start_trace(&mut self, diagnostic_names: &[String]) -> std::io::Result<()> {
+        if self.trace.is_none() {
+            let header: Vec<&str> =
+                trace::LOOP_COLUMNS.iter().copied().chain(diagnostic_names.iter().map(String::as_str)).collect();
+            self.trace = Some(open_append(&self.out_dir, "trace.csv", &header.join(","))?);
+            self.diagnostic_names = diagnostic_names.to_vec();
+        }
+        Ok(())
+    }
+
     fn row(&mut self, plant: &Received<PlantSample>, command: Option<&Received<CommandSample>>) -> std::io::Result<()> {
         let snap = snapshot(&plant.sample);
         let nan = f64::NAN;
@@ -93,18 +107,19 @@ impl Writer {
                     rudder_deg: s.surface_cmd_deg[2],
                 };
                 // The trace's columns are fixed by its header: missing diagnostics are empty, extra ones dropped.
-                let mut diagnostics = vec![nan; self.diagnostics];
+                let mut diagnostics = vec![nan; self.diagnostic_names.len()];
                 let given = s.diagnostics();
-                let n = given.len().min(self.diagnostics);
+                let n = given.len().min(diagnostics.len());
                 diagnostics[..n].copy_from_slice(&given[..n]);
                 trace_row(&snap, &cmd, &diagnostics)
             }
             None => {
                 let cmd = SurfaceCommand { aileron_deg: nan, elevator_deg: nan, rudder_deg: nan };
-                trace_row(&snap, &cmd, &vec![nan; self.diagnostics])
+                trace_row(&snap, &cmd, &vec![nan; self.diagnostic_names.len()])
             }
         };
-        writeln!(self.trace, "{}", Trace::format_row(&row))?;
+        let trace = self.trace.as_mut().ok_or_else(|| std::io::Error::other("trace.csv written before its header"))?;
+        writeln!(trace, "{}", Trace::format_row(&row))?;
         let p = &plant.sample.header;
         let (cs, ce, ct, cr, cn) =
             command.map_or((String::new(), String::new(), String::new(), String::new(), String::new()), |c| {
@@ -137,7 +152,9 @@ impl Writer {
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
-        self.trace.flush()?;
+        if let Some(trace) = self.trace.as_mut() {
+            trace.flush()?;
+        }
         self.timing.flush()
     }
 }
@@ -165,10 +182,14 @@ impl LoggerPorts {
         let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
         let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
         let ack_stream = ipc::open_stream::<LogAckSample>(&node, Stream::LogAck)?;
+        let info_stream = ipc::open_stream::<ControllerInfo>(&node, Stream::ControllerInfo)?;
+        // Announcements first: the plant starts once it sees the logger's plant subscriber, and every announcement
+        // made after that must reach this queue.
+        let info = info_stream.subscriber(Stream::ControllerInfo.queue_depth(Role::Logger))?;
         let plant = plant_stream.subscriber(Stream::Plant.queue_depth(Role::Logger))?;
         let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Logger))?;
         let acks = ack_stream.publisher()?;
-        Ok(Self { inputs: LoggerInputs { plant, commands }, acks, _node: node })
+        Ok(Self { inputs: LoggerInputs { plant, commands, info }, acks, _node: node })
     }
 }
 
@@ -176,6 +197,7 @@ impl LoggerPorts {
 pub struct LoggerInputs {
     plant: StreamSubscriber<PlantSample>,
     commands: StreamSubscriber<CommandSample>,
+    info: StreamSubscriber<ControllerInfo>,
 }
 
 /// Everything the logger keeps between wake-ups: the files, the samples waiting for their partner, the counters.
@@ -193,6 +215,8 @@ pub struct LoggerLoop {
     pending_command: BTreeMap<u64, Received<CommandSample>>,
     /// First tick of the current run of rows written without a command.
     missing_since: Option<u64>,
+    /// The diagnostic names the newest controller epoch announced.
+    announced: Option<Vec<String>>,
     done: bool,
     error: Option<anyhow::Error>,
 }
@@ -202,7 +226,6 @@ impl LoggerLoop {
     pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
         let scenario = args.scenario()?;
         std::fs::create_dir_all(&args.out)?;
-        let columns = trace::columns(scenario.controller.rbf.nodes());
         let events = EventLog::new(&args.out, Role::Logger.label());
         let resume_after = last_logged_tick(&args.out, scenario.timing.dt_s);
         if let Some(t) = resume_after {
@@ -210,13 +233,18 @@ impl LoggerLoop {
         }
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Logger, scenario.timing.dt_s, scenario.seed, events.clone());
-        let writer = Writer {
-            trace: open_append(&args.out, "trace.csv", &columns.join(","))?,
+        let mut writer = Writer {
+            out_dir: args.out.clone(),
+            trace: None,
             timing: open_append(&args.out, "timing.csv", &TIMING_COLUMNS.join(","))?,
-            diagnostics: columns.len() - trace::LOOP_COLUMNS.len(),
+            diagnostic_names: Vec::new(),
             rows: 0,
             last_tick: resume_after,
         };
+        // A previous logger of this run started the trace: continue under its header.
+        if let Ok(previous) = Trace::load(&args.out.join("trace.csv")) {
+            writer.start_trace(&previous.columns[trace::LOOP_COLUMNS.len().min(previous.columns.len())..])?;
+        }
         let mut rec = Recorder::new(
             Role::Logger.label(),
             &[
@@ -236,6 +264,7 @@ impl LoggerLoop {
             pending_plant: BTreeMap::new(),
             pending_command: BTreeMap::new(),
             missing_since: None,
+            announced: None,
             done: false,
             error: None,
         })
@@ -294,6 +323,14 @@ impl LoggerLoop {
     }
 
     fn take_samples(&mut self, inputs: &LoggerInputs) -> anyhow::Result<()> {
+        // Announcements first: a controller announces before its first command.
+        inputs.info.drain(|r| match &r.invalid {
+            Some(e) => {
+                self.rec.count("invalid_samples", 1);
+                self.events.emit(None, "controller-info-invalid", e.to_string());
+            }
+            None => self.on_announcement(r.sample.names()),
+        })?;
         inputs.plant.drain(|r| {
             if r.invalid.is_some() {
                 self.rec.count("invalid_samples", 1);
@@ -313,6 +350,38 @@ impl LoggerLoop {
             self.pending_command.insert(r.sample.answers_tick, *r);
         })?;
         Ok(())
+    }
+
+    /// A controller epoch's diagnostic names. Once the trace has started its columns stay; a controller that names
+    /// other diagnostics (another controller restarted into the run) is reported, its values written by position.
+    fn on_announcement(&mut self, names: Vec<String>) {
+        if self.writer.trace.is_some() && names != self.writer.diagnostic_names {
+            let detail = format!(
+                "the controller names {} diagnostics ({}), the trace has columns for {}: values are written by position",
+                names.len(),
+                names.join(","),
+                self.writer.diagnostic_names.len()
+            );
+            self.events.emit(self.writer.last_tick, "diagnostics-renamed", detail);
+        }
+        self.announced = Some(names);
+    }
+
+    /// The trace's diagnostic columns when its first row is due: those the controller announced, or, with no
+    /// announcement (no controller yet), the scenario's controller's, said in an event.
+    fn start_trace(&mut self, tick: u64) -> std::io::Result<()> {
+        if self.writer.trace.is_some() {
+            return Ok(());
+        }
+        let names = match &self.announced {
+            Some(names) => names.clone(),
+            None => {
+                let detail = "no controller announced its diagnostics before the first row; columns from the scenario";
+                self.events.emit(Some(tick), "controller-unannounced", detail);
+                trace::attitude_diagnostic_names(self.scenario.controller.rbf.nodes())
+            }
+        };
+        self.writer.start_trace(&names)
     }
 
     /// Write the oldest waiting plant samples, each with the command answering it; one whose command has not come
@@ -345,6 +414,7 @@ impl LoggerLoop {
                     std::thread::sleep(std::time::Duration::from_nanos(effect.sleep_ns));
                 }
             }
+            self.start_trace(tick)?;
             self.writer.row(&sample, command.as_ref())?;
             self.rec.count("rows_written", 1);
             // Commands answering ticks already written can no longer be used.
