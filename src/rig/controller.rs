@@ -1,15 +1,19 @@
-//! `silrig-controller`: event-driven. A WaitSet wakes it on each plant sample (with a deadline that flags the
-//! plant stale); it runs the same [`crate::control::AttitudeController`] as `silrig sim` on the newest sample and
-//! publishes the command with a notify.
+//! `silrig-controller` and the session every controller runs in. A [`Controller`] is the control law alone (one
+//! step per plant sample, its diagnostics' names, optional checkpoint and restore, as copper's `Freezable`);
+//! [`serve`] is everything around it: the streams, the announcement of the diagnostics, the WaitSet loop woken by
+//! each plant sample (with a deadline that flags the plant stale), the in-loop faults, checkpoint files, the
+//! bumpless blend and the report. Our controller is [`AttitudeLaw`], the same [`crate::control::AttitudeController`]
+//! as `silrig sim`, served by [`run_controller`].
 //!
 //! A controller that joins a plant already flying (a restart) blends its output from the surfaces' current
 //! positions to its own command over [`BUMPLESS_BLEND_S`], so the switch from the plant's held or failsafe command
-//! causes no bump. With a fault plan it saves its RBF weights every few ticks; restarted with `--resume`, it starts
-//! from them instead of from zero, so it need not re-learn. While the plant is silent it idles and says so once.
+//! causes no bump; the blend lives here, in the session, so every controller gets it. With a fault plan the session
+//! saves the controller's checkpoint every few ticks; restarted with `--resume`, it restores it, so ours need not
+//! re-learn its weights. While the plant is silent it idles and says so once.
 //!
-//! Phases: [`ControllerLoop::setup`] (scenario, control law, recorder), [`ControllerPorts::connect`], the event loop
-//! ([`ControllerLoop::on_samples`] per wake-up, [`ControllerLoop::on_plant_silent`] per missed deadline), and
-//! [`ControllerLoop::finish`].
+//! Phases: [`ControllerLoop::setup`] (scenario, law, recorder), [`ControllerPorts::connect`] (streams and the
+//! announcement), the event loop (`on_samples` per wake-up, `on_plant_silent`
+//! per missed deadline), and [`ControllerLoop::finish`].
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
@@ -36,6 +40,77 @@ const CHECKPOINT_EVERY_TICKS: u64 = 10;
 
 const IPC_PLANT_TO_CONTROLLER: usize = 0;
 const COMPUTE: usize = 1;
+
+/// What a controller commands for one plant sample.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ControlCommand {
+    /// Surfaces, deg: aileron, elevator, rudder.
+    pub surface_cmd_deg: [f64; 3],
+    /// Throttle, 0..1.
+    pub throttle_cmd: f64,
+}
+
+/// A controller the rig can fly. The session around it ([`serve`]) owns everything else: the transport, the
+/// clock, the in-loop faults, the bumpless blend when it joins a flying plant, checkpoint files, and the report.
+pub trait Controller {
+    /// Names of the diagnostics [`Controller::step`] reports, in order (announced once per epoch; at most
+    /// [`MAX_DIAGNOSTICS`], see [`ControllerInfo::new`] for the characters allowed).
+    fn diagnostic_names(&self) -> Vec<String>;
+
+    /// The command for one plant sample; write the diagnostics of this step into `diagnostics` (one per name).
+    fn step(&mut self, sample: &PlantSample, dt_s: f64, diagnostics: &mut [f64]) -> ControlCommand;
+
+    /// The state a restarted controller should resume from, as text (`None`: nothing worth saving).
+    fn checkpoint(&self) -> Option<String> {
+        None
+    }
+
+    /// Resume from what [`Controller::checkpoint`] saved; false leaves the controller as it was.
+    fn restore(&mut self, _saved: &str) -> bool {
+        false
+    }
+}
+
+/// The paper's adaptive SMC/RBF controller behind the [`Controller`] trait; its checkpoint is its RBF weights.
+pub struct AttitudeLaw {
+    controller: AttitudeController,
+    setpoint: [f64; 3],
+}
+
+impl AttitudeLaw {
+    /// The scenario's controller, with zero weights.
+    pub fn new(scenario: &Scenario) -> Self {
+        let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
+        Self {
+            controller: AttitudeController::new(scenario.controller.clone(), tables),
+            setpoint: setpoint_rad(scenario),
+        }
+    }
+}
+
+impl Controller for AttitudeLaw {
+    fn diagnostic_names(&self) -> Vec<String> {
+        crate::trace::attitude_diagnostic_names(self.controller.gains().rbf.nodes())
+    }
+
+    fn step(&mut self, sample: &PlantSample, dt_s: f64, diagnostics: &mut [f64]) -> ControlCommand {
+        let (command, diag) = self.controller.step(&measurement(&snapshot(sample)), &self.setpoint, dt_s);
+        write_attitude_diagnostics(diagnostics, &diag, &self.controller);
+        ControlCommand {
+            surface_cmd_deg: [command.aileron_deg, command.elevator_deg, command.rudder_deg],
+            throttle_cmd: sample.throttle,
+        }
+    }
+
+    fn checkpoint(&self) -> Option<String> {
+        let weights: [&Vec<f64>; 3] = std::array::from_fn(|c| &self.controller.networks()[c].weights);
+        serde_json::to_string(&weights).ok()
+    }
+
+    fn restore(&mut self, saved: &str) -> bool {
+        serde_json::from_str::<[Vec<f64>; 3]>(saved).is_ok_and(|w| self.controller.set_weights(&w))
+    }
+}
 
 /// The controller's side of the run's streams.
 pub struct ControllerPorts {
@@ -79,8 +154,8 @@ struct ControllerOutputs {
 pub struct ControllerLoop {
     scenario: Scenario,
     scheduling: String,
-    controller: AttitudeController,
-    setpoint: [f64; 3],
+    law: Box<dyn Controller>,
+    diagnostics_len: usize,
     rec: Recorder,
     events: EventLog,
     loop_faults: LoopFaults,
@@ -97,18 +172,14 @@ pub struct ControllerLoop {
 }
 
 impl ControllerLoop {
-    /// Phase 1: the scenario, the control law (with the weights a predecessor saved, on `--resume`), the recorder.
-    pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
-        let scenario = args.scenario()?;
-        let nodes = scenario.controller.rbf.nodes();
-        let diagnostics = crate::trace::attitude_diagnostic_names(nodes).len();
+    /// Phase 1: the scenario, the control law (with the state a predecessor saved, on `--resume`), the recorder.
+    pub fn setup(args: &ProcessArgs, scenario: Scenario, law: Box<dyn Controller>) -> anyhow::Result<Self> {
+        let diagnostics_len = law.diagnostic_names().len();
         anyhow::ensure!(
-            diagnostics <= MAX_DIAGNOSTICS,
-            "a command carries at most {MAX_DIAGNOSTICS} diagnostics; the scenario's controller reports \
-             {diagnostics} (S and f_hat per channel, and {nodes} RBF weights per channel)"
+            diagnostics_len <= MAX_DIAGNOSTICS,
+            "a command carries at most {MAX_DIAGNOSTICS} diagnostics; the controller reports {diagnostics_len}"
         );
         let scheduling = request_scheduling(Role::Controller, args.mode == RigMode::Realtime);
-        let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
         let mut rec = Recorder::new(
             Role::Controller.label(),
             &[
@@ -127,8 +198,8 @@ impl ControllerLoop {
         let dt = scenario.timing.dt_s;
         let events = EventLog::new(&args.out, Role::Controller.label());
         let mut this = Self {
-            controller: AttitudeController::new(scenario.controller.clone(), tables),
-            setpoint: setpoint_rad(&scenario),
+            law,
+            diagnostics_len,
             loop_faults: LoopFaults::new(&scenario.faults, Role::Controller, dt, scenario.seed, events.clone()),
             events,
             rec,
@@ -144,19 +215,16 @@ impl ControllerLoop {
             scenario,
         };
         if args.resume {
-            this.resume_weights();
+            this.resume();
         }
         Ok(this)
     }
 
-    fn resume_weights(&mut self) {
-        let loaded = std::fs::read_to_string(&self.checkpoint_path)
-            .ok()
-            .and_then(|t| serde_json::from_str::<[Vec<f64>; 3]>(&t).ok())
-            .is_some_and(|w| self.controller.set_weights(&w));
+    fn resume(&mut self) {
+        let loaded = std::fs::read_to_string(&self.checkpoint_path).is_ok_and(|t| self.law.restore(&t));
         if !loaded {
             eprintln!(
-                "silrig-controller: warning: --resume without usable weights in {}; starting from zero",
+                "silrig-controller: warning: --resume without a usable checkpoint in {}; starting fresh",
                 self.checkpoint_path.display()
             );
         }
@@ -230,9 +298,9 @@ impl ControllerLoop {
         match self.last_tick {
             None if tick > 0 => {
                 self.blend = Some(tick);
-                let weights = if self.resumed { "checkpointed" } else { "fresh" };
+                let state = if self.resumed { "checkpointed" } else { "fresh" };
                 let detail =
-                    format!("plant already at tick {tick}: {weights} weights, {BUMPLESS_BLEND_S} s bumpless blend");
+                    format!("plant already at tick {tick}: {state} state, {BUMPLESS_BLEND_S} s bumpless blend");
                 self.events.emit(Some(tick), "controller-joined", detail);
             }
             Some((last_epoch, _)) if last_epoch != epoch => {
@@ -251,39 +319,30 @@ impl ControllerLoop {
     fn compute(&mut self, sample: &PlantSample) -> CommandSample {
         let t0 = monotonic_ns();
         let tick = sample.header.tick;
-        let snap = snapshot(sample);
+        let mut out = CommandSample { answers_tick: tick, ..CommandSample::zeroed() };
         let dt = self.scenario.timing.dt_s;
-        let (mut command, diag) = self.controller.step(&measurement(&snap), &self.setpoint, dt);
+        let mut command = self.law.step(sample, dt, &mut out.diagnostics[..self.diagnostics_len]);
         if let Some(start) = self.blend {
             let k = ((tick - start + 1) as f64 / self.blend_ticks as f64).min(1.0);
-            let mix = |now: f64, cmd: f64| now + k * (cmd - now);
-            command.aileron_deg = mix(snap.surfaces_deg[0], command.aileron_deg);
-            command.elevator_deg = mix(snap.surfaces_deg[1], command.elevator_deg);
-            command.rudder_deg = mix(snap.surfaces_deg[2], command.rudder_deg);
+            for (cmd, now) in command.surface_cmd_deg.iter_mut().zip(sample.surfaces_deg) {
+                *cmd = now + k * (*cmd - now);
+            }
             if k >= 1.0 {
                 self.blend = None;
             }
         }
-        let compute_ns = monotonic_ns() - t0;
-        self.rec.record(COMPUTE, compute_ns as i64);
-        let mut out = CommandSample {
-            answers_tick: tick,
-            surface_cmd_deg: [command.aileron_deg, command.elevator_deg, command.rudder_deg],
-            throttle_cmd: sample.throttle,
-            compute_ns,
-            ..CommandSample::zeroed()
-        };
-        out.diagnostics_len = write_attitude_diagnostics(&mut out.diagnostics, &diag, &self.controller) as u32;
+        out.compute_ns = monotonic_ns() - t0;
+        self.rec.record(COMPUTE, out.compute_ns as i64);
+        out.surface_cmd_deg = command.surface_cmd_deg;
+        out.throttle_cmd = command.throttle_cmd;
+        out.diagnostics_len = self.diagnostics_len as u32;
         out
     }
 
     fn save_checkpoint(&self) {
-        let weights: [&Vec<f64>; 3] = std::array::from_fn(|c| &self.controller.networks()[c].weights);
-        let saved = serde_json::to_string(&weights)
-            .map_err(std::io::Error::other)
-            .and_then(|t| super::write_atomically(&self.checkpoint_path, &t));
-        if let Err(e) = saved {
-            eprintln!("silrig-controller: cannot save weights: {e}");
+        let Some(text) = self.law.checkpoint() else { return };
+        if let Err(e) = super::write_atomically(&self.checkpoint_path, &text) {
+            eprintln!("silrig-controller: cannot save a checkpoint: {e}");
         }
     }
 
@@ -347,11 +406,18 @@ impl ControllerLoop {
     }
 }
 
-/// Run the controller until SIGTERM and write its report.
-pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
-    let mut controller = ControllerLoop::setup(args)?;
-    let names = crate::trace::attitude_diagnostic_names(controller.scenario.controller.rbf.nodes());
+/// Serve `law` as the run's controller until SIGTERM and write the report: the session every controller runs in.
+pub fn serve(args: &ProcessArgs, scenario: Scenario, law: Box<dyn Controller>) -> anyhow::Result<ProcessReport> {
+    let names = law.diagnostic_names();
+    let mut controller = ControllerLoop::setup(args, scenario, law)?;
     let mut ports = ControllerPorts::connect(args, &names)?;
     let exit = controller.serve(args, &mut ports)?;
     controller.finish(args, &ports, exit)
+}
+
+/// Run our controller (the paper's, from the scenario) until SIGTERM and write its report.
+pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
+    let scenario = args.scenario()?;
+    let law = AttitudeLaw::new(&scenario);
+    serve(args, scenario, Box::new(law))
 }

@@ -8,7 +8,7 @@
 //! plant waits for every command, and never runs further ahead of the logger than its queue holds.
 //!
 //! The process runs in four phases: [`PlantLoop::setup`] (scenario, model, recorder, watchdog settings),
-//! [`PlantPorts::connect`] (streams, then waiting for the peers), the tick loop ([`PlantLoop::tick`], one tick in
+//! [`PlantPorts::connect`] (streams, then waiting for the peers), the tick loop ([`PlantLoop::fly`], one tick at a time in
 //! named steps), and [`PlantLoop::finish`] (the report).
 
 use super::events::EventLog;
