@@ -242,11 +242,6 @@ pub fn new_epoch() -> u64 {
 }
 
 impl<T: WireSample> StreamService<T> {
-    /// What the stream is and the settings it was opened with.
-    pub fn spec(&self) -> &StreamSpec {
-        &self.spec
-    }
-
     /// Publishers connected now.
     pub fn number_of_publishers(&self) -> usize {
         self.pubsub.dynamic_config().number_of_publishers()

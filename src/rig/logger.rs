@@ -159,10 +159,9 @@ impl Writer {
     }
 }
 
-/// The last tick a previous logger of this run wrote to `trace.csv` (its last complete line), so a restarted
-/// logger continues after it instead of writing a tick twice.
-fn last_logged_tick(out_dir: &Path, dt_s: f64) -> Option<u64> {
-    let trace = Trace::load(&out_dir.join("trace.csv")).ok()?;
+/// The last tick a previous logger of this run wrote to its trace (its last complete line), so a restarted logger
+/// continues after it instead of writing a tick twice.
+fn last_logged_tick(trace: &Trace, dt_s: f64) -> Option<u64> {
     let t = trace.rows.last()?[trace.index("t_s")?];
     Some((t / dt_s).round() as u64)
 }
@@ -227,7 +226,9 @@ impl LoggerLoop {
         let scenario = args.scenario()?;
         std::fs::create_dir_all(&args.out)?;
         let events = EventLog::new(&args.out, Role::Logger.label());
-        let resume_after = last_logged_tick(&args.out, scenario.timing.dt_s);
+        // What a previous logger of this run wrote, if anything.
+        let previous = Trace::load(&args.out.join("trace.csv")).ok();
+        let resume_after = previous.as_ref().and_then(|p| last_logged_tick(p, scenario.timing.dt_s));
         if let Some(t) = resume_after {
             events.emit(Some(t), "logger-resumed", format!("continuing trace.csv after tick {t}"));
         }
@@ -242,7 +243,7 @@ impl LoggerLoop {
             last_tick: resume_after,
         };
         // A previous logger of this run started the trace: continue under its header.
-        if let Ok(previous) = Trace::load(&args.out.join("trace.csv")) {
+        if let Some(previous) = previous {
             writer.start_trace(&previous.columns[trace::LOOP_COLUMNS.len().min(previous.columns.len())..])?;
         }
         let mut rec = Recorder::new(
