@@ -135,8 +135,13 @@ impl PlantPorts {
 
     /// Wait until the controller and the logger are connected, or time out; SIGTERM ends the wait early (false).
     pub fn wait_for_peers(&self, timeout_s: f64) -> anyhow::Result<bool> {
-        let ready =
-            || self.plant_stream.number_of_subscribers() >= 2 && self.command_stream.number_of_publishers() >= 1;
+        // Every port the peers read with, the logger's command subscriber too (it subscribes to commands after
+        // plant samples): otherwise the first commands of a fast lockstep run can go out before it listens.
+        let ready = || {
+            self.plant_stream.number_of_subscribers() >= 2
+                && self.command_stream.number_of_publishers() >= 1
+                && self.command_stream.number_of_subscribers() >= 2
+        };
         let deadline = monotonic_ns() + (timeout_s * 1e9) as u64;
         while !ready() {
             if signals::termination_requested() {
