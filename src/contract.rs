@@ -60,9 +60,11 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
         ("FLAG_SATURATED", u64::from(wire::FLAG_SATURATED), "a surface or the throttle is at its position limit"),
         ("FLAG_FAILSAFE", u64::from(wire::FLAG_FAILSAFE), "the failsafe output is active"),
         ("FLAG_RATE_LIMITED", u64::from(wire::FLAG_RATE_LIMITED), "a surface moved at its rate limit this tick"),
+        ("FLAG_COMMAND_REFUSED", u64::from(wire::FLAG_COMMAND_REFUSED), "command refused (NaN/out of range): hold"),
         ("MAX_DIAGNOSTICS", wire::MAX_DIAGNOSTICS as u64, "diagnostics a command sample carries at most"),
         ("DIAGNOSTIC_NAME_BYTES", wire::DIAGNOSTIC_NAME_BYTES as u64, "bytes of a diagnostic name, NUL-padded"),
         ("EVENT_SAMPLE_SENT", StreamEvent::SampleSent.id() as u64, "event id to notify after every send"),
+        ("EVENT_FINISHED", StreamEvent::Finished.id() as u64, "event id: the plant has published its last tick"),
         ("EVENT_PUBLISHER_DEAD", StreamEvent::PublisherDead.id() as u64, "event id of a cleaned-up dead publisher"),
     ]
 }

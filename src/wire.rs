@@ -127,6 +127,14 @@ pub const FLAG_FAILSAFE: u32 = 1 << 2;
 /// At least one surface moved at its rate limit during this tick.
 pub const FLAG_RATE_LIMITED: u32 = 1 << 3;
 
+/// `CommandSample::flags`: the controller's command for this tick was refused (NaN, infinity or out of range) and
+/// not sent; the plant holds its last valid command, as for a missing one.
+pub const FLAG_COMMAND_REFUSED: u32 = 1 << 4;
+
+/// A surface command beyond this many degrees either way is refused: no control surface deflects that far, so it
+/// is a bug (units, an uninitialised value), not a saturation the actuator model should quietly clip.
+pub const SURFACE_CMD_LIMIT_DEG: f64 = 90.0;
+
 /// Names of the three surfaces, in the order of every `[f64; 3]` surface array on the wire.
 pub const SURFACE_NAMES: [&str; 3] = ["aileron", "elevator", "rudder"];
 
@@ -261,7 +269,7 @@ pub enum WireError {
         /// [`WIRE_LAYOUT_VERSION`].
         expected: u32,
     },
-    /// A count field is beyond what the layout holds.
+    /// A count beyond what the layout holds, or a command no actuator could mean.
     #[error("{type_name}: field `{field}` is out of range ({value})")]
     OutOfRange {
         /// Type name of the sample.
@@ -366,16 +374,21 @@ impl CommandSample {
         &self.diagnostics[..(self.diagnostics_len as usize).min(MAX_DIAGNOSTICS)]
     }
 
-    /// Rejects NaN/inf in a command or a diagnostic in use, and a diagnostics count beyond the layout, naming the
-    /// field.
+    /// Rejects NaN/inf in a command or a diagnostic in use, a surface beyond [`SURFACE_CMD_LIMIT_DEG`], a throttle
+    /// outside 0..1 and a diagnostics count beyond the layout, naming the field.
     fn check(&self) -> Result<(), WireError> {
         let t = Self::TYPE_NAME;
-        check_finite(
-            t,
-            &["surface_cmd_deg[0] aileron", "surface_cmd_deg[1] elevator", "surface_cmd_deg[2] rudder"],
-            &self.surface_cmd_deg,
-        )?;
+        let surfaces = ["surface_cmd_deg[0] aileron", "surface_cmd_deg[1] elevator", "surface_cmd_deg[2] rudder"];
+        check_finite(t, &surfaces, &self.surface_cmd_deg)?;
         check_finite(t, &["throttle_cmd"], &[self.throttle_cmd])?;
+        for (value, field) in self.surface_cmd_deg.iter().zip(surfaces) {
+            if value.abs() > SURFACE_CMD_LIMIT_DEG {
+                return Err(WireError::OutOfRange { type_name: t, field, value: *value });
+            }
+        }
+        if !(0.0..=1.0).contains(&self.throttle_cmd) {
+            return Err(WireError::OutOfRange { type_name: t, field: "throttle_cmd", value: self.throttle_cmd });
+        }
         if self.diagnostics_len as usize > MAX_DIAGNOSTICS {
             let value = f64::from(self.diagnostics_len);
             return Err(WireError::OutOfRange { type_name: t, field: "diagnostics_len", value });
@@ -391,7 +404,10 @@ impl ControllerInfo {
     /// The announcement of `names`; an error names the first name that does not fit the layout.
     pub fn new(names: &[String]) -> Result<Self, String> {
         if names.len() > MAX_DIAGNOSTICS {
-            return Err(format!("{} diagnostics; a command carries at most {MAX_DIAGNOSTICS}", names.len()));
+            return Err(format!(
+                "a command carries at most {MAX_DIAGNOSTICS} diagnostics; the controller reports {}",
+                names.len()
+            ));
         }
         let mut info = Self {
             header: SampleHeader { layout_version: WIRE_LAYOUT_VERSION, ..SampleHeader::default() },

@@ -158,7 +158,10 @@ fn controller_stopped_500_ms_is_detected_and_recovered() {
     assert!(first(&ev, "plant", "controller-stale").is_some());
     assert!(first(&ev, "plant", "failsafe-engaged").is_some());
     assert!(first(&ev, "plant", "controller-recovered").is_some());
-    assert_eq!(process(&r, "controller")["ended"], "terminated by signal", "SIGCONT did not end its loop");
+    // It ran to the run's end (it saw the plant's last tick, or the launcher's SIGTERM came first): SIGCONT did not
+    // end its loop.
+    let ended = process(&r, "controller")["ended"].as_str().unwrap().to_string();
+    assert!(ended == "completed" || ended == "terminated by signal", "{ended}");
     assert_eq!(trace_rows(&out), 300);
 }
 

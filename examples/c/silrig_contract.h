@@ -34,12 +34,16 @@
 #define SILRIG_FLAG_FAILSAFE 4u
 /* a surface moved at its rate limit this tick */
 #define SILRIG_FLAG_RATE_LIMITED 8u
+/* command refused (NaN/out of range): hold */
+#define SILRIG_FLAG_COMMAND_REFUSED 16u
 /* diagnostics a command sample carries at most */
 #define SILRIG_MAX_DIAGNOSTICS 64u
 /* bytes of a diagnostic name, NUL-padded */
 #define SILRIG_DIAGNOSTIC_NAME_BYTES 32u
 /* event id to notify after every send */
 #define SILRIG_EVENT_SAMPLE_SENT 0u
+/* event id: the plant has published its last tick */
+#define SILRIG_EVENT_FINISHED 253u
 /* event id of a cleaned-up dead publisher */
 #define SILRIG_EVENT_PUBLISHER_DEAD 254u
 

@@ -19,9 +19,11 @@ FLAG_COMMAND_STALE = 1  # the applied command is older than allowed
 FLAG_SATURATED = 2  # a surface or the throttle is at its position limit
 FLAG_FAILSAFE = 4  # the failsafe output is active
 FLAG_RATE_LIMITED = 8  # a surface moved at its rate limit this tick
+FLAG_COMMAND_REFUSED = 16  # command refused (NaN/out of range): hold
 MAX_DIAGNOSTICS = 64  # diagnostics a command sample carries at most
 DIAGNOSTIC_NAME_BYTES = 32  # bytes of a diagnostic name, NUL-padded
 EVENT_SAMPLE_SENT = 0  # event id to notify after every send
+EVENT_FINISHED = 253  # event id: the plant has published its last tick
 EVENT_PUBLISHER_DEAD = 254  # event id of a cleaned-up dead publisher
 
 SERVICES = {

@@ -23,7 +23,7 @@ pub mod waitset;
 pub use namespace::{CleanupReport, NodeSummary, RUN_ID_MAX_LEN, RunId, SHM_DIR, cleanup_run, create_node, rig_config};
 pub use publisher::{SendReceipt, StreamPublisher};
 pub use stream::{StreamEvent, StreamService, StreamSettings, StreamSpec, new_epoch, open_stream};
-pub use subscriber::{Received, SeqObservation, SeqTracker, StreamSubscriber, SubscriberStats};
+pub use subscriber::{Received, SeqObservation, SeqTracker, StreamSubscriber, SubscriberStats, WaitOutcome};
 pub use waitset::{LoopEnd, LoopExit, TickTimer, rig_waitset, run_waitset};
 
 use crate::wire::WireError;

@@ -74,6 +74,16 @@ impl<T: WireSample> StreamPublisher<T> {
         Ok(SendReceipt { delivered, t_send_ns })
     }
 
+    /// Tell the subscribers this publisher has sent its last sample ([`StreamEvent::Finished`]).
+    pub fn announce_finished(&self) -> Result<(), IpcError> {
+        let id = EventId::new(super::StreamEvent::Finished.id());
+        self.notifier.notify_with_custom_event_id(id).map(|_| ()).map_err(|e| IpcError::Transfer {
+            stream: self.stream,
+            op: "notify",
+            detail: format!("{e:?}"),
+        })
+    }
+
     /// Epoch stamped into every sample.
     pub fn epoch(&self) -> u64 {
         self.epoch

@@ -61,6 +61,8 @@ pub struct StreamSpec {
 pub enum StreamEvent {
     /// The publisher sent a sample (after every send).
     SampleSent,
+    /// The publisher has sent its last sample: the plant flew the whole scenario.
+    Finished,
     /// iceoryx2 cleaned up the node of a dead publisher (emitted by whoever ran the cleanup).
     PublisherDead,
 }
@@ -70,6 +72,7 @@ impl StreamEvent {
     pub const fn id(self) -> usize {
         match self {
             StreamEvent::SampleSent => 0,
+            StreamEvent::Finished => 253,
             StreamEvent::PublisherDead => 254,
         }
     }

@@ -63,6 +63,20 @@ pub struct SubscriberStats {
     pub invalid: u64,
     /// Dead-publisher events seen (after someone cleaned up its node).
     pub publisher_deaths: u64,
+    /// Times the publisher said it had sent its last sample ([`StreamEvent::Finished`]).
+    #[serde(default)]
+    pub finished_notices: u64,
+}
+
+/// How [`StreamSubscriber::wait`] ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WaitOutcome {
+    /// Something was notified (a sample, a death, the end); drain to see what.
+    Notified,
+    /// Nothing within the timeout.
+    TimedOut,
+    /// A signal interrupted the wait (SIGCONT after SIGSTOP, SIGTERM under a flag handler): look at the flag.
+    Interrupted,
 }
 
 /// One received sample with what the transport knows about it.
@@ -133,17 +147,11 @@ impl<T: WireSample> StreamSubscriber<T> {
     /// marked in [`Received::invalid`] (the logger records them; a consumer must skip them).
     pub fn drain(&self, mut on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
         let stream = self.stream;
-        let mut deaths = 0;
         self.listener
-            .try_wait(|activation| {
-                if activation.id.as_value() == StreamEvent::PublisherDead.id() {
-                    deaths += 1;
-                }
-            })
+            .try_wait(|activation| self.note_event(activation.id.as_value()))
             .map_err(|e| IpcError::Transfer { stream, op: "listener wait", detail: format!("{e:?}") })?;
         let mut stats = self.stats.get();
         let mut tracker = self.tracker.get();
-        stats.publisher_deaths += deaths;
         let mut n = 0;
         loop {
             let sample = match self.subscriber.receive() {
@@ -170,6 +178,28 @@ impl<T: WireSample> StreamSubscriber<T> {
         self.stats.set(stats);
         self.tracker.set(tracker);
         Ok(n)
+    }
+
+    /// Block until the publisher notifies something or `timeout` passes, without taking samples (see
+    /// [`StreamSubscriber::drain`]); the loop form of a WaitSet deadline, for a process that owns its signals.
+    pub fn wait(&self, timeout: std::time::Duration) -> Result<WaitOutcome, IpcError> {
+        use iceoryx2::port::listener::ListenerWaitError;
+        match self.listener.timed_wait(|activation| self.note_event(activation.id.as_value()), timeout) {
+            Ok(0) => Ok(WaitOutcome::TimedOut),
+            Ok(_) => Ok(WaitOutcome::Notified),
+            Err(ListenerWaitError::InterruptSignal) => Ok(WaitOutcome::Interrupted),
+            Err(e) => Err(IpcError::Transfer { stream: self.stream, op: "listener wait", detail: format!("{e:?}") }),
+        }
+    }
+
+    fn note_event(&self, id: usize) {
+        let mut stats = self.stats.get();
+        if id == StreamEvent::PublisherDead.id() {
+            stats.publisher_deaths += 1;
+        } else if id == StreamEvent::Finished.id() {
+            stats.finished_notices += 1;
+        }
+        self.stats.set(stats);
     }
 
     /// Drain and keep only the newest valid sample (what a controller acts on).

@@ -15,6 +15,7 @@ pub mod loop_faults;
 pub mod plant;
 pub mod report;
 pub mod run_report;
+pub mod session;
 pub mod signals;
 pub mod supervision;
 

@@ -454,6 +454,12 @@ impl PlantLoop {
             self.rec.count("command_misses", 1);
             return true;
         };
+        if fresh.flags & wire::FLAG_COMMAND_REFUSED != 0 {
+            // The controller's session refused its command (its event says why): hold, as for a missing one.
+            self.rec.count("command_misses", 1);
+            self.rec.count("commands_refused_held", 1);
+            return true;
+        }
         self.applied = actuator_command(&fresh, self.throttle);
         self.applied_answers = Some(target);
         let w = &mut self.watchdog;
@@ -551,7 +557,13 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         if args.resume {
             plant.resume_from_checkpoint();
         }
-        plant.fly(&mut ports)?
+        let ended = plant.fly(&mut ports)?;
+        if ended == "completed" {
+            // A controller that was not started by a launcher (`--controller external`) learns here that the run
+            // is over.
+            let _ = ports.publisher.announce_finished();
+        }
+        ended
     } else {
         "terminated by signal".into()
     };

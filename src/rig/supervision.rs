@@ -103,6 +103,8 @@ pub(super) struct RoleProcess {
     killed_by_plan: bool,
     /// Its exit has been dealt with (each exit is handled once).
     exit_handled: bool,
+    /// When a clean exit before the plant's end was first seen.
+    clean_exit_seen: Option<Instant>,
     restarts: u32,
     /// When to start it again.
     pub(super) restart_at: Option<Instant>,
@@ -114,6 +116,9 @@ impl RoleProcess {
         self.process.has_ended() && self.restart_at.is_none()
     }
 }
+
+/// How long a process that exited cleanly before the plant's end waits for that end before it counts as a death.
+const CLEAN_EXIT_GRACE: Duration = Duration::from_secs(2);
 
 /// Folder of the rig binaries: next to the running executable (`target/release/` in a build tree).
 pub fn binary_dir() -> anyhow::Result<PathBuf> {
@@ -178,6 +183,7 @@ impl Supervisor {
                 planned_exit: false,
                 killed_by_plan: false,
                 exit_handled: false,
+                clean_exit_seen: None,
                 restarts: 0,
                 restart_at: None,
             });
@@ -222,9 +228,18 @@ impl Supervisor {
         for i in 0..self.processes.len() {
             let p = &mut self.processes[i];
             let Some(status) = p.process.poll()? else { continue };
-            if std::mem::replace(&mut p.exit_handled, true) {
+            if p.exit_handled {
                 continue;
             }
+            // A process that ends cleanly by itself mid-run has usually seen the plant's last tick a moment before
+            // the plant's own exit reaches us: judge it once the plant has had time to end.
+            if status.success() && p.role != Role::Plant && self.plant_done_at.is_none() {
+                let seen = *p.clean_exit_seen.get_or_insert_with(Instant::now);
+                if seen.elapsed() < CLEAN_EXIT_GRACE {
+                    continue;
+                }
+            }
+            p.exit_handled = true;
             let role = p.role;
             if std::mem::take(&mut p.planned_exit) {
                 p.killed_by_plan = true;
@@ -294,6 +309,7 @@ impl Supervisor {
                 planned_exit: false,
                 killed_by_plan: false,
                 exit_handled: false,
+                clean_exit_seen: None,
                 restarts,
                 restart_at: None,
             };

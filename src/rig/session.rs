@@ -1,0 +1,470 @@
+//! The controller's side of a run, for any controller: [`ControllerSession`] opens the run's streams, announces the
+//! controller's diagnostics, hands out plant samples one at a time ([`ControllerSession::next_sample`]) and takes
+//! one command in answer to each ([`ControllerSession::send`]). Everything a controller should not have to write
+//! lives here: header stamps, validation (a NaN or out-of-range command is refused, never sent), the in-loop faults
+//! of the plan (delay, jitter, drop), the bumpless blend after a restart, checkpoint files, staleness of the plant,
+//! stop requests (SIGTERM/SIGINT, the end of the run) and the timing report. `silrig-controller` is one user of it
+//! ([`super::controller::serve`]); the C ABI of `libsilrig_client.so` (`src/client/`) is another, through which
+//! controllers in C, C++, Python and anything with a C FFI fly.
+//!
+//! A session installs a SIGTERM/SIGINT flag handler when it opens (so a stop request ends the loop with a report
+//! instead of killing the process) and waits on the plant stream's listener, not on a WaitSet, so iceoryx2 never
+//! takes the process's signals.
+
+use super::events::EventLog;
+use super::loop_faults::LoopFaults;
+use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
+use super::{ProcessArgs, RigMode, signals};
+use crate::clock::monotonic_ns;
+use crate::ipc::{self, IpcError, StreamPublisher, StreamService, StreamSubscriber, WaitOutcome};
+use crate::scenario::Scenario;
+use crate::topology::{Role, Stream};
+use crate::wire::{CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, PlantSample, WireSample};
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// How long a controller joining a running plant blends from the current surface positions to its command, s.
+pub const BUMPLESS_BLEND_S: f64 = 0.5;
+
+/// With a fault plan, the session asks for a checkpoint every this many ticks.
+const CHECKPOINT_EVERY_TICKS: u64 = 10;
+
+const IPC_PLANT_TO_CONTROLLER: usize = 0;
+const COMPUTE: usize = 1;
+
+/// What a controller commands for one plant sample.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ControlCommand {
+    /// Surfaces, deg: aileron, elevator, rudder.
+    pub surface_cmd_deg: [f64; 3],
+    /// Throttle, 0..1.
+    pub throttle_cmd: f64,
+}
+
+/// Why a session stops handing out samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// SIGTERM or SIGINT.
+    TerminationRequested,
+    /// The plant has flown the whole scenario.
+    RunEnded,
+}
+
+/// What [`ControllerSession::next_sample`] gives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Next {
+    /// A plant sample to answer with one [`ControllerSession::send`].
+    Sample(PlantSample),
+    /// No more samples: finish the session.
+    Stop(StopReason),
+}
+
+/// What can go wrong in a session, each phrased for the person running the controller.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The run's arguments, environment or scenario are not usable.
+    #[error("{0}")]
+    Setup(String),
+    /// The client was built against another contract than this library.
+    #[error("{0}")]
+    Layout(String),
+    /// No plant sample arrived in time after opening.
+    #[error(
+        "no plant sample on run `{run}` within {waited_s} s: is the rig running with this run id? (start it first, \
+         e.g. `silrig run --controller external`, and give the controller the SILRIG_* variables it prints)"
+    )]
+    NoRig {
+        /// Run id.
+        run: String,
+        /// How long it waited, s.
+        waited_s: f64,
+    },
+    /// The run has a controller already.
+    #[error("refusing to start a second controller: run `{run}` has one already")]
+    SecondController {
+        /// Run id.
+        run: String,
+    },
+    /// The command was refused and not sent; the plant holds the last valid command for this tick.
+    #[error("tick {tick}: command refused, not sent ({reason}); the plant holds the last valid command")]
+    CommandRefused {
+        /// The tick it answered.
+        tick: u64,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The API was used out of order or with wrong sizes.
+    #[error("{0}")]
+    Usage(String),
+    /// The transport failed.
+    #[error(transparent)]
+    Transport(#[from] IpcError),
+}
+
+/// The sample being answered.
+#[derive(Debug, Clone, Copy)]
+struct Pending {
+    tick: u64,
+    surfaces_deg: [f64; 3],
+    delivered_ns: u64,
+}
+
+/// The controller's side of one run (see the module doc). Create it on the thread that uses it: its ports are not
+/// `Send`.
+pub struct ControllerSession {
+    args: ProcessArgs,
+    scenario: Scenario,
+    plant_stream: StreamService<PlantSample>,
+    samples: StreamSubscriber<PlantSample>,
+    commands: StreamPublisher<CommandSample>,
+    // Held for the run, so a second controller is refused before it could announce other names.
+    announcer: StreamPublisher<ControllerInfo>,
+    info: ControllerInfo,
+    diagnostics_len: usize,
+    scheduling: String,
+    rec: Recorder,
+    events: EventLog,
+    loop_faults: LoopFaults,
+    checkpoint_path: PathBuf,
+    save_checkpoints: bool,
+    restored: Option<String>,
+    blend_ticks: u64,
+    /// First tick of the bumpless blend: set when the first sample is not the plant's tick 0.
+    blend: Option<u64>,
+    plant_stale: bool,
+    stale_after: Duration,
+    /// (epoch, tick) of the last sample handed out.
+    last_tick: Option<(u64, u64)>,
+    pending: Option<Pending>,
+    /// The last command sent; what a refused command is replaced by.
+    last_sent: Option<ControlCommand>,
+    /// Consecutive refused commands (an event marks the first of each run).
+    refusing: u64,
+    opened_ns: u64,
+    ended: Option<String>,
+    // Dropped last: the services and ports above belong to it.
+    _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
+}
+
+impl ControllerSession {
+    /// Open the run's streams as its controller: read plant samples, announce `diagnostic_names`, then publish
+    /// commands. The announcement goes out before the command publisher exists, which is what the plant waits for,
+    /// and again with the first command (iceoryx2 hands a late subscriber the last announcement only on a later
+    /// send, and the logger's subscriber may come after ours), so the logger knows the trace's columns before its
+    /// first row. With `--resume`, the checkpoint a predecessor saved is read ([`Self::restored_checkpoint`]).
+    pub fn open(args: ProcessArgs, scenario: Scenario, diagnostic_names: &[String]) -> Result<Self, SessionError> {
+        signals::install_termination_flag();
+        let info = ControllerInfo::new(diagnostic_names)
+            .map_err(|e| SessionError::Setup(format!("announcing diagnostics: {e}")))?;
+        let run = args.run_id.to_string();
+        let node = ipc::create_node(&args.run_id, Role::Controller.label())?;
+        let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
+        let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
+        let info_stream = ipc::open_stream::<ControllerInfo>(&node, Stream::ControllerInfo)?;
+        let mut announcer = info_stream.publisher().map_err(|_| SessionError::SecondController { run: run.clone() })?;
+        let samples = plant_stream.subscriber(Stream::Plant.queue_depth(Role::Controller))?;
+        announcer.send(0, &info)?;
+        let commands = command_stream.publisher().map_err(|_| SessionError::SecondController { run })?;
+
+        let realtime = args.mode == RigMode::Realtime;
+        let mut rec = Recorder::new(
+            Role::Controller.label(),
+            &[
+                ("ipc_plant_to_controller", "plant publish to receive at the controller"),
+                ("compute", "controller step execution time: sample handed out to command given"),
+            ],
+        );
+        rec.declare(&[
+            "commands_sent",
+            "commands_refused",
+            "samples_skipped",
+            "samples_invalid",
+            "plant_stale_deadlines",
+            "errors",
+            "commands_dropped",
+        ]);
+        let dt = scenario.timing.dt_s;
+        let events = EventLog::new(&args.out, Role::Controller.label());
+        let checkpoint_path = args.out.join("controller.checkpoint.json");
+        let restored = if args.resume {
+            let saved = std::fs::read_to_string(&checkpoint_path).ok();
+            if saved.is_none() {
+                eprintln!(
+                    "silrig controller: warning: --resume without a checkpoint in {}; starting fresh",
+                    checkpoint_path.display()
+                );
+            }
+            saved
+        } else {
+            None
+        };
+        let stale_after =
+            Duration::from_nanos(scenario.timing.period_ns() * u64::from(args.options.stale_after_periods.max(1)));
+        Ok(Self {
+            scheduling: request_scheduling(Role::Controller, realtime),
+            diagnostics_len: diagnostic_names.len(),
+            loop_faults: LoopFaults::new(&scenario.faults, Role::Controller, dt, scenario.seed, events.clone()),
+            events,
+            rec,
+            checkpoint_path,
+            save_checkpoints: !scenario.faults.is_empty() && realtime,
+            restored,
+            blend_ticks: (BUMPLESS_BLEND_S / dt).round().max(1.0) as u64,
+            blend: None,
+            plant_stale: false,
+            stale_after,
+            last_tick: None,
+            pending: None,
+            last_sent: None,
+            refusing: 0,
+            opened_ns: monotonic_ns(),
+            ended: None,
+            plant_stream,
+            samples,
+            commands,
+            announcer,
+            info,
+            scenario,
+            args,
+            _node: node,
+        })
+    }
+
+    /// The scenario the run flies (its period, set points, fault plan).
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// The arguments the session was opened with.
+    pub fn args(&self) -> &ProcessArgs {
+        &self.args
+    }
+
+    /// The controller's step, s.
+    pub fn dt_s(&self) -> f64 {
+        self.scenario.timing.dt_s
+    }
+
+    /// What a predecessor of this controller saved, when the session was opened with `--resume`.
+    pub fn restored_checkpoint(&self) -> Option<&str> {
+        self.restored.as_deref()
+    }
+
+    /// Whether the controller should hand a checkpoint to [`Self::save_checkpoint`] now: every few ticks of a
+    /// realtime run with a fault plan (a restart may come).
+    pub fn checkpoint_due(&self) -> bool {
+        self.save_checkpoints && self.last_tick.is_some_and(|(_, tick)| tick.is_multiple_of(CHECKPOINT_EVERY_TICKS))
+    }
+
+    /// Save the state a restarted controller resumes from (written atomically to the run's folder).
+    pub fn save_checkpoint(&self, text: &str) -> std::io::Result<()> {
+        super::write_atomically(&self.checkpoint_path, text)
+    }
+
+    /// Block until the next plant sample to answer (the newest one waiting: after a stall, older ones are skipped
+    /// and counted), or until the session should stop. While the plant is silent the session idles and says so
+    /// once; with no sample at all within twice `--startup-timeout-s` of opening, it gives up ([`SessionError::NoRig`]).
+    pub fn next_sample(&mut self) -> Result<Next, SessionError> {
+        if self.pending.take().is_some() {
+            self.rec.count("samples_unanswered", 1);
+        }
+        loop {
+            if signals::termination_requested() {
+                return Ok(self.stop(StopReason::TerminationRequested));
+            }
+            if let Some(sample) = self.take_newest()? {
+                return Ok(Next::Sample(sample));
+            }
+            if self.samples.stats().finished_notices > 0 {
+                return Ok(self.stop(StopReason::RunEnded));
+            }
+            match self.samples.wait(self.stale_after)? {
+                WaitOutcome::Notified => {}
+                WaitOutcome::Interrupted => self.rec.count("interrupted_waits", 1),
+                WaitOutcome::TimedOut => self.on_plant_silent()?,
+            }
+        }
+    }
+
+    fn stop(&mut self, reason: StopReason) -> Next {
+        let ended = match reason {
+            StopReason::TerminationRequested => "terminated by signal",
+            StopReason::RunEnded => "completed",
+        };
+        self.ended.get_or_insert_with(|| ended.into());
+        Next::Stop(reason)
+    }
+
+    /// Take what waits; hand out the newest valid sample of a tick not handed out yet.
+    fn take_newest(&mut self) -> Result<Option<PlantSample>, SessionError> {
+        let mut newest = None;
+        let mut fresh = 0u64;
+        let mut invalid = 0u64;
+        self.samples.drain(|r| {
+            if r.invalid.is_some() {
+                invalid += 1;
+            } else {
+                fresh += 1;
+                newest = Some(*r);
+            }
+        })?;
+        self.rec.count("samples_invalid", invalid);
+        // After a stall several samples wait; acting on stale ones would only delay the newest.
+        self.rec.count("samples_skipped", fresh.saturating_sub(1));
+        let Some(r) = newest else { return Ok(None) };
+        let h = r.sample.header;
+        if self.last_tick.is_some_and(|(epoch, tick)| epoch == h.epoch && tick >= h.tick) {
+            return Ok(None);
+        }
+        if self.last_tick.is_none() {
+            self.announcer.send(h.tick, &self.info)?;
+        }
+        self.note_plant(h.epoch, h.tick);
+        self.rec.record(IPC_PLANT_TO_CONTROLLER, r.age_ns() as i64);
+        self.pending =
+            Some(Pending { tick: h.tick, surfaces_deg: r.sample.surfaces_deg, delivered_ns: monotonic_ns() });
+        Ok(Some(r.sample))
+    }
+
+    /// What this sample says about the plant: a first sample past tick 0 (we joined a flying plant: blend), a new
+    /// plant epoch (it restarted), samples back after silence.
+    fn note_plant(&mut self, epoch: u64, tick: u64) {
+        match self.last_tick {
+            None if tick > 0 => {
+                self.blend = Some(tick);
+                let state = if self.restored.is_some() { "checkpointed" } else { "fresh" };
+                let detail =
+                    format!("plant already at tick {tick}: {state} state, {BUMPLESS_BLEND_S} s bumpless blend");
+                self.events.emit(Some(tick), "controller-joined", detail);
+            }
+            Some((last_epoch, _)) if last_epoch != epoch => {
+                self.events.emit(Some(tick), "plant-restarted", "samples from a new plant epoch");
+            }
+            _ => {}
+        }
+        if self.plant_stale {
+            self.plant_stale = false;
+            self.events.emit(Some(tick), "plant-recovered", "samples resumed");
+        }
+        self.last_tick = Some((epoch, tick));
+    }
+
+    /// No sample within the deadline: before the first sample, give up after the startup timeout; after it, flag
+    /// the plant stale once, and clean up its node if it died so a restarted plant can take its place.
+    fn on_plant_silent(&mut self) -> Result<(), SessionError> {
+        let Some((_, tick)) = self.last_tick else {
+            let waited_s = (monotonic_ns() - self.opened_ns) as f64 / 1e9;
+            let limit_s = 2.0 * self.args.options.startup_timeout_s;
+            if waited_s > limit_s {
+                return Err(SessionError::NoRig { run: self.args.run_id.to_string(), waited_s: limit_s });
+            }
+            return Ok(());
+        };
+        self.rec.count("plant_stale_deadlines", 1);
+        if !self.plant_stale {
+            self.plant_stale = true;
+            let detail = format!("no plant sample for {:?}; idling", self.stale_after);
+            self.events.emit(Some(tick), "plant-stale", detail);
+        }
+        let _ = self.plant_stream.try_cleanup_dead_nodes();
+        Ok(())
+    }
+
+    /// Answer the sample [`Self::next_sample`] handed out: blend while joining, stamp, validate, apply the plan's
+    /// in-loop faults, publish. `diagnostics` holds one value per announced name. A command with NaN, infinity or
+    /// a value out of range is refused: what goes out instead is a marker (`FLAG_COMMAND_REFUSED`) that tells the
+    /// plant to hold its last valid command for this tick, so a lockstep run goes on; it is counted, the first of
+    /// a series is an event, and the error says why.
+    pub fn send(&mut self, command: &ControlCommand, diagnostics: &[f64]) -> Result<(), SessionError> {
+        let Some(p) = self.pending.take() else {
+            return Err(SessionError::Usage("a command answers a sample: call next_sample first".into()));
+        };
+        if diagnostics.len() != self.diagnostics_len {
+            self.pending = Some(p);
+            return Err(SessionError::Usage(format!(
+                "{} diagnostics given; {} were announced",
+                diagnostics.len(),
+                self.diagnostics_len
+            )));
+        }
+        let mut out = CommandSample { answers_tick: p.tick, ..CommandSample::zeroed() };
+        out.surface_cmd_deg = self.blended(p, command.surface_cmd_deg);
+        out.throttle_cmd = command.throttle_cmd;
+        out.diagnostics_len = self.diagnostics_len as u32;
+        out.diagnostics[..self.diagnostics_len].copy_from_slice(diagnostics);
+        let refused = out.validate().err().map(|e| e.to_string());
+        if let Some(reason) = &refused {
+            self.rec.count("commands_refused", 1);
+            if self.refusing == 0 {
+                self.events.emit(Some(p.tick), "command-refused", reason.clone());
+            }
+            self.refusing += 1;
+            let hold = self.last_sent.unwrap_or_default();
+            out = CommandSample { answers_tick: p.tick, flags: FLAG_COMMAND_REFUSED, ..CommandSample::zeroed() };
+            out.surface_cmd_deg = hold.surface_cmd_deg;
+            out.throttle_cmd = hold.throttle_cmd;
+        } else {
+            if self.refusing > 0 {
+                let detail = format!("valid commands again after {} refused", self.refusing);
+                self.events.emit(Some(p.tick), "command-accepted", detail);
+            }
+            self.refusing = 0;
+            self.last_sent =
+                Some(ControlCommand { surface_cmd_deg: out.surface_cmd_deg, throttle_cmd: out.throttle_cmd });
+        }
+        out.compute_ns = monotonic_ns() - p.delivered_ns;
+        self.rec.record(COMPUTE, out.compute_ns as i64);
+        self.publish(p.tick, &out)?;
+        match refused {
+            Some(reason) => Err(SessionError::CommandRefused { tick: p.tick, reason }),
+            None => Ok(()),
+        }
+    }
+
+    /// While joining a flying plant: from the surfaces' current positions towards the command.
+    fn blended(&mut self, p: Pending, command_deg: [f64; 3]) -> [f64; 3] {
+        let Some(start) = self.blend else { return command_deg };
+        let k = ((p.tick - start + 1) as f64 / self.blend_ticks as f64).min(1.0);
+        if k >= 1.0 {
+            self.blend = None;
+        }
+        std::array::from_fn(|i| p.surfaces_deg[i] + k * (command_deg[i] - p.surfaces_deg[i]))
+    }
+
+    /// Send the command, after any delay fault, unless a drop fault swallows it.
+    fn publish(&mut self, tick: u64, command: &CommandSample) -> Result<(), SessionError> {
+        let effect = if self.loop_faults.is_empty() { Default::default() } else { self.loop_faults.at(tick) };
+        if effect.sleep_ns > 0 {
+            std::thread::sleep(Duration::from_nanos(effect.sleep_ns));
+        }
+        if effect.drop {
+            self.rec.count("commands_dropped", 1);
+            return Ok(());
+        }
+        match self.commands.send(tick, command) {
+            Ok(_) => {
+                self.rec.count("commands_sent", 1);
+                Ok(())
+            }
+            Err(e) => {
+                self.rec.count("errors", 1);
+                Err(e.into())
+            }
+        }
+    }
+
+    /// Record why the controller stopped on an error (the report says so; [`Self::finish`] returns it).
+    pub fn fail(&mut self, error: &dyn std::fmt::Display) {
+        self.ended = Some(format!("error: {error}"));
+    }
+
+    /// Write the report (`controller.report.json` in the run's folder) and close the session.
+    pub fn finish(mut self) -> anyhow::Result<ProcessReport> {
+        let stats = self.samples.stats();
+        self.rec.count("plant_samples_lost", stats.lost);
+        self.rec.count("plant_restarts", stats.publisher_restarts);
+        let ended = self.ended.take().unwrap_or_else(|| "closed by the controller".into());
+        let meta = ReportMeta::new(&self.args, &self.scenario.name, std::mem::take(&mut self.scheduling), ended);
+        Ok(self.rec.finish(meta, &self.args.out)?)
+    }
+}
