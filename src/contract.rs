@@ -6,6 +6,8 @@
 //! types themselves ([`crate::wire::WireType::FIELDS`]).
 
 use crate::ipc::StreamEvent;
+use crate::rig::ProcessArgs;
+use crate::rig::session::Status;
 use crate::topology::{STREAM_SETTINGS, Stream};
 use crate::wire::{self, WIRE_LAYOUT_VERSION, WireField, WireType};
 use std::fmt::Write as _;
@@ -61,6 +63,7 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
         ("FLAG_FAILSAFE", u64::from(wire::FLAG_FAILSAFE), "the failsafe output is active"),
         ("FLAG_RATE_LIMITED", u64::from(wire::FLAG_RATE_LIMITED), "a surface moved at its rate limit this tick"),
         ("FLAG_COMMAND_REFUSED", u64::from(wire::FLAG_COMMAND_REFUSED), "command refused (NaN/out of range): hold"),
+        ("SURFACE_CMD_LIMIT_DEG", wire::SURFACE_CMD_LIMIT_DEG as u64, "|surface command| beyond this, deg: refused"),
         ("MAX_DIAGNOSTICS", wire::MAX_DIAGNOSTICS as u64, "diagnostics a command sample carries at most"),
         ("DIAGNOSTIC_NAME_BYTES", wire::DIAGNOSTIC_NAME_BYTES as u64, "bytes of a diagnostic name, NUL-padded"),
         ("EVENT_SAMPLE_SENT", StreamEvent::SampleSent.id() as u64, "event id to notify after every send"),
@@ -70,7 +73,7 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
 }
 
 /// The rules of the sample header, for people (every rendering carries them as comments).
-pub const HEADER_RULES: [&str; 7] = [
+pub const HEADER_RULES: [&str; 8] = [
     "seq: starts at 0 for each publisher epoch and grows by 1 per sample sent; a jump means samples were lost",
     "tick: the plant tick the sample belongs to; a command carries the tick it answers (= answers_tick)",
     "t_send_ns: CLOCK_MONOTONIC at publish, ns (the one clock shared by every process of the machine)",
@@ -78,6 +81,7 @@ pub const HEADER_RULES: [&str; 7] = [
     "layout_version: WIRE_LAYOUT_VERSION; a peer of another version is refused by its type names already",
     "_pad and every other padding field: 0",
     "after each send, notify the stream's event service with EVENT_SAMPLE_SENT; never send NaN or infinity",
+    "a command's surfaces lie within +-SURFACE_CMD_LIMIT_DEG and its throttle within 0..1, or it is refused",
 ];
 
 /// The contract as text for people.
@@ -119,6 +123,14 @@ pub fn text() -> String {
     out += "\nConstants:\n";
     for (name, value, meaning) in constants() {
         let _ = writeln!(out, "  {name:<22} {value:>5}  {meaning}");
+    }
+    out += "\nStatus codes of libsilrig_client.so (0 and above: no error; below 0: see silrig_last_error()):\n";
+    for st in Status::ALL {
+        let _ = writeln!(out, "  SILRIG_{:<22} {:>3}  {}", st.name(), st.code(), st.meaning());
+    }
+    out += "\nEnvironment of a controller started by `silrig run --controller-cmd` (read by silrig_session_open):\n";
+    for (name, help) in ProcessArgs::env_variables() {
+        let _ = writeln!(out, "  {name:<28} {}", help.replace('\n', " "));
     }
     for t in types() {
         let _ = write!(out, "\n{} \"{}\": {} B, align {}. {}\n", t.name, t.type_name, t.size, t.align, t.doc);
@@ -219,6 +231,10 @@ pub fn c_header() -> String {
     for (name, value, meaning) in constants() {
         let _ = writeln!(out, "/* {meaning} */\n#define SILRIG_{name} {value}u");
     }
+    out += "\n/* Status codes of libsilrig_client.so: 0 and above are not errors. */\n";
+    for st in Status::ALL {
+        let _ = writeln!(out, "#define SILRIG_{} ({}) /* {} */", st.name(), st.code(), st.meaning());
+    }
     out += "\n";
     for s in Stream::ALL {
         let upper = s.label().to_uppercase().replace('-', "_");
@@ -266,6 +282,10 @@ pub fn python_module() -> String {
     out += "\"\"\"\n\nimport ctypes\n\n";
     for (name, value, meaning) in constants() {
         let _ = writeln!(out, "{name} = {value}  # {meaning}");
+    }
+    out += "\n# Status codes of libsilrig_client.so: 0 and above are not errors.\n";
+    for st in Status::ALL {
+        let _ = writeln!(out, "{} = {}  # {}", st.name(), st.code(), st.meaning());
     }
     out += "\nSERVICES = {\n";
     for s in Stream::ALL {

@@ -22,6 +22,7 @@
  *  - layout_version: WIRE_LAYOUT_VERSION; a peer of another version is refused by its type names already
  *  - _pad and every other padding field: 0
  *  - after each send, notify the stream's event service with EVENT_SAMPLE_SENT; never send NaN or infinity
+ *  - a command's surfaces lie within +-SURFACE_CMD_LIMIT_DEG and its throttle within 0..1, or it is refused
  */
 
 /* layout version; every header carries it */
@@ -36,6 +37,8 @@
 #define SILRIG_FLAG_RATE_LIMITED 8u
 /* command refused (NaN/out of range): hold */
 #define SILRIG_FLAG_COMMAND_REFUSED 16u
+/* |surface command| beyond this, deg: refused */
+#define SILRIG_SURFACE_CMD_LIMIT_DEG 90u
 /* diagnostics a command sample carries at most */
 #define SILRIG_MAX_DIAGNOSTICS 64u
 /* bytes of a diagnostic name, NUL-padded */
@@ -46,6 +49,19 @@
 #define SILRIG_EVENT_FINISHED 253u
 /* event id of a cleaned-up dead publisher */
 #define SILRIG_EVENT_PUBLISHER_DEAD 254u
+
+/* Status codes of libsilrig_client.so: 0 and above are not errors. */
+#define SILRIG_OK (0) /* the call did what it says */
+#define SILRIG_STOPPED (1) /* SIGTERM or SIGINT arrived: close the session and exit */
+#define SILRIG_RUN_ENDED (2) /* the plant has flown the whole scenario: close the session and exit */
+#define SILRIG_ERR_USAGE (-1) /* API misuse: NULL pointer, command without a sample, wrong count */
+#define SILRIG_ERR_LAYOUT (-2) /* built against another contract (layout version or sample sizes) */
+#define SILRIG_ERR_SETUP (-3) /* SILRIG_* variables, scenario or diagnostics unusable */
+#define SILRIG_ERR_NO_RIG (-4) /* no plant sample within twice the startup timeout */
+#define SILRIG_ERR_SECOND_CONTROLLER (-5) /* the run has a controller already */
+#define SILRIG_ERR_COMMAND_REFUSED (-6) /* command refused (NaN, infinity, out of range), not sent; plant holds */
+#define SILRIG_ERR_TRANSPORT (-7) /* the transport failed */
+#define SILRIG_ERR_INTERNAL (-8) /* a bug in the library (a panic caught at the boundary) */
 
 #define SILRIG_SERVICE_PLANT "silrig/plant"
 #define SILRIG_TYPE_NAME_PLANT "silrig::PlantSample::v2"

@@ -10,6 +10,7 @@ Header rules:
   - layout_version: WIRE_LAYOUT_VERSION; a peer of another version is refused by its type names already
   - _pad and every other padding field: 0
   - after each send, notify the stream's event service with EVENT_SAMPLE_SENT; never send NaN or infinity
+  - a command's surfaces lie within +-SURFACE_CMD_LIMIT_DEG and its throttle within 0..1, or it is refused
 """
 
 import ctypes
@@ -20,11 +21,25 @@ FLAG_SATURATED = 2  # a surface or the throttle is at its position limit
 FLAG_FAILSAFE = 4  # the failsafe output is active
 FLAG_RATE_LIMITED = 8  # a surface moved at its rate limit this tick
 FLAG_COMMAND_REFUSED = 16  # command refused (NaN/out of range): hold
+SURFACE_CMD_LIMIT_DEG = 90  # |surface command| beyond this, deg: refused
 MAX_DIAGNOSTICS = 64  # diagnostics a command sample carries at most
 DIAGNOSTIC_NAME_BYTES = 32  # bytes of a diagnostic name, NUL-padded
 EVENT_SAMPLE_SENT = 0  # event id to notify after every send
 EVENT_FINISHED = 253  # event id: the plant has published its last tick
 EVENT_PUBLISHER_DEAD = 254  # event id of a cleaned-up dead publisher
+
+# Status codes of libsilrig_client.so: 0 and above are not errors.
+OK = 0  # the call did what it says
+STOPPED = 1  # SIGTERM or SIGINT arrived: close the session and exit
+RUN_ENDED = 2  # the plant has flown the whole scenario: close the session and exit
+ERR_USAGE = -1  # API misuse: NULL pointer, command without a sample, wrong count
+ERR_LAYOUT = -2  # built against another contract (layout version or sample sizes)
+ERR_SETUP = -3  # SILRIG_* variables, scenario or diagnostics unusable
+ERR_NO_RIG = -4  # no plant sample within twice the startup timeout
+ERR_SECOND_CONTROLLER = -5  # the run has a controller already
+ERR_COMMAND_REFUSED = -6  # command refused (NaN, infinity, out of range), not sent; plant holds
+ERR_TRANSPORT = -7  # the transport failed
+ERR_INTERNAL = -8  # a bug in the library (a panic caught at the boundary)
 
 SERVICES = {
     "plant": "silrig/plant",

@@ -9,7 +9,7 @@ use super::events::EventLog;
 use super::fault_schedule::FaultSchedule;
 use super::report::{MachineConditions, read_report};
 use super::run_report::{RigReport, write_plots};
-use super::supervision::{ChildProcess, SupervisionOptions, Supervisor};
+use super::supervision::{ChildProcess, SupervisionOptions, Supervisor, find_program, split_command};
 use super::{ProcessArgs, ProcessOptions, RigMode, load_scenario, signals};
 use crate::bench::timer_baseline::{self, BaselineArgs, BaselineReport};
 use crate::fault::Fault;
@@ -54,6 +54,77 @@ pub struct LaunchOptions {
     /// What to do when a process dies.
     #[command(flatten)]
     pub supervision: SupervisionOptions,
+    /// Fly your own controller: run this command in place of silrig-controller, with the run's SILRIG_* variables
+    /// in its environment (`silrig contract` lists them). Split into words like a shell does, but run directly
+    /// (wrap it in `sh -c '...'` yourself for shell syntax). Supervised, restarted and faulted like ours; its stdout
+    /// and stderr go to <out>/controller.stderr.log.
+    #[arg(long, value_name = "CMD")]
+    pub controller_cmd: Option<String>,
+    /// builtin (silrig-controller, or --controller-cmd) or external: wait for a controller started by hand (in a
+    /// debugger, in MATLAB) with the variables printed and written to <out>/controller.env.
+    #[arg(long, value_enum, default_value = "builtin", conflicts_with = "controller_cmd")]
+    pub controller: ControllerKind,
+    /// --controller external: how long the plant waits for the controller to connect, s.
+    #[arg(long, default_value_t = 120.0)]
+    pub external_timeout_s: f64,
+}
+
+/// Where the run's controller comes from (`--controller`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ControllerKind {
+    /// The launcher starts it: silrig-controller, or the `--controller-cmd` command.
+    Builtin,
+    /// Somebody else starts it; the launcher waits for it.
+    External,
+}
+
+/// The controller the supervisor starts, if any.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ControllerLaunch {
+    /// silrig-controller.
+    Ours,
+    /// A user's shell command, with the run's SILRIG_* variables.
+    Command(String),
+    /// Started by hand; not supervised.
+    External,
+}
+
+impl LaunchOptions {
+    fn controller_launch(&self) -> ControllerLaunch {
+        match (&self.controller_cmd, self.controller) {
+            (_, ControllerKind::External) => ControllerLaunch::External,
+            (Some(cmd), _) => ControllerLaunch::Command(cmd.clone()),
+            (None, _) => ControllerLaunch::Ours,
+        }
+    }
+}
+
+/// `<out>/controller.env`: the variables a controller of this run reads (`export NAME='value'` lines, for `.` in a
+/// shell); for `--controller external` also printed with how to start it.
+fn write_controller_env(args: &ProcessArgs, controller: &ControllerLaunch) -> anyhow::Result<()> {
+    let env = args.to_env();
+    let lines: String = env.iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
+    let path = args.out.join("controller.env");
+    std::fs::write(&path, lines).with_context(|| format!("writing {}", path.display()))?;
+    if *controller == ControllerLaunch::External {
+        eprintln!(
+            "silrig run: waiting up to {} s for a controller on run {}; start yours with the run's variables, e.g.\n  \
+             . {} && python3 examples/python/pid_attitude.py",
+            args.options.startup_timeout_s,
+            args.run_id,
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// A controller the launcher did not start writes its report when it sees the run end; give it a moment.
+fn wait_for_external_report(out: &Path) {
+    let path = super::report::report_path(out, Role::Controller.label());
+    let deadline = std::time::Instant::now() + Duration::from_secs(5);
+    while !path.exists() && std::time::Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+    }
 }
 
 /// A fresh run id: short, lowercase, unique per launcher process and start time.
@@ -82,6 +153,20 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         && let Some(f) = scenario.faults.iter().find(|f| !f.action().is_plant_model_fault())
     {
         anyhow::bail!("fault plan: {} needs realtime mode (lockstep has no clock to fault)", f.describe());
+    }
+    if opts.controller == ControllerKind::External
+        && let Some(f) =
+            scenario.faults.iter().find(|f| f.target() == Role::Controller && f.action().is_process_fault())
+    {
+        anyhow::bail!("fault plan: {} needs a controller the launcher starts, not --controller external", f.describe());
+    }
+    if let Some(cmd) = &opts.controller_cmd {
+        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
+        anyhow::ensure!(
+            find_program(&words[0]).is_some(),
+            "--controller-cmd: cannot find `{}` (not an executable file, and not on PATH)",
+            words[0]
+        );
     }
     let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
     let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));
@@ -163,7 +248,8 @@ fn finish_baseline(
 pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     signals::install_termination_flag();
     let Prepared { scenario, run_id, out, scenario_path } = prepare(opts)?;
-    let args = ProcessArgs {
+    let controller = opts.controller_launch();
+    let mut args = ProcessArgs {
         config: Some(scenario_path),
         run_id: run_id.clone(),
         mode: opts.mode,
@@ -172,9 +258,13 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         resume: false,
         options: opts.process.clone(),
     };
+    if controller == ControllerLaunch::External {
+        args.options.startup_timeout_s = opts.external_timeout_s;
+    }
+    write_controller_env(&args, &controller)?;
     let conditions_start = MachineConditions::now();
     let events = EventLog::new(&out, "launcher");
-    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone())?;
+    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone())?;
     let mut baseline =
         if opts.mode == RigMode::Realtime && !opts.no_baseline { Some(start_baseline(&scenario, &out)?) } else { None };
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
@@ -188,6 +278,9 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     };
     let conditions_end = MachineConditions::now();
 
+    if controller == ControllerLaunch::External {
+        wait_for_external_report(&out);
+    }
     let mut failures = sup.failures;
     let mut processes = Vec::new();
     for role in Role::ALL {

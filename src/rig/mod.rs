@@ -103,7 +103,7 @@ pub struct ProcessArgs {
     #[arg(long, default_value = "out/rig")]
     pub out: PathBuf,
     /// Plant: continue from the state a previous plant of this run saved in `--out`; controller: start from the
-    /// RBF weights a previous controller saved there (a restart).
+    /// checkpoint a previous controller saved there (a restart).
     #[arg(long)]
     pub resume: bool,
     /// Loop and watchdog tuning.
@@ -130,6 +130,74 @@ impl ProcessArgs {
         }
         argv.extend(self.options.to_argv());
         argv
+    }
+}
+
+/// The environment variable that carries the scenario path to a controller started by `--controller-cmd`; every
+/// flag `--some-flag` travels as `SILRIG_SOME_FLAG` ([`ProcessArgs::to_env`]).
+pub const SCENARIO_ENV: &str = "SILRIG_SCENARIO";
+
+fn flag_env_name(flag: &str) -> String {
+    format!("SILRIG_{}", flag.trim_start_matches("--").replace('-', "_").to_uppercase())
+}
+
+impl ProcessArgs {
+    /// These arguments as environment variables (what `silrig run --controller-cmd` gives the user's command):
+    /// the scenario path as [`SCENARIO_ENV`], each flag `--x-y` as `SILRIG_X_Y`, a switch as `1`.
+    pub fn to_env(&self) -> Vec<(String, String)> {
+        let mut argv = self.to_argv().into_iter().peekable();
+        let mut env = Vec::new();
+        if let Some(config) = &self.config {
+            argv.next();
+            env.push((SCENARIO_ENV.to_string(), config.display().to_string()));
+        }
+        while let Some(flag) = argv.next() {
+            let value = argv.next_if(|v| !v.starts_with("--")).unwrap_or_else(|| "1".into());
+            env.push((flag_env_name(&flag), value));
+        }
+        env
+    }
+
+    /// Every variable [`Self::from_env`] reads, with what it means (for `silrig contract` and the README).
+    pub fn env_variables() -> Vec<(String, String)> {
+        use clap::Args;
+        let command = Self::augment_args(clap::Command::new("silrig-client"));
+        command
+            .get_arguments()
+            .map(|arg| {
+                let name = arg.get_long().map_or_else(|| SCENARIO_ENV.to_string(), flag_env_name);
+                let help = arg.get_help().map(|h| h.to_string()).unwrap_or_default();
+                (name, help)
+            })
+            .collect()
+    }
+
+    /// The arguments from `SILRIG_*` variables (see [`Self::to_env`]), parsed and checked like the command line;
+    /// variables of other names are ignored. The error names the variable at fault where clap can.
+    pub fn from_env(vars: impl IntoIterator<Item = (String, String)>) -> Result<Self, String> {
+        use clap::{Args, FromArgMatches};
+        let vars: std::collections::HashMap<String, String> = vars.into_iter().collect();
+        let command = Self::augment_args(clap::Command::new("silrig-client").no_binary_name(true));
+        let mut argv = Vec::new();
+        for arg in command.get_arguments() {
+            let Some(long) = arg.get_long() else {
+                if let Some(path) = vars.get(SCENARIO_ENV) {
+                    argv.push(path.clone());
+                }
+                continue;
+            };
+            let Some(value) = vars.get(&flag_env_name(long)) else { continue };
+            if arg.get_action().takes_values() {
+                argv.extend([format!("--{long}"), value.clone()]);
+            } else if !matches!(value.as_str(), "" | "0" | "false") {
+                argv.push(format!("--{long}"));
+            }
+        }
+        let matches = command.try_get_matches_from(&argv).map_err(|e| {
+            let problem = e.render().to_string();
+            format!("the SILRIG_* variables are not a usable run (flag --x-y below is variable SILRIG_X_Y): {problem}")
+        })?;
+        Self::from_arg_matches(&matches).map_err(|e| e.to_string())
     }
 }
 
@@ -182,6 +250,15 @@ mod tests {
     }
 
     #[test]
+    fn bad_environment_is_named() {
+        let vars = [("SILRIG_RUN_ID", "r1"), ("SILRIG_STALE_AFTER_PERIODS", "many"), ("OTHER", "x")];
+        let err = ProcessArgs::from_env(vars.map(|(k, v)| (k.to_string(), v.to_string()))).unwrap_err();
+        assert!(err.contains("--stale-after-periods") && err.contains("many"), "{err}");
+        let err = ProcessArgs::from_env(std::iter::empty()).unwrap_err();
+        assert!(err.contains("--run-id"), "{err}");
+    }
+
+    #[test]
     fn process_arguments_survive_their_command_line() {
         let args = ProcessArgs {
             config: Some("some dir/scenario.toml".into()),
@@ -200,7 +277,9 @@ mod tests {
         };
         let argv = std::iter::once("silrig-plant".to_string()).chain(args.to_argv());
         assert_eq!(Process::parse_from(argv).args, args);
+        assert_eq!(ProcessArgs::from_env(args.to_env()).unwrap(), args);
         let defaults = Process::parse_from(["silrig-plant", "--run-id", "r2"]).args;
+        assert_eq!(ProcessArgs::from_env(defaults.to_env()).unwrap(), defaults);
         let argv = std::iter::once("silrig-plant".to_string()).chain(defaults.to_argv());
         assert_eq!(Process::parse_from(argv).args, defaults);
     }

@@ -101,6 +101,107 @@ pub enum SessionError {
     Transport(#[from] IpcError),
 }
 
+/// Every outcome of a session call as the C ABI of `libsilrig_client.so` returns it: 0 and positive values are not
+/// errors, negative ones are (the reason is in `silrig_last_error()`). `silrig contract` writes them into the C
+/// header and the Python module, so a client never types them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(i32)]
+pub enum Status {
+    /// The call did what it says.
+    Ok = 0,
+    /// SIGTERM or SIGINT arrived: close the session (its report is written) and exit.
+    Stopped = 1,
+    /// The plant has flown the whole scenario: close the session and exit.
+    RunEnded = 2,
+    /// The API was used wrongly (a NULL pointer, a command without a sample, a count that does not match).
+    ErrUsage = -1,
+    /// The client was built against another contract (layout version or sample sizes differ).
+    ErrLayout = -2,
+    /// The run's variables or scenario are unusable, or the diagnostics do not fit a command.
+    ErrSetup = -3,
+    /// No plant sample arrived within twice the startup timeout: no rig runs with this run id.
+    ErrNoRig = -4,
+    /// The run has a controller already.
+    ErrSecondController = -5,
+    /// The command was refused (NaN, infinity, out of range) and not sent; the plant holds the last valid one.
+    ErrCommandRefused = -6,
+    /// The transport failed.
+    ErrTransport = -7,
+    /// A bug in the library (a panic was caught at the boundary).
+    ErrInternal = -8,
+}
+
+impl Status {
+    /// Every status, in code order of appearance.
+    pub const ALL: [Status; 11] = [
+        Status::Ok,
+        Status::Stopped,
+        Status::RunEnded,
+        Status::ErrUsage,
+        Status::ErrLayout,
+        Status::ErrSetup,
+        Status::ErrNoRig,
+        Status::ErrSecondController,
+        Status::ErrCommandRefused,
+        Status::ErrTransport,
+        Status::ErrInternal,
+    ];
+
+    /// The code the C ABI returns.
+    pub const fn code(self) -> i32 {
+        self as i32
+    }
+
+    /// The constant's name without the `SILRIG_` prefix (`OK`, `ERR_NO_RIG`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Status::Ok => "OK",
+            Status::Stopped => "STOPPED",
+            Status::RunEnded => "RUN_ENDED",
+            Status::ErrUsage => "ERR_USAGE",
+            Status::ErrLayout => "ERR_LAYOUT",
+            Status::ErrSetup => "ERR_SETUP",
+            Status::ErrNoRig => "ERR_NO_RIG",
+            Status::ErrSecondController => "ERR_SECOND_CONTROLLER",
+            Status::ErrCommandRefused => "ERR_COMMAND_REFUSED",
+            Status::ErrTransport => "ERR_TRANSPORT",
+            Status::ErrInternal => "ERR_INTERNAL",
+        }
+    }
+
+    /// What it means, for the header's comments.
+    pub const fn meaning(self) -> &'static str {
+        match self {
+            Status::Ok => "the call did what it says",
+            Status::Stopped => "SIGTERM or SIGINT arrived: close the session and exit",
+            Status::RunEnded => "the plant has flown the whole scenario: close the session and exit",
+            Status::ErrUsage => "API misuse: NULL pointer, command without a sample, wrong count",
+            Status::ErrLayout => "built against another contract (layout version or sample sizes)",
+            Status::ErrSetup => "SILRIG_* variables, scenario or diagnostics unusable",
+            Status::ErrNoRig => "no plant sample within twice the startup timeout",
+            Status::ErrSecondController => "the run has a controller already",
+            Status::ErrCommandRefused => "command refused (NaN, infinity, out of range), not sent; plant holds",
+            Status::ErrTransport => "the transport failed",
+            Status::ErrInternal => "a bug in the library (a panic caught at the boundary)",
+        }
+    }
+}
+
+impl SessionError {
+    /// The status the C ABI returns for this error.
+    pub fn status(&self) -> Status {
+        match self {
+            SessionError::Setup(_) => Status::ErrSetup,
+            SessionError::Layout(_) => Status::ErrLayout,
+            SessionError::NoRig { .. } => Status::ErrNoRig,
+            SessionError::SecondController { .. } => Status::ErrSecondController,
+            SessionError::CommandRefused { .. } => Status::ErrCommandRefused,
+            SessionError::Usage(_) => Status::ErrUsage,
+            SessionError::Transport(_) => Status::ErrTransport,
+        }
+    }
+}
+
 /// The sample being answered.
 #[derive(Debug, Clone, Copy)]
 struct Pending {
@@ -467,4 +568,28 @@ impl ControllerSession {
         let meta = ReportMeta::new(&self.args, &self.scenario.name, std::mem::take(&mut self.scheduling), ended);
         Ok(self.rec.finish(meta, &self.args.out)?)
     }
+}
+
+/// Refuse a client built against another contract than this library: another layout version (named both ways)
+/// or samples of other sizes (a header edited by hand, or packed by another compiler setting).
+pub fn check_client_layout(layout_version: u32, plant_size: usize, command_size: usize) -> Result<(), SessionError> {
+    let ours = crate::wire::WIRE_LAYOUT_VERSION;
+    if layout_version != ours {
+        return Err(SessionError::Layout(format!(
+            "the client was built against wire layout version {layout_version}, this library speaks version {ours}: \
+             rebuild the client with the header `silrig contract --c-header` writes for this build"
+        )));
+    }
+    for (what, theirs, ours) in [
+        ("plant sample", plant_size, size_of::<PlantSample>()),
+        ("command sample", command_size, size_of::<CommandSample>()),
+    ] {
+        if theirs != ours {
+            return Err(SessionError::Layout(format!(
+                "the client's {what} is {theirs} bytes, the contract's is {ours} (layout version {layout_version}): \
+                 the header was changed or compiled with other packing"
+            )));
+        }
+    }
+    Ok(())
 }

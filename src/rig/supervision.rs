@@ -4,6 +4,7 @@
 
 use super::ProcessArgs;
 use super::events::EventLog;
+use super::launcher::ControllerLaunch;
 use crate::topology::Role;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -37,11 +38,18 @@ pub struct SupervisionOptions {
 pub(super) struct ChildProcess {
     child: std::process::Child,
     status: Option<ExitStatus>,
+    /// It leads a process group of its own (a user's shell command): signals go to the whole group.
+    group: bool,
 }
 
 impl ChildProcess {
     pub(super) fn new(child: std::process::Child) -> Self {
-        Self { child, status: None }
+        Self { child, status: None, group: false }
+    }
+
+    /// A child started with `process_group(0)`: signalled as a group, so it and what it started stop together.
+    pub(super) fn group_leader(child: std::process::Child) -> Self {
+        Self { child, status: None, group: true }
     }
 
     pub(super) fn pid(&self) -> u32 {
@@ -62,9 +70,11 @@ impl ChildProcess {
 
     pub(super) fn signal(&mut self, signal: libc::c_int) {
         if self.status.is_none() {
-            // SAFETY: kill(2) on the pid of a child we have not reaped yet, so the pid cannot have been reused.
+            let pid = self.child.id() as libc::pid_t;
+            // SAFETY: kill(2) on the pid of a child we have not reaped yet (or the group it leads), so the pid
+            // cannot have been reused.
             unsafe {
-                libc::kill(self.child.id() as libc::pid_t, signal);
+                libc::kill(if self.group { -pid } else { pid }, signal);
             }
         }
     }
@@ -142,9 +152,82 @@ fn warn_if_stale(bin_dir: &Path) {
     }
 }
 
+/// Split a `--controller-cmd` into words as a POSIX shell would (blanks separate words; single quotes keep
+/// everything; double quotes keep everything but `\"`, `\\`, `\$` and `` \` ``; a backslash outside quotes keeps the
+/// next character). The program is then run directly, not through a shell, so the signals the rig sends (SIGTERM
+/// at the end, the plan's faults) reach it and not a shell in between.
+pub fn split_command(cmd: &str) -> Result<Vec<String>, String> {
+    let mut words = Vec::new();
+    let mut word: Option<String> = None;
+    let mut chars = cmd.chars();
+    while let Some(c) = chars.next() {
+        match c {
+            ' ' | '\t' | '\n' => words.extend(word.take()),
+            '\'' => {
+                let w = word.get_or_insert_with(String::new);
+                loop {
+                    match chars.next() {
+                        Some('\'') => break,
+                        Some(c) => w.push(c),
+                        None => return Err(format!("unbalanced ' in `{cmd}`")),
+                    }
+                }
+            }
+            '"' => {
+                let w = word.get_or_insert_with(String::new);
+                loop {
+                    match chars.next() {
+                        Some('"') => break,
+                        Some('\\') => match chars.next() {
+                            Some(c @ ('"' | '\\' | '$' | '`')) => w.push(c),
+                            Some(c) => w.extend(['\\', c]),
+                            None => return Err(format!("unbalanced \" in `{cmd}`")),
+                        },
+                        Some(c) => w.push(c),
+                        None => return Err(format!("unbalanced \" in `{cmd}`")),
+                    }
+                }
+            }
+            '\\' => word.get_or_insert_with(String::new).extend(chars.next()),
+            c => word.get_or_insert_with(String::new).push(c),
+        }
+    }
+    words.extend(word);
+    if words.is_empty() {
+        return Err("the command is empty".into());
+    }
+    Ok(words)
+}
+
+/// Whether `program` can be started: a path to an executable file, or a name found on PATH.
+pub fn find_program(program: &str) -> Option<PathBuf> {
+    use std::os::unix::fs::PermissionsExt;
+    let runnable = |p: &Path| std::fs::metadata(p).is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0);
+    if program.contains('/') {
+        return runnable(Path::new(program)).then(|| program.into());
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path).map(|dir| dir.join(program)).find(|p| runnable(p))
+}
+
+/// The last lines a process wrote to its stderr log, for the message that reports its death.
+fn stderr_tail(out: &Path, role: Role) -> String {
+    let text = std::fs::read_to_string(out.join(format!("{role}.stderr.log"))).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    let tail = lines[lines.len().saturating_sub(3)..].join(" | ");
+    if tail.is_empty() { String::new() } else { format!("; its stderr ends: {}", last_chars(&tail, 400)) }
+}
+
+/// The last `max_chars` characters of `text`.
+fn last_chars(text: &str, max_chars: usize) -> &str {
+    let skip = text.chars().count().saturating_sub(max_chars);
+    text.char_indices().nth(skip).map_or("", |(at, _)| &text[at..])
+}
+
 /// The run's processes and what became of them.
 pub(super) struct Supervisor {
     bin_dir: PathBuf,
+    controller: ControllerLaunch,
     args: ProcessArgs,
     events: EventLog,
     restart: SupervisionOptions,
@@ -161,11 +244,17 @@ pub(super) struct Supervisor {
 impl Supervisor {
     /// Start the three processes with `args`: the logger first and the plant last, staggered, because concurrent
     /// node creation with dead-node cleanup is where iceoryx2 has had races (#1880).
-    pub(super) fn start(args: ProcessArgs, events: EventLog, restart: SupervisionOptions) -> anyhow::Result<Self> {
+    pub(super) fn start(
+        args: ProcessArgs,
+        events: EventLog,
+        restart: SupervisionOptions,
+        controller: ControllerLaunch,
+    ) -> anyhow::Result<Self> {
         let bin_dir = binary_dir()?;
         warn_if_stale(&bin_dir);
         let mut sup = Self {
             bin_dir,
+            controller,
             args,
             events,
             restart,
@@ -176,6 +265,9 @@ impl Supervisor {
             failures: Vec::new(),
         };
         for role in [Role::Logger, Role::Controller, Role::Plant] {
+            if role == Role::Controller && sup.controller == ControllerLaunch::External {
+                continue;
+            }
             let process = sup.spawn(role, false)?;
             sup.processes.push(RoleProcess {
                 role,
@@ -192,10 +284,33 @@ impl Supervisor {
         Ok(sup)
     }
 
+    /// Start `role`'s process; its stderr is appended to `<out>/<role>.stderr.log` (a restart adds a marker line,
+    /// so what the dead one said stays readable).
     fn spawn(&self, role: Role, resume: bool) -> anyhow::Result<ChildProcess> {
-        let exe = self.bin_dir.join(role.binary());
-        let log = std::fs::File::create(self.args.out.join(format!("{role}.stderr.log")))?;
+        let log_path = self.args.out.join(format!("{role}.stderr.log"));
+        let mut log = std::fs::OpenOptions::new().create(true).append(true).open(&log_path)?;
+        if resume {
+            use std::io::Write;
+            writeln!(log, "--- silrig run: {role} restarted ---")?;
+        }
         let args = ProcessArgs { resume, ..self.args.clone() };
+        if let (Role::Controller, ControllerLaunch::Command(cmd)) = (role, &self.controller) {
+            use std::os::unix::process::CommandExt;
+            let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
+            let child = Command::new(&words[0])
+                .args(&words[1..])
+                .envs(args.to_env())
+                .env("SILRIG_CLIENT_LIB", self.bin_dir.join("libsilrig_client.so"))
+                // Its own process group: a stop or kill fault reaches whatever it started as well.
+                .process_group(0)
+                .stdin(Stdio::null())
+                .stdout(log.try_clone()?)
+                .stderr(log)
+                .spawn()
+                .with_context(|| format!("starting the controller command `{cmd}`"))?;
+            return Ok(ChildProcess::group_leader(child));
+        }
+        let exe = self.bin_dir.join(role.binary());
         let child = Command::new(&exe)
             .args(args.to_argv())
             .stdin(Stdio::null())
@@ -264,7 +379,8 @@ impl Supervisor {
             {
                 continue;
             }
-            self.on_death(i, format!("{role}: {} before the end of the run", describe(status)));
+            let tail = stderr_tail(&self.args.out, role);
+            self.on_death(i, format!("{role}: {} before the end of the run{tail}", describe(status)));
         }
         Ok(())
     }
@@ -342,9 +458,37 @@ impl Supervisor {
             let already_ended = p.process.has_ended();
             let status = p.process.finish(Duration::from_secs(5))?;
             if !already_ended && !status.success() && !self.failures.iter().any(|f| f.starts_with(p.role.label())) {
-                self.failures.push(format!("{}: {}", p.role, describe(status)));
+                let tail = stderr_tail(&self.args.out, p.role);
+                self.failures.push(format!("{}: {}{tail}", p.role, describe(status)));
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn controller_commands_split_like_a_shell() {
+        let words = |c: &str| split_command(c).unwrap();
+        assert_eq!(words("python3 examples/python/pd.py"), ["python3", "examples/python/pd.py"]);
+        assert_eq!(
+            words("  ./ctl  --gain 'a b'  \"c \\\" d\" e\\ f ''"),
+            ["./ctl", "--gain", "a b", "c \" d", "e f", ""]
+        );
+        assert_eq!(words(r#"say "a\nb""#), ["say", "a\\nb"]);
+        assert!(split_command("   ").unwrap_err().contains("empty"));
+        assert!(split_command("ctl 'oops").unwrap_err().contains("unbalanced '"));
+        assert!(split_command("ctl \"oops").unwrap_err().contains("unbalanced \""));
+    }
+
+    #[test]
+    fn programs_are_found_on_path_or_by_path() {
+        assert!(find_program("sh").is_some());
+        assert!(find_program("/bin/sh").is_some());
+        assert!(find_program("surely-no-such-program-here").is_none());
+        assert!(find_program("./no/such/file").is_none());
     }
 }

@@ -1,0 +1,85 @@
+/* A PID attitude controller for silrig in C: the "bring your own controller" example, the same law as
+ * examples/python/pid_attitude.py. Roll (phi) on the aileron, pitch (theta) on the elevator, yaw (psi) on the
+ * rudder; the body rate is the derivative; the integrators start from the surfaces' positions when the controller
+ * connects (a bumpless start) and carry the trim. Stevens & Lewis signs: a positive deflection makes a negative
+ * moment.
+ *
+ *   cc -std=c11 -O2 -I examples/c examples/c/pid_attitude.c -L target/release -lsilrig_client \
+ *      -Wl,-rpath,"$PWD/target/release" -lm -o pid_attitude
+ *   silrig run --controller-cmd ./pid_attitude configs/robust.toml
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "silrig_client.h"
+
+static const double KP[3] = {4.0, 4.0, 8.0}; /* deg per deg: aileron, elevator, rudder */
+static const double KD[3] = {1.2, 1.5, 3.0}; /* deg per deg/s */
+static const double KI[3] = {4.0, 3.0, 8.0}; /* deg per deg*s */
+static const int ANGLE[3] = {3, 4, 5};      /* phi, theta, psi in the plant sample's state */
+static const int RATE[3] = {6, 7, 8};       /* p, q, r */
+static const char *const DIAGNOSTICS[3] = {"err_phi_deg", "err_theta_deg", "err_psi_deg"};
+
+#define DEG_PER_RAD (180.0 / 3.14159265358979323846)
+
+static int fail(const char *what, int code) {
+    fprintf(stderr, "pid_attitude: %s: %s (status %d)\n", what, silrig_last_error(), code);
+    return 2;
+}
+
+int main(void) {
+    silrig_session *session = NULL;
+    int rc = SILRIG_SESSION_OPEN(DIAGNOSTICS, 3, &session);
+    if (rc != SILRIG_OK) {
+        return fail("opening the session", rc);
+    }
+    double setpoint_deg[3];
+    silrig_session_setpoint_deg(session, setpoint_deg);
+    const double dt_s = silrig_session_dt_s(session);
+
+    double integral[3];
+    int started = 0;
+    const char *saved = silrig_session_restored_checkpoint(session);
+    if (saved != NULL && sscanf(saved, "%lf %lf %lf", &integral[0], &integral[1], &integral[2]) == 3) {
+        started = 1;
+    }
+
+    silrig_plant_sample_t sample;
+    for (;;) {
+        rc = silrig_session_next_sample(session, &sample);
+        if (rc != SILRIG_OK) {
+            break; /* SILRIG_STOPPED, SILRIG_RUN_ENDED, or an error */
+        }
+        if (!started) {
+            for (int c = 0; c < 3; c++) {
+                integral[c] = sample.surfaces_deg[c];
+            }
+            started = 1;
+        }
+        double surfaces[3], errors[3];
+        for (int c = 0; c < 3; c++) {
+            errors[c] = setpoint_deg[c] - sample.state[ANGLE[c]] * DEG_PER_RAD;
+            integral[c] -= KI[c] * errors[c] * dt_s;
+            surfaces[c] = integral[c] - KP[c] * errors[c] + KD[c] * sample.state[RATE[c]] * DEG_PER_RAD;
+        }
+        rc = silrig_session_send_command(session, surfaces, sample.throttle, errors, 3);
+        if (rc < 0 && rc != SILRIG_ERR_COMMAND_REFUSED) {
+            break;
+        }
+        if (silrig_session_checkpoint_due(session)) {
+            char text[128];
+            snprintf(text, sizeof text, "%.17g %.17g %.17g", integral[0], integral[1], integral[2]);
+            silrig_session_save_checkpoint(session, text);
+        }
+    }
+    int failed = rc < 0;
+    if (failed) {
+        fprintf(stderr, "pid_attitude: %s (status %d)\n", silrig_last_error(), rc);
+    }
+    int closed = silrig_session_close(session, failed ? silrig_last_error() : NULL);
+    if (closed != SILRIG_OK) {
+        return fail("closing the session", closed);
+    }
+    return failed ? 1 : 0;
+}

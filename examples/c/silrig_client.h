@@ -1,0 +1,94 @@
+/* silrig_client.h: fly your own controller in a silrig run through libsilrig_client.so.
+ *
+ * The library is silrig's own controller session (the one silrig-controller uses) behind a C ABI. It opens the
+ * run named by the SILRIG_* environment variables (silrig run --controller-cmd sets them; for --controller
+ * external, `. <out>/controller.env`), hands out one plant sample at a time and sends one command in answer to
+ * each. It stamps and validates every command, applies the run's in-loop faults (delay, jitter, drop), blends
+ * bumplessly after a restart, watches the plant, writes the controller's timing report and turns SIGTERM/SIGINT
+ * and the end of the run into return codes.
+ *
+ * Build:  cc -I examples/c my_controller.c -L target/release -lsilrig_client -Wl,-rpath,$PWD/target/release
+ * Run:    silrig run --controller-cmd ./my_controller
+ *
+ * Return codes: every function returning int returns one of the SILRIG_* status codes of silrig_contract.h
+ * (0 and above are not errors; below 0, silrig_last_error() says why, naming the problem).
+ *
+ * Ownership: the session belongs to the caller from silrig_session_open until silrig_session_close, which frees
+ * it; strings the library returns belong to the library (copy them if you keep them). The library keeps no
+ * pointer the caller passed in after a call returns.
+ *
+ * Threads: use a session only from the thread that opened it (its shared-memory ports are bound to that thread);
+ * one session per process. silrig_last_error() is per thread.
+ *
+ * Signals: opening a session installs handlers for SIGTERM and SIGINT that only set a flag; the next
+ * silrig_session_next_sample returns SILRIG_STOPPED. Close the session then, so its report is written.
+ */
+#ifndef SILRIG_CLIENT_H
+#define SILRIG_CLIENT_H
+
+#include "silrig_contract.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One controller's session in one run; opaque. */
+typedef struct SilrigSession silrig_session;
+
+/* The wire layout version the library speaks (compare with SILRIG_WIRE_LAYOUT_VERSION). */
+uint32_t silrig_layout_version(void);
+
+/* Why the last failing call on this thread failed ("" if none). Owned by the library; valid until the next
+ * call on this thread. */
+const char *silrig_last_error(void);
+
+/* Open the run's controller session (use SILRIG_SESSION_OPEN, which passes the contract this file was built
+ * against). Announces the names of the diagnostics the controller will send with each command (at most
+ * SILRIG_MAX_DIAGNOSTICS, each 1..31 ASCII letters, digits or _; they label the trace's columns and
+ * plots). On success *session_out is the session; on failure NULL, with SILRIG_ERR_LAYOUT (built against another
+ * layout version or sample sizes), SILRIG_ERR_SETUP (SILRIG_* variables or scenario unusable, bad names) or
+ * SILRIG_ERR_SECOND_CONTROLLER (the run has a controller). */
+int silrig_session_open(uint32_t layout_version, size_t plant_sample_size, size_t command_sample_size,
+                        const char *const *diagnostic_names, size_t diagnostic_count, silrig_session **session_out);
+
+#define SILRIG_SESSION_OPEN(names, count, session_out)                                                           \
+    silrig_session_open(SILRIG_WIRE_LAYOUT_VERSION, sizeof(silrig_plant_sample_t),                               \
+                        sizeof(silrig_command_sample_t), (names), (count), (session_out))
+
+/* Block until the next plant sample to answer and copy it to *sample_out (SILRIG_OK). After a stall only the
+ * newest waiting sample is handed out. Returns SILRIG_STOPPED (SIGTERM/SIGINT) or SILRIG_RUN_ENDED (the plant
+ * has flown the whole scenario) when it is time to close; SILRIG_ERR_NO_RIG if no plant sample came within twice
+ * SILRIG_STARTUP_TIMEOUT_S of opening. While the plant is silent after that (a plant restart), it waits. */
+int silrig_session_next_sample(silrig_session *session, silrig_plant_sample_t *sample_out);
+
+/* Answer the sample just handed out: surfaces (deg: aileron, elevator, rudder), throttle (0..1) and one value
+ * per announced diagnostic. The library measures the compute time (sample handed out to this call), stamps the
+ * header and validates: NaN, infinity, |surface| > SILRIG_SURFACE_CMD_LIMIT_DEG or a throttle outside 0..1 is
+ * refused and not sent (SILRIG_ERR_COMMAND_REFUSED; the plant holds the last valid command, the run's events
+ * say why). SILRIG_ERR_USAGE: no sample to answer, or a diagnostic count other than announced. */
+int silrig_session_send_command(silrig_session *session, const double surface_cmd_deg[3], double throttle_cmd,
+                                const double *diagnostics, size_t diagnostic_count);
+
+/* The controller's step, s (the scenario's dt). */
+double silrig_session_dt_s(silrig_session *session);
+
+/* The scenario's attitude set point, deg: roll (phi), pitch (theta), yaw (psi). */
+int silrig_session_setpoint_deg(silrig_session *session, double setpoint_deg_out[3]);
+
+/* Checkpoints, so a restarted controller resumes instead of starting cold (copper's Freezable): after a send,
+ * when silrig_session_checkpoint_due returns 1, save your state as text with silrig_session_save_checkpoint. A
+ * controller the launcher restarts finds that text in silrig_session_restored_checkpoint (NULL otherwise; owned by
+ * the session). */
+const char *silrig_session_restored_checkpoint(silrig_session *session);
+int silrig_session_checkpoint_due(silrig_session *session);
+int silrig_session_save_checkpoint(silrig_session *session, const char *text);
+
+/* Write the controller's report (<out>/controller.report.json) and free the session. Pass the reason if your
+ * controller stops on an error of its own (it goes into the report), else NULL. NULL session: nothing to do. */
+int silrig_session_close(silrig_session *session, const char *error);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SILRIG_CLIENT_H */

@@ -1,0 +1,58 @@
+"""A PID attitude controller for silrig, in plain Python: the "bring your own controller" example.
+
+Each channel is a PID on the Euler angle error with the body rate as the derivative: roll (phi) on the
+aileron, pitch (theta) on the elevator, yaw (psi) on the rudder. The integrators start from the surfaces' positions
+when the controller connects, so taking over is bumpless, and they carry the trim. Gains are in deg of surface per
+deg of error (per deg/s of rate, per deg*s of integral). The Stevens & Lewis sign convention: a positive
+deflection of any surface makes a negative moment, hence the minus signs.
+
+    silrig run --controller-cmd "python3 examples/python/pid_attitude.py" configs/robust.toml
+"""
+
+import json
+import math
+import sys
+
+from silrig_client import Controller, serve
+
+KP = (4.0, 4.0, 8.0)  # deg per deg: aileron, elevator, rudder
+KD = (1.2, 1.5, 3.0)  # deg per deg/s
+KI = (4.0, 3.0, 8.0)  # deg per deg*s
+RATES = (6, 7, 8)  # p, q, r in the plant sample's state
+ANGLES = (3, 4, 5)  # phi, theta, psi
+
+
+class PidAttitude(Controller):
+    diagnostic_names = ("err_phi_deg", "err_theta_deg", "err_psi_deg")
+
+    def __init__(self):
+        self.setpoint_deg = (0.0, 0.0, 0.0)
+        self.integral = None  # surface deg carried by the integrators, per channel
+
+    def start(self, session):
+        self.setpoint_deg = session.setpoint_deg
+
+    def step(self, sample, dt_s):
+        state = sample.state
+        if self.integral is None:
+            self.integral = list(sample.surfaces_deg)
+        surfaces = [0.0, 0.0, 0.0]
+        errors = [0.0, 0.0, 0.0]
+        for c in range(3):
+            error = self.setpoint_deg[c] - math.degrees(state[ANGLES[c]])
+            rate = math.degrees(state[RATES[c]])
+            self.integral[c] -= KI[c] * error * dt_s
+            surfaces[c] = self.integral[c] - KP[c] * error + KD[c] * rate
+            errors[c] = error
+        return surfaces, sample.throttle, errors
+
+    def checkpoint(self):
+        return json.dumps(self.integral)
+
+    def restore(self, text):
+        self.integral = json.loads(text)
+        return True
+
+
+if __name__ == "__main__":
+    sys.exit(serve(PidAttitude()))

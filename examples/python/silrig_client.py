@@ -1,0 +1,231 @@
+"""silrig_client: fly a Python controller in a silrig run.
+
+A thin ctypes wrapper over libsilrig_client.so (silrig's own controller session behind a C ABI; see
+examples/c/silrig_client.h for the rules) with no third-party dependency. Write a `Controller` with one method,
+`step(sample, dt_s)`, and hand it to `serve()`:
+
+    from silrig_client import Controller, serve
+
+    class Hold(Controller):
+        def step(self, sample, dt_s):
+            return (0.0, -2.0, 0.0), sample.throttle   # surfaces deg (aileron, elevator, rudder), throttle 0..1
+
+    raise SystemExit(serve(Hold()))
+
+and fly it with `silrig run --controller-cmd "python3 my_controller.py"`. The launcher passes the run in SILRIG_*
+variables and the library's path in SILRIG_CLIENT_LIB; by hand (`--controller external`), `. <out>/controller.env`
+first.
+"""
+
+import ctypes
+import os
+import pathlib
+import sys
+
+from silrig_contract import (
+    ERR_COMMAND_REFUSED,
+    OK,
+    RUN_ENDED,
+    STOPPED,
+    WIRE_LAYOUT_VERSION,
+    CommandSample,
+    PlantSample,
+)
+
+
+class SilrigError(RuntimeError):
+    """A call into libsilrig_client.so failed; `code` is one of the contract's ERR_* status codes."""
+
+    def __init__(self, code, message):
+        super().__init__(message)
+        self.code = code
+
+
+def _library_path():
+    given = os.environ.get("SILRIG_CLIENT_LIB")
+    if given:
+        return given
+    # A build tree: examples/python/ -> target/release/.
+    built = pathlib.Path(__file__).resolve().parents[2] / "target" / "release" / "libsilrig_client.so"
+    return str(built) if built.exists() else "libsilrig_client.so"
+
+
+def _load():
+    lib = ctypes.CDLL(_library_path())
+    c_double_p = ctypes.POINTER(ctypes.c_double)
+    session_p = ctypes.c_void_p
+    signatures = {
+        "silrig_layout_version": ([], ctypes.c_uint32),
+        "silrig_last_error": ([], ctypes.c_char_p),
+        "silrig_session_open": (
+            [ctypes.c_uint32, ctypes.c_size_t, ctypes.c_size_t, ctypes.POINTER(ctypes.c_char_p), ctypes.c_size_t,
+             ctypes.POINTER(session_p)],
+            ctypes.c_int,
+        ),
+        "silrig_session_next_sample": ([session_p, ctypes.POINTER(PlantSample)], ctypes.c_int),
+        "silrig_session_send_command": (
+            [session_p, c_double_p, ctypes.c_double, c_double_p, ctypes.c_size_t],
+            ctypes.c_int,
+        ),
+        "silrig_session_dt_s": ([session_p], ctypes.c_double),
+        "silrig_session_setpoint_deg": ([session_p, c_double_p], ctypes.c_int),
+        "silrig_session_restored_checkpoint": ([session_p], ctypes.c_char_p),
+        "silrig_session_checkpoint_due": ([session_p], ctypes.c_int),
+        "silrig_session_save_checkpoint": ([session_p, ctypes.c_char_p], ctypes.c_int),
+        "silrig_session_close": ([session_p, ctypes.c_char_p], ctypes.c_int),
+    }
+    for name, (argtypes, restype) in signatures.items():
+        function = getattr(lib, name)
+        function.argtypes = argtypes
+        function.restype = restype
+    return lib
+
+
+_lib = None
+
+
+def library():
+    """libsilrig_client.so, loaded once."""
+    global _lib
+    if _lib is None:
+        _lib = _load()
+    return _lib
+
+
+def _check(code):
+    if code < 0:
+        raise SilrigError(code, library().silrig_last_error().decode(errors="replace"))
+    return code
+
+
+class Session:
+    """The controller's side of one run: `next_sample()`, then one `send()` per sample, then `close()`."""
+
+    def __init__(self, diagnostic_names=()):
+        lib = library()
+        self._lib = lib
+        self._handle = ctypes.c_void_p()
+        names = [n.encode() for n in diagnostic_names]
+        c_names = (ctypes.c_char_p * max(len(names), 1))(*names)
+        _check(lib.silrig_session_open(
+            WIRE_LAYOUT_VERSION, ctypes.sizeof(PlantSample), ctypes.sizeof(CommandSample), c_names, len(names),
+            ctypes.byref(self._handle)))
+        self._sample = PlantSample()
+        self._sample_ref = ctypes.byref(self._sample)
+        self._surfaces = (ctypes.c_double * 3)()
+        self._diagnostics = (ctypes.c_double * max(len(names), 1))()
+        self._diagnostic_count = len(names)
+        #: Why the session stopped handing out samples: STOPPED or RUN_ENDED (None while it runs).
+        self.stop_reason = None
+
+    @property
+    def dt_s(self):
+        """The controller's step, s."""
+        return self._lib.silrig_session_dt_s(self._handle)
+
+    @property
+    def setpoint_deg(self):
+        """The scenario's attitude set point, deg: (roll, pitch, yaw)."""
+        out = (ctypes.c_double * 3)()
+        _check(self._lib.silrig_session_setpoint_deg(self._handle, out))
+        return tuple(out)
+
+    @property
+    def restored_checkpoint(self):
+        """What a predecessor saved (a restarted controller), or None."""
+        text = self._lib.silrig_session_restored_checkpoint(self._handle)
+        return None if text is None else text.decode()
+
+    def next_sample(self):
+        """The next plant sample to answer (a PlantSample, reused between calls: copy what you keep), or None when
+        the run ended or a stop was requested (see `stop_reason`)."""
+        code = _check(self._lib.silrig_session_next_sample(self._handle, self._sample_ref))
+        if code == OK:
+            return self._sample
+        self.stop_reason = code
+        return None
+
+    def send(self, surface_cmd_deg, throttle_cmd, diagnostics=()):
+        """Answer the sample: surfaces deg (aileron, elevator, rudder), throttle 0..1, one value per diagnostic
+        name. Returns False when the command was refused (NaN, out of range: the plant holds the last valid one);
+        raises SilrigError on anything else."""
+        s = self._surfaces
+        s[0], s[1], s[2] = surface_cmd_deg
+        d = self._diagnostics
+        for i, value in enumerate(diagnostics):
+            d[i] = value
+        code = self._lib.silrig_session_send_command(self._handle, s, throttle_cmd, d, len(diagnostics))
+        if code == ERR_COMMAND_REFUSED:
+            return False
+        _check(code)
+        return True
+
+    def checkpoint_due(self):
+        """Whether the session wants a checkpoint now."""
+        return self._lib.silrig_session_checkpoint_due(self._handle) == 1
+
+    def save_checkpoint(self, text):
+        """Save the state a restarted controller resumes from."""
+        _check(self._lib.silrig_session_save_checkpoint(self._handle, text.encode()))
+
+    def close(self, error=None):
+        """Write the controller's report and end the session (`error`: why your controller gave up, if it did)."""
+        if self._handle:
+            handle, self._handle = self._handle, ctypes.c_void_p()
+            _check(self._lib.silrig_session_close(handle, None if error is None else str(error).encode()))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, value, traceback):
+        self.close(None if value is None else f"{kind.__name__}: {value}")
+        return False
+
+
+class Controller:
+    """A controller for `serve()`: override `step`; the rest is optional."""
+
+    #: Names of the diagnostics `step` returns (logged and plotted by the rig), 1..31 of [A-Za-z0-9_] each.
+    diagnostic_names = ()
+
+    def start(self, session):
+        """Called once the session is open (read `session.setpoint_deg`, `session.dt_s` here)."""
+
+    def step(self, sample, dt_s):
+        """One plant sample in; `(surfaces_deg, throttle)` or `(surfaces_deg, throttle, diagnostics)` out."""
+        raise NotImplementedError
+
+    def checkpoint(self):
+        """The state a restarted controller should resume from, as text (None: nothing to save)."""
+        return None
+
+    def restore(self, text):
+        """Resume from what `checkpoint` saved; return False if it does not fit."""
+        return False
+
+
+def serve(controller):
+    """Fly `controller` until the run ends or SIGTERM; returns the process's exit status (0 clean, 1 error)."""
+    try:
+        session = Session(controller.diagnostic_names)
+    except SilrigError as e:
+        print(f"silrig_client: {e}", file=sys.stderr)
+        return 2
+    with session:
+        saved = session.restored_checkpoint
+        if saved is not None and not controller.restore(saved):
+            print("silrig_client: warning: the checkpoint does not fit this controller; starting fresh",
+                  file=sys.stderr)
+        controller.start(session)
+        dt_s = session.dt_s
+        while True:
+            sample = session.next_sample()
+            if sample is None:
+                return 0
+            out = controller.step(sample, dt_s)
+            # False when refused: the run's events say why and the plant holds; the next sample may do better.
+            session.send(out[0], out[1], out[2] if len(out) > 2 else ())
+            if session.checkpoint_due():
+                text = controller.checkpoint()
+                if text is not None:
+                    session.save_checkpoint(text)

@@ -1,0 +1,271 @@
+//! `libsilrig_client.so`: silrig's controller session ([`silrig::rig::session::ControllerSession`]) behind a C ABI,
+//! so that a controller in C, C++, Python (ctypes), MATLAB or anything with a C FFI flies in the rig exactly as
+//! `silrig-controller` does. The functions and their rules are declared, with ownership and threading, in
+//! `examples/c/silrig_client.h`; the status codes and sample structs come from `silrig contract --c-header`.
+//!
+//! Every entry point returns a status code (never unwinds into C: a panic becomes `SILRIG_ERR_INTERNAL`), and an
+//! error's text is kept per thread for `silrig_last_error`.
+
+use silrig::rig::ProcessArgs;
+use silrig::rig::session::{
+    ControlCommand, ControllerSession, Next, SessionError, Status, StopReason, check_client_layout,
+};
+use silrig::wire::PlantSample;
+use std::cell::RefCell;
+use std::ffi::{CStr, CString, c_char, c_int};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+thread_local! {
+    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+fn set_last_error(text: &str) {
+    let text = CString::new(text.replace('\0', " ")).expect("NULs were replaced");
+    LAST_ERROR.with(|e| *e.borrow_mut() = text);
+}
+
+/// Run `body` at the C boundary: its error becomes the thread's last error and a status code; a panic becomes
+/// `SILRIG_ERR_INTERNAL`.
+fn boundary(body: impl FnOnce() -> Result<Status, SessionError>) -> c_int {
+    match catch_unwind(AssertUnwindSafe(body)) {
+        Ok(Ok(status)) => status.code(),
+        Ok(Err(e)) => {
+            set_last_error(&e.to_string());
+            e.status().code()
+        }
+        Err(panic) => {
+            let what = panic.downcast_ref::<&str>().copied().or(panic.downcast_ref::<String>().map(String::as_str));
+            set_last_error(&format!("internal error in libsilrig_client: {}", what.unwrap_or("panic")));
+            Status::ErrInternal.code()
+        }
+    }
+}
+
+fn usage(text: &str) -> SessionError {
+    SessionError::Usage(text.into())
+}
+
+/// One controller's session: opaque to C.
+pub struct SilrigSession {
+    session: ControllerSession,
+    restored: Option<CString>,
+}
+
+/// Borrow the session behind a pointer from C.
+///
+/// # Safety
+/// `session` is NULL or a pointer `silrig_session_open` returned and `silrig_session_close` has not freed.
+unsafe fn session_mut<'a>(session: *mut SilrigSession) -> Result<&'a mut SilrigSession, SessionError> {
+    // SAFETY: the caller's contract above.
+    unsafe { session.as_mut() }.ok_or_else(|| usage("the session pointer is NULL"))
+}
+
+/// The wire layout version this library speaks.
+#[unsafe(no_mangle)]
+pub extern "C" fn silrig_layout_version() -> u32 {
+    silrig::wire::WIRE_LAYOUT_VERSION
+}
+
+/// The text of the last error on this thread ("" if none); valid until the next call on this thread.
+#[unsafe(no_mangle)]
+pub extern "C" fn silrig_last_error() -> *const c_char {
+    LAST_ERROR.with(|e| e.borrow().as_ptr())
+}
+
+/// Open the run's controller session from the `SILRIG_*` environment; see the header.
+///
+/// # Safety
+/// `diagnostic_names` points to `diagnostic_count` NUL-terminated strings (or is NULL with a count of 0);
+/// `session_out` points to writable storage for one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_open(
+    layout_version: u32,
+    plant_sample_size: usize,
+    command_sample_size: usize,
+    diagnostic_names: *const *const c_char,
+    diagnostic_count: usize,
+    session_out: *mut *mut SilrigSession,
+) -> c_int {
+    boundary(|| {
+        if session_out.is_null() {
+            return Err(usage("session_out is NULL"));
+        }
+        // SAFETY: checked non-NULL; the caller gives storage for one pointer.
+        unsafe { *session_out = std::ptr::null_mut() };
+        check_client_layout(layout_version, plant_sample_size, command_sample_size)?;
+        if diagnostic_names.is_null() && diagnostic_count > 0 {
+            return Err(usage("diagnostic_names is NULL but diagnostic_count is not 0"));
+        }
+        let mut names = Vec::with_capacity(diagnostic_count);
+        for i in 0..diagnostic_count {
+            // SAFETY: the caller gives `diagnostic_count` pointers.
+            let name = unsafe { *diagnostic_names.add(i) };
+            if name.is_null() {
+                return Err(usage(&format!("diagnostic name {i} is NULL")));
+            }
+            // SAFETY: the caller gives NUL-terminated strings.
+            let name = unsafe { CStr::from_ptr(name) };
+            names.push(name.to_str().map_err(|_| usage(&format!("diagnostic name {i} is not UTF-8")))?.to_string());
+        }
+        let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
+        let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
+        let session = ControllerSession::open(args, scenario, &names)?;
+        let restored = session.restored_checkpoint().map(|t| CString::new(t.replace('\0', " ")).expect("no NULs"));
+        // SAFETY: checked non-NULL above.
+        unsafe { *session_out = Box::into_raw(Box::new(SilrigSession { session, restored })) };
+        Ok(Status::Ok)
+    })
+}
+
+/// Wait for the next plant sample and copy it to `*sample_out`; see the header.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `sample_out` points to a writable `silrig_plant_sample_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_next_sample(
+    session: *mut SilrigSession,
+    sample_out: *mut PlantSample,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        if sample_out.is_null() {
+            return Err(usage("sample_out is NULL"));
+        }
+        match s.session.next_sample()? {
+            Next::Sample(sample) => {
+                // SAFETY: checked non-NULL; the caller gives storage for one sample.
+                unsafe { sample_out.write(sample) };
+                Ok(Status::Ok)
+            }
+            Next::Stop(StopReason::TerminationRequested) => Ok(Status::Stopped),
+            Next::Stop(StopReason::RunEnded) => Ok(Status::RunEnded),
+        }
+    })
+}
+
+/// Answer the sample `silrig_session_next_sample` gave; see the header.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `surface_cmd_deg` points to 3 doubles; `diagnostics` points to
+/// `diagnostic_count` doubles (or is NULL with a count of 0).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_send_command(
+    session: *mut SilrigSession,
+    surface_cmd_deg: *const f64,
+    throttle_cmd: f64,
+    diagnostics: *const f64,
+    diagnostic_count: usize,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        if surface_cmd_deg.is_null() {
+            return Err(usage("surface_cmd_deg is NULL"));
+        }
+        if diagnostics.is_null() && diagnostic_count > 0 {
+            return Err(usage("diagnostics is NULL but diagnostic_count is not 0"));
+        }
+        // SAFETY: the caller gives 3 doubles.
+        let surfaces = unsafe { std::slice::from_raw_parts(surface_cmd_deg, 3) };
+        let diagnostics = if diagnostic_count == 0 {
+            &[][..]
+        } else {
+            // SAFETY: the caller gives `diagnostic_count` doubles.
+            unsafe { std::slice::from_raw_parts(diagnostics, diagnostic_count) }
+        };
+        let command = ControlCommand { surface_cmd_deg: [surfaces[0], surfaces[1], surfaces[2]], throttle_cmd };
+        s.session.send(&command, diagnostics)?;
+        Ok(Status::Ok)
+    })
+}
+
+/// The controller's step, s (the scenario's dt); NaN for a NULL session.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_dt_s(session: *mut SilrigSession) -> f64 {
+    // SAFETY: the caller's contract.
+    unsafe { session_mut(session) }.map_or(f64::NAN, |s| s.session.dt_s())
+}
+
+/// The scenario's attitude set point, deg: roll (phi), pitch (theta), yaw (psi).
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `setpoint_deg_out` points to 3 writable doubles.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_setpoint_deg(session: *mut SilrigSession, setpoint_deg_out: *mut f64) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        if setpoint_deg_out.is_null() {
+            return Err(usage("setpoint_deg_out is NULL"));
+        }
+        let sp = &s.session.scenario().setpoint;
+        // SAFETY: the caller gives 3 doubles.
+        unsafe { std::ptr::copy_nonoverlapping([sp.phi_deg, sp.theta_deg, sp.psi_deg].as_ptr(), setpoint_deg_out, 3) };
+        Ok(Status::Ok)
+    })
+}
+
+/// What a predecessor saved with `silrig_session_save_checkpoint` (a restarted controller), or NULL.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_restored_checkpoint(session: *mut SilrigSession) -> *const c_char {
+    // SAFETY: the caller's contract.
+    unsafe { session_mut(session) }.ok().and_then(|s| s.restored.as_ref()).map_or(std::ptr::null(), |c| c.as_ptr())
+}
+
+/// 1 when the session wants a checkpoint now (after the command just sent), 0 otherwise.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_checkpoint_due(session: *mut SilrigSession) -> c_int {
+    // SAFETY: the caller's contract.
+    unsafe { session_mut(session) }.map_or(0, |s| c_int::from(s.session.checkpoint_due()))
+}
+
+/// Save `text` as the state a restarted controller resumes from.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `text` is a NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_save_checkpoint(session: *mut SilrigSession, text: *const c_char) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        if text.is_null() {
+            return Err(usage("text is NULL"));
+        }
+        // SAFETY: the caller gives a NUL-terminated string.
+        let text = unsafe { CStr::from_ptr(text) }.to_string_lossy();
+        s.session.save_checkpoint(&text).map_err(|e| SessionError::Setup(format!("saving the checkpoint: {e}")))?;
+        Ok(Status::Ok)
+    })
+}
+
+/// Write the controller's report and free the session; see the header.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open` and is not used again.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_close(session: *mut SilrigSession, error: *const c_char) -> c_int {
+    boundary(|| {
+        if session.is_null() {
+            return Ok(Status::Ok);
+        }
+        // SAFETY: the caller's contract: a pointer from `silrig_session_open`, not freed yet.
+        let mut s = unsafe { Box::from_raw(session) };
+        if !error.is_null() {
+            // SAFETY: the caller gives a NUL-terminated string.
+            let error = unsafe { CStr::from_ptr(error) }.to_string_lossy();
+            s.session.fail(&error);
+        }
+        s.session.finish().map_err(|e| SessionError::Setup(format!("writing the controller report: {e:#}")))?;
+        Ok(Status::Ok)
+    })
+}
