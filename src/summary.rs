@@ -97,7 +97,7 @@ pub struct Summary {
     pub oscillations: Vec<Oscillation>,
     /// True if any examined signal oscillates in a sustained way.
     pub limit_cycle: bool,
-    /// phi, theta, psi channels.
+    /// phi, theta, psi channels of a sliding-mode controller (empty for a controller without S diagnostics).
     pub channels: Vec<ChannelFigures>,
 }
 
@@ -236,8 +236,10 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
             .iter()
             .map(|s| oscillation(s, &t, &col(trace, s)))
             .collect();
+    // Only a sliding-mode controller (ours) reports S and W; a user's controller has other diagnostics.
     let channels = CHANNELS
         .iter()
+        .filter(|ch| trace.index(&format!("s_{ch}")).is_some())
         .map(|ch| {
             let s = col(trace, &format!("s_{ch}"));
             let w_cols: Vec<usize> = trace

@@ -72,6 +72,25 @@ fn the_header_compiles_as_c_and_cpp_with_every_assertion_holding() {
         run(&mut Command::new(&exe));
     }
 
+    // The client library's header, on top of it, is valid C and C++ too (the library itself is linked by the
+    // examples in tests/clients.rs).
+    let client = dir.join("client.c");
+    std::fs::write(
+        &client,
+        "#include \"silrig_client.h\"\nint main(void) {\n  silrig_session *s = 0;\n  \
+         return (int)sizeof(&silrig_session_open) + (int)sizeof(s) + SILRIG_ERR_COMMAND_REFUSED;\n}\n",
+    )
+    .unwrap();
+    for (compiler, std) in [("cc", "-std=c11"), ("c++", "-std=c++11")] {
+        let lang: &[&str] = if compiler == "c++" { &["-x", "c++"] } else { &[] };
+        run(Command::new(compiler)
+            .args([std, "-Wall", "-Wextra", "-Werror", "-pedantic", "-fsyntax-only"])
+            .args(lang)
+            .arg("-I")
+            .arg(&include)
+            .arg(&client));
+    }
+
     // A header whose layout disagrees must not compile: the assertions are real.
     let broken = contract::c_header().replacen(
         "    silrig_sample_header_t header;\n",

@@ -243,6 +243,8 @@ pub struct ControllerSession {
     refusing: u64,
     opened_ns: u64,
     ended: Option<String>,
+    /// It gave up waiting for a plant: no launcher will clean the run's namespace, so [`Self::finish`] does.
+    no_rig: bool,
     // Dropped last: the services and ports above belong to it.
     _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
 }
@@ -320,6 +322,7 @@ impl ControllerSession {
             refusing: 0,
             opened_ns: monotonic_ns(),
             ended: None,
+            no_rig: false,
             plant_stream,
             samples,
             commands,
@@ -457,6 +460,7 @@ impl ControllerSession {
             let waited_s = (monotonic_ns() - self.opened_ns) as f64 / 1e9;
             let limit_s = 2.0 * self.args.options.startup_timeout_s;
             if waited_s > limit_s {
+                self.no_rig = true;
                 return Err(SessionError::NoRig { run: self.args.run_id.to_string(), waited_s: limit_s });
             }
             return Ok(());
@@ -566,7 +570,15 @@ impl ControllerSession {
         self.rec.count("plant_restarts", stats.publisher_restarts);
         let ended = self.ended.take().unwrap_or_else(|| "closed by the controller".into());
         let meta = ReportMeta::new(&self.args, &self.scenario.name, std::mem::take(&mut self.scheduling), ended);
-        Ok(self.rec.finish(meta, &self.args.out)?)
+        let rec = std::mem::replace(&mut self.rec, Recorder::new(Role::Controller.label(), &[]));
+        let report = rec.finish(meta, &self.args.out)?;
+        if self.no_rig {
+            let run = self.args.run_id.clone();
+            drop(self);
+            // Removes nothing while another node of the run is alive.
+            ipc::cleanup_run(&run)?;
+        }
+        Ok(report)
     }
 }
 

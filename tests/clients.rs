@@ -1,0 +1,434 @@
+//! Bring your own controller: the C and the Python examples fly through `silrig run --controller-cmd` (lockstep to
+//! the set points with every tick answered, and 2 s realtime with the same timing report as ours), a controller
+//! started by hand joins `--controller external`, the in-loop faults and restarts reach a user's controller, and
+//! every bad input the contract names gets a clear message without losing recorded data. The client library is
+//! built here (`cargo build --release -p silrig-client`, once per test binary) and the C example with the system
+//! compiler. Each test has its own run id and folder; the launcher reaps what it started and removes the run's
+//! shared memory, and the tests check that it did. No timing figure is asserted as a bound.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("silrig-clients-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run_id(test: &str) -> String {
+    format!("c{}-{test}", std::process::id())
+}
+
+/// `libsilrig_client.so` beside the binaries under test (cargo test builds the binaries, not the cdylib).
+fn client_lib() -> &'static Path {
+    static LIB: OnceLock<PathBuf> = OnceLock::new();
+    LIB.get_or_init(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let o =
+            Command::new(cargo).args(["build", "--release", "-p", "silrig-client"]).current_dir(ROOT).output().unwrap();
+        assert!(o.status.success(), "building libsilrig_client.so: {}", String::from_utf8_lossy(&o.stderr));
+        let lib = Path::new(SILRIG).parent().unwrap().join("libsilrig_client.so");
+        assert!(lib.exists(), "{} was not built", lib.display());
+        lib
+    })
+}
+
+/// The C example, compiled with the system compiler against the header and the library.
+fn c_example() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let lib_dir = client_lib().parent().unwrap().to_path_buf();
+        let out = std::env::temp_dir().join(format!("silrig-clients-{}-pid_attitude", std::process::id()));
+        let o = Command::new("cc")
+            .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+            .arg(Path::new(ROOT).join("examples/c"))
+            .arg(Path::new(ROOT).join("examples/c/pid_attitude.c"))
+            .arg("-L")
+            .arg(&lib_dir)
+            .arg("-lsilrig_client")
+            .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
+            .args(["-lm", "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "cc: {}", String::from_utf8_lossy(&o.stderr));
+        out
+    })
+}
+
+fn python_example() -> String {
+    client_lib();
+    format!("python3 {ROOT}/examples/python/pid_attitude.py")
+}
+
+fn misbehaving(mode: &str) -> String {
+    client_lib();
+    format!("python3 {ROOT}/tests/clients/misbehaving.py {mode}")
+}
+
+/// Wait for a child with a watchdog: past `limit` it is killed (by its pid) and reaped, and the test fails.
+fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().unwrap();
+            panic!("no end within {limit:?}; stderr: {}", String::from_utf8_lossy(&out.stderr));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn no_shared_memory_left(run_id: &str) {
+    let prefix = format!("sr_{run_id}_");
+    let left: Vec<String> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n.starts_with(&prefix))
+        .collect();
+    assert!(left.is_empty(), "shared memory left behind: {left:?}");
+}
+
+struct Run {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+    report: Value,
+    out: PathBuf,
+    dir: PathBuf,
+    id: String,
+}
+
+impl Run {
+    fn process(&self, name: &str) -> &Value {
+        self.report["processes"].as_array().unwrap().iter().find(|p| p["process"] == name).unwrap()
+    }
+
+    fn counter(&self, process: &str, counter: &str) -> u64 {
+        self.process(process)["counters"][counter].as_u64().unwrap_or(0)
+    }
+
+    fn events(&self) -> Vec<Value> {
+        let text = std::fs::read_to_string(self.out.join("events.jsonl")).unwrap_or_default();
+        text.lines().filter_map(|l| serde_json::from_str(l).ok()).collect()
+    }
+
+    fn event(&self, process: &str, kind: &str) -> Option<Value> {
+        self.events().into_iter().find(|e| e["process"] == process && e["kind"] == kind)
+    }
+
+    /// The trace: header and rows.
+    fn trace(&self) -> (Vec<String>, Vec<Vec<f64>>) {
+        let text = std::fs::read_to_string(self.out.join("trace.csv")).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap().split(',').map(String::from).collect();
+        let rows = lines.map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
+        (header, rows)
+    }
+
+    fn finish(self) {
+        no_shared_memory_left(&self.id);
+        std::fs::remove_dir_all(&self.dir).unwrap();
+    }
+}
+
+/// `silrig run` with its own run id and folder, to the end.
+fn run(test: &str, args: &[&str]) -> Run {
+    let dir = temp_dir(test);
+    let id = run_id(test);
+    let out = dir.join("out");
+    let child = Command::new(SILRIG)
+        .arg("run")
+        .args(args)
+        .args(["--run-id", &id, "--out", out.to_str().unwrap(), "--no-baseline"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let o = wait_with_watchdog(child, Duration::from_secs(120));
+    let report = std::fs::read_to_string(out.join("report.json"))
+        .map(|t| serde_json::from_str(&t).unwrap())
+        .unwrap_or(Value::Null);
+    Run {
+        code: o.status.code(),
+        stdout: String::from_utf8_lossy(&o.stdout).into(),
+        stderr: String::from_utf8_lossy(&o.stderr).into(),
+        report,
+        out,
+        dir,
+        id,
+    }
+}
+
+fn robust() -> String {
+    format!("{ROOT}/configs/robust.toml")
+}
+
+/// A 10 s lockstep flight of robust.toml: every tick answered, the announced diagnostics in the trace, the
+/// attitude within 1 deg of the set points (0, 10, 0 deg) at the end.
+fn flies_lockstep_to_the_set_points(test: &str, controller_cmd: &str) {
+    let r = run(test, &["--mode", "lockstep", "--controller-cmd", controller_cmd, &robust()]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 1000);
+    assert_eq!(r.counter("plant", "command_misses"), 0, "a tick went unanswered");
+    assert_eq!(r.counter("controller", "commands_sent"), 1000);
+    assert_eq!(r.counter("controller", "commands_refused"), 0);
+    assert_eq!(r.process("controller")["ended"], "completed");
+    let (header, rows) = r.trace();
+    assert_eq!(rows.len(), 1000);
+    assert!(header.ends_with(&["err_phi_deg".into(), "err_theta_deg".into(), "err_psi_deg".into()]), "{header:?}");
+    let last = rows.last().unwrap();
+    for (angle, setpoint) in [("phi_deg", 0.0), ("theta_deg", 10.0), ("psi_deg", 0.0)] {
+        let value = last[header.iter().position(|h| h == angle).unwrap()];
+        assert!((value - setpoint).abs() < 1.0, "{angle} ends at {value}, set point {setpoint}");
+    }
+    r.finish();
+}
+
+/// A 2 s realtime flight: it completes, and the report covers the user's controller as ours (its compute time and
+/// IPC latency at the controller, sense-to-actuate at the plant).
+fn flies_realtime(test: &str, controller_cmd: &str) {
+    let r = run(test, &["--duration-s", "2", "--controller-cmd", controller_cmd, &robust()]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 200);
+    assert!(r.counter("controller", "commands_sent") > 150);
+    let latencies = |p: &str| r.process(p)["latencies"].as_array().unwrap().clone();
+    let count = |p: &str, name: &str| {
+        let name = format!("{p}.{name}");
+        latencies(p).iter().find(|l| l["name"] == name.as_str()).map_or(0, |l| l["summary"]["count"].as_u64().unwrap())
+    };
+    assert!(count("controller", "compute") > 150);
+    assert!(count("controller", "ipc_plant_to_controller") > 150);
+    assert!(count("plant", "sense_to_actuate") > 150);
+    assert_eq!(r.trace().1.len(), 200);
+    r.finish();
+}
+
+#[test]
+fn the_c_example_flies_lockstep_to_the_set_points() {
+    flies_lockstep_to_the_set_points("c-lock", c_example().to_str().unwrap());
+}
+
+#[test]
+fn the_python_example_flies_lockstep_to_the_set_points() {
+    flies_lockstep_to_the_set_points("py-lock", &python_example());
+}
+
+#[test]
+fn the_c_example_flies_2_s_realtime() {
+    flies_realtime("c-rt", c_example().to_str().unwrap());
+}
+
+#[test]
+fn the_python_example_flies_2_s_realtime() {
+    flies_realtime("py-rt", &python_example());
+}
+
+#[test]
+fn in_loop_faults_and_a_restart_reach_a_users_controller() {
+    let r = run(
+        "c-faults",
+        &[
+            "--duration-s",
+            "3",
+            "--controller-cmd",
+            c_example().to_str().unwrap(),
+            "--restart",
+            "on-failure",
+            "--fault",
+            "controller:drop@0.5s,ticks=10",
+            "--fault",
+            "controller:kill@1.5s,restart_after=0.3s",
+            &robust(),
+        ],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.event("controller", "fault-injected").is_some_and(|e| e["detail"].as_str().unwrap().contains("drop")));
+    assert!(r.event("launcher", "process-restarted").is_some());
+    // The restarted C controller resumed its integrators from the checkpoint it saved through the library.
+    let joined = r.event("controller", "controller-joined").expect("the restarted controller joined the flight");
+    assert!(joined["detail"].as_str().unwrap().contains("checkpointed state"), "{joined}");
+    assert!(r.event("plant", "controller-recovered").is_some());
+    assert_eq!(r.trace().1.len(), 300, "the logger lost rows");
+    r.finish();
+}
+
+#[test]
+fn a_controller_started_by_hand_joins_an_external_run() {
+    let dir = temp_dir("external");
+    let id = run_id("external");
+    let out = dir.join("out");
+    let launcher = Command::new(SILRIG)
+        .args(["run", "--mode", "lockstep", "--controller", "external", "--external-timeout-s", "60"])
+        .args(["--run-id", &id, "--out", out.to_str().unwrap(), &robust()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let env_file = out.join("controller.env");
+    let start = Instant::now();
+    while !env_file.exists() {
+        assert!(start.elapsed() < Duration::from_secs(20), "no controller.env");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(50));
+    let controller = Command::new("sh")
+        .arg("-c")
+        .arg(format!(". '{}' && exec {}", env_file.display(), python_example()))
+        .env("SILRIG_CLIENT_LIB", client_lib())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let c = wait_with_watchdog(controller, Duration::from_secs(90));
+    let o = wait_with_watchdog(launcher, Duration::from_secs(90));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(c.status.success(), "controller: {}", String::from_utf8_lossy(&c.stderr));
+    assert!(o.status.success(), "{}\n{stderr}", String::from_utf8_lossy(&o.stdout));
+    assert!(stderr.contains("waiting up to 60 s for a controller"), "{stderr}");
+    let report: Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let controller = report["processes"].as_array().unwrap().iter().find(|p| p["process"] == "controller").unwrap();
+    assert_eq!(controller["ended"], "completed", "the controller saw the run end by itself");
+    assert_eq!(controller["counters"]["commands_sent"], 1000);
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A client run by hand against `out`'s run, or none: (exit code, stderr).
+fn client(mode: &str, env: &[(&str, &str)]) -> (Option<i32>, String) {
+    let o = Command::new("python3")
+        .arg(Path::new(ROOT).join("tests/clients/misbehaving.py"))
+        .arg(mode)
+        .env("SILRIG_CLIENT_LIB", client_lib())
+        .envs(env.iter().copied())
+        .output()
+        .unwrap();
+    (o.status.code(), String::from_utf8_lossy(&o.stderr).into())
+}
+
+#[test]
+fn a_client_of_another_layout_or_sample_size_is_refused_by_name() {
+    let out = temp_dir("layout");
+    let env = [("SILRIG_RUN_ID", "nobody"), ("SILRIG_OUT", out.to_str().unwrap())];
+    let (code, err) = client("layout", &env);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("status -2") && err.contains("version 9") && err.contains("version 2"), "{err}");
+    let (code, err) = client("size", &env);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("status -2") && err.contains("plant sample is 184 bytes, the contract's is 192"), "{err}");
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn bad_variables_and_a_controller_without_a_rig_get_clear_errors() {
+    let out = temp_dir("no-rig");
+    let id = run_id("no-rig");
+    let (code, err) = client("open", &[("SILRIG_RUN_ID", &id), ("SILRIG_STALE_AFTER_PERIODS", "many")]);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("status -3") && err.contains("--stale-after-periods") && err.contains("many"), "{err}");
+    let env =
+        [("SILRIG_RUN_ID", id.as_str()), ("SILRIG_OUT", out.to_str().unwrap()), ("SILRIG_STARTUP_TIMEOUT_S", "0.3")];
+    let (code, err) = client("never", &env);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("status -4") && err.contains(&format!("no plant sample on run `{id}`")), "{err}");
+    // It said why in its report too, and left nothing behind.
+    let report = std::fs::read_to_string(out.join("controller.report.json")).unwrap();
+    assert!(report.contains("no plant sample"), "{report}");
+    no_shared_memory_left(&id);
+    let _ = std::fs::remove_dir_all(format!("/tmp/silrig_{id}"));
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn a_second_controller_is_refused_and_the_run_goes_on() {
+    let dir = temp_dir("second");
+    let id = run_id("second");
+    let out = dir.join("out");
+    let launcher = Command::new(SILRIG)
+        .args(["run", "--duration-s", "3", "--no-baseline", "--controller-cmd", &python_example()])
+        .args(["--run-id", &id, "--out", out.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while std::fs::read_to_string(out.join("trace.csv")).map_or(0, |t| t.lines().count()) < 20 {
+        assert!(start.elapsed() < Duration::from_secs(30), "the rig did not start");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let second = dir.join("second");
+    let (code, err) = client("open", &[("SILRIG_RUN_ID", &id), ("SILRIG_OUT", second.to_str().unwrap())]);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("status -5") && err.contains("second controller"), "{err}");
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+    assert_eq!(std::fs::read_to_string(out.join("trace.csv")).unwrap().lines().count(), 301);
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn nan_commands_are_refused_counted_held_and_reported() {
+    let r = run("nan", &["--mode", "lockstep", "--controller-cmd", &misbehaving("nan"), &robust()]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("controller", "commands_refused"), 50);
+    assert_eq!(r.counter("plant", "commands_refused_held"), 50);
+    let refused = r.event("controller", "command-refused").expect("an event for the refused commands");
+    assert_eq!(refused["tick"], 100);
+    assert!(refused["detail"].as_str().unwrap().contains("NaN"), "{refused}");
+    assert!(r.event("controller", "command-accepted").is_some());
+    // Every tick was still recorded, and no NaN reached the trace.
+    let (header, rows) = r.trace();
+    assert_eq!(rows.len(), 1000);
+    let aileron_cmd = header.iter().position(|h| h == "aileron_cmd_deg").unwrap();
+    assert!(rows.iter().all(|row| row[aileron_cmd].is_finite()));
+    r.finish();
+}
+
+#[test]
+fn a_controller_that_never_answers_leaves_the_plant_in_failsafe() {
+    let r = run("never", &["--duration-s", "2", "--controller-cmd", &misbehaving("never"), &robust()]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.event("plant", "controller-stale").is_some());
+    assert!(r.event("plant", "failsafe-engaged").is_some());
+    assert!(r.counter("plant", "failsafe_ticks") > 100);
+    assert!(r.counter("controller", "samples_unanswered") > 100);
+    assert_eq!(r.trace().1.len(), 200);
+    r.finish();
+}
+
+#[test]
+fn a_controller_that_exits_at_once_is_reported_with_its_status_and_stderr() {
+    let cmd = "python3 -c 'import sys; print(\"cannot find my gains file\", file=sys.stderr); sys.exit(3)'";
+    let r = run("exits", &["--duration-s", "1", "--startup-timeout-s", "1", "--controller-cmd", cmd, &robust()]);
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    let failures = r.report["failures"].to_string();
+    assert!(failures.contains("controller: exit status 3"), "{failures}");
+    assert!(failures.contains("cannot find my gains file"), "{failures}");
+    // The plant never flew without a controller: it says so in its report rather than recording a flight.
+    assert!(failures.contains("no controller and logger connected"), "{failures}");
+    r.finish();
+}
+
+#[test]
+fn a_controller_command_that_cannot_start_is_refused_before_anything_runs() {
+    let r = run("no-such", &["--controller-cmd", "./no/such/controller --fast"]);
+    assert_eq!(r.code, Some(2));
+    assert!(r.stderr.contains("cannot find `./no/such/controller`"), "{}", r.stderr);
+    let r2 = run("quote", &["--controller-cmd", "python3 'unbalanced"]);
+    assert_eq!(r2.code, Some(2));
+    assert!(r2.stderr.contains("unbalanced '"), "{}", r2.stderr);
+    r.finish();
+    r2.finish();
+}
