@@ -145,11 +145,17 @@ impl<T: WireSample> StreamSubscriber<T> {
     /// Take every pending sample, oldest first, and hand each to `on_sample`; returns how many. Also consumes the
     /// pending wake-ups, which a WaitSet callback must do or the WaitSet spins. Invalid samples are handed over too,
     /// marked in [`Received::invalid`] (the logger records them; a consumer must skip them).
-    pub fn drain(&self, mut on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
+    pub fn drain(&self, on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
         let stream = self.stream;
         self.listener
             .try_wait(|activation| self.note_event(activation.id.as_value()))
             .map_err(|e| IpcError::Transfer { stream, op: "listener wait", detail: format!("{e:?}") })?;
+        self.receive_all(on_sample)
+    }
+
+    /// [`StreamSubscriber::drain`] without consuming wake-ups: right after [`StreamSubscriber::wait`], which did.
+    pub fn receive_all(&self, mut on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
+        let stream = self.stream;
         let mut stats = self.stats.get();
         let mut tracker = self.tracker.get();
         let mut n = 0;

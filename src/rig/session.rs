@@ -372,18 +372,21 @@ impl ControllerSession {
         if self.pending.take().is_some() {
             self.rec.count("samples_unanswered", 1);
         }
+        // Every sample waiting is taken at each wake-up, so waiting first costs nothing: a sample that came since
+        // has left a wake-up behind.
         loop {
             if signals::termination_requested() {
                 return Ok(self.stop(StopReason::TerminationRequested));
-            }
-            if let Some(sample) = self.take_newest()? {
-                return Ok(Next::Sample(sample));
             }
             if self.samples.stats().finished_notices > 0 {
                 return Ok(self.stop(StopReason::RunEnded));
             }
             match self.samples.wait(self.stale_after)? {
-                WaitOutcome::Notified => {}
+                WaitOutcome::Notified => {
+                    if let Some(sample) = self.take_newest()? {
+                        return Ok(Next::Sample(sample));
+                    }
+                }
                 WaitOutcome::Interrupted => self.rec.count("interrupted_waits", 1),
                 WaitOutcome::TimedOut => self.on_plant_silent()?,
             }
@@ -404,7 +407,7 @@ impl ControllerSession {
         let mut newest = None;
         let mut fresh = 0u64;
         let mut invalid = 0u64;
-        self.samples.drain(|r| {
+        self.samples.receive_all(|r| {
             if r.invalid.is_some() {
                 invalid += 1;
             } else {
