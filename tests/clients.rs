@@ -8,9 +8,12 @@
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
+
+mod common;
+use common::{no_shared_memory_left, wait_with_watchdog};
 
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -71,33 +74,6 @@ fn python_example() -> String {
 fn misbehaving(mode: &str) -> String {
     client_lib();
     format!("python3 {ROOT}/tests/clients/misbehaving.py {mode}")
-}
-
-/// Wait for a child with a watchdog: past `limit` it is killed (by its pid) and reaped, and the test fails.
-fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
-    let start = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            return child.wait_with_output().unwrap();
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let out = child.wait_with_output().unwrap();
-            panic!("no end within {limit:?}; stderr: {}", String::from_utf8_lossy(&out.stderr));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-fn no_shared_memory_left(run_id: &str) {
-    let prefix = format!("sr_{run_id}_");
-    let left: Vec<String> = std::fs::read_dir("/dev/shm")
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().to_string())
-        .filter(|n| n.starts_with(&prefix))
-        .collect();
-    assert!(left.is_empty(), "shared memory left behind: {left:?}");
 }
 
 struct Run {
@@ -346,7 +322,6 @@ fn bad_variables_and_a_controller_without_a_rig_get_clear_errors() {
     let report = std::fs::read_to_string(out.join("controller.report.json")).unwrap();
     assert!(report.contains("no plant sample"), "{report}");
     no_shared_memory_left(&id);
-    let _ = std::fs::remove_dir_all(format!("/tmp/silrig_{id}"));
     std::fs::remove_dir_all(&out).unwrap();
 }
 

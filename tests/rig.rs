@@ -5,8 +5,11 @@
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+
+mod common;
+use common::{no_shared_memory_left, wait_with_watchdog};
 
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 
@@ -25,36 +28,8 @@ fn config(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("configs").join(format!("{name}.toml")).display().to_string()
 }
 
-/// Wait for a child with a watchdog: past `limit` it is killed (by its pid) and reaped, and the test fails.
-fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
-    let start = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            return child.wait_with_output().unwrap();
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let out = child.wait_with_output().unwrap();
-            panic!("no end within {limit:?}; stderr: {}", String::from_utf8_lossy(&out.stderr));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
 fn silrig_run(args: &[&str]) -> Child {
     Command::new(SILRIG).arg("run").args(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap()
-}
-
-fn no_shared_memory_left(run_id: &str) {
-    let prefix = format!("sr_{run_id}_");
-    let left: Vec<String> = std::fs::read_dir("/dev/shm")
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().to_string())
-        .filter(|n| n.starts_with(&prefix))
-        .collect();
-    assert!(left.is_empty(), "shared memory left behind: {left:?}");
-    assert!(!Path::new(&format!("/tmp/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
 }
 
 /// The trace's diagnostic columns came from the controller's announcement, not from the logger's fallback (checked

@@ -12,7 +12,7 @@
 use super::ProcessArgs;
 use super::plant::snapshot;
 use super::report::ProcessReport;
-pub use super::session::{BUMPLESS_BLEND_S, ControlCommand};
+pub use super::session::ControlCommand;
 use super::session::{ControllerSession, Next, SessionError};
 use crate::control::AttitudeController;
 use crate::scenario::Scenario;

@@ -285,6 +285,8 @@ impl ControllerSession {
             "plant_stale_deadlines",
             "errors",
             "commands_dropped",
+            "samples_unanswered",
+            "interrupted_waits",
         ]);
         let dt = scenario.timing.dt_s;
         let events = EventLog::new(&args.out, Role::Controller.label());
@@ -337,11 +339,6 @@ impl ControllerSession {
     /// The scenario the run flies (its period, set points, fault plan).
     pub fn scenario(&self) -> &Scenario {
         &self.scenario
-    }
-
-    /// The arguments the session was opened with.
-    pub fn args(&self) -> &ProcessArgs {
-        &self.args
     }
 
     /// The controller's step, s.

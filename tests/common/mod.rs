@@ -1,0 +1,35 @@
+//! Helpers the tests that start the rig's processes share: a watchdog that kills and reaps only the child it was
+//! given, and the check that a run left no shared memory behind.
+
+use std::path::Path;
+use std::process::{Child, Output};
+use std::time::{Duration, Instant};
+
+/// Wait for a child with a watchdog: past `limit` it is killed (by its pid) and reaped, and the test fails.
+pub fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().unwrap();
+            panic!("no end within {limit:?}; stderr: {}", String::from_utf8_lossy(&out.stderr));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// The run's `/dev/shm` files and iceoryx2 root folder are gone.
+pub fn no_shared_memory_left(run_id: &str) {
+    let prefix = format!("sr_{run_id}_");
+    let left: Vec<String> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n.starts_with(&prefix))
+        .collect();
+    assert!(left.is_empty(), "shared memory left behind: {left:?}");
+    assert!(!Path::new(&format!("/tmp/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
+}
