@@ -121,6 +121,20 @@ pub(super) struct RoleProcess {
 }
 
 impl RoleProcess {
+    /// A process just started, after `restarts` restarts of its role.
+    fn started(role: Role, process: ChildProcess, restarts: u32) -> Self {
+        Self {
+            role,
+            process,
+            planned_exit: false,
+            killed_by_plan: false,
+            exit_handled: false,
+            clean_exit_seen: None,
+            restarts,
+            restart_at: None,
+        }
+    }
+
     /// Ended for good: exited and no restart pending.
     fn ended_for_good(&self) -> bool {
         self.process.has_ended() && self.restart_at.is_none()
@@ -269,16 +283,7 @@ impl Supervisor {
                 continue;
             }
             let process = sup.spawn(role, false)?;
-            sup.processes.push(RoleProcess {
-                role,
-                process,
-                planned_exit: false,
-                killed_by_plan: false,
-                exit_handled: false,
-                clean_exit_seen: None,
-                restarts: 0,
-                restart_at: None,
-            });
+            sup.processes.push(RoleProcess::started(role, process, 0));
             std::thread::sleep(Duration::from_millis(20));
         }
         Ok(sup)
@@ -419,16 +424,7 @@ impl Supervisor {
             let (role, restarts) = (p.role, p.restarts + 1);
             let process = self.spawn(role, role.resumes())?;
             let pid = process.pid();
-            self.processes[i] = RoleProcess {
-                role,
-                process,
-                planned_exit: false,
-                killed_by_plan: false,
-                exit_handled: false,
-                clean_exit_seen: None,
-                restarts,
-                restart_at: None,
-            };
+            self.processes[i] = RoleProcess::started(role, process, restarts);
             self.events.emit(None, "process-restarted", format!("{role} as pid {pid} (restart {restarts})"));
         }
         Ok(())
