@@ -56,6 +56,10 @@ enum Command {
     },
     /// Run the three-process rig (plant, controller, logger over iceoryx2) and report control quality and timing.
     Run(silrig::rig::launcher::LaunchOptions),
+    /// Fly a suite of cases with one controller and give a verdict a CI pipeline can gate on: a table,
+    /// check.json and check.junit.xml. Exit status 0: every case passed; 1: a case failed; 2: nothing could be
+    /// judged (a malformed suite, a controller command that cannot run).
+    Check(silrig::check::CheckOptions),
     /// Print the wire contract a peer of the rig must match, or write it as a C header or a Python ctypes module.
     Contract {
         /// Write the C header (C11 or C++11) to this file.
@@ -127,6 +131,16 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             let report = silrig::rig::launcher::run(&opts)?;
             print!("{}", report.to_text());
             if !report.failures.is_empty() {
+                return Ok(ExitCode::FAILURE);
+            }
+        }
+        Command::Check(opts) => {
+            let verdict = silrig::check::run(&opts)?;
+            print!("{}", verdict.to_text());
+            if verdict.interrupted {
+                return Ok(ExitCode::from(130));
+            }
+            if !verdict.passed {
                 return Ok(ExitCode::FAILURE);
             }
         }

@@ -15,6 +15,7 @@
 
 pub mod actuator;
 pub mod bench;
+pub mod check;
 pub mod clock;
 pub mod contract;
 pub mod control;

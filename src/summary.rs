@@ -110,7 +110,8 @@ fn col(trace: &Trace, name: &str) -> Vec<f64> {
     trace.column(name).unwrap_or_else(|| vec![f64::NAN; trace.rows.len()])
 }
 
-fn settle_time(t: &[f64], x: &[f64], target: f64, band: f64) -> Option<f64> {
+/// The time after which `x` stays within `band` of `target`; `None` if it is outside at the end.
+pub fn settle_time(t: &[f64], x: &[f64], target: f64, band: f64) -> Option<f64> {
     let last_outside = x.iter().rposition(|v| !((v - target).abs() <= band));
     match last_outside {
         None => t.first().copied(),

@@ -229,6 +229,7 @@ impl PlantLoop {
             "command_misses",
             "commands_received",
             "commands_invalid",
+            "commands_refused_held",
             "failsafe_ticks",
             "samples_dropped",
         ]);

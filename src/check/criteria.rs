@@ -1,0 +1,674 @@
+//! The criteria of a check case (`[cases.criteria]`): what each one measures in a finished run, the limit it is
+//! held to, and the sentence that explains a failure to someone who has not read the code. Judged from the run's
+//! report (`report.json`) and trace alone, so the rig's controller and a user's are judged by the same code.
+
+use crate::fault::FaultAction;
+use crate::rig::RigMode;
+use crate::rig::run_report::RigReport;
+use crate::scenario::Scenario;
+use crate::summary::settle_time;
+use crate::topology::Role;
+use crate::trace::Trace;
+use serde::{Deserialize, Serialize};
+
+/// What a case's run must meet. Every key is optional; a case judges only what it names, plus `run_completed`,
+/// which every case checks.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Criteria {
+    /// The plant found an answer (a command, or a refusal) from the controller for every tick it flew.
+    #[serde(default)]
+    pub every_tick_answered: bool,
+    /// No command was NaN, infinite or out of range (refused by the controller's session or by the plant).
+    #[serde(default)]
+    pub no_invalid_command: bool,
+    /// The controller's compute time per tick, p99.
+    pub compute_p99: Option<Budget>,
+    /// From the plant publishing a sample to the answering command arriving at the plant, p99.
+    pub sense_to_actuate_p99: Option<Budget>,
+    /// Ticks whose command did not reach the plant by the time it needed it (refusals not counted), at most.
+    pub deadline_misses_max: Option<u64>,
+    /// phi, theta and psi each stay within `band_deg` of the set point from `within_s` on.
+    pub settled: Option<Settled>,
+    /// Largest angle of attack over the run, deg.
+    pub alpha_max_deg: Option<f64>,
+    /// Largest |p|, |q|, |r| from `after_s` on.
+    pub body_rate_max_dps: Option<BodyRateLimit>,
+    /// Ticks in which a surface's rate limit cut its motion, as a fraction of the ticks flown (worst surface).
+    pub rate_limit_fraction_max: Option<f64>,
+    /// No sustained oscillation of an angle or surface in the last 3 s (the summary's limit-cycle detector).
+    #[serde(default)]
+    pub no_sustained_oscillation: bool,
+    /// After each restarted or resumed process (kill/term with `restart_after`, stop), the loop flies again within
+    /// this many seconds of the process coming back.
+    pub recovered_within_s: Option<f64>,
+    /// The plant's failsafe engaged during a fault and released when the controller came back.
+    #[serde(default)]
+    pub failsafe_engaged_and_released: bool,
+    /// Bumpless resume: after each controller fault it comes back from, how far its first command is from where
+    /// the surface actually was, deg (worst surface).
+    pub resume_jump_max_deg: Option<f64>,
+    /// Two runs of the case give bit-identical commands (lockstep only).
+    #[serde(default)]
+    pub deterministic: bool,
+}
+
+/// A time budget: an absolute time, or a multiple of the OS floor (the p99 wake-up lateness of a bare timer loop
+/// measured beside the same run).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Budget {
+    /// At most this many µs.
+    pub max_us: Option<f64>,
+    /// At most this multiple of the OS floor's p99.
+    pub max_os_floor_ratio: Option<f64>,
+}
+
+/// `settled = { within_s = T, band_deg = B }`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Settled {
+    /// From this time on, s.
+    pub within_s: f64,
+    /// Half-width of the band around the set point, deg.
+    pub band_deg: f64,
+}
+
+/// `body_rate_max_dps = { after_s = T, max = X }`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyRateLimit {
+    /// From this time on, s.
+    pub after_s: f64,
+    /// Largest |p|, |q|, |r|, deg/s.
+    pub max: f64,
+}
+
+/// One criterion judged.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Judgement {
+    /// The criterion's key.
+    pub criterion: String,
+    /// What was measured, with its unit.
+    pub measured: String,
+    /// The limit, with its unit.
+    pub limit: String,
+    /// Whether the run met it.
+    pub passed: bool,
+    /// On failure: what went wrong, in words, and where to look.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why_failed: Option<String>,
+}
+
+/// One run of a case: its merged report and its logged trace (None if it logged nothing).
+pub struct RunEvidence {
+    /// `report.json`.
+    pub report: RigReport,
+    /// `trace.csv`.
+    pub trace: Option<Trace>,
+}
+
+fn positive(key: &str, v: f64) -> Result<(), String> {
+    if v > 0.0 && v.is_finite() { Ok(()) } else { Err(format!("`criteria.{key}` must be a positive number, got {v}")) }
+}
+
+/// Faults of the case after which a process comes back: (index in the plan, when it comes back, s).
+fn comebacks(scenario: &Scenario, target: Option<Role>) -> Vec<(usize, f64)> {
+    let mut order: Vec<(usize, &crate::fault::Fault)> = scenario.faults.iter().enumerate().collect();
+    order.sort_by(|a, b| a.1.at_s.total_cmp(&b.1.at_s));
+    order
+        .into_iter()
+        .filter(|(_, f)| target.is_none_or(|t| f.target() == t))
+        .filter_map(|(i, f)| match f.action() {
+            FaultAction::Kill | FaultAction::Term => f.restart_after_s.map(|r| (i, f.at_s + r)),
+            FaultAction::Stop => f.duration_s.map(|d| (i, f.at_s + d)),
+            _ => None,
+        })
+        .collect()
+}
+
+impl Criteria {
+    /// Whether the case must be flown twice.
+    pub fn runs(&self) -> usize {
+        if self.deterministic { 2 } else { 1 }
+    }
+
+    /// Refuse what cannot be judged for a case of this mode and scenario (before anything flies).
+    pub fn validate(&self, mode: RigMode, scenario: &Scenario) -> Result<(), String> {
+        let duration = scenario.timing.duration_s;
+        for (key, budget) in [("compute_p99", &self.compute_p99), ("sense_to_actuate_p99", &self.sense_to_actuate_p99)]
+        {
+            let Some(b) = budget else { continue };
+            if b.max_us.is_none() && b.max_os_floor_ratio.is_none() {
+                return Err(format!("`criteria.{key}` needs `max_us`, `max_os_floor_ratio` or both"));
+            }
+            if let Some(us) = b.max_us {
+                positive(&format!("{key}.max_us"), us)?;
+            }
+            if let Some(r) = b.max_os_floor_ratio {
+                positive(&format!("{key}.max_os_floor_ratio"), r)?;
+                if mode == RigMode::Lockstep {
+                    return Err(format!(
+                        "`criteria.{key}.max_os_floor_ratio` needs `mode = \"realtime\"` (the OS floor is measured \
+                         beside a realtime run)"
+                    ));
+                }
+            }
+        }
+        if let Some(s) = self.settled {
+            positive("settled.band_deg", s.band_deg)?;
+            if !(s.within_s >= 0.0 && s.within_s < duration) {
+                return Err(format!("`criteria.settled.within_s` must be within 0..{duration} s, got {}", s.within_s));
+            }
+        }
+        if let Some(a) = self.alpha_max_deg {
+            positive("alpha_max_deg", a)?;
+        }
+        if let Some(b) = self.body_rate_max_dps {
+            positive("body_rate_max_dps.max", b.max)?;
+            if !(b.after_s >= 0.0 && b.after_s < duration) {
+                return Err(format!(
+                    "`criteria.body_rate_max_dps.after_s` must be within 0..{duration} s, got {}",
+                    b.after_s
+                ));
+            }
+        }
+        if let Some(f) = self.rate_limit_fraction_max
+            && !(0.0..=1.0).contains(&f)
+        {
+            return Err(format!("`criteria.rate_limit_fraction_max` must be a fraction in 0..1, got {f}"));
+        }
+        if let Some(t) = self.recovered_within_s {
+            positive("recovered_within_s", t)?;
+            if comebacks(scenario, None).is_empty() {
+                return Err("`criteria.recovered_within_s` needs a fault a process comes back from (kill or term \
+                            with restart_after, or stop) in `faults`"
+                    .into());
+            }
+        }
+        if let Some(j) = self.resume_jump_max_deg {
+            positive("resume_jump_max_deg", j)?;
+            if comebacks(scenario, Some(Role::Controller)).is_empty() {
+                return Err("`criteria.resume_jump_max_deg` needs a controller fault it comes back from (kill or \
+                            term with restart_after, or stop) in `faults`"
+                    .into());
+            }
+        }
+        if self.failsafe_engaged_and_released && scenario.faults.is_empty() {
+            return Err("`criteria.failsafe_engaged_and_released` needs a fault in `faults`".into());
+        }
+        if self.deterministic && mode != RigMode::Lockstep {
+            return Err("`criteria.deterministic` needs `mode = \"lockstep\"` (realtime runs differ by design)".into());
+        }
+        Ok(())
+    }
+
+    /// Judge the case's runs: `run_completed` first, then each criterion the case names, in a fixed order.
+    pub fn judge(&self, scenario: &Scenario, runs: &[RunEvidence]) -> Vec<Judgement> {
+        let first = &runs[0];
+        let mut out = vec![run_completed(scenario, runs)];
+        let report = &first.report;
+        let trace = first.trace.as_ref();
+        if self.every_tick_answered {
+            out.push(every_tick_answered(report));
+        }
+        if self.no_invalid_command {
+            out.push(no_invalid_command(report));
+        }
+        if let Some(b) = &self.compute_p99 {
+            out.push(budget(report, "compute_p99", "controller.compute", b));
+        }
+        if let Some(b) = &self.sense_to_actuate_p99 {
+            out.push(budget(report, "sense_to_actuate_p99", "plant.sense_to_actuate", b));
+        }
+        if let Some(n) = self.deadline_misses_max {
+            out.push(deadline_misses(report, n));
+        }
+        if let Some(s) = self.settled {
+            out.push(settled(scenario, trace, s));
+        }
+        if let Some(a) = self.alpha_max_deg {
+            out.push(alpha_max(trace, a));
+        }
+        if let Some(b) = self.body_rate_max_dps {
+            out.push(body_rate_max(trace, b));
+        }
+        if let Some(f) = self.rate_limit_fraction_max {
+            out.push(rate_limit_fraction(report, f));
+        }
+        if self.no_sustained_oscillation {
+            out.push(no_sustained_oscillation(report));
+        }
+        if let Some(t) = self.recovered_within_s {
+            out.push(recovered_within(scenario, report, t));
+        }
+        if self.failsafe_engaged_and_released {
+            out.push(failsafe_engaged_and_released(report));
+        }
+        if let Some(j) = self.resume_jump_max_deg {
+            out.push(resume_jump(scenario, report, trace, j));
+        }
+        if self.deterministic {
+            out.push(deterministic(runs));
+        }
+        out
+    }
+}
+
+fn judgement(criterion: &str, measured: String, limit: String, failure: Option<String>) -> Judgement {
+    Judgement { criterion: criterion.into(), measured, limit, passed: failure.is_none(), why_failed: failure }
+}
+
+fn counter(report: &RigReport, role: Role, name: &str) -> Option<u64> {
+    report.processes.iter().find(|p| p.process == role.label()).and_then(|p| p.counters.get(name).copied())
+}
+
+/// A judgement that could not be made because the run left no evidence for it: a failure, saying why.
+fn no_evidence(criterion: &str, limit: String, what: &str) -> Judgement {
+    judgement(criterion, "-".into(), limit, Some(format!("nothing to judge: {what}; see run_completed")))
+}
+
+fn run_completed(scenario: &Scenario, runs: &[RunEvidence]) -> Judgement {
+    let duration = scenario.timing.duration_s;
+    let limit = format!("{duration:.2} s flown, no process failed");
+    let mut problems = Vec::new();
+    let mut flown_s = f64::INFINITY;
+    for (i, run) in runs.iter().enumerate() {
+        let which = if runs.len() > 1 { format!("run {}: ", i + 1) } else { String::new() };
+        problems.extend(run.report.failures.iter().map(|f| format!("{which}{f}")));
+        let last_t = run.trace.as_ref().and_then(|t| t.column("t_s")).and_then(|t| t.last().copied());
+        // The trace's last row is the start of the last tick.
+        flown_s = flown_s.min(last_t.map_or(0.0, |t| t + scenario.timing.dt_s));
+        match last_t {
+            None => problems.push(format!("{which}the logger recorded no tick")),
+            Some(t) if t < duration - 1.5 * scenario.timing.dt_s => problems.push(format!(
+                "{which}the logged flight ended at {:.2} s of {duration:.2} s",
+                t + scenario.timing.dt_s
+            )),
+            Some(_) => {}
+        }
+    }
+    let measured =
+        format!("{flown_s:.2} s flown, {} failure(s)", runs.iter().map(|r| r.report.failures.len()).sum::<usize>());
+    let failure = (!problems.is_empty()).then(|| {
+        format!(
+            "the run did not finish cleanly: {}. The processes' stderr logs and events.jsonl in the run folder say \
+             what happened",
+            problems.join("; ")
+        )
+    });
+    judgement("run_completed", measured, limit, failure)
+}
+
+fn every_tick_answered(report: &RigReport) -> Judgement {
+    let limit = "0 ticks unanswered".to_string();
+    let (Some(misses), Some(ticks)) =
+        (counter(report, Role::Plant, "command_misses"), counter(report, Role::Plant, "ticks"))
+    else {
+        return no_evidence("every_tick_answered", limit, "the plant wrote no report");
+    };
+    let refused = counter(report, Role::Plant, "commands_refused_held").unwrap_or(0);
+    let unanswered = misses.saturating_sub(refused);
+    let failure = (unanswered > 0).then(|| {
+        format!(
+            "{unanswered} of {ticks} plant ticks found no answer from the controller when the plant needed it, so \
+             the plant held the previous command (or flew its failsafe); a controller that is too slow, stalled or \
+             gone leaves ticks unanswered"
+        )
+    });
+    judgement("every_tick_answered", format!("{unanswered} of {ticks} ticks unanswered"), limit, failure)
+}
+
+fn no_invalid_command(report: &RigReport) -> Judgement {
+    let limit = "0 invalid commands".to_string();
+    if counter(report, Role::Plant, "ticks").is_none() {
+        return no_evidence("no_invalid_command", limit, "the plant wrote no report");
+    }
+    let held = counter(report, Role::Plant, "commands_refused_held").unwrap_or(0);
+    let refused = counter(report, Role::Controller, "commands_refused").unwrap_or(0).max(held);
+    let invalid = counter(report, Role::Plant, "commands_invalid").unwrap_or(0);
+    let n = refused + invalid;
+    let failure = (n > 0).then(|| {
+        format!(
+            "the controller produced {n} command(s) that were NaN, infinite or out of range ({refused} refused \
+             before sending, {invalid} rejected by the plant); the plant held the previous command each time. \
+             events.jsonl has a `command-refused` event naming the field and value"
+        )
+    });
+    judgement("no_invalid_command", format!("{n} invalid"), limit, failure)
+}
+
+fn budget(report: &RigReport, criterion: &str, latency: &str, b: &Budget) -> Judgement {
+    let floor = report.timer_baseline.as_ref().map(|t| t.lateness.p99_us);
+    let mut limits = Vec::new();
+    let mut limit_us = f64::INFINITY;
+    if let Some(us) = b.max_us {
+        limits.push(format!("{us:.1} us"));
+        limit_us = limit_us.min(us);
+    }
+    if let Some(r) = b.max_os_floor_ratio {
+        match floor {
+            Some(f) => {
+                limits.push(format!("{r}x OS floor p99 ({:.1} us)", r * f));
+                limit_us = limit_us.min(r * f);
+            }
+            None => limits.push(format!("{r}x OS floor p99 (not measured)")),
+        }
+    }
+    let limit = limits.join(" and ");
+    let Some(l) = report.latency(latency).filter(|l| l.count > 0) else {
+        return no_evidence(criterion, limit, &format!("no `{latency}` values were recorded"));
+    };
+    let ratio = floor.map(|f| format!(" = {:.2}x OS floor", l.p99_us / f)).unwrap_or_default();
+    let measured = format!("{:.1} us{ratio}", l.p99_us);
+    if b.max_os_floor_ratio.is_some() && floor.is_none() {
+        return judgement(
+            criterion,
+            measured,
+            limit,
+            Some("the OS floor was not measured beside this run (the timer-baseline loop wrote no report)".into()),
+        );
+    }
+    let what = if latency == "controller.compute" {
+        "the controller's compute time per tick"
+    } else {
+        "the time from the plant publishing a sample to the controller's answer arriving at the plant"
+    };
+    let failure = (l.p99_us > limit_us).then(|| {
+        format!(
+            "{what} exceeded its budget in more than 1 % of the ticks (p99 {:.1} us against {limit_us:.1} us, max \
+             {:.1} us over {} ticks); latency.png in the run folder shows the whole distribution",
+            l.p99_us, l.max_us, l.count
+        )
+    });
+    judgement(criterion, measured, limit, failure)
+}
+
+fn deadline_misses(report: &RigReport, max: u64) -> Judgement {
+    let limit = format!("at most {max}");
+    let Some(misses) = counter(report, Role::Plant, "command_misses") else {
+        return no_evidence("deadline_misses_max", limit, "the plant wrote no report");
+    };
+    let late = misses.saturating_sub(counter(report, Role::Plant, "commands_refused_held").unwrap_or(0));
+    let failure = (late > max).then(|| {
+        format!(
+            "on {late} ticks the controller's command had not reached the plant when the plant needed it (at most \
+             {max} allowed); the plant held the previous command. The report's `command age at use` says by how \
+             many ticks"
+        )
+    });
+    judgement("deadline_misses_max", format!("{late}"), limit, failure)
+}
+
+fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement {
+    let limit = format!("within {} deg from {} s", s.band_deg, s.within_s);
+    let Some(trace) = trace else { return no_evidence("settled", limit, "no trace was logged") };
+    let t = trace.column("t_s").unwrap_or_default();
+    let sp = &scenario.setpoint;
+    let settle_times: Vec<(&str, Option<f64>)> = [("phi", sp.phi_deg), ("theta", sp.theta_deg), ("psi", sp.psi_deg)]
+        .into_iter()
+        .map(|(name, setpoint)| {
+            (name, settle_time(&t, &trace.column(&format!("{name}_deg")).unwrap_or_default(), setpoint, s.band_deg))
+        })
+        .collect();
+    // The axis that settled last, or one that never did.
+    let (axis, at) = settle_times
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.unwrap_or(f64::INFINITY).total_cmp(&b.1.unwrap_or(f64::INFINITY)))
+        .expect("three axes");
+    let measured = match at {
+        Some(a) => format!("{axis} settled at {a:.2} s"),
+        None => format!("{axis} never settled"),
+    };
+    let failure = match at {
+        Some(a) if a <= s.within_s => None,
+        Some(a) => Some(format!(
+            "{axis} only stayed within {} deg of its set point from {a:.2} s on, later than the {} s allowed; \
+             closed_loop.png in the run folder shows the response",
+            s.band_deg, s.within_s
+        )),
+        None => Some(format!(
+            "{axis} was still more than {} deg from its set point at the end of the run; closed_loop.png in the run \
+             folder shows the response",
+            s.band_deg
+        )),
+    };
+    judgement("settled", measured, limit, failure)
+}
+
+/// Largest |column| over rows with t >= from_s (NaN-free), with the time it happened.
+fn peak_abs(trace: &Trace, column: &str, from_s: f64) -> Option<(f64, f64)> {
+    let t = trace.column("t_s")?;
+    let x = trace.column(column)?;
+    t.iter()
+        .zip(&x)
+        .filter(|(ti, v)| **ti >= from_s && v.is_finite())
+        .map(|(ti, v)| (v.abs(), *ti))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+fn alpha_max(trace: Option<&Trace>, max: f64) -> Judgement {
+    let limit = format!("{max} deg");
+    let Some((alpha, at)) = trace.and_then(|t| peak_abs(t, "alpha_deg", f64::NEG_INFINITY)) else {
+        return no_evidence("alpha_max_deg", limit, "no trace was logged");
+    };
+    let failure = (alpha > max)
+        .then(|| format!("the angle of attack reached {alpha:.2} deg at {at:.2} s, beyond the {max} deg allowed"));
+    judgement("alpha_max_deg", format!("{alpha:.2} deg"), limit, failure)
+}
+
+fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgement {
+    let limit = format!("{} deg/s after {} s", b.max, b.after_s);
+    let Some(trace) = trace else { return no_evidence("body_rate_max_dps", limit, "no trace was logged") };
+    let peaks: Vec<(&str, f64, f64)> = ["p", "q", "r"]
+        .iter()
+        .filter_map(|n| peak_abs(trace, &format!("{n}_dps"), b.after_s).map(|(v, t)| (*n, v, t)))
+        .collect();
+    let Some(&(name, rate, at)) = peaks.iter().max_by(|a, c| a.1.total_cmp(&c.1)) else {
+        return no_evidence("body_rate_max_dps", limit, "the trace ends before `after_s`");
+    };
+    let failure = (rate > b.max).then(|| {
+        format!(
+            "|{name}| reached {rate:.2} deg/s at {at:.2} s, after the {} s by which rates should be below {} deg/s",
+            b.after_s, b.max
+        )
+    });
+    judgement("body_rate_max_dps", format!("|{name}| {rate:.2} deg/s"), limit, failure)
+}
+
+fn rate_limit_fraction(report: &RigReport, max: f64) -> Judgement {
+    let limit = format!("{:.1} % of ticks", max * 100.0);
+    let Some(s) = &report.control else { return no_evidence("rate_limit_fraction_max", limit, "no trace was logged") };
+    let ticks = s.ticks.max(1) as f64;
+    let Some(worst) = s.surfaces.iter().max_by_key(|f| f.ticks_at_rate_limit) else {
+        return no_evidence("rate_limit_fraction_max", limit, "no surfaces in the summary");
+    };
+    let fraction = worst.ticks_at_rate_limit as f64 / ticks;
+    let failure = (fraction > max).then(|| {
+        format!(
+            "the {} spent {} of {} ticks ({:.1} %) at its rate limit: the controller asks for more than the actuator \
+             can give, which costs phase margin and can drive a limit cycle",
+            worst.name,
+            worst.ticks_at_rate_limit,
+            s.ticks,
+            fraction * 100.0
+        )
+    });
+    judgement("rate_limit_fraction_max", format!("{} {:.1} %", worst.name, fraction * 100.0), limit, failure)
+}
+
+fn no_sustained_oscillation(report: &RigReport) -> Judgement {
+    let limit = "none in the last 3 s".to_string();
+    let Some(s) = &report.control else {
+        return no_evidence("no_sustained_oscillation", limit, "no trace was logged");
+    };
+    let sustained: Vec<String> = s
+        .oscillations
+        .iter()
+        .filter(|o| o.sustained)
+        .map(|o| format!("{} +-{:.2} every {:.2} s", o.signal, o.amplitude, o.period_s))
+        .collect();
+    let measured = if sustained.is_empty() { "none".to_string() } else { sustained.join(", ") };
+    let failure = (!sustained.is_empty()).then(|| {
+        format!(
+            "the loop did not come to rest: {} in the last 3 s of the run, not decaying (a limit cycle, typically \
+             from too much gain against the actuators' rate limits or the loop's delay)",
+            sustained.join(", ")
+        )
+    });
+    judgement("no_sustained_oscillation", measured, limit, failure)
+}
+
+fn recovered_within(scenario: &Scenario, report: &RigReport, max_s: f64) -> Judgement {
+    let limit = format!("{max_s} s after each comeback");
+    let mut worst: Option<(String, f64)> = None;
+    let mut never = Vec::new();
+    for (i, back_s) in comebacks(scenario, None) {
+        let desc = scenario.faults[i].describe();
+        let record = report.faults.iter().find(|r| r.fault == desc);
+        match record.and_then(|r| r.recovered_at_s) {
+            Some(rec) => {
+                let took = (rec - back_s).max(0.0);
+                if worst.as_ref().is_none_or(|w| took > w.1) {
+                    worst = Some((desc, took));
+                }
+            }
+            None => never.push(desc),
+        }
+    }
+    if !never.is_empty() {
+        return judgement(
+            "recovered_within_s",
+            "never".into(),
+            limit,
+            Some(format!(
+                "the loop never recovered from: {}; the fault table of the report and events.jsonl say what was \
+                 seen",
+                never.join("; ")
+            )),
+        );
+    }
+    let (desc, took) = worst.unwrap_or_default();
+    let failure = (took > max_s).then(|| {
+        format!(
+            "after `{desc}` the loop took {took:.3} s from the process coming back to flying again ({max_s} s allowed)"
+        )
+    });
+    judgement("recovered_within_s", format!("{took:.3} s"), limit, failure)
+}
+
+fn failsafe_engaged_and_released(report: &RigReport) -> Judgement {
+    let limit = "engaged, then released".to_string();
+    let engaged = report.faults.iter().find_map(|r| r.failsafe_at_s.map(|f| (r, f)));
+    let Some((record, at)) = engaged else {
+        return judgement(
+            "failsafe_engaged_and_released",
+            "never engaged".into(),
+            limit,
+            Some(
+                "no fault made the plant engage its failsafe (the controller was never silent for longer than \
+                  --controller-hold-ms)"
+                    .into(),
+            ),
+        );
+    };
+    match record.recovered_at_s.filter(|r| *r >= at) {
+        Some(rel) => {
+            judgement("failsafe_engaged_and_released", format!("engaged {at:.3} s, released {rel:.3} s"), limit, None)
+        }
+        None => judgement(
+            "failsafe_engaged_and_released",
+            format!("engaged {at:.3} s, never released"),
+            limit,
+            Some(format!(
+                "the failsafe engaged at {at:.3} s during `{}` and the controller never took over again",
+                record.fault
+            )),
+        ),
+    }
+}
+
+const COMMAND_COLUMNS: [&str; 3] = ["aileron_cmd_deg", "elevator_cmd_deg", "rudder_cmd_deg"];
+const SURFACE_COLUMNS: [&str; 3] = ["aileron_deg", "elevator_deg", "rudder_deg"];
+
+fn resume_jump(scenario: &Scenario, report: &RigReport, trace: Option<&Trace>, max_deg: f64) -> Judgement {
+    let limit = format!("{max_deg} deg");
+    let Some(trace) = trace else { return no_evidence("resume_jump_max_deg", limit, "no trace was logged") };
+    let t = trace.column("t_s").unwrap_or_default();
+    let column = |name: &str| trace.column(name).unwrap_or_default();
+    let commands: Vec<Vec<f64>> = COMMAND_COLUMNS.iter().map(|c| column(c)).collect();
+    let actual: Vec<Vec<f64>> = SURFACE_COLUMNS.iter().map(|c| column(c)).collect();
+    let has_command = |k: usize| commands.iter().all(|c| c.get(k).is_some_and(|v| v.is_finite()));
+    // Per comeback: the first command after it against where the surface actually was at that tick.
+    let mut worst: Option<(f64, &str, f64)> = None;
+    let mut resumed = 0;
+    for (i, back_s) in comebacks(scenario, Some(Role::Controller)) {
+        let fault = &scenario.faults[i];
+        if report.faults.iter().find(|r| r.fault == fault.describe()).and_then(|r| r.recovered_at_s).is_none() {
+            continue;
+        }
+        let Some(k) = (0..t.len()).find(|&k| t[k] >= back_s - 1e-9 && has_command(k)) else { continue };
+        resumed += 1;
+        for (c, name) in COMMAND_COLUMNS.iter().enumerate() {
+            let step = (commands[c][k] - actual[c][k]).abs();
+            if worst.is_none_or(|w| step > w.0) {
+                worst = Some((step, name, t[k]));
+            }
+        }
+    }
+    let Some((step, column, at)) = worst.filter(|_| resumed > 0) else {
+        return judgement(
+            "resume_jump_max_deg",
+            "no resume".into(),
+            limit,
+            Some("the controller never commanded again after its fault; see recovered_within_s".into()),
+        );
+    };
+    let failure = (step > max_deg).then(|| {
+        format!(
+            "the controller's first command after it came back ({column} at {at:.2} s) was {step:.2} deg away from \
+             where the surface was: the takeover was not bumpless (a restarted controller should start from its \
+             checkpoint and blend in from the surfaces' positions)"
+        )
+    });
+    judgement("resume_jump_max_deg", format!("{column} {step:.2} deg"), limit, failure)
+}
+
+fn deterministic(runs: &[RunEvidence]) -> Judgement {
+    let limit = "2 runs, identical commands".to_string();
+    let (Some(a), Some(b)) = (runs[0].trace.as_ref(), runs.get(1).and_then(|r| r.trace.as_ref())) else {
+        return no_evidence("deterministic", limit, "a run logged no trace");
+    };
+    let columns =
+        |t: &Trace| -> Vec<Vec<f64>> { COMMAND_COLUMNS.iter().map(|c| t.column(c).unwrap_or_default()).collect() };
+    let (ca, cb) = (columns(a), columns(b));
+    let t = a.column("t_s").unwrap_or_default();
+    let rows = a.rows.len().min(b.rows.len());
+    for k in 0..rows {
+        for (c, name) in COMMAND_COLUMNS.iter().enumerate() {
+            if ca[c][k].to_bits() != cb[c][k].to_bits() {
+                return judgement(
+                    "deterministic",
+                    format!("differ from tick {k}"),
+                    limit,
+                    Some(format!(
+                        "the same scenario flown twice gave different commands: at tick {k} (t = {:.2} s) {name} was \
+                         {} in run 1 and {} in run 2; a controller that reads the clock, a random source without a \
+                         fixed seed or uninitialised memory cannot be replayed or regression-tested",
+                        t[k], ca[c][k], cb[c][k]
+                    )),
+                );
+            }
+        }
+    }
+    if a.rows.len() != b.rows.len() {
+        return judgement(
+            "deterministic",
+            format!("{} vs {} ticks", a.rows.len(), b.rows.len()),
+            limit,
+            Some("the two runs logged a different number of ticks".into()),
+        );
+    }
+    judgement("deterministic", format!("identical over {rows} ticks"), limit, None)
+}

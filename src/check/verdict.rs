@@ -1,0 +1,272 @@
+//! The verdict of a check and its three forms: the table a person reads, `check.json`, and `check.junit.xml` (one
+//! `<testsuite>` per case, one `<testcase>` per criterion) for GitLab, Jenkins and GitHub test reporters.
+
+use super::criteria::Judgement;
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The verdict file.
+pub const JSON_FILE: &str = "check.json";
+/// The JUnit XML file.
+pub const JUNIT_FILE: &str = "check.junit.xml";
+
+/// One case judged.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CaseVerdict {
+    /// The case's name.
+    pub name: String,
+    /// Why it is in the suite.
+    pub why: String,
+    /// realtime or lockstep.
+    pub mode: String,
+    /// The faults injected (`--fault` syntax).
+    pub faults: Vec<String>,
+    /// Whether every criterion passed.
+    pub passed: bool,
+    /// Wall time of the case, s.
+    pub wall_s: f64,
+    /// The run folders (plots, report, trace), one per run.
+    pub run_dirs: Vec<String>,
+    /// The command that runs just this case again.
+    pub reproduce: String,
+    /// Each criterion, `run_completed` first.
+    pub judgements: Vec<Judgement>,
+}
+
+/// The whole check (`check.json`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Verdict {
+    /// Suite name.
+    pub suite: String,
+    /// Suite file (None: the embedded default suite).
+    pub suite_file: Option<String>,
+    /// What the suite is for.
+    pub description: String,
+    /// The controller judged: `silrig-controller` or the `--controller-cmd` command.
+    pub controller: String,
+    /// Output folder.
+    pub out_dir: String,
+    /// Start, s since the Unix epoch.
+    pub started_unix_s: u64,
+    /// Wall time of the whole check, s.
+    pub wall_s: f64,
+    /// Stopped by SIGINT/SIGTERM before every case ran.
+    pub interrupted: bool,
+    /// Cases selected to run (fewer ran if interrupted).
+    pub cases_in_suite: usize,
+    /// True only if every selected case ran and passed.
+    pub passed: bool,
+    /// The cases, in suite order.
+    pub cases: Vec<CaseVerdict>,
+}
+
+/// Seconds since the Unix epoch.
+pub fn unix_now_s() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs())
+}
+
+/// `YYYYMMDD-HHMMSS` in UTC, of `unix_s` or now.
+pub fn utc_stamp(unix_s: Option<u64>) -> String {
+    let s = unix_s.unwrap_or_else(unix_now_s);
+    let (days, secs) = ((s / 86_400) as i64, s % 86_400);
+    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1_460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!("{year:04}{month:02}{day:02}-{:02}{:02}{:02}", secs / 3600, secs / 60 % 60, secs % 60)
+}
+
+fn xml_escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out += "&amp;",
+            '<' => out += "&lt;",
+            '>' => out += "&gt;",
+            '"' => out += "&quot;",
+            '\'' => out += "&apos;",
+            // XML 1.0 forbids most control characters, even escaped.
+            c if (c as u32) < 0x20 && !matches!(c, '\n' | '\r' | '\t') => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+impl Verdict {
+    /// Set `passed`: every selected case ran and passed.
+    pub fn concluded(mut self) -> Self {
+        self.passed =
+            !self.interrupted && self.cases.len() == self.cases_in_suite && self.cases.iter().all(|c| c.passed);
+        self
+    }
+
+    /// Criteria judged, and how many failed.
+    pub fn counts(&self) -> (usize, usize) {
+        let all = self.cases.iter().flat_map(|c| &c.judgements);
+        let failed = all.clone().filter(|j| !j.passed).count();
+        (all.count(), failed)
+    }
+
+    /// The table a person reads, each failure explained with the command that reproduces it, and the verdict.
+    pub fn to_text(&self) -> String {
+        let mut out = format!(
+            "silrig check: suite {} ({} case{}), controller {}\n\n",
+            self.suite,
+            self.cases.len(),
+            if self.cases.len() == 1 { "" } else { "s" },
+            self.controller
+        );
+        let w_case = self.cases.iter().map(|c| c.name.len()).max().unwrap_or(4).max(4);
+        let rows: Vec<(&str, &Judgement)> =
+            self.cases.iter().flat_map(|c| c.judgements.iter().map(move |j| (c.name.as_str(), j))).collect();
+        let w_crit = rows.iter().map(|(_, j)| j.criterion.len()).max().unwrap_or(9).max(9);
+        let w_meas = rows.iter().map(|(_, j)| j.measured.len()).max().unwrap_or(8).max(8);
+        let w_lim = rows.iter().map(|(_, j)| j.limit.len()).max().unwrap_or(5).max(5);
+        let _ = writeln!(
+            out,
+            "{:<w_case$}  {:<w_crit$}  {:<w_meas$}  {:<w_lim$}  result",
+            "case", "criterion", "measured", "limit"
+        );
+        for case in &self.cases {
+            for (i, j) in case.judgements.iter().enumerate() {
+                let name = if i == 0 { case.name.as_str() } else { "" };
+                let result = if j.passed { "pass" } else { "FAIL" };
+                let _ = writeln!(
+                    out,
+                    "{name:<w_case$}  {:<w_crit$}  {:<w_meas$}  {:<w_lim$}  {result}",
+                    j.criterion, j.measured, j.limit
+                );
+            }
+        }
+        for case in self.cases.iter().filter(|c| !c.passed) {
+            let why = if case.why.is_empty() { String::new() } else { format!(": {}", case.why) };
+            let _ = writeln!(out, "\nFAILED {}{why}", case.name);
+            for j in case.judgements.iter().filter(|j| !j.passed) {
+                let _ = writeln!(out, "  {}: {}", j.criterion, j.why_failed.as_deref().unwrap_or("failed"));
+            }
+            let _ = writeln!(out, "  run folder: {}", case.run_dirs.join(", "));
+            let _ = writeln!(out, "  reproduce:  {}", case.reproduce);
+        }
+        let (criteria, failed) = self.counts();
+        let failed_cases = self.cases.iter().filter(|c| !c.passed).count();
+        let _ = writeln!(out);
+        if self.interrupted {
+            let _ = writeln!(out, "interrupted after {} of {} cases", self.cases.len(), self.cases_in_suite);
+        }
+        let _ = writeln!(
+            out,
+            "verdict: {}: {} of {} cases passed, {} of {} criteria failed, {:.1} s",
+            if self.passed { "PASS" } else { "FAIL" },
+            self.cases.len() - failed_cases,
+            self.cases_in_suite,
+            failed,
+            criteria,
+            self.wall_s
+        );
+        let _ = writeln!(out, "wrote {}/{JSON_FILE} and {}/{JUNIT_FILE}", self.out_dir, self.out_dir);
+        out
+    }
+
+    /// JUnit XML: one `<testsuite>` per case, one `<testcase>` per criterion, a `<failure>` with the explanation
+    /// and the reproducing command.
+    pub fn to_junit(&self) -> String {
+        let (tests, failures) = self.counts();
+        let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+        let _ = writeln!(
+            out,
+            "<testsuites name=\"silrig check {}\" tests=\"{tests}\" failures=\"{failures}\" errors=\"0\" time=\"{:.3}\">",
+            xml_escape(&self.suite),
+            self.wall_s
+        );
+        for case in &self.cases {
+            let failed = case.judgements.iter().filter(|j| !j.passed).count();
+            let _ = writeln!(
+                out,
+                "  <testsuite name=\"{}.{}\" tests=\"{}\" failures=\"{failed}\" errors=\"0\" skipped=\"0\" time=\"{:.3}\" timestamp=\"{}\">",
+                xml_escape(&self.suite),
+                xml_escape(&case.name),
+                case.judgements.len(),
+                case.wall_s,
+                xml_escape(&utc_iso(self.started_unix_s)),
+            );
+            let _ = writeln!(out, "    <properties>");
+            for (name, value) in [
+                ("controller", self.controller.as_str()),
+                ("why", case.why.as_str()),
+                ("mode", case.mode.as_str()),
+                ("run_dir", &case.run_dirs.join(", ")),
+                ("reproduce", case.reproduce.as_str()),
+            ] {
+                let _ = writeln!(out, "      <property name=\"{name}\" value=\"{}\"/>", xml_escape(value));
+            }
+            let _ = writeln!(out, "    </properties>");
+            for j in &case.judgements {
+                let _ = write!(
+                    out,
+                    "    <testcase classname=\"{}.{}\" name=\"{}\" time=\"0\"",
+                    xml_escape(&self.suite),
+                    xml_escape(&case.name),
+                    xml_escape(&j.criterion)
+                );
+                if j.passed {
+                    let _ = writeln!(out, "/>");
+                } else {
+                    let why = j.why_failed.as_deref().unwrap_or("failed");
+                    let _ = writeln!(
+                        out,
+                        ">\n      <failure type=\"criterion\" message=\"{}\">measured: {}\nlimit: {}\n{}\nrun folder: {}\nreproduce: {}</failure>\n    </testcase>",
+                        xml_escape(&format!("{}: measured {}, limit {}", j.criterion, j.measured, j.limit)),
+                        xml_escape(&j.measured),
+                        xml_escape(&j.limit),
+                        xml_escape(why),
+                        xml_escape(&case.run_dirs.join(", ")),
+                        xml_escape(&case.reproduce)
+                    );
+                }
+            }
+            let _ = writeln!(out, "  </testsuite>");
+        }
+        out += "</testsuites>\n";
+        out
+    }
+
+    /// Write `check.json` and `check.junit.xml` into `out`.
+    pub fn write(&self, out: &Path) -> anyhow::Result<()> {
+        std::fs::create_dir_all(out)?;
+        std::fs::write(out.join(JSON_FILE), serde_json::to_string_pretty(self)? + "\n")?;
+        std::fs::write(out.join(JUNIT_FILE), self.to_junit())?;
+        Ok(())
+    }
+}
+
+/// ISO 8601 UTC time of `unix_s` (JUnit's `timestamp`).
+fn utc_iso(unix_s: u64) -> String {
+    let s = utc_stamp(Some(unix_s));
+    format!("{}-{}-{}T{}:{}:{}", &s[0..4], &s[4..6], &s[6..8], &s[9..11], &s[11..13], &s[13..15])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_stamp_matches_known_dates() {
+        assert_eq!(utc_stamp(Some(0)), "19700101-000000");
+        // 2000-02-29 12:34:56 UTC, a leap day.
+        assert_eq!(utc_stamp(Some(951_827_696)), "20000229-123456");
+        assert_eq!(utc_iso(1_795_000_000), "2026-11-18T11:06:40");
+    }
+
+    #[test]
+    fn xml_escape_handles_markup_and_control_characters() {
+        assert_eq!(xml_escape("a<b & \"c\" 'd'\u{1}"), "a&lt;b &amp; &quot;c&quot; &apos;d&apos; ");
+    }
+}

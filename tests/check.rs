@@ -1,0 +1,323 @@
+//! `silrig check`: the default suite passes with our controller; the Python PID example passes a test suite and,
+//! with one fault injected (tests/clients/faulty_pid.py), fails exactly the criteria that fault breaks; the paper's
+//! gains fail on their limit cycle, and `--case` reproduces a failed case's numbers; a controller that never joins
+//! is a failed verdict (exit 1), a malformed suite or an unrunnable command is no verdict (exit 2). The JUnit file is
+//! parsed by Python's xml.etree and its counts compared with check.json. Timing criteria are never required to pass
+//! (this machine is shared): they must only be measured, or, for a controller 15 ms slow, fail.
+
+use serde_json::Value;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::OnceLock;
+use std::time::Duration;
+
+mod common;
+use common::{no_shared_memory_left, wait_with_watchdog};
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+/// Criteria whose outcome depends on how busy the machine is.
+const TIMING_CRITERIA: [&str; 4] =
+    ["compute_p99", "sense_to_actuate_p99", "deadline_misses_max", "every_tick_answered"];
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("silrig-check-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `libsilrig_client.so` beside the binaries (cargo test does not build the cdylib).
+fn client_lib() {
+    static LIB: OnceLock<()> = OnceLock::new();
+    LIB.get_or_init(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let o =
+            Command::new(cargo).args(["build", "--release", "-p", "silrig-client"]).current_dir(ROOT).output().unwrap();
+        assert!(o.status.success(), "building libsilrig_client.so: {}", String::from_utf8_lossy(&o.stderr));
+    });
+}
+
+struct Check {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+    verdict: Value,
+    out: PathBuf,
+    dir: PathBuf,
+}
+
+impl Check {
+    fn case(&self, name: &str) -> &Value {
+        self.verdict["cases"].as_array().unwrap().iter().find(|c| c["name"] == name).unwrap()
+    }
+
+    /// (criterion, passed) of a case.
+    fn judgements(&self, case: &str) -> Vec<(String, bool)> {
+        self.case(case)["judgements"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|j| (j["criterion"].as_str().unwrap().to_string(), j["passed"].as_bool().unwrap()))
+            .collect()
+    }
+
+    fn failed(&self, case: &str) -> BTreeSet<String> {
+        self.judgements(case).into_iter().filter(|(_, passed)| !passed).map(|(c, _)| c).collect()
+    }
+
+    fn measured(&self, case: &str, criterion: &str) -> String {
+        let j = self.case(case)["judgements"].as_array().unwrap().iter().find(|j| j["criterion"] == criterion);
+        j.unwrap()["measured"].as_str().unwrap().to_string()
+    }
+
+    /// Every run of the check left no shared memory behind; then the folder goes.
+    fn finish(self) {
+        for case in self.verdict["cases"].as_array().into_iter().flatten() {
+            for dir in case["run_dirs"].as_array().unwrap() {
+                let report: Value = serde_json::from_str(
+                    &std::fs::read_to_string(Path::new(dir.as_str().unwrap()).join("report.json")).unwrap(),
+                )
+                .unwrap();
+                no_shared_memory_left(report["run_id"].as_str().unwrap());
+            }
+        }
+        std::fs::remove_dir_all(&self.dir).unwrap();
+    }
+
+    /// The JUnit file as an independent parser reads it: (tests, failures, testcases, <failure> elements).
+    fn junit_counts(&self) -> (u64, u64, u64, u64) {
+        let script = "import sys, xml.etree.ElementTree as ET\n\
+                      root = ET.parse(sys.argv[1]).getroot()\n\
+                      assert root.tag == 'testsuites'\n\
+                      cases = root.findall('testsuite/testcase')\n\
+                      for s in root.findall('testsuite'):\n    \
+                          assert int(s.get('tests')) == len(s.findall('testcase'))\n    \
+                          assert int(s.get('failures')) == len(s.findall('testcase/failure'))\n    \
+                          assert s.get('name') and s.get('time') is not None\n\
+                      for c in cases:\n    \
+                          assert c.get('classname') and c.get('name')\n\
+                      print(root.get('tests'), root.get('failures'), len(cases), len(root.findall('testsuite/testcase/failure')))\n";
+        let o = Command::new("python3").arg("-c").arg(script).arg(self.out.join("check.junit.xml")).output().unwrap();
+        assert!(o.status.success(), "check.junit.xml: {}", String::from_utf8_lossy(&o.stderr));
+        let n: Vec<u64> = String::from_utf8_lossy(&o.stdout).split_whitespace().map(|v| v.parse().unwrap()).collect();
+        (n[0], n[1], n[2], n[3])
+    }
+
+    /// The JUnit file's counts are check.json's.
+    fn junit_agrees(&self) {
+        let all: Vec<&Value> = self.verdict["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|c| c["judgements"].as_array().unwrap())
+            .collect();
+        let failed = all.iter().filter(|j| j["passed"] == false).count() as u64;
+        let n = all.len() as u64;
+        assert_eq!(self.junit_counts(), (n, failed, n, failed));
+    }
+}
+
+/// `silrig check ARGS --out <own folder>`, to the end.
+fn check(test: &str, args: &[&str]) -> Check {
+    let dir = temp_dir(test);
+    let out = dir.join("out");
+    let child = Command::new(SILRIG)
+        .arg("check")
+        .args(args)
+        .args(["--out", out.to_str().unwrap()])
+        .current_dir(ROOT)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let o = wait_with_watchdog(child, Duration::from_secs(300));
+    let verdict = std::fs::read_to_string(out.join("check.json"))
+        .map(|t| serde_json::from_str(&t).unwrap())
+        .unwrap_or(Value::Null);
+    Check {
+        code: o.status.code(),
+        stdout: String::from_utf8_lossy(&o.stdout).into(),
+        stderr: String::from_utf8_lossy(&o.stderr).into(),
+        verdict,
+        out,
+        dir,
+    }
+}
+
+#[test]
+fn the_default_suite_passes_with_our_controller() {
+    let c = check("default", &[]);
+    let cases: Vec<&str> = c.verdict["cases"].as_array().unwrap().iter().map(|c| c["name"].as_str().unwrap()).collect();
+    assert_eq!(
+        cases,
+        [
+            "lockstep-determinism",
+            "realtime-deadline",
+            "sensor-noise-bias",
+            "controller-kill-restart",
+            "plant-restart",
+            "plant-delay-15ms"
+        ],
+        "{}",
+        c.stderr
+    );
+    for case in &cases {
+        assert!(!c.case(case)["why"].as_str().unwrap().is_empty());
+        for (criterion, passed) in c.judgements(case) {
+            if TIMING_CRITERIA.contains(&criterion.as_str()) {
+                assert_ne!(c.measured(case, &criterion), "-", "{case}: {criterion} was not measured");
+            } else {
+                assert!(passed, "{case}: {criterion} failed:\n{}", c.stdout);
+            }
+        }
+    }
+    let timing_failed = cases.iter().any(|case| !c.failed(case).is_empty());
+    assert_eq!(c.code, Some(if timing_failed { 1 } else { 0 }), "{}{}", c.stdout, c.stderr);
+    assert_eq!(c.measured("lockstep-determinism", "deterministic"), "identical over 1000 ticks");
+    assert!(c.measured("realtime-deadline", "sense_to_actuate_p99").contains("x OS floor"));
+    assert!(c.stdout.contains("verdict: "), "{}", c.stdout);
+    c.junit_agrees();
+    c.finish();
+}
+
+#[test]
+fn a_healthy_python_controller_passes_and_each_injected_fault_fails_only_its_criteria() {
+    client_lib();
+    let suite = "tests/check/judge-a-controller.toml";
+    let healthy = check("healthy", &[suite, "--controller-cmd", "python3 examples/python/pid_attitude.py"]);
+    for case in ["lockstep-flight", "realtime-budget"] {
+        let failed = healthy.failed(case);
+        assert!(failed.iter().all(|f| TIMING_CRITERIA.contains(&f.as_str())), "{case}: {failed:?}\n{}", healthy.stdout);
+    }
+    healthy.finish();
+
+    // A NaN aileron every 100 ticks: refused, held, counted; the flight and its determinism are unharmed.
+    let nan = check(
+        "nan",
+        &[suite, "--case", "lockstep-flight", "--controller-cmd", "python3 tests/clients/faulty_pid.py nan"],
+    );
+    assert_eq!(nan.code, Some(1), "{}{}", nan.stdout, nan.stderr);
+    assert_eq!(nan.failed("lockstep-flight"), BTreeSet::from(["no_invalid_command".to_string()]), "{}", nan.stdout);
+    assert_eq!(nan.measured("lockstep-flight", "no_invalid_command"), "5 invalid");
+    assert!(nan.stdout.contains("reproduce:  silrig check tests/check/judge-a-controller.toml --case lockstep-flight"));
+    nan.junit_agrees();
+    nan.finish();
+
+    // 15 ms of compute in a 10 ms period: late every tick, and nothing else wrong.
+    let slow = check(
+        "slow",
+        &[suite, "--case", "realtime-budget", "--controller-cmd", "python3 tests/clients/faulty_pid.py slow"],
+    );
+    assert_eq!(slow.code, Some(1), "{}{}", slow.stdout, slow.stderr);
+    let expected: BTreeSet<String> =
+        ["compute_p99", "deadline_misses_max", "every_tick_answered"].iter().map(|s| s.to_string()).collect();
+    assert_eq!(slow.failed("realtime-budget"), expected, "{}", slow.stdout);
+    slow.junit_agrees();
+    slow.finish();
+}
+
+#[test]
+fn the_papers_gains_fail_on_their_limit_cycle_and_a_case_reproduces_alone() {
+    let c = check("paper", &["configs/check-paper-gains.toml"]);
+    assert_eq!(c.code, Some(1), "{}{}", c.stdout, c.stderr);
+    for case in ["same-tick", "next-tick"] {
+        let failed = c.failed(case);
+        assert!(failed.contains("no_sustained_oscillation"), "{case}: {failed:?}");
+        assert!(!failed.contains("run_completed") && !failed.contains("no_invalid_command"), "{case}: {failed:?}");
+        let run_dir = PathBuf::from(c.case(case)["run_dirs"][0].as_str().unwrap());
+        assert!(run_dir.join("trace.csv").exists() && run_dir.join("report.json").exists(), "run folder kept");
+    }
+    assert!(c.stdout.contains("FAILED same-tick"), "{}", c.stdout);
+    assert!(c.stdout.contains("verdict: FAIL: 0 of 2 cases passed"), "{}", c.stdout);
+    c.junit_agrees();
+
+    // The printed command runs just that case and measures the same.
+    let again = check("paper-again", &["configs/check-paper-gains.toml", "--case", "same-tick"]);
+    assert_eq!(again.code, Some(1));
+    assert_eq!(again.verdict["cases"].as_array().unwrap().len(), 1);
+    for criterion in ["settled", "rate_limit_fraction_max", "no_sustained_oscillation"] {
+        assert_eq!(again.measured("same-tick", criterion), c.measured("same-tick", criterion), "{criterion}");
+    }
+    again.finish();
+    c.finish();
+}
+
+#[test]
+fn a_controller_that_never_joins_is_a_failed_verdict() {
+    let dir = temp_dir("never-joins-suite");
+    let suite = dir.join("suite.toml");
+    std::fs::write(
+        &suite,
+        "name = \"never\"\n[[cases]]\nname = \"one\"\nmode = \"lockstep\"\nduration_s = 2.0\n\
+         [cases.criteria]\nevery_tick_answered = true\n",
+    )
+    .unwrap();
+    let c =
+        check("never-joins", &[suite.to_str().unwrap(), "--controller-cmd", "sleep 60", "--startup-timeout-s", "1"]);
+    assert_eq!(c.code, Some(1), "{}{}", c.stdout, c.stderr);
+    assert!(c.failed("one").contains("run_completed"), "{}", c.stdout);
+    assert!(c.stdout.contains("the run did not finish cleanly"), "{}", c.stdout);
+    c.finish();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_malformed_suite_or_an_unrunnable_controller_is_no_verdict() {
+    let dir = temp_dir("malformed");
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let case = |body: &str| format!("name = \"bad\"\n[[cases]]\nname = \"c1\"\nmode = \"lockstep\"\n{body}");
+    let cases = [
+        (
+            write("unknown.toml", &case("[cases.criteria]\nsettles_fast = true\n")),
+            vec![],
+            "unknown field `settles_fast`",
+        ),
+        (
+            write("ratio.toml", &case("[cases.criteria]\ncompute_p99 = { max_os_floor_ratio = 2.0 }\n")),
+            vec![],
+            "case `c1`: `criteria.compute_p99.max_os_floor_ratio` needs `mode = \"realtime\"`",
+        ),
+        (
+            write("scenario.toml", &case("scenario = \"no-such.toml\"\n[cases.criteria]\n")),
+            vec![],
+            "case `c1`: `scenario`:",
+        ),
+        (
+            write("set.toml", &case("set.setpoint.theta_deg = 99.0\n[cases.criteria]\n")),
+            vec![],
+            "case `c1`: embedded default scenario with the case's `set`: `setpoint.theta_deg`",
+        ),
+        (
+            write("fault.toml", &case("faults = [\"controller:kill@1s\"]\n[cases.criteria]\n")),
+            vec![],
+            "case `c1`: `faults`: controller kill at 1 s needs `mode = \"realtime\"`",
+        ),
+        (
+            write("ok.toml", &case("[cases.criteria]\n")),
+            vec!["--controller-cmd", "/no/such/controller"],
+            "--controller-cmd: cannot find `/no/such/controller`",
+        ),
+        (
+            write("ok2.toml", &case("[cases.criteria]\n")),
+            vec!["--case", "c2"],
+            "--case c2: no such case; the suite has c1",
+        ),
+    ];
+    for (i, (suite, extra, message)) in cases.iter().enumerate() {
+        let mut args = vec![suite.as_str()];
+        args.extend(extra);
+        let c = check(&format!("malformed-{i}"), &args);
+        assert_eq!(c.code, Some(2), "{suite}: {}{}", c.stdout, c.stderr);
+        assert!(c.stderr.contains(message), "{suite}: expected {message:?} in:\n{}", c.stderr);
+        assert!(!c.out.join("check.json").exists(), "nothing judged, nothing written");
+        c.finish();
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
