@@ -14,9 +14,10 @@
 
 #include "silrig_client.h"
 
-static const double KP[3] = {4.0, 4.0, 8.0}; /* deg per deg: aileron, elevator, rudder */
-static const double KD[3] = {1.2, 1.5, 3.0}; /* deg per deg/s */
-static const double KI[3] = {4.0, 3.0, 8.0}; /* deg per deg*s */
+static const double KP[3] = {2.0, 4.0, 8.0};       /* deg per deg: aileron, elevator, rudder */
+static const double KD[3] = {0.6, 1.5, 3.0};       /* deg per deg/s */
+static const double KI[3] = {1.5, 3.0, 8.0};       /* deg per deg*s */
+static const double TRAVEL[3] = {21.5, 25.0, 30.0}; /* the F-16's surface travel, deg */
 static const int ANGLE[3] = {3, 4, 5};      /* phi, theta, psi in the plant sample's state */
 static const int RATE[3] = {6, 7, 8};       /* p, q, r */
 static const char *const DIAGNOSTICS[3] = {"err_phi_deg", "err_theta_deg", "err_psi_deg"};
@@ -60,8 +61,14 @@ int main(void) {
         double surfaces[3], errors[3];
         for (int c = 0; c < 3; c++) {
             errors[c] = setpoint_deg[c] - sample.state[ANGLE[c]] * DEG_PER_RAD;
-            integral[c] -= KI[c] * errors[c] * dt_s;
-            surfaces[c] = integral[c] - KP[c] * errors[c] + KD[c] * sample.state[RATE[c]] * DEG_PER_RAD;
+            double rate_term = KD[c] * sample.state[RATE[c]] * DEG_PER_RAD;
+            double next = integral[c] - KI[c] * errors[c] * dt_s;
+            /* Anti-windup: an integrator pushing a surface past its travel stops integrating, and the command
+               stays within the travel. */
+            if (fabs(next - KP[c] * errors[c] + rate_term) <= TRAVEL[c] || fabs(next) < fabs(integral[c])) {
+                integral[c] = next;
+            }
+            surfaces[c] = fmax(-TRAVEL[c], fmin(TRAVEL[c], integral[c] - KP[c] * errors[c] + rate_term));
         }
         rc = silrig_session_send_command(session, surfaces, sample.throttle, errors, 3);
         if (rc < 0 && rc != SILRIG_ERR_COMMAND_REFUSED) {

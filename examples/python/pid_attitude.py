@@ -15,9 +15,10 @@ import sys
 
 from silrig_client import Controller, serve
 
-KP = (4.0, 4.0, 8.0)  # deg per deg: aileron, elevator, rudder
-KD = (1.2, 1.5, 3.0)  # deg per deg/s
-KI = (4.0, 3.0, 8.0)  # deg per deg*s
+KP = (2.0, 4.0, 8.0)  # deg per deg: aileron, elevator, rudder
+KD = (0.6, 1.5, 3.0)  # deg per deg/s
+KI = (1.5, 3.0, 8.0)  # deg per deg*s
+TRAVEL = (21.5, 25.0, 30.0)  # the F-16's surface travel, deg: aileron, elevator, rudder
 RATES = (6, 7, 8)  # p, q, r in the plant sample's state
 ANGLES = (3, 4, 5)  # phi, theta, psi
 
@@ -41,8 +42,13 @@ class PidAttitude(Controller):
         for c in range(3):
             error = self.setpoint_deg[c] - math.degrees(state[ANGLES[c]])
             rate = math.degrees(state[RATES[c]])
-            self.integral[c] -= KI[c] * error * dt_s
-            surfaces[c] = self.integral[c] - KP[c] * error + KD[c] * rate
+            integral = self.integral[c] - KI[c] * error * dt_s
+            command = integral - KP[c] * error + KD[c] * rate
+            # Anti-windup: an integrator pushing a surface past its travel stops integrating, and the command
+            # stays within the travel.
+            if abs(command) <= TRAVEL[c] or abs(integral) < abs(self.integral[c]):
+                self.integral[c] = integral
+            surfaces[c] = max(-TRAVEL[c], min(TRAVEL[c], self.integral[c] - KP[c] * error + KD[c] * rate))
             errors[c] = error
         return surfaces, sample.throttle, errors
 

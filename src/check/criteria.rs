@@ -503,13 +503,19 @@ fn no_sustained_oscillation(report: &RigReport) -> Judgement {
     let Some(s) = &report.control else {
         return no_evidence("no_sustained_oscillation", limit, "no trace was logged");
     };
-    let sustained: Vec<String> = s
-        .oscillations
-        .iter()
-        .filter(|o| o.sustained)
-        .map(|o| format!("{} +-{:.2} every {:.2} s", o.signal, o.amplitude, o.period_s))
-        .collect();
-    let measured = if sustained.is_empty() { "none".to_string() } else { sustained.join(", ") };
+    let mut oscillating: Vec<&crate::summary::Oscillation> = s.oscillations.iter().filter(|o| o.sustained).collect();
+    // The strongest first, relative to what counts for its kind of signal.
+    oscillating.sort_by(|a, b| {
+        let strength = |o: &crate::summary::Oscillation| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal);
+        strength(b).total_cmp(&strength(a))
+    });
+    let sustained: Vec<String> =
+        oscillating.iter().map(|o| format!("{} +-{:.2} every {:.2} s", o.signal, o.amplitude, o.period_s)).collect();
+    let measured = match sustained.len() {
+        0 => "none".to_string(),
+        1 => sustained[0].clone(),
+        n => format!("{} (+{} more)", sustained[0], n - 1),
+    };
     let failure = (!sustained.is_empty()).then(|| {
         format!(
             "the loop did not come to rest: {} in the last 3 s of the run, not decaying (a limit cycle, typically \
