@@ -41,10 +41,19 @@ enum Command {
     Sim {
         /// Scenario file (TOML); without it, the embedded default scenario.
         config: Option<PathBuf>,
-        /// Output folder (default: out/<scenario name>).
+        /// Output folder (default: out/<scenario name>, or out/<scenario name>-sample-<I> with --sample).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Fly case I of the scenario's [dispersions] (as `silrig sweep` did) and judge it by its [criteria].
+        #[arg(long, value_name = "I")]
+        sample: Option<u64>,
+        /// With --sample: the sweep's seed (default: the scenario's).
+        #[arg(long, requires = "sample")]
+        seed: Option<u64>,
     },
+    /// Monte Carlo: fly N dispersed cases of a scenario ([dispersions]) in parallel, judge each by its [criteria],
+    /// and write cases.csv, sweep.json and the pass rate with the worst cases.
+    Sweep(silrig::campaign::SweepOptions),
     /// Run several scenarios and print their summaries side by side, with an overlay plot.
     Compare {
         /// Scenario files (TOML).
@@ -108,7 +117,33 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 derivative_csv::run(std::io::stdin().lock(), std::io::stdout().lock()).context("plant derivative")?;
             eprintln!("{rows} rows");
         }
-        Command::Sim { config, out } => {
+        Command::Sim { config, out, sample: Some(index), seed } => {
+            let path = config.ok_or_else(|| anyhow::anyhow!("--sample needs the sweep's scenario file"))?;
+            let campaign = silrig::campaign::Campaign::load(&path)?;
+            let seed = seed.unwrap_or(campaign.scenario.seed);
+            let out =
+                out.unwrap_or_else(|| Path::new("out").join(format!("{}-sample-{index}", campaign.scenario.name)));
+            let (text, files) = silrig::campaign::fly_one(&campaign, seed, index, &out)?;
+            print!("{text}");
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+        }
+        Command::Sweep(opts) => {
+            let run = silrig::campaign::sweep(&opts)?;
+            print!("{}", run.summary.to_text());
+            println!(
+                "flew {} cases in {:.2} s on {} thread(s): {:.0} cases/s",
+                run.summary.runs,
+                run.fly_s,
+                run.jobs,
+                run.summary.runs as f64 / run.fly_s.max(1e-9)
+            );
+            for f in run.files {
+                println!("wrote {}", f.display());
+            }
+        }
+        Command::Sim { config, out, .. } => {
             let scenario = load_scenario(config.as_deref(), None)?;
             let out = out.unwrap_or_else(|| Path::new("out").join(&scenario.name));
             let (summary, files) = silrig::outputs::simulate(&scenario, &out)?;

@@ -15,13 +15,17 @@
 
 pub mod actuator;
 pub mod bench;
+pub mod campaign;
 pub mod check;
 pub mod clock;
 pub mod contract;
 pub mod control;
+pub mod criteria;
+pub mod dispersion;
 pub mod fault;
 pub mod integrator;
 pub mod ipc;
+pub mod judge;
 pub mod outputs;
 pub mod plant;
 pub mod plot;

@@ -4,7 +4,10 @@
 
 use crate::actuator::ActuatorSetLimits;
 use crate::control::ControllerGains;
+use crate::criteria::Criteria;
+use crate::dispersion::Distribution;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// The embedded default scenario (what `silrig sim` and `silrig run` use without a file).
@@ -43,6 +46,13 @@ pub struct Scenario {
     /// The fault plan (`[[faults]]`), in any order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub faults: Vec<crate::fault::Fault>,
+    /// Monte Carlo dispersions (`silrig sweep`): a distribution per dotted scenario key. A single run flies the
+    /// nominal values.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub dispersions: BTreeMap<String, Distribution>,
+    /// What each case of a sweep must meet (the flight criteria of `silrig check`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub criteria: Option<Criteria>,
 }
 
 /// How the run starts.
@@ -209,6 +219,67 @@ impl Timing {
     }
 }
 
+/// Find the value at a dotted key (`initial.phi_deg`, `actuators.elevator_deg.rate_limit_per_s`,
+/// `controller.adaptation_gain.0`, `faults.1.std`) in a scenario's TOML tree.
+/// (see [`Scenario::with_values`])
+fn lookup<'a>(root: &'a mut toml::Table, key: &str) -> Result<&'a mut toml::Value, String> {
+    let mut parts = key.split('.');
+    let first = parts.next().unwrap_or_default();
+    let mut node = root.get_mut(first).ok_or_else(|| format!("`{key}`: the scenario has no `{first}`"))?;
+    for part in parts {
+        node = match node {
+            toml::Value::Table(t) => {
+                t.get_mut(part).ok_or_else(|| format!("`{key}`: the scenario has no `{part}` there"))?
+            }
+            toml::Value::Array(a) => {
+                let i: usize = part.parse().map_err(|_| format!("`{key}`: `{part}` must be an index into a list"))?;
+                let len = a.len();
+                a.get_mut(i).ok_or_else(|| format!("`{key}`: index {i} is beyond the list's {len} entries"))?
+            }
+            _ => return Err(format!("`{key}`: `{part}` is below a value, not a table or list")),
+        };
+    }
+    Ok(node)
+}
+
+impl Scenario {
+    /// The scenario with each dotted key set to a value (a dispersion sample), without dispersions of its own,
+    /// validated; an error names the key.
+    pub fn with_values(&self, values: &[(String, f64)]) -> Result<Scenario, String> {
+        let mut tree: toml::Table = toml::from_str(&self.to_toml()).map_err(|e| e.to_string())?;
+        for (key, value) in values {
+            let node = lookup(&mut tree, key)?;
+            match node {
+                toml::Value::Float(_) | toml::Value::Integer(_) => *node = toml::Value::Float(*value),
+                other => return Err(format!("`{key}` is a {}, not a number", other.type_str())),
+            }
+        }
+        let mut scenario: Scenario = toml::Table::try_into(tree).map_err(|e: toml::de::Error| e.to_string())?;
+        // A sampled scenario is one case: it carries no dispersions of its own.
+        scenario.dispersions.clear();
+        scenario.validate().map_err(|(key, problem)| format!("`{key}`: {problem}"))?;
+        Ok(scenario)
+    }
+
+    /// Check every dispersion: its distribution, and that its key names a number in the scenario.
+    fn validate_dispersions(&self) -> Result<(), (String, String)> {
+        if self.dispersions.is_empty() {
+            return Ok(());
+        }
+        let mut tree: toml::Table = toml::from_str(&self.to_toml()).map_err(|e| (String::new(), e.to_string()))?;
+        for (key, dist) in &self.dispersions {
+            let at = format!("dispersions.\"{key}\"");
+            dist.validate().map_err(|e| (at.clone(), e))?;
+            let node =
+                lookup(&mut tree, key).map_err(|e| (at.clone(), format!("no such key in the scenario ({e})")))?;
+            if !matches!(node, toml::Value::Float(_) | toml::Value::Integer(_)) {
+                return Err((at, format!("is a {}, not a number", node.type_str())));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A scenario that cannot be used, with where the problem is.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
@@ -349,6 +420,18 @@ impl Scenario {
         for (i, f) in self.faults.iter().enumerate() {
             f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
         }
+        if let Some(c) = &self.criteria {
+            if let Some(rig) = c.rig_criteria_set().first() {
+                return err(
+                    &format!("criteria.{rig}"),
+                    "is judged by `silrig check` on the rig; a scenario's [criteria] (for sweeps) takes the flight \
+                     criteria only"
+                        .into(),
+                );
+            }
+            c.validate_flight(t.duration_s).map_err(|e| ("criteria".to_string(), e))?;
+        }
+        self.validate_dispersions()?;
         Ok(())
     }
 }

@@ -11,7 +11,7 @@ use silrig::scenario::Scenario;
 use std::path::Path;
 
 /// (scenario, FNV-1a 64 of trace.csv, rows, theta_deg in the last row).
-const GOLDEN: [(&str, u64, usize, f64); 7] = [
+const GOLDEN: [(&str, u64, usize, f64); 8] = [
     ("embedded default", 0x14c5_5400_0f36_d31e, 1000, 9.94750178256039),
     ("faults-demo", 0x9c28_1e72_94f3_e695, 1000, 9.9483440999551),
     ("paper", 0x5857_0e0c_bf10_9bee, 1000, 10.383176340008399),
@@ -19,6 +19,8 @@ const GOLDEN: [(&str, u64, usize, f64); 7] = [
     ("paper-ideal-sign", 0xccb3_9a3d_35c1_4a7d, 1000, 9.99022091257509),
     ("paper-next-tick", 0x0161_74b2_2f95_7826, 1000, 13.17071640441258),
     ("robust", 0x14c5_5400_0f36_d31e, 1000, 9.94750178256039),
+    // The robust scenario with dispersions and criteria: its nominal flight is robust's.
+    ("sweep-robust", 0x14c5_5400_0f36_d31e, 1000, 9.94750178256039),
 ];
 
 fn fnv1a64(bytes: &[u8]) -> u64 {

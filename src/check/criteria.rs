@@ -1,104 +1,18 @@
-//! The criteria of a check case (`[cases.criteria]`): what each one measures in a finished run, the limit it is
-//! held to, and the sentence that explains a failure to someone who has not read the code. Judged from the run's
-//! report (`report.json`) and trace alone, so the rig's controller and a user's are judged by the same code.
+//! The rig's side of a check case's criteria (`[cases.criteria]`): the timing, contract and fault criteria judged
+//! from the run's report (`report.json`) and trace, beside the flight criteria of [`crate::criteria`], so the rig's
+//! controller and a user's are judged by the same code.
 
+use crate::criteria::positive;
+pub use crate::criteria::{BodyRateLimit, Budget, Criteria, Judgement, Settled};
 use crate::fault::FaultAction;
+use crate::judge::{
+    alpha_max, body_rate_max, judgement, no_evidence, no_sustained_oscillation, rate_limit_fraction, settled,
+};
 use crate::rig::RigMode;
 use crate::rig::run_report::RigReport;
 use crate::scenario::Scenario;
-use crate::summary::settle_time;
 use crate::topology::Role;
 use crate::trace::Trace;
-use serde::{Deserialize, Serialize};
-
-/// What a case's run must meet. Every key is optional; a case judges only what it names, plus `run_completed`,
-/// which every case checks.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Criteria {
-    /// The plant found an answer (a command, or a refusal) from the controller for every tick it flew.
-    #[serde(default)]
-    pub every_tick_answered: bool,
-    /// No command was NaN, infinite or out of range (refused by the controller's session or by the plant).
-    #[serde(default)]
-    pub no_invalid_command: bool,
-    /// The controller's compute time per tick, p99.
-    pub compute_p99: Option<Budget>,
-    /// From the plant publishing a sample to the answering command arriving at the plant, p99.
-    pub sense_to_actuate_p99: Option<Budget>,
-    /// Ticks whose command did not reach the plant by the time it needed it (refusals not counted), at most.
-    pub deadline_misses_max: Option<u64>,
-    /// phi, theta and psi each stay within `band_deg` of the set point from `within_s` on.
-    pub settled: Option<Settled>,
-    /// Largest angle of attack over the run, deg.
-    pub alpha_max_deg: Option<f64>,
-    /// Largest |p|, |q|, |r| from `after_s` on.
-    pub body_rate_max_dps: Option<BodyRateLimit>,
-    /// Ticks in which a surface's rate limit cut its motion, as a fraction of the ticks flown (worst surface).
-    pub rate_limit_fraction_max: Option<f64>,
-    /// No sustained oscillation of an angle or surface in the last 3 s (the summary's limit-cycle detector).
-    #[serde(default)]
-    pub no_sustained_oscillation: bool,
-    /// After each restarted or resumed process (kill/term with `restart_after`, stop), the loop flies again within
-    /// this many seconds of the process coming back.
-    pub recovered_within_s: Option<f64>,
-    /// The plant's failsafe engaged during a fault and released when the controller came back.
-    #[serde(default)]
-    pub failsafe_engaged_and_released: bool,
-    /// Bumpless resume: after each controller fault it comes back from, how far its first command is from where
-    /// the surface actually was, deg (worst surface).
-    pub resume_jump_max_deg: Option<f64>,
-    /// Two runs of the case give bit-identical commands (lockstep only).
-    #[serde(default)]
-    pub deterministic: bool,
-}
-
-/// A time budget: an absolute time, or a multiple of the OS floor (the p99 wake-up lateness of a bare timer loop
-/// measured beside the same run).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Budget {
-    /// At most this many µs.
-    pub max_us: Option<f64>,
-    /// At most this multiple of the OS floor's p99.
-    pub max_os_floor_ratio: Option<f64>,
-}
-
-/// `settled = { within_s = T, band_deg = B }`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Settled {
-    /// From this time on, s.
-    pub within_s: f64,
-    /// Half-width of the band around the set point, deg.
-    pub band_deg: f64,
-}
-
-/// `body_rate_max_dps = { after_s = T, max = X }`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BodyRateLimit {
-    /// From this time on, s.
-    pub after_s: f64,
-    /// Largest |p|, |q|, |r|, deg/s.
-    pub max: f64,
-}
-
-/// One criterion judged.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Judgement {
-    /// The criterion's key.
-    pub criterion: String,
-    /// What was measured, with its unit.
-    pub measured: String,
-    /// The limit, with its unit.
-    pub limit: String,
-    /// Whether the run met it.
-    pub passed: bool,
-    /// On failure: what went wrong, in words, and where to look.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub why_failed: Option<String>,
-}
 
 /// One run of a case: its merged report and its logged trace (None if it logged nothing).
 pub struct RunEvidence {
@@ -106,10 +20,6 @@ pub struct RunEvidence {
     pub report: RigReport,
     /// `trace.csv`.
     pub trace: Option<Trace>,
-}
-
-fn positive(key: &str, v: f64) -> Result<(), String> {
-    if v > 0.0 && v.is_finite() { Ok(()) } else { Err(format!("`criteria.{key}` must be a positive number, got {v}")) }
 }
 
 /// Faults of the case after which a process comes back: (index in the plan, when it comes back, s).
@@ -155,29 +65,7 @@ impl Criteria {
                 }
             }
         }
-        if let Some(s) = self.settled {
-            positive("settled.band_deg", s.band_deg)?;
-            if !(s.within_s >= 0.0 && s.within_s < duration) {
-                return Err(format!("`criteria.settled.within_s` must be within 0..{duration} s, got {}", s.within_s));
-            }
-        }
-        if let Some(a) = self.alpha_max_deg {
-            positive("alpha_max_deg", a)?;
-        }
-        if let Some(b) = self.body_rate_max_dps {
-            positive("body_rate_max_dps.max", b.max)?;
-            if !(b.after_s >= 0.0 && b.after_s < duration) {
-                return Err(format!(
-                    "`criteria.body_rate_max_dps.after_s` must be within 0..{duration} s, got {}",
-                    b.after_s
-                ));
-            }
-        }
-        if let Some(f) = self.rate_limit_fraction_max
-            && !(0.0..=1.0).contains(&f)
-        {
-            return Err(format!("`criteria.rate_limit_fraction_max` must be a fraction in 0..1, got {f}"));
-        }
+        self.validate_flight(duration)?;
         if let Some(t) = self.recovered_within_s {
             positive("recovered_within_s", t)?;
             if comebacks(scenario, None).is_empty() {
@@ -234,10 +122,10 @@ impl Criteria {
             out.push(body_rate_max(trace, b));
         }
         if let Some(f) = self.rate_limit_fraction_max {
-            out.push(rate_limit_fraction(report, f));
+            out.push(rate_limit_fraction(report.control.as_ref(), f));
         }
         if self.no_sustained_oscillation {
-            out.push(no_sustained_oscillation(report));
+            out.push(no_sustained_oscillation(report.control.as_ref()));
         }
         if let Some(t) = self.recovered_within_s {
             out.push(recovered_within(scenario, report, t));
@@ -255,17 +143,8 @@ impl Criteria {
     }
 }
 
-fn judgement(criterion: &str, measured: String, limit: String, failure: Option<String>) -> Judgement {
-    Judgement { criterion: criterion.into(), measured, limit, passed: failure.is_none(), why_failed: failure }
-}
-
 fn counter(report: &RigReport, role: Role, name: &str) -> Option<u64> {
     report.processes.iter().find(|p| p.process == role.label()).and_then(|p| p.counters.get(name).copied())
-}
-
-/// A judgement that could not be made because the run left no evidence for it: a failure, saying why.
-fn no_evidence(criterion: &str, limit: String, what: &str) -> Judgement {
-    judgement(criterion, "-".into(), limit, Some(format!("nothing to judge: {what}; see run_completed")))
 }
 
 fn run_completed(scenario: &Scenario, runs: &[RunEvidence]) -> Judgement {
@@ -398,132 +277,6 @@ fn deadline_misses(report: &RigReport, max: u64) -> Judgement {
         )
     });
     judgement("deadline_misses_max", format!("{late}"), limit, failure)
-}
-
-fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement {
-    let limit = format!("within {} deg from {} s", s.band_deg, s.within_s);
-    let Some(trace) = trace else { return no_evidence("settled", limit, "no trace was logged") };
-    let t = trace.column("t_s").unwrap_or_default();
-    let sp = &scenario.setpoint;
-    let settle_times: Vec<(&str, Option<f64>)> = [("phi", sp.phi_deg), ("theta", sp.theta_deg), ("psi", sp.psi_deg)]
-        .into_iter()
-        .map(|(name, setpoint)| {
-            (name, settle_time(&t, &trace.column(&format!("{name}_deg")).unwrap_or_default(), setpoint, s.band_deg))
-        })
-        .collect();
-    // The axis that settled last, or one that never did.
-    let (axis, at) = settle_times
-        .iter()
-        .copied()
-        .max_by(|a, b| a.1.unwrap_or(f64::INFINITY).total_cmp(&b.1.unwrap_or(f64::INFINITY)))
-        .expect("three axes");
-    let measured = match at {
-        Some(a) => format!("{axis} settled at {a:.2} s"),
-        None => format!("{axis} never settled"),
-    };
-    let failure = match at {
-        Some(a) if a <= s.within_s => None,
-        Some(a) => Some(format!(
-            "{axis} only stayed within {} deg of its set point from {a:.2} s on, later than the {} s allowed; \
-             closed_loop.png in the run folder shows the response",
-            s.band_deg, s.within_s
-        )),
-        None => Some(format!(
-            "{axis} was still more than {} deg from its set point at the end of the run; closed_loop.png in the run \
-             folder shows the response",
-            s.band_deg
-        )),
-    };
-    judgement("settled", measured, limit, failure)
-}
-
-/// Largest |column| over rows with t >= from_s (NaN-free), with the time it happened.
-fn peak_abs(trace: &Trace, column: &str, from_s: f64) -> Option<(f64, f64)> {
-    let t = trace.column("t_s")?;
-    let x = trace.column(column)?;
-    t.iter()
-        .zip(&x)
-        .filter(|(ti, v)| **ti >= from_s && v.is_finite())
-        .map(|(ti, v)| (v.abs(), *ti))
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-}
-
-fn alpha_max(trace: Option<&Trace>, max: f64) -> Judgement {
-    let limit = format!("{max} deg");
-    let Some((alpha, at)) = trace.and_then(|t| peak_abs(t, "alpha_deg", f64::NEG_INFINITY)) else {
-        return no_evidence("alpha_max_deg", limit, "no trace was logged");
-    };
-    let failure = (alpha > max)
-        .then(|| format!("the angle of attack reached {alpha:.2} deg at {at:.2} s, beyond the {max} deg allowed"));
-    judgement("alpha_max_deg", format!("{alpha:.2} deg"), limit, failure)
-}
-
-fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgement {
-    let limit = format!("{} deg/s after {} s", b.max, b.after_s);
-    let Some(trace) = trace else { return no_evidence("body_rate_max_dps", limit, "no trace was logged") };
-    let peaks: Vec<(&str, f64, f64)> = ["p", "q", "r"]
-        .iter()
-        .filter_map(|n| peak_abs(trace, &format!("{n}_dps"), b.after_s).map(|(v, t)| (*n, v, t)))
-        .collect();
-    let Some(&(name, rate, at)) = peaks.iter().max_by(|a, c| a.1.total_cmp(&c.1)) else {
-        return no_evidence("body_rate_max_dps", limit, "the trace ends before `after_s`");
-    };
-    let failure = (rate > b.max).then(|| {
-        format!(
-            "|{name}| reached {rate:.2} deg/s at {at:.2} s, after the {} s by which rates should be below {} deg/s",
-            b.after_s, b.max
-        )
-    });
-    judgement("body_rate_max_dps", format!("|{name}| {rate:.2} deg/s"), limit, failure)
-}
-
-fn rate_limit_fraction(report: &RigReport, max: f64) -> Judgement {
-    let limit = format!("{:.1} % of ticks", max * 100.0);
-    let Some(s) = &report.control else { return no_evidence("rate_limit_fraction_max", limit, "no trace was logged") };
-    let ticks = s.ticks.max(1) as f64;
-    let Some(worst) = s.surfaces.iter().max_by_key(|f| f.ticks_at_rate_limit) else {
-        return no_evidence("rate_limit_fraction_max", limit, "no surfaces in the summary");
-    };
-    let fraction = worst.ticks_at_rate_limit as f64 / ticks;
-    let failure = (fraction > max).then(|| {
-        format!(
-            "the {} spent {} of {} ticks ({:.1} %) at its rate limit: the controller asks for more than the actuator \
-             can give, which costs phase margin and can drive a limit cycle",
-            worst.name,
-            worst.ticks_at_rate_limit,
-            s.ticks,
-            fraction * 100.0
-        )
-    });
-    judgement("rate_limit_fraction_max", format!("{} {:.1} %", worst.name, fraction * 100.0), limit, failure)
-}
-
-fn no_sustained_oscillation(report: &RigReport) -> Judgement {
-    let limit = "none in the last 3 s".to_string();
-    let Some(s) = &report.control else {
-        return no_evidence("no_sustained_oscillation", limit, "no trace was logged");
-    };
-    let mut oscillating: Vec<&crate::summary::Oscillation> = s.oscillations.iter().filter(|o| o.sustained).collect();
-    // The strongest first, relative to what counts for its kind of signal.
-    oscillating.sort_by(|a, b| {
-        let strength = |o: &crate::summary::Oscillation| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal);
-        strength(b).total_cmp(&strength(a))
-    });
-    let sustained: Vec<String> =
-        oscillating.iter().map(|o| format!("{} +-{:.2} every {:.2} s", o.signal, o.amplitude, o.period_s)).collect();
-    let measured = match sustained.len() {
-        0 => "none".to_string(),
-        1 => sustained[0].clone(),
-        n => format!("{} (+{} more)", sustained[0], n - 1),
-    };
-    let failure = (!sustained.is_empty()).then(|| {
-        format!(
-            "the loop did not come to rest: {} in the last 3 s of the run, not decaying (a limit cycle, typically \
-             from too much gain against the actuators' rate limits or the loop's delay)",
-            sustained.join(", ")
-        )
-    });
-    judgement("no_sustained_oscillation", measured, limit, failure)
 }
 
 fn recovered_within(scenario: &Scenario, report: &RigReport, max_s: f64) -> Judgement {

@@ -12,6 +12,10 @@ pub const WING_SPAN_FT: f64 = 30.0;
 pub const MEAN_CHORD_FT: f64 = 11.32;
 /// CG position (fraction of the chord) at which the tables' moments are taken.
 pub const XCG_REF: f64 = 0.35;
+/// The angle of attack the aerodynamic tables cover, deg (outside it they extrapolate linearly: no data).
+pub const ALPHA_DATA_DEG: (f64, f64) = (-10.0, 45.0);
+/// The largest |sideslip| the tables cover, deg.
+pub const BETA_DATA_MAX_DEG: f64 = 30.0;
 
 /// What the coefficients depend on.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -87,6 +87,10 @@ impl LegendEntry {
     pub(super) fn cycled(label: &str, k: usize) -> Self {
         Self { label: label.to_string(), stroke: Stroke::cycled(k) }
     }
+
+    pub(super) fn solid(label: &str, color: RGBColor) -> Self {
+        Self { label: label.to_string(), stroke: Stroke { color, width: 2, dash: Dash::Solid } }
+    }
 }
 
 #[derive(Clone, Copy, PartialEq)]

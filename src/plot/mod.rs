@@ -1,5 +1,6 @@
 //! Plotting: owns every figure the rig draws (closed-loop states, sliding surfaces, RBF weights, run overlays, fault
-//! timelines, latency percentile distributions), each written as PNG and SVG.
+//! timelines, latency percentile distributions, sweep histograms, scatter plots and envelopes), each written as PNG
+//! and SVG.
 //!
 //! Text is drawn with DejaVu Sans embedded in the binary (`src/plot/fonts/`, Bitstream Vera licence), so plotting
 //! needs no system font libraries. Every figure is first described as plain data (a figure: a grid of panels, each
@@ -10,7 +11,7 @@
 //!
 //! The engine: `figure.rs` (the data), `axis.rs`, `layout.rs` (pixel sizes) and `render.rs` (both backends, the font,
 //! the files). Each figure family is one file that turns trace columns (`columns.rs`) into figures: `closed_loop.rs`,
-//! `smc_rbf.rs`, `overlay.rs`, `latency.rs`, `timeline.rs`.
+//! `smc_rbf.rs`, `overlay.rs`, `latency.rs`, `timeline.rs`, `sweep.rs`.
 
 use std::path::PathBuf;
 
@@ -23,11 +24,13 @@ mod layout;
 mod overlay;
 mod render;
 mod smc_rbf;
+mod sweep;
 mod timeline;
 
 pub use closed_loop::plot_closed_loop;
 pub use latency::plot_percentile_distributions;
 pub use overlay::plot_overlay;
+pub use sweep::{Envelope, Histogram, Scatter, plot_envelope, plot_histograms, plot_scatter};
 pub use timeline::plot_timeline;
 
 /// A figure that could not be drawn. Each variant names the file it was drawing (or the directory it wanted).

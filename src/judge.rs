@@ -1,0 +1,179 @@
+//! Judging a flight: what each flight criterion of [`crate::criteria`] measures in a trace and its summary, the
+//! limit it is held to, and the sentence that explains a failure to someone who has not read the code. Pure: the
+//! same code judges `silrig check` runs and sweep cases.
+
+use crate::criteria::{BodyRateLimit, Criteria, Judgement, Settled};
+use crate::scenario::Scenario;
+use crate::summary::{Summary, settle_time};
+use crate::trace::Trace;
+
+pub(crate) fn judgement(criterion: &str, measured: String, limit: String, failure: Option<String>) -> Judgement {
+    Judgement {
+        criterion: criterion.into(),
+        measured,
+        limit,
+        passed: failure.is_none(),
+        why_failed: failure,
+        value: None,
+    }
+}
+
+/// A judgement that could not be made because the run left no evidence for it: a failure, saying why.
+pub(crate) fn no_evidence(criterion: &str, limit: String, what: &str) -> Judgement {
+    judgement(criterion, "-".into(), limit, Some(format!("nothing to judge: {what}")))
+}
+
+/// Judge the flight criteria of `criteria` that are set, in a fixed order, from a trace and its summary.
+pub fn judge_flight(
+    criteria: &Criteria,
+    scenario: &Scenario,
+    trace: Option<&Trace>,
+    summary: Option<&Summary>,
+) -> Vec<Judgement> {
+    let mut out = Vec::new();
+    if let Some(s) = criteria.settled {
+        out.push(settled(scenario, trace, s));
+    }
+    if let Some(a) = criteria.alpha_max_deg {
+        out.push(alpha_max(trace, a));
+    }
+    if let Some(b) = criteria.body_rate_max_dps {
+        out.push(body_rate_max(trace, b));
+    }
+    if let Some(f) = criteria.rate_limit_fraction_max {
+        out.push(rate_limit_fraction(summary, f));
+    }
+    if criteria.no_sustained_oscillation {
+        out.push(no_sustained_oscillation(summary));
+    }
+    out
+}
+
+pub(crate) fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement {
+    let limit = format!("within {} deg from {} s", s.band_deg, s.within_s);
+    let Some(trace) = trace else { return no_evidence("settled", limit, "no trace was logged") };
+    let t = trace.column("t_s").unwrap_or_default();
+    let sp = &scenario.setpoint;
+    let settle_times: Vec<(&str, Option<f64>)> = [("phi", sp.phi_deg), ("theta", sp.theta_deg), ("psi", sp.psi_deg)]
+        .into_iter()
+        .map(|(name, setpoint)| {
+            (name, settle_time(&t, &trace.column(&format!("{name}_deg")).unwrap_or_default(), setpoint, s.band_deg))
+        })
+        .collect();
+    // The axis that settled last, or one that never did.
+    let (axis, at) = settle_times
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.unwrap_or(f64::INFINITY).total_cmp(&b.1.unwrap_or(f64::INFINITY)))
+        .expect("three axes");
+    let measured = match at {
+        Some(a) => format!("{axis} settled at {a:.2} s"),
+        None => format!("{axis} never settled"),
+    };
+    let failure = match at {
+        Some(a) if a <= s.within_s => None,
+        Some(a) => Some(format!(
+            "{axis} only stayed within {} deg of its set point from {a:.2} s on, later than the {} s allowed; \
+             closed_loop.png in the run folder shows the response",
+            s.band_deg, s.within_s
+        )),
+        None => Some(format!(
+            "{axis} was still more than {} deg from its set point at the end of the run; closed_loop.png in the run \
+             folder shows the response",
+            s.band_deg
+        )),
+    };
+    judgement("settled", measured, limit, failure).with_value(at.unwrap_or(f64::INFINITY))
+}
+
+/// Largest |column| over rows with t >= from_s (NaN-free), with the time it happened.
+fn peak_abs(trace: &Trace, column: &str, from_s: f64) -> Option<(f64, f64)> {
+    let t = trace.column("t_s")?;
+    let x = trace.column(column)?;
+    t.iter()
+        .zip(&x)
+        .filter(|(ti, v)| **ti >= from_s && v.is_finite())
+        .map(|(ti, v)| (v.abs(), *ti))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+pub(crate) fn alpha_max(trace: Option<&Trace>, max: f64) -> Judgement {
+    let limit = format!("{max} deg");
+    let Some((alpha, at)) = trace.and_then(|t| peak_abs(t, "alpha_deg", f64::NEG_INFINITY)) else {
+        return no_evidence("alpha_max_deg", limit, "no trace was logged");
+    };
+    let failure = (alpha > max)
+        .then(|| format!("the angle of attack reached {alpha:.2} deg at {at:.2} s, beyond the {max} deg allowed"));
+    judgement("alpha_max_deg", format!("{alpha:.2} deg"), limit, failure).with_value(alpha)
+}
+
+pub(crate) fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgement {
+    let limit = format!("{} deg/s after {} s", b.max, b.after_s);
+    let Some(trace) = trace else { return no_evidence("body_rate_max_dps", limit, "no trace was logged") };
+    let peaks: Vec<(&str, f64, f64)> = ["p", "q", "r"]
+        .iter()
+        .filter_map(|n| peak_abs(trace, &format!("{n}_dps"), b.after_s).map(|(v, t)| (*n, v, t)))
+        .collect();
+    let Some(&(name, rate, at)) = peaks.iter().max_by(|a, c| a.1.total_cmp(&c.1)) else {
+        return no_evidence("body_rate_max_dps", limit, "the trace ends before `after_s`");
+    };
+    let failure = (rate > b.max).then(|| {
+        format!(
+            "|{name}| reached {rate:.2} deg/s at {at:.2} s, after the {} s by which rates should be below {} deg/s",
+            b.after_s, b.max
+        )
+    });
+    judgement("body_rate_max_dps", format!("|{name}| {rate:.2} deg/s"), limit, failure).with_value(rate)
+}
+
+pub(crate) fn rate_limit_fraction(summary: Option<&Summary>, max: f64) -> Judgement {
+    let limit = format!("{:.1} % of ticks", max * 100.0);
+    let Some(s) = summary else { return no_evidence("rate_limit_fraction_max", limit, "no trace was logged") };
+    let ticks = s.ticks.max(1) as f64;
+    let Some(worst) = s.surfaces.iter().max_by_key(|f| f.ticks_at_rate_limit) else {
+        return no_evidence("rate_limit_fraction_max", limit, "no surfaces in the summary");
+    };
+    let fraction = worst.ticks_at_rate_limit as f64 / ticks;
+    let failure = (fraction > max).then(|| {
+        format!(
+            "the {} spent {} of {} ticks ({:.1} %) at its rate limit: the controller asks for more than the actuator \
+             can give, which costs phase margin and can drive a limit cycle",
+            worst.name,
+            worst.ticks_at_rate_limit,
+            s.ticks,
+            fraction * 100.0
+        )
+    });
+    judgement("rate_limit_fraction_max", format!("{} {:.1} %", worst.name, fraction * 100.0), limit, failure)
+        .with_value(fraction)
+}
+
+pub(crate) fn no_sustained_oscillation(summary: Option<&Summary>) -> Judgement {
+    let limit = "none in the last 3 s".to_string();
+    let Some(s) = summary else {
+        return no_evidence("no_sustained_oscillation", limit, "no trace was logged");
+    };
+    let mut oscillating: Vec<&crate::summary::Oscillation> = s.oscillations.iter().filter(|o| o.sustained).collect();
+    // The strongest first, relative to what counts for its kind of signal.
+    oscillating.sort_by(|a, b| {
+        let strength = |o: &crate::summary::Oscillation| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal);
+        strength(b).total_cmp(&strength(a))
+    });
+    let sustained: Vec<String> =
+        oscillating.iter().map(|o| format!("{} +-{:.2} every {:.2} s", o.signal, o.amplitude, o.period_s)).collect();
+    let measured = match sustained.len() {
+        0 => "none".to_string(),
+        1 => sustained[0].clone(),
+        n => format!("{} (+{} more)", sustained[0], n - 1),
+    };
+    let failure = (!sustained.is_empty()).then(|| {
+        format!(
+            "the loop did not come to rest: {} in the last 3 s of the run, not decaying (a limit cycle, typically \
+             from too much gain against the actuators' rate limits or the loop's delay)",
+            sustained.join(", ")
+        )
+    });
+    // How far past what counts the strongest sustained oscillation is (0 without one).
+    let strength = oscillating.first().map_or(0.0, |o| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal));
+    judgement("no_sustained_oscillation", measured, limit, failure).with_value(strength)
+}

@@ -1,0 +1,152 @@
+//! `silrig sweep`: a sweep is a pure function of (scenario, seed, index): the same bytes with 1 or 2 threads and as
+//! a prefix of a longer sweep; a worst case flown alone (`silrig sim --sample I --seed S`, the command the sweep
+//! prints) gives the numbers the sweep gave; infeasible cases are counted with their reason; every figure is drawn;
+//! bad dispersions and criteria are refused naming the key, with nothing written.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+const CONFIG: &str = "configs/sweep-robust.toml";
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("silrig-sweep-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `silrig ARGS` from the repository root: (exit code, stdout, stderr).
+fn silrig(args: &[&str]) -> (Option<i32>, String, String) {
+    let o = Command::new(SILRIG).args(args).current_dir(ROOT).output().unwrap();
+    (o.status.code(), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+}
+
+fn sweep(out: &Path, extra: &[&str]) -> (String, String) {
+    let mut args = vec!["sweep", CONFIG, "--out", out.to_str().unwrap()];
+    args.extend(extra);
+    let (code, stdout, stderr) = silrig(&args);
+    assert_eq!(code, Some(0), "{stdout}{stderr}");
+    (std::fs::read_to_string(out.join("cases.csv")).unwrap(), std::fs::read_to_string(out.join("sweep.json")).unwrap())
+}
+
+#[test]
+fn a_sweep_is_the_same_bytes_on_any_number_of_threads_and_a_prefix_of_a_longer_one() {
+    let dir = temp_dir("pure");
+    let (csv1, json1) = sweep(&dir.join("one"), &["--runs", "40", "--jobs", "1"]);
+    let (csv2, json2) = sweep(&dir.join("two"), &["--runs", "40", "--jobs", "2"]);
+    assert_eq!(csv1, csv2);
+    assert_eq!(json1, json2);
+    let (csv_short, _) = sweep(&dir.join("short"), &["--runs", "25", "--jobs", "2"]);
+    let long: Vec<&str> = csv1.lines().take(26).collect();
+    assert_eq!(csv_short.lines().collect::<Vec<_>>(), long, "case i does not depend on how many cases there are");
+    let (csv_other, _) = sweep(&dir.join("other-seed"), &["--runs", "40", "--seed", "2"]);
+    assert_ne!(csv_other, csv1);
+    for stem in ["histograms", "scatter", "envelope"] {
+        for ext in ["png", "svg"] {
+            let f = dir.join("one").join(format!("{stem}.{ext}"));
+            assert!(std::fs::metadata(&f).map(|m| m.len() > 1000).unwrap_or(false), "{} drawn", f.display());
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_worst_cases_fly_alone_with_the_numbers_the_sweep_gave() {
+    let dir = temp_dir("worst");
+    let (csv, json) = sweep(&dir.join("sweep"), &["--runs", "60"]);
+    let summary: Value = serde_json::from_str(&json).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let mut checked = 0;
+    for entry in summary["worst"].as_array().unwrap() {
+        let criterion = entry[0].as_str().unwrap();
+        let worst = &entry[1][0];
+        let index = worst["index"].as_u64().unwrap();
+        let command = worst["reproduce"].as_str().unwrap();
+        assert_eq!(command, format!("silrig sim {CONFIG} --sample {index} --seed 1"));
+        let out = dir.join(format!("case-{criterion}"));
+        let mut args: Vec<&str> = command.split(' ').skip(1).collect();
+        args.extend(["--out", out.to_str().unwrap()]);
+        let (code, stdout, stderr) = silrig(&args);
+        assert_eq!(code, Some(0), "{stdout}{stderr}");
+        assert!(stdout.contains(worst["measured"].as_str().unwrap()), "{criterion}: {stdout}");
+        let alone: Value = serde_json::from_str(&std::fs::read_to_string(out.join("case.json")).unwrap()).unwrap();
+        // The row of the sweep: the same figure for every criterion, bit for bit.
+        let row: Vec<&str> = csv.lines().nth(index as usize + 1).unwrap().split(',').collect();
+        let row = &row[row.len() - header.len()..];
+        for j in alone["judgements"].as_array().unwrap() {
+            let column = header.iter().position(|h| *h == j["criterion"].as_str().unwrap()).unwrap();
+            let in_sweep: Option<f64> = row[column].parse().ok();
+            assert_eq!(in_sweep, j["value"].as_f64(), "case {index}, {}", j["criterion"]);
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 5, "one worst case per criterion of the scenario");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn infeasible_cases_are_counted_with_their_reason_never_dropped() {
+    let dir = temp_dir("infeasible");
+    let (csv, json) = sweep(&dir.join("sweep"), &["--runs", "30"]);
+    let summary: Value = serde_json::from_str(&json).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 30);
+    let infeasible: Vec<&&str> = rows.iter().filter(|r| r.split(',').nth(1) == Some("infeasible")).collect();
+    assert!(!infeasible.is_empty(), "seed 1 has infeasible cases among its first 30 (case 0 is one)");
+    assert!(rows[0].starts_with("0,infeasible,\"initial condition: no throttle in 0..1 holds the airspeed"));
+    assert_eq!(summary["infeasible"].as_u64().unwrap() as usize, infeasible.len());
+    assert_eq!(summary["infeasible_cases"].as_array().unwrap().len(), infeasible.len());
+    let flown = summary["passed"].as_u64().unwrap() + summary["failed"].as_u64().unwrap();
+    assert_eq!(flown as usize + infeasible.len(), 30);
+    let (lo, hi) = (summary["pass_rate_95"][0].as_f64().unwrap(), summary["pass_rate_95"][1].as_f64().unwrap());
+    let rate = summary["pass_rate"].as_f64().unwrap();
+    assert!(lo <= rate && rate <= hi && 0.0 <= lo && hi <= 1.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_sweeps_are_refused_naming_the_key_with_nothing_written() {
+    let dir = temp_dir("bad");
+    let base = std::fs::read_to_string(Path::new(ROOT).join(CONFIG)).unwrap();
+    let (head, _) = base.split_once("\n[dispersions]\n").unwrap();
+    let cases = [
+        ("\"initial.phi_dge\" = { dist = \"uniform\", min = 0.0, max = 1.0 }", "", "dispersions.\"initial.phi_dge\""),
+        ("\"initial.phi_deg\" = { dist = \"lognormal\", mean = 0.0 }", "", "unknown variant `lognormal`"),
+        ("\"initial.phi_deg\" = { dist = \"normal\", mean = 0.0, std = -1.0 }", "", "`std` must be >= 0"),
+        (
+            "\"initial.phi_deg\" = { dist = \"normal\", mean = 0.0, std = 1.0, min = 8.0, max = 9.0 }",
+            "",
+            "of the distribution's mass (mean 0, std 1); it must keep at least 1e-4",
+        ),
+        ("\"initial.phi_deg\" = { dist = \"uniform\", min = 0.0, max = 1.0, mode = 2.0 }", "", "unknown field `mode`"),
+        ("\"name\" = { dist = \"uniform\", min = 0.0, max = 1.0 }", "", "is a string, not a number"),
+        (
+            "\"initial.phi_deg\" = { dist = \"uniform\", min = 0.0, max = 1.0 }",
+            "compute_p99 = { max_us = 100.0 }",
+            "`criteria.compute_p99`: is judged by `silrig check`",
+        ),
+        ("\"initial.phi_deg\" = { dist = \"uniform\", min = 0.0, max = 1.0 }", "NONE", "no [criteria]"),
+    ];
+    for (i, (dispersion, criteria, message)) in cases.iter().enumerate() {
+        let criteria = match *criteria {
+            "NONE" => String::new(),
+            "" => "[criteria]\nalpha_max_deg = 20.0\n".to_string(),
+            c => format!("[criteria]\n{c}\n"),
+        };
+        let config = dir.join(format!("bad-{i}.toml"));
+        std::fs::write(&config, format!("{head}\n[dispersions]\n{dispersion}\n\n{criteria}")).unwrap();
+        let out = dir.join(format!("out-{i}"));
+        let (code, stdout, stderr) =
+            silrig(&["sweep", config.to_str().unwrap(), "--runs", "5", "--out", out.to_str().unwrap()]);
+        assert_eq!(code, Some(2), "{i}: {stdout}{stderr}");
+        assert!(stderr.contains(message), "{i}: expected {message:?} in {stderr}");
+        assert!(!out.exists(), "{i}: nothing written");
+    }
+    let (code, _, stderr) = silrig(&["sweep", CONFIG, "--runs", "0", "--out", dir.join("zero").to_str().unwrap()]);
+    assert_eq!(code, Some(2));
+    assert!(stderr.contains("--runs must be within 1..="), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
