@@ -23,6 +23,12 @@ pub(crate) fn no_evidence(criterion: &str, limit: String, what: &str) -> Judgeme
     judgement(criterion, "-".into(), limit, Some(format!("nothing to judge: {what}")))
 }
 
+/// A figure for people: two decimals, or three significant digits in powers of ten once it is absurdly large (a
+/// flight that left the model's data).
+fn figure(v: f64) -> String {
+    if v.abs() < 1e5 { format!("{v:.2}") } else { format!("{v:.2e}") }
+}
+
 /// Judge the flight criteria of `criteria` that are set, in a fixed order, from a trace and its summary.
 pub fn judge_flight(
     criteria: &Criteria,
@@ -102,9 +108,10 @@ pub(crate) fn alpha_max(trace: Option<&Trace>, max: f64) -> Judgement {
     let Some((alpha, at)) = trace.and_then(|t| peak_abs(t, "alpha_deg", f64::NEG_INFINITY)) else {
         return no_evidence("alpha_max_deg", limit, "no trace was logged");
     };
-    let failure = (alpha > max)
-        .then(|| format!("the angle of attack reached {alpha:.2} deg at {at:.2} s, beyond the {max} deg allowed"));
-    judgement("alpha_max_deg", format!("{alpha:.2} deg"), limit, failure).with_value(alpha)
+    let failure = (alpha > max).then(|| {
+        format!("the angle of attack reached {} deg at {at:.2} s, beyond the {max} deg allowed", figure(alpha))
+    });
+    judgement("alpha_max_deg", format!("{} deg", figure(alpha)), limit, failure).with_value(alpha)
 }
 
 pub(crate) fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgement {
@@ -119,11 +126,13 @@ pub(crate) fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgemen
     };
     let failure = (rate > b.max).then(|| {
         format!(
-            "|{name}| reached {rate:.2} deg/s at {at:.2} s, after the {} s by which rates should be below {} deg/s",
-            b.after_s, b.max
+            "|{name}| reached {} deg/s at {at:.2} s, after the {} s by which rates should be below {} deg/s",
+            figure(rate),
+            b.after_s,
+            b.max
         )
     });
-    judgement("body_rate_max_dps", format!("|{name}| {rate:.2} deg/s"), limit, failure).with_value(rate)
+    judgement("body_rate_max_dps", format!("|{name}| {} deg/s", figure(rate)), limit, failure).with_value(rate)
 }
 
 pub(crate) fn rate_limit_fraction(summary: Option<&Summary>, max: f64) -> Judgement {

@@ -172,17 +172,72 @@ pub struct PlantOptions {
     /// CG position, fraction of the mean chord.
     #[serde(default = "default_xcg")]
     pub xcg: f64,
+    /// Multipliers on the total aerodynamic coefficients (uncertainty; 1: the book's data).
+    #[serde(default)]
+    pub aero_scale: AeroScale,
+    /// Multiplier on the mass and the inertias together (uncertainty; 1: the book's aircraft).
+    #[serde(default = "one")]
+    pub mass_scale: f64,
 }
 
 fn default_xcg() -> f64 {
     crate::plant::aero::XCG_REF
 }
 
+fn one() -> f64 {
+    1.0
+}
+
 impl Default for PlantOptions {
     fn default() -> Self {
-        Self { speed_hold: false, xcg: default_xcg() }
+        Self { speed_hold: false, xcg: default_xcg(), aero_scale: AeroScale::default(), mass_scale: 1.0 }
     }
 }
+
+/// Multipliers on the total body-axis aerodynamic coefficients, each within 0..3 (1: the book's data).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AeroScale {
+    /// Axial force.
+    #[serde(default = "one")]
+    pub cx: f64,
+    /// Side force.
+    #[serde(default = "one")]
+    pub cy: f64,
+    /// Normal force.
+    #[serde(default = "one")]
+    pub cz: f64,
+    /// Rolling moment.
+    #[serde(default = "one")]
+    pub cl: f64,
+    /// Pitching moment.
+    #[serde(default = "one")]
+    pub cm: f64,
+    /// Yawing moment.
+    #[serde(default = "one")]
+    pub cn: f64,
+}
+
+impl Default for AeroScale {
+    fn default() -> Self {
+        Self { cx: 1.0, cy: 1.0, cz: 1.0, cl: 1.0, cm: 1.0, cn: 1.0 }
+    }
+}
+
+impl PlantOptions {
+    /// The F-16 model these options describe (CG and uncertainty scales): the one place a model is built from a
+    /// scenario.
+    pub fn model(&self) -> crate::plant::F16Model {
+        let a = &self.aero_scale;
+        crate::plant::F16Model::new(self.xcg).with_scales(crate::plant::ModelScales {
+            aero: [a.cx, a.cy, a.cz, a.cl, a.cm, a.cn],
+            mass: self.mass_scale,
+        })
+    }
+}
+
+/// Largest extra transport delay, ticks (the rig's plant keeps the last 8 commands).
+pub const MAX_TRANSPORT_DELAY_TICKS: u64 = 5;
 
 /// When a command computed from the sample of tick k acts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -204,9 +259,22 @@ pub struct Timing {
     pub duration_s: f64,
     /// Command timing.
     pub command_timing: CommandTiming,
+    /// Extra transport delay, whole ticks on top of `command_timing` (0..=5): the command computed from the sample
+    /// of tick k acts from tick k + d (same-tick) or k + 1 + d (next-tick).
+    #[serde(default)]
+    pub transport_delay_ticks: u64,
 }
 
 impl Timing {
+    /// Ticks between the sample a command answers and the first tick it acts on.
+    pub fn command_delay_ticks(&self) -> u64 {
+        let offset = match self.command_timing {
+            CommandTiming::SameTick => 0,
+            CommandTiming::NextTick => 1,
+        };
+        offset + self.transport_delay_ticks
+    }
+
     /// Number of ticks in the run.
     pub fn ticks(&self) -> u64 {
         (self.duration_s / self.dt_s).round() as u64
@@ -250,7 +318,9 @@ impl Scenario {
         for (key, value) in values {
             let node = lookup(&mut tree, key)?;
             match node {
-                toml::Value::Float(_) | toml::Value::Integer(_) => *node = toml::Value::Float(*value),
+                toml::Value::Float(_) => *node = toml::Value::Float(*value),
+                // A count (ticks) takes the sampled value rounded to the nearest whole number.
+                toml::Value::Integer(_) => *node = toml::Value::Integer(value.round() as i64),
                 other => return Err(format!("`{key}` is a {}, not a number", other.type_str())),
             }
         }
@@ -395,6 +465,15 @@ impl Scenario {
         if !(0.0..=1.0).contains(&self.plant.xcg) {
             return err("plant.xcg", format!("must be a fraction of the chord in 0..1, got {}", self.plant.xcg));
         }
+        let a = &self.plant.aero_scale;
+        for (key, v) in [("cx", a.cx), ("cy", a.cy), ("cz", a.cz), ("cl", a.cl), ("cm", a.cm), ("cn", a.cn)] {
+            if !(0.0..=3.0).contains(&v) {
+                return err(&format!("plant.aero_scale.{key}"), format!("must be within 0..3, got {v}"));
+            }
+        }
+        if !(self.plant.mass_scale >= 0.5 && self.plant.mass_scale <= 2.0) {
+            return err("plant.mass_scale", format!("must be within 0.5..2, got {}", self.plant.mass_scale));
+        }
         self.controller.validate().map_err(|e| {
             let key = e.split([' ', '[', ':']).next().unwrap_or("").to_string();
             (format!("controller.{key}"), e)
@@ -416,6 +495,12 @@ impl Scenario {
         }
         if t.duration_s < t.dt_s {
             return err("timing.duration_s", format!("is shorter than one step ({} s)", t.dt_s));
+        }
+        if t.transport_delay_ticks > MAX_TRANSPORT_DELAY_TICKS {
+            return err(
+                "timing.transport_delay_ticks",
+                format!("must be within 0..={MAX_TRANSPORT_DELAY_TICKS}, got {}", t.transport_delay_ticks),
+            );
         }
         for (i, f) in self.faults.iter().enumerate() {
             f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;

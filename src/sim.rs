@@ -19,7 +19,7 @@ use crate::integrator::rk4_step;
 use crate::plant::trim::trim_level_flight;
 use crate::plant::{ControlInputs, ExternalForcing, F16Model, F16State, STATE_NAMES, engine};
 use crate::rng::SplitMix64;
-use crate::scenario::{CommandTiming, InitialMode, Scenario};
+use crate::scenario::{InitialMode, Scenario};
 use crate::trace::{self, Trace};
 use crate::units::{M_PER_FT, deg_to_rad, m_to_ft, rad_to_deg};
 
@@ -161,7 +161,7 @@ fn holding_throttle(model: &F16Model, state: &F16State, surfaces: &ControlInputs
 impl PlantRunner {
     /// The plant at the scenario's initial condition.
     pub fn new(s: &Scenario) -> Result<Self, SetupError> {
-        let model = F16Model::new(s.plant.xcg);
+        let model = s.plant.model();
         let i = &s.initial;
         let vt_fps = m_to_ft(i.airspeed_mps);
         let mut state = F16State {
@@ -474,20 +474,22 @@ pub fn run(s: &Scenario) -> Result<Trace, SetupError> {
     let ticks = s.timing.ticks();
     let mut trace = Trace::new(trace::columns(s.controller.rbf.nodes()));
     trace.rows.reserve(ticks as usize);
-    let mut previous = plant.initial_command();
+    // The commands computed but not yet acting, oldest first: the one computed `delay` ticks ago acts now.
+    let delay = s.timing.command_delay_ticks() as usize;
+    let mut pending = std::collections::VecDeque::with_capacity(delay + 1);
+    let mut acting = plant.initial_command();
     let mut diagnostics = vec![0.0; trace.columns.len() - trace::LOOP_COLUMNS.len()];
     for _ in 0..ticks {
         let snap = plant.snapshot();
         let (surfaces, diag) = controller.step(&measurement(&snap), &setpoint, dt);
         write_attitude_diagnostics(&mut diagnostics, &diag, &controller);
         trace.rows.push(trace_row(&snap, &surfaces, &diagnostics));
-        let command = ActuatorCommand { surfaces, throttle: previous.throttle };
-        let applied = match s.timing.command_timing {
-            CommandTiming::SameTick => command,
-            CommandTiming::NextTick => previous,
-        };
-        plant.step(&applied);
-        previous = command;
+        // The throttle is held: the controller commands surfaces only.
+        pending.push_back(ActuatorCommand { surfaces, throttle: acting.throttle });
+        if pending.len() > delay {
+            acting = pending.pop_front().expect("not empty");
+        }
+        plant.step(&acting);
     }
     Ok(trace)
 }

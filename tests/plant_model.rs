@@ -213,3 +213,24 @@ fn euler_disturbance_appears_in_the_euler_accelerations() {
         assert!((euler[k] - d[k]).abs() < 1e-12, "{euler:?}");
     }
 }
+
+#[test]
+fn model_scales_multiply_the_coefficients_and_divide_by_mass_and_inertia() {
+    use silrig::plant::ModelScales;
+    let (mut x, u) = check_case();
+    // No body rates: the rate derivatives are the aerodynamic and engine moments over the inertias alone.
+    (x.p_radps, x.q_radps, x.r_radps) = (0.0, 0.0, 0.0);
+    let book = F16Model::new(0.4);
+    let nominal = book.derivative(&x, &u, &ExternalForcing::default());
+    assert_eq!(book.with_scales(ModelScales::default()).derivative(&x, &u, &ExternalForcing::default()), nominal);
+    let heavy =
+        book.with_scales(ModelScales { aero: [1.0; 6], mass: 2.0 }).derivative(&x, &u, &ExternalForcing::default());
+    for i in [6, 7, 8] {
+        assert!((heavy[i] - nominal[i] / 2.0).abs() < 1e-12 * nominal[i].abs().max(1.0), "{}", STATE_DOT_NAMES[i]);
+    }
+    // Cm doubled: q_dot (index 7) doubles, roll and yaw do not move.
+    let cm = book.with_scales(ModelScales { aero: [1.0, 1.0, 1.0, 1.0, 2.0, 1.0], mass: 1.0 });
+    let d = cm.derivative(&x, &u, &ExternalForcing::default());
+    assert!((d[7] - 2.0 * nominal[7]).abs() < 1e-12 * nominal[7].abs());
+    assert_eq!((d[6], d[8]), (nominal[6], nominal[8]));
+}

@@ -296,3 +296,22 @@ fn a_controller_with_more_diagnostics_than_a_command_carries_is_refused_before_i
     no_shared_memory_left(&run_id("too-many"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The uncertainty keys a sweep disperses act identically in the rig's plant: extra transport delay, aerodynamic
+/// and mass scales (and they change the flight).
+#[test]
+fn lockstep_with_delay_and_model_scales_equals_sim_bit_for_bit() {
+    let dir = temp_dir("lock-scales-scenario");
+    let scenario = dir.join("scaled.toml");
+    let base = std::fs::read_to_string(config("robust")).unwrap();
+    let text = base
+        .replace("xcg = 0.35\n", "xcg = 0.35\nmass_scale = 1.1\naero_scale = { cm = 0.9, cl = 1.2 }\n")
+        .replace("command_timing = \"next-tick\"\n", "command_timing = \"next-tick\"\ntransport_delay_ticks = 2\n");
+    assert_ne!(text, base);
+    std::fs::write(&scenario, text).unwrap();
+    lockstep_matches_sim(scenario.to_str().unwrap(), "lock-scales");
+    let nominal = silrig::sim::run(&silrig::scenario::Scenario::load(Path::new(&config("robust"))).unwrap()).unwrap();
+    let scaled = silrig::sim::run(&silrig::scenario::Scenario::load(&scenario).unwrap()).unwrap();
+    assert_ne!(nominal.rows[300], scaled.rows[300], "the keys change the flight");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

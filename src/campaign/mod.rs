@@ -295,21 +295,23 @@ pub fn write_plots(
             })
             .collect();
         influence.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
-        let shown = figure.iter().copied().filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+        // Departed flights reach absurd figures: the axis stops at 3x the limit, and a case beyond it (or that never
+        // settled) is drawn at that edge.
+        let largest = figure.iter().copied().filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+        let limit = limits.iter().find(|(c, _)| c == criterion).and_then(|(_, l)| *l);
+        let shown = limit.map_or(largest, |l| largest.min(3.0 * l.abs()));
         let scatters: Vec<Scatter> = influence
             .iter()
             .take(SCATTER_PARAMETERS)
             .map(|(p, rho)| {
-                let point = |c: &&&CaseResult| {
-                    (c.values[*p], c.judgements[k].value.unwrap_or(shown).min(shown.max(1e-9) * 1.0))
-                };
+                let point = |c: &&&CaseResult| (c.values[*p], c.judgements[k].value.unwrap_or(shown).min(shown));
                 let split = |passed: bool| {
                     flown.iter().filter(|c| c.judgements[k].passed == passed).map(|c| point(&c)).collect()
                 };
                 Scatter {
                     caption: format!("{} (Spearman rho {rho:+.2})", campaign.parameters[*p]),
                     x_desc: campaign.parameters[*p].clone(),
-                    y_desc: criterion_unit(criterion).into(),
+                    y_desc: format!("{} (at most {shown:.3})", criterion_unit(criterion)),
                     passed: split(true),
                     failed: split(false),
                 }

@@ -170,12 +170,29 @@ pub struct ExternalForcing {
     pub euler_accel_disturbance_radps2: [f64; 3],
 }
 
-/// The F-16 model: the tables plus the CG position.
+/// Multipliers on the book's F-16 for uncertainty studies (Monte Carlo): all 1 is the book's aircraft.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModelScales {
+    /// On the total body-axis coefficients Cx, Cy, Cz, Cl, Cm, Cn (after the build-up, damping and CG terms).
+    pub aero: [f64; 6],
+    /// On the mass and the inertias together (the radii of gyration kept).
+    pub mass: f64,
+}
+
+impl Default for ModelScales {
+    fn default() -> Self {
+        Self { aero: [1.0; 6], mass: 1.0 }
+    }
+}
+
+/// The F-16 model: the tables plus the CG position (and uncertainty scales, 1 by default).
 #[derive(Debug, Clone, Copy)]
 pub struct F16Model {
     tables: &'static F16Tables,
     /// CG position, fraction of the mean aerodynamic chord (book default 0.35; the check case uses 0.4).
     pub xcg: f64,
+    /// Uncertainty multipliers (1: the book's aircraft; multiplying by 1 changes no bit).
+    pub scales: ModelScales,
 }
 
 impl Default for F16Model {
@@ -198,7 +215,12 @@ pub struct AirDataOutputs {
 impl F16Model {
     /// The model with the embedded tables and the given CG position.
     pub fn new(xcg: f64) -> Self {
-        Self { tables: &F16_TABLES, xcg }
+        Self { tables: &F16_TABLES, xcg, scales: ModelScales::default() }
+    }
+
+    /// The model with uncertainty multipliers.
+    pub fn with_scales(self, scales: ModelScales) -> Self {
+        Self { scales, ..self }
     }
 
     /// The tables the model reads.
@@ -246,6 +268,20 @@ impl F16Model {
             },
         );
 
+        let [sx, sy, sz, sl, sm, sn] = self.scales.aero;
+        let k = aero::AeroCoefficients {
+            cx: k.cx * sx,
+            cy: k.cy * sy,
+            cz: k.cz * sz,
+            cl: k.cl * sl,
+            cm: k.cm * sm,
+            cn: k.cn * sn,
+        };
+        // Mass and inertias scaled together: 1/m and the inverse-inertia terms c3, c4, c7, c9 divide by the
+        // scale; the inertia ratios c1, c2, c5, c6, c8 are unchanged.
+        let mass = self.scales.mass;
+        let inv_mass = INV_MASS_PER_SLUG / mass;
+        let (c3, c4, c7, c9) = (c3 / mass, c4 / mass, c7 / mass, c9 / mass);
         let cbta = x.beta_rad.cos();
         let u_fps = vt * x.alpha_rad.cos() * cbta;
         let v_fps = vt * x.beta_rad.sin();
@@ -256,12 +292,12 @@ impl F16Model {
 
         let qs = air.qbar_psf * aero::WING_AREA_FT2;
         let qsb = qs * aero::WING_SPAN_FT;
-        let rmqs = INV_MASS_PER_SLUG * qs;
+        let rmqs = inv_mass * qs;
         let gcth = g * cth;
         let qsph = q * sph;
 
         // Force equations in body axes.
-        let udot = r * v_fps - q * w_fps - g * sth + INV_MASS_PER_SLUG * (qs * k.cx + thrust);
+        let udot = r * v_fps - q * w_fps - g * sth + inv_mass * (qs * k.cx + thrust);
         let vdot = p * w_fps - r * u_fps + gcth * sph + rmqs * k.cy;
         let wdot = q * u_fps - p * v_fps + gcth * cph + rmqs * k.cz;
         let dum = u_fps * u_fps + w_fps * w_fps;

@@ -18,7 +18,7 @@ use super::{ProcessArgs, RigMode, signals};
 use crate::clock::{self, TickSchedule, monotonic_ns};
 use crate::control::SurfaceCommand;
 use crate::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
-use crate::scenario::{CommandTiming, Scenario};
+use crate::scenario::Scenario;
 use crate::sim::{ActuatorCommand, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
 use crate::topology::{Role, Stream};
 use crate::wire::{self, CommandSample, LogAckSample, PlantSample};
@@ -98,7 +98,7 @@ fn actuator_command(c: &CommandSample, throttle: f64) -> ActuatorCommand {
 /// The trim surfaces of the scenario's initial airspeed and altitude, or `hold` when level flight has no trim
 /// there.
 fn failsafe_command(scenario: &Scenario, hold: ActuatorCommand) -> ActuatorCommand {
-    let model = crate::plant::F16Model::new(scenario.plant.xcg);
+    let model = scenario.plant.model();
     let vt_fps = crate::units::m_to_ft(scenario.initial.airspeed_mps);
     match crate::plant::trim::trim_level_flight(&model, vt_fps, scenario.initial.altitude_ft) {
         Ok(trim) => ActuatorCommand {
@@ -446,10 +446,7 @@ impl PlantLoop {
     /// Apply the command this tick wants (the answer to this tick, same-tick, or to the previous one, next-tick);
     /// returns true when it is missing and the last command is held (a miss).
     fn choose_command(&mut self) -> bool {
-        let target = match self.scenario.timing.command_timing {
-            CommandTiming::SameTick => Some(self.sim_tick),
-            CommandTiming::NextTick => self.sim_tick.checked_sub(1),
-        };
+        let target = self.sim_tick.checked_sub(self.scenario.timing.command_delay_ticks());
         let Some(target) = target else { return false };
         let Some(fresh) = self.received.iter().find(|c| c.answers_tick == target).copied() else {
             self.rec.count("command_misses", 1);
