@@ -53,7 +53,7 @@ enum Command {
     },
     /// Monte Carlo: fly N dispersed cases of a scenario ([dispersions]) in parallel, judge each by its [criteria],
     /// and write cases.csv, sweep.json and the pass rate with the worst cases.
-    Sweep(silrig::campaign::SweepOptions),
+    Sweep(silrig::campaign::SweepCommand),
     /// Run several scenarios and print their summaries side by side, with an overlay plot.
     Compare {
         /// Scenario files (TOML).
@@ -129,8 +129,8 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 println!("wrote {}", f.display());
             }
         }
-        Command::Sweep(opts) => {
-            let run = silrig::campaign::sweep(&opts)?;
+        Command::Sweep(silrig::campaign::SweepCommand { action: None, local }) => {
+            let run = silrig::campaign::sweep(&local)?;
             print!("{}", run.summary.to_text());
             println!(
                 "flew {} cases in {:.2} s on {} thread(s): {:.0} cases/s",
@@ -141,6 +141,52 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             );
             for f in run.files {
                 println!("wrote {}", f.display());
+            }
+        }
+        Command::Sweep(silrig::campaign::SweepCommand { action: Some(action), .. }) => {
+            use silrig::campaign::{SweepAction, shard};
+            match action {
+                SweepAction::Plan(opts) => {
+                    let m = shard::plan(&opts)?;
+                    println!(
+                        "planned {} cases of {} in {} shards (seed {}) in {}",
+                        m.runs,
+                        m.config,
+                        m.shards,
+                        m.seed,
+                        opts.out.display()
+                    );
+                    println!(
+                        "fly each shard with `silrig sweep run {} --index K` (K = 0..{})",
+                        opts.out.display(),
+                        m.shards - 1
+                    );
+                }
+                SweepAction::Run(opts) => {
+                    let (path, result) = shard::run(&opts)?;
+                    println!(
+                        "shard {}: cases {}..{} flown; wrote {}",
+                        result.shard,
+                        result.cases_range.0,
+                        result.cases_range.1,
+                        path.display()
+                    );
+                }
+                SweepAction::Merge { dir } => {
+                    let run = shard::merge(&dir)?;
+                    print!("{}", run.summary.to_text());
+                    for f in run.files {
+                        println!("wrote {}", f.display());
+                    }
+                }
+                SweepAction::Slurm(opts) => {
+                    let (path, _) = shard::slurm_script(&opts)?;
+                    println!(
+                        "wrote {}; submit it with `sbatch {}`, then merge (the script's header says how)",
+                        path.display(),
+                        path.display()
+                    );
+                }
             }
         }
         Command::Sim { config, out, .. } => {

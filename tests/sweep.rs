@@ -150,3 +150,55 @@ fn bad_sweeps_are_refused_naming_the_key_with_nothing_written() {
     assert!(stderr.contains("--runs must be within 1..="), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_sweep_split_in_shards_merges_into_the_same_bytes_and_refuses_what_does_not_belong() {
+    let dir = temp_dir("shards");
+    let (plan, other) = (dir.join("plan"), dir.join("other"));
+    let (p, o) = (plan.to_str().unwrap(), other.to_str().unwrap());
+    let ok = |args: &[&str]| {
+        let (code, stdout, stderr) = silrig(args);
+        assert_eq!(code, Some(0), "{args:?}: {stdout}{stderr}");
+        stdout
+    };
+    let refused = |args: &[&str], message: &str| {
+        let (code, stdout, stderr) = silrig(args);
+        assert_eq!(code, Some(2), "{args:?}: {stdout}{stderr}");
+        assert!(stderr.contains(message), "{args:?}: expected {message:?} in {stderr}");
+    };
+    ok(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--out", p]);
+    refused(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--out", p], "already holds a sweep plan");
+    refused(&["sweep", "plan", CONFIG, "--runs", "3", "--shards", "4", "--out", o], "--shards must be within 1..=3");
+    ok(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--seed", "9", "--out", o]);
+    // Each way of naming a shard: --index, --shard K/N, the batch system's variable.
+    ok(&["sweep", "run", p, "--index", "0"]);
+    ok(&["sweep", "run", p, "--shard", "1/3"]);
+    refused(&["sweep", "merge", p], "1 of 3 shards have no results yet (shard 2)");
+    let o2 = Command::new(SILRIG)
+        .args(["sweep", "run", p])
+        .env("JOB_COMPLETION_INDEX", "2")
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .current_dir(ROOT)
+        .output()
+        .unwrap();
+    assert!(o2.status.success(), "{}", String::from_utf8_lossy(&o2.stderr));
+    refused(&["sweep", "run", p, "--index", "3"], "shard 3 is out of range: the plan has shards 0..=2");
+    refused(&["sweep", "run", p, "--shard", "1/4"], "the plan has 3 shards, not 4");
+    // A shard of another plan (another seed) in this plan's folder.
+    ok(&["sweep", "run", o, "--index", "1"]);
+    let mine = plan.join("shards/shard-1-of-3.json");
+    let saved = std::fs::read(&mine).unwrap();
+    std::fs::copy(other.join("shards/shard-1-of-3.json"), &mine).unwrap();
+    refused(&["sweep", "merge", p], "belongs to another plan");
+    assert!(!plan.join("sweep.json").exists(), "nothing written half");
+    std::fs::write(&mine, saved).unwrap();
+    ok(&["sweep", "merge", p]);
+    refused(&["sweep", "merge", p], "already holds merged results");
+    let (csv, json) = sweep(&dir.join("local"), &["--runs", "30"]);
+    assert_eq!(std::fs::read_to_string(plan.join("cases.csv")).unwrap(), csv);
+    assert_eq!(std::fs::read_to_string(plan.join("sweep.json")).unwrap(), json);
+    ok(&["sweep", "slurm", p]);
+    let script = std::fs::read_to_string(plan.join("sweep.sbatch")).unwrap();
+    assert!(script.contains("#SBATCH --array=0-2") && script.contains("sweep run"), "{script}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -38,12 +38,12 @@ impl Outcome {
 pub struct CaseFigures {
     /// Settling time within 0.5 deg of phi, theta, psi, s (None: never).
     pub settle_0p5deg_s: [Option<f64>; 3],
-    /// phi, theta, psi minus their set points at the end, deg.
-    pub final_error_deg: [f64; 3],
-    /// Largest angle of attack, deg.
-    pub alpha_peak_deg: f64,
-    /// Largest |p|, |q|, |r| after the summary's late window starts, deg/s.
-    pub body_rate_max_late_dps: [f64; 3],
+    /// phi, theta, psi minus their set points at the end, deg (None: not a number, the flight left the model).
+    pub final_error_deg: [Option<f64>; 3],
+    /// Largest angle of attack, deg (None: not a number).
+    pub alpha_peak_deg: Option<f64>,
+    /// Largest |p|, |q|, |r| after the summary's late window starts, deg/s (None: not a number).
+    pub body_rate_max_late_dps: [Option<f64>; 3],
     /// Largest fraction of ticks any surface spent at its rate limit.
     pub rate_limit_fraction: f64,
     /// A sustained oscillation at the end.
@@ -57,14 +57,19 @@ impl CaseFigures {
         let ticks = s.ticks.max(1) as f64;
         Self {
             settle_0p5deg_s: [0, 1, 2].map(|i| s.angles[i].settle_within_0p5deg_s),
-            final_error_deg: [0, 1, 2].map(|i| s.angles[i].final_deg - s.angles[i].setpoint_deg),
-            alpha_peak_deg: s.alpha_peak_deg,
-            body_rate_max_late_dps: s.body_rate_max_late_dps,
+            final_error_deg: [0, 1, 2].map(|i| finite(s.angles[i].final_deg - s.angles[i].setpoint_deg)),
+            alpha_peak_deg: finite(s.alpha_peak_deg),
+            body_rate_max_late_dps: s.body_rate_max_late_dps.map(finite),
             rate_limit_fraction: s.surfaces.iter().map(|f| f.ticks_at_rate_limit as f64 / ticks).fold(0.0, f64::max),
             limit_cycle: s.limit_cycle,
             departed_at_s: departure.map(|(t, _)| t),
         }
     }
+}
+
+/// A figure that is a number, or None (JSON has no NaN, and the CSV shows an empty cell).
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
 }
 
 /// The first tick at which the flight leaves what the model knows: alpha or |beta| beyond the aerodynamic tables
@@ -109,8 +114,9 @@ pub struct CaseResult {
     pub figures: Option<CaseFigures>,
     /// The criteria, judged (empty if infeasible).
     pub judgements: Vec<Judgement>,
-    /// (t, phi, theta, psi) every `ENVELOPE_STEP` ticks, deg (empty if infeasible).
-    #[serde(skip)]
+    /// (t, phi, theta, psi) every `ENVELOPE_STEP` ticks, deg (empty if infeasible); carried by shard files so a merged
+    /// sweep draws the same envelope.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub envelope: Vec<[f32; 4]>,
 }
 
@@ -144,7 +150,14 @@ pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index
         failed.insert(0, format!("departed at {t:.2} s: {why};"));
     }
     let columns = ["t_s", "phi_deg", "theta_deg", "psi_deg"].map(|c| trace.index(c).expect("loop columns"));
-    let envelope = trace.rows.iter().step_by(ENVELOPE_STEP).map(|r| columns.map(|c| r[c] as f32)).collect();
+    // Up to the first row that is no longer a number (a departed flight): nothing past it can be drawn.
+    let envelope = trace
+        .rows
+        .iter()
+        .step_by(ENVELOPE_STEP)
+        .map(|r| columns.map(|c| r[c] as f32))
+        .take_while(|r| r.iter().all(|v| v.is_finite()))
+        .collect();
     let result = CaseResult {
         index,
         values,

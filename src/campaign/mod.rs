@@ -5,6 +5,7 @@
 
 pub mod case;
 pub mod report;
+pub mod shard;
 
 use anyhow::Context;
 use case::CaseResult;
@@ -17,14 +18,43 @@ use std::time::{Duration, Instant};
 use crate::criteria::Criteria;
 use crate::scenario::Scenario;
 
-/// What `silrig sweep` is asked to do.
+/// `silrig sweep`: every case on this machine, or (with a subcommand) a sweep split over many.
+#[derive(Debug, Clone, clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct SweepCommand {
+    /// Split the sweep over machines: plan, run a shard, merge, or write a Slurm array script.
+    #[command(subcommand)]
+    pub action: Option<SweepAction>,
+    /// The sweep on this machine.
+    #[command(flatten)]
+    pub local: SweepOptions,
+}
+
+/// The steps of a sweep split over machines.
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum SweepAction {
+    /// Write the plan (manifest.json) into a folder every worker can read.
+    Plan(shard::PlanOptions),
+    /// Fly one shard of a plan (the index from --index, --shard, $SLURM_ARRAY_TASK_ID or $JOB_COMPLETION_INDEX).
+    Run(shard::RunOptions),
+    /// Check that every shard of a plan is done and write the outputs a single-machine sweep writes.
+    Merge {
+        /// The sweep folder.
+        dir: PathBuf,
+    },
+    /// Write the Slurm array script (sweep.sbatch) for a plan.
+    Slurm(shard::SlurmOptions),
+}
+
+/// What `silrig sweep CONFIG` is asked to do.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SweepOptions {
     /// Scenario file (TOML) with `[dispersions]` and `[criteria]`.
-    pub config: PathBuf,
+    #[arg(required = true)]
+    pub config: Option<PathBuf>,
     /// Number of cases.
-    #[arg(long)]
-    pub runs: u64,
+    #[arg(long, required = true)]
+    pub runs: Option<u64>,
     /// Seed of the dispersions (default: the scenario's `seed`).
     #[arg(long)]
     pub seed: Option<u64>,
@@ -54,20 +84,22 @@ pub struct Campaign {
 impl Campaign {
     /// Load `config` and check it can be swept.
     pub fn load(config: &Path) -> anyhow::Result<Self> {
-        let scenario = Scenario::load(config)?;
+        let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
+        Self::from_text(&text, &config.display().to_string())
+    }
+
+    /// A campaign from a scenario's text; `config` names it in errors and printed commands.
+    pub fn from_text(text: &str, config: &str) -> anyhow::Result<Self> {
+        let scenario = Scenario::from_toml(text, config)?;
         anyhow::ensure!(
             !scenario.dispersions.is_empty(),
-            "{}: no [dispersions]: a sweep needs at least one dispersed key",
-            config.display()
+            "{config}: no [dispersions]: a sweep needs at least one dispersed key"
         );
         let criteria = scenario.criteria.clone().filter(Criteria::has_flight_criteria).ok_or_else(|| {
-            anyhow::anyhow!(
-                "{}: no [criteria]: a sweep judges every case by them (e.g. settled, alpha_max_deg)",
-                config.display()
-            )
+            anyhow::anyhow!("{config}: no [criteria]: a sweep judges every case by them (e.g. settled, alpha_max_deg)")
         })?;
         let parameters = scenario.dispersions.keys().cloned().collect();
-        Ok(Self { scenario, criteria, parameters, config: config.display().to_string() })
+        Ok(Self { scenario, criteria, parameters, config: config.to_string() })
     }
 
     /// Fly the cases `indices` under `seed` on `jobs` threads, reporting progress on stderr; results in index order.
@@ -169,13 +201,28 @@ pub fn write_outputs(
     Ok((summary, vec![csv, json]))
 }
 
+/// Refuse a number of cases outside 1..=MAX_RUNS.
+fn check_runs(runs: u64) -> anyhow::Result<()> {
+    anyhow::ensure!((1..=MAX_RUNS).contains(&runs), "--runs must be within 1..={MAX_RUNS}, got {runs}");
+    Ok(())
+}
+
+/// Worker threads: as asked (1..=1024), or one per core.
+fn jobs(asked: Option<usize>) -> anyhow::Result<usize> {
+    let jobs = asked.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    anyhow::ensure!((1..=1024).contains(&jobs), "--jobs must be within 1..=1024, got {jobs}");
+    Ok(jobs)
+}
+
 /// `silrig sweep CONFIG --runs N`: every case on this machine.
 pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
-    anyhow::ensure!((1..=MAX_RUNS).contains(&opts.runs), "--runs must be within 1..={MAX_RUNS}, got {}", opts.runs);
-    let campaign = Campaign::load(&opts.config)?;
+    let (Some(config), Some(runs)) = (&opts.config, opts.runs) else {
+        anyhow::bail!("silrig sweep needs a scenario file and --runs N (or a subcommand: plan, run, merge, slurm)");
+    };
+    check_runs(runs)?;
+    let campaign = Campaign::load(config)?;
     let seed = opts.seed.unwrap_or(campaign.scenario.seed);
-    let jobs = opts.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    anyhow::ensure!((1..=1024).contains(&jobs), "--jobs must be within 1..=1024, got {jobs}");
+    let jobs = jobs(opts.jobs)?;
     let out =
         opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("sweep-{}-{seed}", campaign.scenario.name)));
     anyhow::ensure!(
@@ -184,7 +231,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
         out.display()
     );
     let started = Instant::now();
-    let cases = campaign.fly(seed, 0..opts.runs, jobs)?;
+    let cases = campaign.fly(seed, 0..runs, jobs)?;
     let fly_s = started.elapsed().as_secs_f64();
     let (summary, mut files) = write_outputs(&campaign, seed, &cases, &out)?;
     files.extend(write_plots(&campaign, &summary, &cases, &out)?);

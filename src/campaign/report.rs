@@ -182,7 +182,7 @@ pub fn cases_csv(cases: &[CaseResult], parameters: &[String]) -> String {
                 for v in
                     f.final_error_deg.iter().chain([f.alpha_peak_deg].iter()).chain(f.body_rate_max_late_dps.iter())
                 {
-                    let _ = write!(out, ",{v}");
+                    let _ = write!(out, ",{}", opt(*v));
                 }
                 let _ = write!(out, ",{},{},{}", f.rate_limit_fraction, u8::from(f.limit_cycle), opt(f.departed_at_s));
             }
