@@ -280,9 +280,9 @@ fn criterion_unit(criterion: &str) -> &'static str {
     match criterion {
         "settled" => "settling time (s)",
         "alpha_max_deg" => "largest alpha (deg)",
-        "body_rate_max_dps" => "largest |p|, |q|, |r| late (deg/s)",
-        "rate_limit_fraction_max" => "fraction of ticks at a rate limit",
-        "no_sustained_oscillation" => "oscillation amplitude / what counts",
+        "body_rate_max_dps" => "late |p|,|q|,|r| (deg/s)",
+        "rate_limit_fraction_max" => "ticks at rate limit",
+        "no_sustained_oscillation" => "oscillation / threshold",
         _ => "",
     }
 }
@@ -358,7 +358,7 @@ pub fn write_plots(
                 Scatter {
                     caption: format!("{} (Spearman rho {rho:+.2})", campaign.parameters[*p]),
                     x_desc: campaign.parameters[*p].clone(),
-                    y_desc: format!("{} (at most {shown:.3})", criterion_unit(criterion)),
+                    y_desc: format!("{} (cap {shown:.3})", criterion_unit(criterion)),
                     passed: split(true),
                     failed: split(false),
                 }

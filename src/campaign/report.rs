@@ -37,6 +37,19 @@ pub struct WorstCase {
     pub reproduce: String,
 }
 
+/// A flown case that left the aerodynamic data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DepartedCase {
+    /// Sample index.
+    pub index: u64,
+    /// When, s.
+    pub at_s: f64,
+    /// What left the data.
+    pub reason: String,
+    /// The command that flies it alone.
+    pub reproduce: String,
+}
+
 /// An infeasible case.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct InfeasibleCase {
@@ -75,8 +88,12 @@ pub struct SweepSummary {
     pub pass_rate_95: (f64, f64),
     /// Per criterion: how many flown cases failed it.
     pub failures_by_criterion: Vec<(String, u64)>,
-    /// Per criterion: the worst `WORST_LISTED` flown cases (largest figure first; never settled counts as worst).
+    /// Per criterion: the worst `WORST_LISTED` flown cases that stayed within the aerodynamic data (largest figure
+    /// first; never settled counts as worst). Departed cases are listed apart: past their departure no figure
+    /// means anything.
     pub worst: Vec<(String, Vec<WorstCase>)>,
+    /// Every departed case, in index order.
+    pub departed_cases: Vec<DepartedCase>,
     /// Every infeasible case.
     pub infeasible_cases: Vec<InfeasibleCase>,
 }
@@ -98,13 +115,15 @@ pub fn summarize(
     let count = |o: Outcome| cases.iter().filter(|c| c.outcome == o).count() as u64;
     let (passed, failed, infeasible) = (count(Outcome::Pass), count(Outcome::Fail), count(Outcome::Infeasible));
     let flown: Vec<&CaseResult> = cases.iter().filter(|c| c.outcome != Outcome::Infeasible).collect();
+    let departure = |c: &CaseResult| c.figures.as_ref().and_then(|f| f.departed_at_s);
+    let in_data: Vec<&CaseResult> = flown.iter().copied().filter(|c| departure(c).is_none()).collect();
     let names: Vec<String> =
         flown.first().map(|c| c.judgements.iter().map(|j| j.criterion.clone()).collect()).unwrap_or_default();
     let mut failures_by_criterion = Vec::new();
     let mut worst = Vec::new();
     for (k, name) in names.iter().enumerate() {
         failures_by_criterion.push((name.clone(), flown.iter().filter(|c| !c.judgements[k].passed).count() as u64));
-        let mut ranked: Vec<&&CaseResult> = flown.iter().collect();
+        let mut ranked: Vec<&&CaseResult> = in_data.iter().collect();
         // Worst first: no figure (never settled) before the largest figure; ties by index, so the order is stable.
         ranked.sort_by(|a, b| {
             let key = |c: &CaseResult| c.judgements[k].value.unwrap_or(f64::INFINITY);
@@ -133,11 +152,22 @@ pub fn summarize(
         passed,
         failed,
         infeasible,
-        departed: flown.iter().filter(|c| c.figures.as_ref().is_some_and(|f| f.departed_at_s.is_some())).count() as u64,
+        departed: (flown.len() - in_data.len()) as u64,
         pass_rate,
         pass_rate_95: wilson_95(passed, passed + failed),
         failures_by_criterion,
         worst,
+        departed_cases: flown
+            .iter()
+            .filter_map(|c| {
+                departure(c).map(|at_s| DepartedCase {
+                    index: c.index,
+                    at_s,
+                    reason: c.reason.split(';').next().unwrap_or_default().to_string(),
+                    reproduce: reproduce_command(config, seed, c.index),
+                })
+            })
+            .collect(),
         infeasible_cases: cases
             .iter()
             .filter(|c| c.outcome == Outcome::Infeasible)
@@ -236,6 +266,12 @@ impl SweepSummary {
                     w.reproduce
                 );
             }
+        }
+        if !self.departed_cases.is_empty() {
+            let _ = writeln!(out, "  departed (left the aerodynamic data; the worst cases above are of the others):");
+        }
+        for c in self.departed_cases.iter().take(3) {
+            let _ = writeln!(out, "    case {:<6} {}   {}", c.index, c.reason, c.reproduce);
         }
         for c in self.infeasible_cases.iter().take(3) {
             let _ = writeln!(out, "  infeasible case {}: {}", c.index, c.reason);
