@@ -24,6 +24,10 @@ pub struct Criteria {
     pub deadline_misses_max: Option<u64>,
     /// phi, theta and psi each stay within `band_deg` of the set point from `within_s` on.
     pub settled: Option<Settled>,
+    /// Largest overshoot of phi, theta or psi past its set point (in the direction of its step), deg.
+    pub overshoot_max_deg: Option<f64>,
+    /// Largest |angle - set point| of phi, theta, psi at the end of the run, deg.
+    pub final_error_max_deg: Option<f64>,
     /// Largest angle of attack over the run, deg.
     pub alpha_max_deg: Option<f64>,
     /// Largest |p|, |q|, |r| from `after_s` on.
@@ -151,8 +155,14 @@ impl Criteria {
                 ));
             }
         }
-        if let Some(a) = self.alpha_max_deg {
-            positive("alpha_max_deg", a)?;
+        for (key, v) in [
+            ("alpha_max_deg", self.alpha_max_deg),
+            ("overshoot_max_deg", self.overshoot_max_deg),
+            ("final_error_max_deg", self.final_error_max_deg),
+        ] {
+            if let Some(v) = v {
+                positive(key, v)?;
+            }
         }
         if let Some(b) = self.body_rate_max_dps {
             positive("body_rate_max_dps.max", b.max)?;
@@ -175,6 +185,8 @@ impl Criteria {
     pub fn has_flight_criteria(&self) -> bool {
         self.settled.is_some()
             || self.alpha_max_deg.is_some()
+            || self.overshoot_max_deg.is_some()
+            || self.final_error_max_deg.is_some()
             || self.body_rate_max_dps.is_some()
             || self.rate_limit_fraction_max.is_some()
             || self.no_sustained_oscillation

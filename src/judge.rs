@@ -40,6 +40,12 @@ pub fn judge_flight(
     if let Some(s) = criteria.settled {
         out.push(settled(scenario, trace, s));
     }
+    if let Some(o) = criteria.overshoot_max_deg {
+        out.push(overshoot_max(scenario, trace, o));
+    }
+    if let Some(e) = criteria.final_error_max_deg {
+        out.push(final_error_max(scenario, trace, e));
+    }
     if let Some(a) = criteria.alpha_max_deg {
         out.push(alpha_max(trace, a));
     }
@@ -55,7 +61,7 @@ pub fn judge_flight(
     out
 }
 
-pub(crate) fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement {
+fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement {
     let limit = format!("within {} deg from {} s", s.band_deg, s.within_s);
     let Some(trace) = trace else { return no_evidence("settled", limit, "no trace was logged") };
     let t = trace.column("t_s").unwrap_or_default();
@@ -103,7 +109,58 @@ fn peak_abs(trace: &Trace, column: &str, from_s: f64) -> Option<(f64, f64)> {
         .max_by(|a, b| a.0.total_cmp(&b.0))
 }
 
-pub(crate) fn alpha_max(trace: Option<&Trace>, max: f64) -> Judgement {
+/// (axis, set point, values) of phi, theta, psi.
+fn angles(scenario: &Scenario, trace: &Trace) -> Vec<(&'static str, f64, Vec<f64>)> {
+    let sp = &scenario.setpoint;
+    [("phi", sp.phi_deg), ("theta", sp.theta_deg), ("psi", sp.psi_deg)]
+        .into_iter()
+        .map(|(name, setpoint)| (name, setpoint, trace.column(&format!("{name}_deg")).unwrap_or_default()))
+        .collect()
+}
+
+fn overshoot_max(scenario: &Scenario, trace: Option<&Trace>, max: f64) -> Judgement {
+    let limit = format!("{max} deg");
+    let Some(trace) = trace else { return no_evidence("overshoot_max_deg", limit, "no trace was logged") };
+    // Past the set point in the direction of the step; an axis already at its set point has no step to overshoot.
+    let worst = angles(scenario, trace)
+        .into_iter()
+        .filter_map(|(name, setpoint, x)| {
+            let step = setpoint - x.first()?;
+            // f64::signum gives 1 for 0: an axis without a step is left out explicitly.
+            let direction = if step > 0.0 { 1.0 } else { -1.0 };
+            (step != 0.0).then(|| {
+                let over = x
+                    .iter()
+                    .map(|v| (v - setpoint) * direction)
+                    .fold(0.0_f64, |m, v| if v.is_nan() { f64::INFINITY } else { m.max(v) });
+                (name, over)
+            })
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    let (axis, over) = worst.unwrap_or(("-", 0.0));
+    let failure = (over > max).then(|| {
+        format!("{axis} went {} deg past its set point on the way there, more than the {max} deg allowed", figure(over))
+    });
+    judgement("overshoot_max_deg", format!("{axis} {} deg", figure(over)), limit, failure).with_value(over)
+}
+
+fn final_error_max(scenario: &Scenario, trace: Option<&Trace>, max: f64) -> Judgement {
+    let limit = format!("{max} deg");
+    let Some(trace) = trace else { return no_evidence("final_error_max_deg", limit, "no trace was logged") };
+    let (axis, error) = angles(scenario, trace)
+        .into_iter()
+        .map(|(name, setpoint, x)| {
+            let e = x.last().map_or(f64::INFINITY, |v| (v - setpoint).abs());
+            (name, if e.is_nan() { f64::INFINITY } else { e })
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .expect("three axes");
+    let failure = (error > max)
+        .then(|| format!("{axis} ended {} deg from its set point, more than the {max} deg allowed", figure(error)));
+    judgement("final_error_max_deg", format!("{axis} {} deg", figure(error)), limit, failure).with_value(error)
+}
+
+fn alpha_max(trace: Option<&Trace>, max: f64) -> Judgement {
     let limit = format!("{max} deg");
     let Some((alpha, at)) = trace.and_then(|t| peak_abs(t, "alpha_deg", f64::NEG_INFINITY)) else {
         return no_evidence("alpha_max_deg", limit, "no trace was logged");
@@ -114,7 +171,7 @@ pub(crate) fn alpha_max(trace: Option<&Trace>, max: f64) -> Judgement {
     judgement("alpha_max_deg", format!("{} deg", figure(alpha)), limit, failure).with_value(alpha)
 }
 
-pub(crate) fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgement {
+fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgement {
     let limit = format!("{} deg/s after {} s", b.max, b.after_s);
     let Some(trace) = trace else { return no_evidence("body_rate_max_dps", limit, "no trace was logged") };
     let peaks: Vec<(&str, f64, f64)> = ["p", "q", "r"]
@@ -135,7 +192,7 @@ pub(crate) fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgemen
     judgement("body_rate_max_dps", format!("|{name}| {} deg/s", figure(rate)), limit, failure).with_value(rate)
 }
 
-pub(crate) fn rate_limit_fraction(summary: Option<&Summary>, max: f64) -> Judgement {
+fn rate_limit_fraction(summary: Option<&Summary>, max: f64) -> Judgement {
     let limit = format!("{:.1} % of ticks", max * 100.0);
     let Some(s) = summary else { return no_evidence("rate_limit_fraction_max", limit, "no trace was logged") };
     let ticks = s.ticks.max(1) as f64;
@@ -157,7 +214,7 @@ pub(crate) fn rate_limit_fraction(summary: Option<&Summary>, max: f64) -> Judgem
         .with_value(fraction)
 }
 
-pub(crate) fn no_sustained_oscillation(summary: Option<&Summary>) -> Judgement {
+fn no_sustained_oscillation(summary: Option<&Summary>) -> Judgement {
     let limit = "none in the last 3 s".to_string();
     let Some(s) = summary else {
         return no_evidence("no_sustained_oscillation", limit, "no trace was logged");
@@ -185,4 +242,34 @@ pub(crate) fn no_sustained_oscillation(summary: Option<&Summary>) -> Judgement {
     // How far past what counts the strongest sustained oscillation is (0 without one).
     let strength = oscillating.first().map_or(0.0, |o| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal));
     judgement("no_sustained_oscillation", measured, limit, failure).with_value(strength)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A trace of phi, theta, psi (deg) at 0.01 s steps.
+    fn trace(rows: &[[f64; 3]]) -> Trace {
+        let mut t = Trace::new(["t_s", "phi_deg", "theta_deg", "psi_deg"].map(String::from).to_vec());
+        t.rows = rows.iter().enumerate().map(|(k, r)| vec![k as f64 * 0.01, r[0], r[1], r[2]]).collect();
+        t
+    }
+
+    #[test]
+    fn overshoot_is_measured_past_the_set_point_in_the_direction_of_the_step() {
+        // Set points 0, 10, 0 (the default scenario). theta steps up from 5 and peaks at 12.5: 2.5 deg over;
+        // phi steps down from 5 and dips to -1: 1 deg over; psi starts at its set point: no step, no overshoot.
+        let s = Scenario::embedded_default();
+        let t = trace(&[[5.0, 5.0, 0.0], [-1.0, 12.5, 3.0], [0.2, 10.1, -0.4]]);
+        let j = overshoot_max(&s, Some(&t), 2.0);
+        assert_eq!((j.measured.as_str(), j.passed, j.value), ("theta 2.50 deg", false, Some(2.5)));
+        assert!(overshoot_max(&s, Some(&t), 3.0).passed);
+        let e = final_error_max(&s, Some(&t), 0.3);
+        assert_eq!((e.measured.as_str(), e.passed), ("psi 0.40 deg", false));
+        assert!((e.value.unwrap() - 0.4).abs() < 1e-12);
+        assert!(final_error_max(&s, Some(&t), 0.5).passed);
+        // A flight that is no longer a number fails both.
+        let lost = trace(&[[5.0, 5.0, 5.0], [f64::NAN, f64::NAN, f64::NAN]]);
+        assert!(!overshoot_max(&s, Some(&lost), 100.0).passed && !final_error_max(&s, Some(&lost), 100.0).passed);
+    }
 }

@@ -280,6 +280,8 @@ fn criterion_unit(criterion: &str) -> &'static str {
     match criterion {
         "settled" => "settling time (s)",
         "alpha_max_deg" => "largest alpha (deg)",
+        "overshoot_max_deg" => "overshoot (deg)",
+        "final_error_max_deg" => "final error (deg)",
         "body_rate_max_dps" => "late |p|,|q|,|r| (deg/s)",
         "rate_limit_fraction_max" => "ticks at rate limit",
         "no_sustained_oscillation" => "oscillation / threshold",
@@ -426,6 +428,8 @@ fn criterion_limits(c: &Criteria) -> Vec<(String, Option<f64>)> {
     vec![
         ("settled".into(), c.settled.map(|s| s.within_s)),
         ("alpha_max_deg".into(), c.alpha_max_deg),
+        ("overshoot_max_deg".into(), c.overshoot_max_deg),
+        ("final_error_max_deg".into(), c.final_error_max_deg),
         ("body_rate_max_dps".into(), c.body_rate_max_dps.map(|b| b.max)),
         ("rate_limit_fraction_max".into(), c.rate_limit_fraction_max),
         ("no_sustained_oscillation".into(), Some(1.0)),

@@ -5,9 +5,7 @@
 use crate::criteria::positive;
 pub use crate::criteria::{BodyRateLimit, Budget, Criteria, Judgement, Settled};
 use crate::fault::FaultAction;
-use crate::judge::{
-    alpha_max, body_rate_max, judgement, no_evidence, no_sustained_oscillation, rate_limit_fraction, settled,
-};
+use crate::judge::{judge_flight, judgement, no_evidence};
 use crate::rig::RigMode;
 use crate::rig::run_report::RigReport;
 use crate::scenario::Scenario;
@@ -112,21 +110,7 @@ impl Criteria {
         if let Some(n) = self.deadline_misses_max {
             out.push(deadline_misses(report, n));
         }
-        if let Some(s) = self.settled {
-            out.push(settled(scenario, trace, s));
-        }
-        if let Some(a) = self.alpha_max_deg {
-            out.push(alpha_max(trace, a));
-        }
-        if let Some(b) = self.body_rate_max_dps {
-            out.push(body_rate_max(trace, b));
-        }
-        if let Some(f) = self.rate_limit_fraction_max {
-            out.push(rate_limit_fraction(report.control.as_ref(), f));
-        }
-        if self.no_sustained_oscillation {
-            out.push(no_sustained_oscillation(report.control.as_ref()));
-        }
+        out.extend(judge_flight(self, scenario, trace, report.control.as_ref()));
         if let Some(t) = self.recovered_within_s {
             out.push(recovered_within(scenario, report, t));
         }
