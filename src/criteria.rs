@@ -34,6 +34,9 @@ pub struct Criteria {
     pub body_rate_max_dps: Option<BodyRateLimit>,
     /// Ticks in which a surface's rate limit cut its motion, as a fraction of the ticks flown (worst surface).
     pub rate_limit_fraction_max: Option<f64>,
+    /// Ticks in which a surface sat at a position limit with its command beyond it, as a fraction of the ticks
+    /// flown (worst surface).
+    pub position_limit_fraction_max: Option<f64>,
     /// No sustained oscillation of an angle or surface in the last 3 s (the summary's limit-cycle detector).
     #[serde(default)]
     pub no_sustained_oscillation: bool,
@@ -173,10 +176,15 @@ impl Criteria {
                 ));
             }
         }
-        if let Some(f) = self.rate_limit_fraction_max
-            && !(0.0..=1.0).contains(&f)
-        {
-            return Err(format!("`criteria.rate_limit_fraction_max` must be a fraction in 0..1, got {f}"));
+        for (key, v) in [
+            ("rate_limit_fraction_max", self.rate_limit_fraction_max),
+            ("position_limit_fraction_max", self.position_limit_fraction_max),
+        ] {
+            if let Some(f) = v
+                && !(0.0..=1.0).contains(&f)
+            {
+                return Err(format!("`criteria.{key}` must be a fraction in 0..1, got {f}"));
+            }
         }
         Ok(())
     }
@@ -189,6 +197,7 @@ impl Criteria {
             || self.final_error_max_deg.is_some()
             || self.body_rate_max_dps.is_some()
             || self.rate_limit_fraction_max.is_some()
+            || self.position_limit_fraction_max.is_some()
             || self.no_sustained_oscillation
     }
 }

@@ -53,7 +53,10 @@ pub fn judge_flight(
         out.push(body_rate_max(trace, b));
     }
     if let Some(f) = criteria.rate_limit_fraction_max {
-        out.push(rate_limit_fraction(summary, f));
+        out.push(saturation_fraction(summary, f, Saturation::Rate));
+    }
+    if let Some(f) = criteria.position_limit_fraction_max {
+        out.push(saturation_fraction(summary, f, Saturation::Position));
     }
     if criteria.no_sustained_oscillation {
         out.push(no_sustained_oscillation(summary));
@@ -192,26 +195,47 @@ fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgement {
     judgement("body_rate_max_dps", format!("|{name}| {} deg/s", figure(rate)), limit, failure).with_value(rate)
 }
 
-fn rate_limit_fraction(summary: Option<&Summary>, max: f64) -> Judgement {
-    let limit = format!("{:.1} % of ticks", max * 100.0);
-    let Some(s) = summary else { return no_evidence("rate_limit_fraction_max", limit, "no trace was logged") };
-    let ticks = s.ticks.max(1) as f64;
-    let Some(worst) = s.surfaces.iter().max_by_key(|f| f.ticks_at_rate_limit) else {
-        return no_evidence("rate_limit_fraction_max", limit, "no surfaces in the summary");
+/// Which limit a saturation criterion counts.
+#[derive(Clone, Copy)]
+enum Saturation {
+    Rate,
+    Position,
+}
+
+fn saturation_fraction(summary: Option<&Summary>, max: f64, kind: Saturation) -> Judgement {
+    let (criterion, what, why) = match kind {
+        Saturation::Rate => (
+            "rate_limit_fraction_max",
+            "rate limit",
+            "the controller asks for more than the actuator can give, which costs phase margin and can drive a limit \
+             cycle",
+        ),
+        Saturation::Position => (
+            "position_limit_fraction_max",
+            "position limit with its command beyond it",
+            "the controller asks for more deflection than the surface has: no authority left for a disturbance",
+        ),
     };
-    let fraction = worst.ticks_at_rate_limit as f64 / ticks;
+    let limit = format!("{:.1} % of ticks", max * 100.0);
+    let Some(s) = summary else { return no_evidence(criterion, limit, "no trace was logged") };
+    let ticks_at = |f: &crate::summary::SurfaceFigures| match kind {
+        Saturation::Rate => f.ticks_at_rate_limit,
+        Saturation::Position => f.ticks_at_position_limit,
+    };
+    let Some(worst) = s.surfaces.iter().max_by_key(|f| ticks_at(f)) else {
+        return no_evidence(criterion, limit, "no surfaces in the summary");
+    };
+    let fraction = ticks_at(worst) as f64 / s.ticks.max(1) as f64;
     let failure = (fraction > max).then(|| {
         format!(
-            "the {} spent {} of {} ticks ({:.1} %) at its rate limit: the controller asks for more than the actuator \
-             can give, which costs phase margin and can drive a limit cycle",
+            "the {} spent {} of {} ticks ({:.1} %) at its {what}: {why}",
             worst.name,
-            worst.ticks_at_rate_limit,
+            ticks_at(worst),
             s.ticks,
             fraction * 100.0
         )
     });
-    judgement("rate_limit_fraction_max", format!("{} {:.1} %", worst.name, fraction * 100.0), limit, failure)
-        .with_value(fraction)
+    judgement(criterion, format!("{} {:.1} %", worst.name, fraction * 100.0), limit, failure).with_value(fraction)
 }
 
 fn no_sustained_oscillation(summary: Option<&Summary>) -> Judgement {

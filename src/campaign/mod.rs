@@ -284,6 +284,7 @@ fn criterion_unit(criterion: &str) -> &'static str {
         "final_error_max_deg" => "final error (deg)",
         "body_rate_max_dps" => "late |p|,|q|,|r| (deg/s)",
         "rate_limit_fraction_max" => "ticks at rate limit",
+        "position_limit_fraction_max" => "ticks at position limit",
         "no_sustained_oscillation" => "oscillation / threshold",
         _ => "",
     }
@@ -432,6 +433,7 @@ fn criterion_limits(c: &Criteria) -> Vec<(String, Option<f64>)> {
         ("final_error_max_deg".into(), c.final_error_max_deg),
         ("body_rate_max_dps".into(), c.body_rate_max_dps.map(|b| b.max)),
         ("rate_limit_fraction_max".into(), c.rate_limit_fraction_max),
+        ("position_limit_fraction_max".into(), c.position_limit_fraction_max),
         ("no_sustained_oscillation".into(), Some(1.0)),
     ]
 }
