@@ -214,6 +214,9 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             if !report.failures.is_empty() {
                 return Ok(ExitCode::FAILURE);
             }
+            if let Some(stopped) = &report.stopped_by {
+                return Ok(ExitCode::from(stopped.exit_status));
+            }
         }
         Command::Check(opts) => {
             let verdict = silrig::check::run(&opts)?;

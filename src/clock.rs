@@ -97,6 +97,14 @@ impl RealtimeStatus {
     }
 }
 
+/// Put the calling thread back on the normal scheduler: a helper thread of a real-time process (it inherited
+/// SCHED_FIFO) must not compete with the loop.
+pub fn leave_realtime_scheduling() {
+    let param = libc::sched_param { sched_priority: 0 };
+    // SAFETY: sched_setscheduler on the calling thread (0) with a valid parameter struct.
+    unsafe { libc::sched_setscheduler(0, libc::SCHED_OTHER, &param) };
+}
+
 /// Ask for `SCHED_FIFO` at `priority` (1..=99) for the calling process and lock its memory. Never fails: a refusal
 /// (non-root without `ulimit -r`/`-l`, a container without CAP_SYS_NICE) leaves the process as it was and says so in
 /// `warning`, so the caller can print it and carry on (as dora's `--rt` and copper do).

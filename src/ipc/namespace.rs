@@ -187,6 +187,78 @@ pub fn cleanup_run(run: &RunId) -> Result<CleanupReport, IpcError> {
     Ok(report)
 }
 
+/// Leftovers younger than this are left alone when their nodes cannot be inspected: a run may be starting.
+const UNINSPECTABLE_GRACE: std::time::Duration = std::time::Duration::from_secs(60);
+/// ... and for this long even when every node is dead: the run's own launcher (or test) cleans up a moment after
+/// its processes end, and may be looking at its leftovers.
+pub const DEAD_RUN_GRACE: std::time::Duration = std::time::Duration::from_secs(5);
+
+/// Run ids that have files on this machine: `/tmp/silrig_<run>/` folders and `/dev/shm/sr_<run>_*` files, with
+/// the time the newest of them was modified.
+fn runs_on_this_machine() -> Vec<(RunId, std::time::SystemTime)> {
+    let mut runs: std::collections::BTreeMap<String, std::time::SystemTime> = Default::default();
+    let mut note = |id: Option<&str>, entry: &std::fs::DirEntry| {
+        let (Some(id), Ok(modified)) = (id, entry.metadata().and_then(|m| m.modified())) else { return };
+        let newest = runs.entry(id.to_string()).or_insert(modified);
+        *newest = (*newest).max(modified);
+    };
+    for entry in std::fs::read_dir("/tmp").into_iter().flatten().flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        note(name.strip_prefix("silrig_"), &entry);
+    }
+    for entry in std::fs::read_dir(SHM_DIR).into_iter().flatten().flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        note(name.strip_prefix("sr_").and_then(|rest| rest.split('_').next()), &entry);
+    }
+    runs.into_iter().filter_map(|(id, t)| RunId::new(&id).ok().map(|r| (r, t))).collect()
+}
+
+/// Remove what dead runs left on this machine (a launcher killed with `kill -9`, a crashed test): every run other
+/// than `except` with no live node whose files are older than [`DEAD_RUN_GRACE`]. A run whose nodes cannot all
+/// be inspected is left alone for a minute after its files last changed, since it may be starting. Returns the
+/// runs cleaned.
+pub fn cleanup_dead_runs(except: &RunId) -> Vec<CleanupReport> {
+    let mut cleaned = Vec::new();
+    for (run, newest) in runs_on_this_machine() {
+        if run == *except {
+            continue;
+        }
+        let age = newest.elapsed().unwrap_or_default();
+        if age < DEAD_RUN_GRACE {
+            continue;
+        }
+        let young = age < UNINSPECTABLE_GRACE;
+        let cfg = rig_config(&run);
+        let (mut alive, mut unknown) = (0, 0);
+        if run.root_dir().exists() {
+            let listed = Node::<ipc::Service>::list(&cfg, |state| {
+                match state {
+                    NodeState::Alive(_) => alive += 1,
+                    NodeState::Inaccessible(_) | NodeState::Undefined(_) => unknown += 1,
+                    NodeState::Dead(_) => {}
+                }
+                CallbackProgression::Continue
+            });
+            if listed.is_err() {
+                unknown += 1;
+            }
+        } else {
+            // Shared memory without the run's folder: what a cleanup interrupted half way leaves.
+            unknown += 1;
+        }
+        if alive > 0 || (unknown > 0 && young) {
+            continue;
+        }
+        if let Ok(report) = cleanup_run(&run)
+            && report.is_clean()
+            && (report.removed_root_dir || !report.removed_shm_files.is_empty())
+        {
+            cleaned.push(report);
+        }
+    }
+    cleaned
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

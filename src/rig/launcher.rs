@@ -180,7 +180,20 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     std::fs::write(&scenario_path, scenario.to_toml())?;
     // A crashed run with this id may have left resources behind; they must not poison this one.
     let pre = ipc::cleanup_run(&run_id)?;
-    anyhow::ensure!(pre.is_clean(), "run id {run_id} is in use by live processes: {pre:?}");
+    if !pre.is_clean() {
+        let who: Vec<String> = pre.alive.iter().map(|n| format!("{} (pid {})", n.name, n.pid)).collect();
+        anyhow::bail!("run id {run_id} is in use by live processes: {}; choose another --run-id", who.join(", "));
+    }
+    let dead = ipc::cleanup_dead_runs(&run_id);
+    if !dead.is_empty() {
+        let runs: Vec<&str> = dead.iter().map(|r| r.run.as_str()).collect();
+        let files: usize = dead.iter().map(|r| r.removed_shm_files.len()).sum();
+        eprintln!(
+            "silrig run: removed what {} dead run(s) left on this machine ({files} shared-memory files): {}",
+            dead.len(),
+            runs.join(", ")
+        );
+    }
     Ok(Prepared { scenario, run_id, out, scenario_path })
 }
 
@@ -194,7 +207,9 @@ fn start_baseline(scenario: &Scenario, out: &Path) -> anyhow::Result<ChildProces
         hgrm: Some(out.join("baseline.wake_lateness.hgrm")),
         json: true,
     };
-    let child = Command::new(std::env::current_exe()?)
+    let mut command = Command::new(std::env::current_exe()?);
+    super::supervision::end_with_launcher(&mut command, libc::SIGKILL);
+    let child = command
         .arg(timer_baseline::SUBCOMMAND)
         .args(args.to_argv())
         .stdin(Stdio::null())
@@ -217,7 +232,7 @@ fn supervise(sup: &mut Supervisor, faults: &mut FaultSchedule, scenario: &Scenar
             return Ok(());
         }
         if signals::termination_requested() {
-            sup.failures.push("silrig run: interrupted".into());
+            // Stopped by the user: not a failure of the run; the report says when (`stopped_by`).
             return Ok(());
         }
         if sup.elapsed() > timeout {
@@ -291,8 +306,20 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             Err(e) => failures.push(format!("{role}: no report ({e})")),
         }
     }
-    let control =
-        Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty()).map(|t| summarize(&t, &scenario));
+    let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
+    let control = trace.as_ref().map(|t| summarize(t, &scenario));
+    let stopped_by = signals::termination_signal().map(|signal| {
+        let flown_s = trace
+            .as_ref()
+            .and_then(|t| t.column("t_s"))
+            .and_then(|t| t.last().copied())
+            .map_or(0.0, |t| t + scenario.timing.dt_s);
+        super::run_report::StoppedBy {
+            signal: signals::name(signal).into(),
+            at_s: flown_s,
+            exit_status: signals::exit_status_for(signal),
+        }
+    });
     let cleanup = ipc::cleanup_run(&run_id)?;
     let leftovers = if cleanup.is_clean() { Vec::new() } else { vec![format!("{cleanup:?}")] };
     let ticks = processes
@@ -314,6 +341,8 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         timer_baseline,
         control,
         faults: super::fault_report::fault_records(&scenario.faults, &out),
+        duration_s: scenario.timing.duration_s,
+        stopped_by,
         failures,
         leftovers,
     };

@@ -214,6 +214,49 @@ pub fn load_scenario(path: Option<&Path>, duration_s: Option<f64>) -> anyhow::Re
     Ok(scenario)
 }
 
+/// Writes checkpoints on a thread of its own, at normal scheduling priority, so the file I/O (about a millisecond
+/// on this kind of machine) stays off the real-time loop, which only hands the text over. A checkpoint handed over
+/// while the previous one is still being written replaces it; the newest always wins.
+pub struct CheckpointWriter {
+    latest: std::sync::Arc<(std::sync::Mutex<Option<String>>, std::sync::Condvar)>,
+}
+
+impl CheckpointWriter {
+    /// A writer of `path`; its thread ends with the process.
+    pub fn new(path: PathBuf) -> Self {
+        let latest = std::sync::Arc::new((std::sync::Mutex::new(None::<String>), std::sync::Condvar::new()));
+        let (shared, target) = (latest.clone(), path.clone());
+        std::thread::Builder::new()
+            .name("checkpoints".into())
+            .stack_size(256 * 1024)
+            .spawn(move || {
+                crate::clock::leave_realtime_scheduling();
+                let (slot, ready) = &*shared;
+                loop {
+                    let text = {
+                        let mut guard = slot.lock().unwrap_or_else(|e| e.into_inner());
+                        while guard.is_none() {
+                            guard = ready.wait(guard).unwrap_or_else(|e| e.into_inner());
+                        }
+                        guard.take().expect("checked")
+                    };
+                    if let Err(e) = write_atomically(&target, &text) {
+                        eprintln!("silrig: cannot write {}: {e}", target.display());
+                    }
+                }
+            })
+            .expect("starting the checkpoint writer thread");
+        Self { latest }
+    }
+
+    /// Hand a checkpoint over (never blocks on I/O).
+    pub fn save(&self, text: String) {
+        let (slot, ready) = &*self.latest;
+        *slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(text);
+        ready.notify_one();
+    }
+}
+
 /// Write `text` beside `path`, then rename it over `path`: a process killed mid-write leaves the previous file
 /// whole (the checkpoints a restarted plant or controller resumes from).
 pub fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {

@@ -24,10 +24,9 @@ use crate::topology::{Role, Stream};
 use crate::wire::{self, CommandSample, LogAckSample, PlantSample};
 use anyhow::Context;
 use std::collections::VecDeque;
-use std::path::PathBuf;
 use std::time::Duration;
 
-/// A realtime plant with a fault plan saves a checkpoint this often, so a restarted plant continues the flight.
+/// A realtime plant saves a checkpoint this often, so a restarted plant continues the flight.
 pub const CHECKPOINT_EVERY_TICKS: u64 = 10;
 
 /// In lockstep the plant stays at most this many ticks ahead of the rows the logger has written (its queue holds
@@ -40,6 +39,7 @@ const WAKE_LATENESS: usize = 0;
 const STEP_EXEC: usize = 1;
 const SENSE_TO_ACTUATE: usize = 2;
 const IPC_CONTROLLER_TO_PLANT: usize = 3;
+const CHECKPOINT_WRITE: usize = 4;
 
 /// Publish stamps kept to measure sense-to-actuate of commands answering recent ticks.
 const PUBLISH_STAMPS: usize = 16;
@@ -180,7 +180,9 @@ pub struct PlantLoop {
     rec: Recorder,
     events: EventLog,
     loop_faults: LoopFaults,
-    checkpoint_path: PathBuf,
+    /// Realtime only (a lockstep plant is never restarted).
+    checkpoints: Option<super::CheckpointWriter>,
+    checkpoint_path: std::path::PathBuf,
     ticks: u64,
     budget_ns: u64,
     spin_ns: u64,
@@ -209,6 +211,7 @@ impl PlantLoop {
     pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
         let scenario = args.scenario()?;
         let realtime = args.mode == RigMode::Realtime;
+        let checkpoint_path = args.out.join("plant.checkpoint.json");
         let scheduling = request_scheduling(Role::Plant, realtime);
         let runner = PlantRunner::new(&scenario)?;
         let period = scenario.timing.period_ns();
@@ -220,6 +223,10 @@ impl PlantLoop {
                 ("step_exec", "actuators + RK4 step execution time"),
                 ("sense_to_actuate", "plant publish of tick k to the command answering k received at the plant"),
                 ("ipc_controller_to_plant", "command publish to receive at the plant"),
+                (
+                    "checkpoint_write",
+                    "serialising the checkpoint a restarted plant resumes from and handing it to the writer thread (realtime)",
+                ),
             ],
         );
         rec.declare(&[
@@ -263,7 +270,8 @@ impl PlantLoop {
             expected_wall_tick: 0,
             sim_tick: 0,
             overrun_counted: false,
-            checkpoint_path: args.out.join("plant.checkpoint.json"),
+            checkpoints: realtime.then(|| super::CheckpointWriter::new(checkpoint_path.clone())),
+            checkpoint_path,
             scenario,
             realtime,
             scheduling,
@@ -503,7 +511,7 @@ impl PlantLoop {
     }
 
     /// Move the actuators and integrate one step; count an overrun if the work ran past the next tick's due time;
-    /// save a checkpoint every few ticks when a fault plan may kill the plant.
+    /// save a checkpoint every few ticks (realtime).
     fn step(&mut self, held: bool) {
         let t0 = monotonic_ns();
         let hits = self.runner.step(&self.applied);
@@ -519,20 +527,24 @@ impl PlantLoop {
                 self.events.emit(Some(self.sim_tick), "overrun", detail);
             }
         }
-        if self.realtime
-            && !self.scenario.faults.is_empty()
-            && (self.sim_tick + 1).is_multiple_of(CHECKPOINT_EVERY_TICKS)
-        {
+        // Any realtime plant may be restarted (a planned fault, --restart on-failure, a user with --resume), so
+        // recovery never depends on whether a death was planned. Written after the tick's work; its cost is in the
+        // report (`checkpoint_write`).
+        if self.realtime && (self.sim_tick + 1).is_multiple_of(CHECKPOINT_EVERY_TICKS) {
+            let t0 = monotonic_ns();
             self.save_checkpoint();
+            self.rec.record(CHECKPOINT_WRITE, (monotonic_ns() - t0) as i64);
         }
     }
 
     fn save_checkpoint(&self) {
-        let saved = serde_json::to_string(&self.runner.checkpoint())
-            .map_err(std::io::Error::other)
-            .and_then(|t| super::write_atomically(&self.checkpoint_path, &t));
-        if let Err(e) = saved {
-            eprintln!("silrig-plant: cannot write {}: {e}", self.checkpoint_path.display());
+        match serde_json::to_string(&self.runner.checkpoint()) {
+            Ok(text) => {
+                if let Some(w) = &self.checkpoints {
+                    w.save(text);
+                }
+            }
+            Err(e) => eprintln!("silrig-plant: cannot serialise the checkpoint: {e}"),
         }
     }
 

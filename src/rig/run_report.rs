@@ -38,10 +38,27 @@ pub struct RigReport {
     pub control: Option<Summary>,
     /// Every fault of the plan and what became of it.
     pub faults: Vec<FaultRecord>,
+    /// The scenario's duration, s.
+    #[serde(default)]
+    pub duration_s: f64,
+    /// The user stopped the run (Ctrl-C, SIGTERM to the launcher): not a failure, but not a whole run either.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped_by: Option<StoppedBy>,
     /// Processes that failed, and how.
     pub failures: Vec<String>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
     pub leftovers: Vec<String>,
+}
+
+/// How the user stopped a run.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct StoppedBy {
+    /// SIGINT or SIGTERM.
+    pub signal: String,
+    /// Simulated time flown when it stopped, s (the logged trace's end).
+    pub at_s: f64,
+    /// The launcher's exit status (128 + the signal, as a shell reports it).
+    pub exit_status: u8,
 }
 
 /// The closed-loop figures of the logged trace and the latency distributions of every process.
@@ -55,7 +72,10 @@ pub(super) fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scen
         .processes
         .iter()
         .flat_map(|p| &p.latencies)
-        .filter(|l| l.summary.count > 0 && !l.name.ends_with("step_exec") && !l.name.ends_with("compute"))
+        .filter(|l| {
+            l.summary.count > 0
+                && !["step_exec", "compute", "checkpoint_write"].iter().any(|work| l.name.ends_with(work))
+        })
         .map(|l| (l.name.clone(), l.percentile_points.clone()))
         .collect();
     if let Some(b) = &report.timer_baseline {
@@ -98,7 +118,10 @@ impl RigReport {
             None => out += "no trace to summarise\n",
         }
         out += &self.faults_text();
-        if self.failures.is_empty() {
+        if let Some(s) = &self.stopped_by {
+            out += &format!("stopped by the user ({}) at t = {:.2} s of {:.2} s\n", s.signal, s.at_s, self.duration_s);
+        }
+        if self.failures.is_empty() && self.stopped_by.is_none() {
             out += "all processes ended cleanly\n";
         } else {
             for f in &self.failures {

@@ -20,7 +20,6 @@ use crate::ipc::{self, IpcError, StreamPublisher, StreamService, StreamSubscribe
 use crate::scenario::Scenario;
 use crate::topology::{Role, Stream};
 use crate::wire::{CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, PlantSample, WireSample};
-use std::path::PathBuf;
 use std::time::Duration;
 
 /// How long a controller joining a running plant blends from the current surface positions to its command, s.
@@ -226,7 +225,8 @@ pub struct ControllerSession {
     rec: Recorder,
     events: EventLog,
     loop_faults: LoopFaults,
-    checkpoint_path: PathBuf,
+    /// Realtime only (lockstep never restarts a controller).
+    checkpoints: Option<super::CheckpointWriter>,
     save_checkpoints: bool,
     restored: Option<String>,
     blend_ticks: u64,
@@ -311,8 +311,9 @@ impl ControllerSession {
             loop_faults: LoopFaults::new(&scenario.faults, Role::Controller, dt, scenario.seed, events.clone()),
             events,
             rec,
-            checkpoint_path,
-            save_checkpoints: !scenario.faults.is_empty() && realtime,
+            checkpoints: realtime.then(|| super::CheckpointWriter::new(checkpoint_path)),
+            // Any realtime controller may be restarted, planned or not: recovery must not depend on which.
+            save_checkpoints: realtime,
             restored,
             blend_ticks: (BUMPLESS_BLEND_S / dt).round().max(1.0) as u64,
             blend: None,
@@ -352,14 +353,18 @@ impl ControllerSession {
     }
 
     /// Whether the controller should hand a checkpoint to [`Self::save_checkpoint`] now: every few ticks of a
-    /// realtime run with a fault plan (a restart may come).
+    /// realtime run (any of which may see a restart, planned or not).
     pub fn checkpoint_due(&self) -> bool {
         self.save_checkpoints && self.last_tick.is_some_and(|(_, tick)| tick.is_multiple_of(CHECKPOINT_EVERY_TICKS))
     }
 
     /// Save the state a restarted controller resumes from (written atomically to the run's folder).
     pub fn save_checkpoint(&self, text: &str) -> std::io::Result<()> {
-        super::write_atomically(&self.checkpoint_path, text)
+        // Handed to the writer thread: the file I/O stays off the loop, and errors are reported there.
+        if let Some(w) = &self.checkpoints {
+            w.save(text.to_string());
+        }
+        Ok(())
     }
 
     /// Block until the next plant sample to answer (the newest one waiting: after a stall, older ones are skipped

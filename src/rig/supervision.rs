@@ -5,6 +5,7 @@
 use super::ProcessArgs;
 use super::events::EventLog;
 use super::launcher::ControllerLaunch;
+use super::report::read_report;
 use crate::topology::Role;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -90,6 +91,26 @@ impl ChildProcess {
             self.status = Some(self.child.wait()?);
         }
         Ok(self.status.expect("reaped"))
+    }
+}
+
+/// The child gets `signal` when the launcher dies, however it dies (`kill -9` included), so nothing outlives its
+/// run. Linux ties the signal to the thread that forked the child: the launcher starts and restarts every process
+/// from its main thread, which lives as long as the launcher.
+pub(super) fn end_with_launcher(command: &mut Command, signal: libc::c_int) {
+    use std::os::unix::process::CommandExt;
+    let launcher = std::process::id() as libc::pid_t;
+    // SAFETY: the closure runs in the child between fork and exec and calls only async-signal-safe functions
+    // (prctl, getppid, raise).
+    unsafe {
+        command.pre_exec(move || {
+            libc::prctl(libc::PR_SET_PDEATHSIG, signal as libc::c_ulong, 0, 0, 0);
+            // The launcher may have died between fork and prctl: then the signal never comes, so send it now.
+            if libc::getppid() != launcher {
+                libc::raise(signal);
+            }
+            Ok(())
+        });
     }
 }
 
@@ -302,7 +323,9 @@ impl Supervisor {
         if let (Role::Controller, ControllerLaunch::Command(cmd)) = (role, &self.controller) {
             use std::os::unix::process::CommandExt;
             let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
-            let child = Command::new(&words[0])
+            let mut command = Command::new(&words[0]);
+            end_with_launcher(&mut command, libc::SIGTERM);
+            let child = command
                 .args(&words[1..])
                 .envs(args.to_env())
                 .env("SILRIG_CLIENT_LIB", self.bin_dir.join("libsilrig_client.so"))
@@ -316,7 +339,11 @@ impl Supervisor {
             return Ok(ChildProcess::group_leader(child));
         }
         let exe = self.bin_dir.join(role.binary());
-        let child = Command::new(&exe)
+        let mut command = Command::new(&exe);
+        // A stopped plant cannot act on SIGTERM until continued, and nobody is left to continue it: it gets SIGKILL
+        // (the next run removes what it leaves); the others end cleanly on SIGTERM, writing what they hold.
+        end_with_launcher(&mut command, if role == Role::Plant { libc::SIGKILL } else { libc::SIGTERM });
+        let child = command
             .args(args.to_argv())
             .stdin(Stdio::null())
             .stdout(Stdio::null())
@@ -373,19 +400,34 @@ impl Supervisor {
             if p.restart_at.is_some() {
                 continue;
             }
-            if role == Role::Plant && status.success() && self.plant_done_at.is_none() {
+            // Ctrl-C reaches the whole process group: whatever ends now, the user stopped the run.
+            if super::signals::termination_requested() {
+                if role == Role::Plant {
+                    self.plant_done();
+                }
+                continue;
+            }
+            // Only a flight flown to its end is the run's end: a clean exit on somebody else's SIGTERM is not.
+            let ended = read_report(&self.args.out, role.label()).map(|r| r.ended).unwrap_or_default();
+            let completed = status.success() && ended == "completed";
+            if role == Role::Plant && completed && self.plant_done_at.is_none() {
                 self.plant_done();
                 continue;
             }
             // The logger ends by itself once it has written the last tick; the others end when told to.
-            if (role == Role::Logger && status.success())
+            if (role == Role::Logger && completed)
                 || self.plant_done_at.is_some()
                 || self.failures.iter().any(|f| f.starts_with(role.label()))
             {
                 continue;
             }
+            let how = if status.success() && !ended.is_empty() {
+                format!("ended ({ended}; the launcher sent no signal)")
+            } else {
+                describe(status)
+            };
             let tail = stderr_tail(&self.args.out, role);
-            self.on_death(i, format!("{role}: {} before the end of the run{tail}", describe(status)));
+            self.on_death(i, format!("{role}: {how} before the end of the run{tail}"));
         }
         Ok(())
     }

@@ -1,0 +1,181 @@
+//! Nothing outlives its run, and an early end is never "clean": `kill -9` of the launcher ends every process it
+//! started (a stopped plant included) and the next run removes what they left, saying so; an outside SIGTERM to
+//! the plant or the logger fails the run; Ctrl-C and SIGTERM to the launcher stop it with 130 and 143 and say when;
+//! a plant restarted after an unplanned `kill -9` continues from its checkpoint. Each test has its own run id and
+//! folder, signals only the processes it started (by pid) and checks that no shared memory is left.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+mod common;
+use common::{no_shared_memory_left, wait_with_watchdog};
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("silrig-reliability-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run_id(test: &str) -> String {
+    format!("y{}-{test}", std::process::id())
+}
+
+fn launch(id: &str, out: &Path, args: &[&str]) -> Child {
+    Command::new(SILRIG)
+        .args(["run", "--no-baseline", "--run-id", id, "--out", out.to_str().unwrap()])
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+fn signal(pid: u32, sig: libc::c_int) {
+    // SAFETY: kill(2) on a process this test started and has not reaped.
+    unsafe { libc::kill(pid as libc::pid_t, sig) };
+}
+
+/// Gone, or a zombie nobody reaps (the launcher is dead; init reaps it in time).
+fn ended(pid: u32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Err(_) => true,
+        Ok(stat) => stat.rsplit(')').next().is_some_and(|rest| rest.trim_start().starts_with('Z')),
+    }
+}
+
+fn children_of(pid: u32) -> Vec<u32> {
+    let o = Command::new("pgrep").args(["-P", &pid.to_string()]).output().unwrap();
+    String::from_utf8_lossy(&o.stdout).lines().filter_map(|l| l.trim().parse().ok()).collect()
+}
+
+/// Wait until the run's plant is ticking (its `ticking` event is in the log).
+fn wait_until_ticking(out: &Path) {
+    let start = Instant::now();
+    while !std::fs::read_to_string(out.join("events.jsonl")).unwrap_or_default().contains("\"ticking\"") {
+        assert!(start.elapsed() < Duration::from_secs(30), "the plant never started ticking");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn pid_of(out: &Path, role: &str, launcher: u32) -> u32 {
+    let exe = format!("silrig-{role}");
+    *children_of(launcher)
+        .iter()
+        .find(|p| std::fs::read_to_string(format!("/proc/{p}/comm")).is_ok_and(|c| exe.starts_with(c.trim())))
+        .unwrap_or_else(|| panic!("no {role} under the launcher (out {})", out.display()))
+}
+
+#[test]
+fn a_killed_launcher_takes_its_processes_with_it_and_the_next_run_cleans_up_after_them() {
+    let dir = temp_dir("kill9");
+    let id = run_id("kill9");
+    let out = dir.join("run");
+    // The plant is stopped (SIGSTOP) when the launcher dies: it cannot act on SIGTERM, and must end all the same.
+    let mut launcher = launch(&id, &out, &["--duration-s", "30", "--fault", "plant:stop@1s,for=20s"]);
+    wait_until_ticking(&out);
+    std::thread::sleep(Duration::from_millis(1500));
+    let children = children_of(launcher.id());
+    assert_eq!(children.len(), 3, "plant, controller, logger");
+    launcher.kill().unwrap();
+    launcher.wait().unwrap();
+    let start = Instant::now();
+    while !children.iter().all(|p| ended(*p)) {
+        assert!(start.elapsed() < Duration::from_secs(10), "processes outlived their launcher: {children:?}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // The SIGKILLed plant could not remove its shared memory; the next run does, once it is not fresh.
+    std::thread::sleep(silrig::ipc::DEAD_RUN_GRACE + Duration::from_millis(500));
+    let next = launch(&run_id("kill9-next"), &dir.join("next"), &["--mode", "lockstep", "--duration-s", "0.3"]);
+    let o = wait_with_watchdog(next, Duration::from_secs(60));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Another test's run may have cleaned it first; either way nothing of it is left.
+    no_shared_memory_left(&id);
+    no_shared_memory_left(&run_id("kill9-next"));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    if stderr.contains("dead run") {
+        assert!(stderr.contains("removed what") && stderr.contains(&id), "{stderr}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A run whose `role` gets SIGTERM from outside (not from the launcher) at about 1 s of 4.
+fn outside_sigterm(role: &str) -> (Option<i32>, String) {
+    let dir = temp_dir(&format!("term-{role}"));
+    let id = run_id(&format!("term-{role}"));
+    let out = dir.join("run");
+    let launcher = launch(&id, &out, &["--duration-s", "4"]);
+    wait_until_ticking(&out);
+    std::thread::sleep(Duration::from_secs(1));
+    signal(pid_of(&out, role, launcher.id()), libc::SIGTERM);
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+    (o.status.code(), String::from_utf8_lossy(&o.stdout).into())
+}
+
+#[test]
+fn an_outside_sigterm_to_the_plant_or_the_logger_is_a_failed_run_not_a_clean_one() {
+    for role in ["plant", "logger"] {
+        let (code, stdout) = outside_sigterm(role);
+        assert_eq!(code, Some(1), "{role}: {stdout}");
+        assert!(!stdout.contains("all processes ended cleanly"), "{role}: {stdout}");
+        assert!(
+            stdout.contains(&format!(
+                "FAILED: {role}: ended (terminated by signal; the launcher sent no signal) before the end of the run"
+            )),
+            "{role}: {stdout}"
+        );
+    }
+}
+
+#[test]
+fn ctrl_c_and_sigterm_to_the_launcher_stop_the_run_with_130_and_143_saying_when() {
+    for (sig, code, name) in [(libc::SIGINT, 130, "SIGINT"), (libc::SIGTERM, 143, "SIGTERM")] {
+        let dir = temp_dir(&format!("stop-{code}"));
+        let id = run_id(&format!("stop-{code}"));
+        let out = dir.join("run");
+        let launcher = launch(&id, &out, &["--duration-s", "10"]);
+        wait_until_ticking(&out);
+        std::thread::sleep(Duration::from_secs(1));
+        signal(launcher.id(), sig);
+        let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(o.status.code(), Some(code), "{name}: {stdout}{}", String::from_utf8_lossy(&o.stderr));
+        assert!(stdout.contains(&format!("stopped by the user ({name}) at t = ")), "{stdout}");
+        assert!(stdout.contains(" s of 10.00 s"), "{stdout}");
+        assert!(!stdout.contains("FAILED") && !stdout.contains("all processes ended cleanly"), "{stdout}");
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+        assert_eq!(report["stopped_by"]["signal"], name);
+        assert!(report["stopped_by"]["at_s"].as_f64().unwrap() < 10.0);
+        no_shared_memory_left(&id);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[test]
+fn a_plant_restarted_after_an_unplanned_kill_continues_from_its_checkpoint() {
+    let dir = temp_dir("restart");
+    let id = run_id("restart");
+    let out = dir.join("run");
+    let launcher = launch(&id, &out, &["--duration-s", "4", "--restart", "on-failure"]);
+    wait_until_ticking(&out);
+    std::thread::sleep(Duration::from_secs(2));
+    signal(pid_of(&out, "plant", launcher.id()), libc::SIGKILL);
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", String::from_utf8_lossy(&o.stderr));
+    let events = std::fs::read_to_string(out.join("events.jsonl")).unwrap();
+    assert!(events.contains("\"plant-resumed\""), "no resume from a checkpoint:\n{events}");
+    // No splice: the logged time only moves forward, and the flight does not jump back to its start.
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let t: Vec<f64> = trace.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert!(t.windows(2).all(|w| w[1] > w[0]), "the trace's time goes back");
+    assert!(*t.last().unwrap() > 3.9, "the flight reached its end");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
