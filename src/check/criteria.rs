@@ -2,8 +2,9 @@
 //! from the run's report (`report.json`) and trace, beside the flight criteria of [`crate::criteria`], so the rig's
 //! controller and a user's are judged by the same code.
 
+use crate::criteria::Budget;
 use crate::criteria::positive;
-pub use crate::criteria::{BodyRateLimit, Budget, Criteria, Judgement, Settled};
+pub use crate::criteria::{Criteria, Judgement};
 use crate::fault::FaultAction;
 use crate::judge::{judge_flight, judgement, no_evidence};
 use crate::rig::RigMode;
