@@ -95,9 +95,11 @@ fn a_killed_launcher_takes_its_processes_with_it_and_the_next_run_cleans_up_afte
     // Another test's run may have cleaned it first; either way nothing of it is left.
     no_shared_memory_left(&id);
     no_shared_memory_left(&run_id("kill9-next"));
+    assert!(!Path::new(&format!("/tmp/silrig_{id}.lock")).exists(), "the dead launcher's run-id lock is removed");
+    // When this run did the cleaning (and not another test's), it said so.
     let stderr = String::from_utf8_lossy(&o.stderr);
-    if stderr.contains("dead run") {
-        assert!(stderr.contains("removed what") && stderr.contains(&id), "{stderr}");
+    if stderr.contains(&id) {
+        assert!(stderr.contains("silrig run: removed what 1 dead run(s) left on this machine"), "{stderr}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -177,5 +179,37 @@ fn a_plant_restarted_after_an_unplanned_kill_continues_from_its_checkpoint() {
     assert!(t.windows(2).all(|w| w[1] > w[0]), "the trace's time goes back");
     assert!(*t.last().unwrap() > 3.9, "the flight reached its end");
     no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn two_runs_started_together_never_share_a_folder_or_a_run_id() {
+    let dir = temp_dir("twice");
+    // Realtime, so the two surely overlap (a lockstep second is over in a tenth of a second).
+    let quick = ["--duration-s", "1.5"];
+    // One folder, two run ids; then one run id, two folders.
+    let pairs = [
+        ((run_id("twice-a"), dir.join("same")), (run_id("twice-b"), dir.join("same"))),
+        ((run_id("twice-c"), dir.join("c")), (run_id("twice-c"), dir.join("d"))),
+    ];
+    for ((id1, out1), (id2, out2)) in pairs {
+        let (a, b) = (launch(&id1, &out1, &quick), launch(&id2, &out2, &quick));
+        let (a, b) = (wait_with_watchdog(a, Duration::from_secs(60)), wait_with_watchdog(b, Duration::from_secs(60)));
+        let mut codes = [a.status.code(), b.status.code()];
+        codes.sort();
+        let stderr = format!("{}{}", String::from_utf8_lossy(&a.stderr), String::from_utf8_lossy(&b.stderr));
+        assert_eq!(codes, [Some(0), Some(2)], "exactly one of the two runs: {stderr}");
+        assert!(
+            stderr.contains("is taken by another silrig run")
+                || stderr.contains("already holds a run")
+                || stderr.contains("is in use by live processes"),
+            "{stderr}"
+        );
+        let winner = if a.status.success() { &out1 } else { &out2 };
+        let rows = std::fs::read_to_string(winner.join("trace.csv")).unwrap().lines().count() - 1;
+        assert_eq!(rows, 150, "one row per tick, written once");
+        no_shared_memory_left(&id1);
+        no_shared_memory_left(&id2);
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -141,6 +141,69 @@ struct Prepared {
     out: PathBuf,
     /// The scenario as the processes load it (`<out>/scenario.toml`).
     scenario_path: PathBuf,
+    /// The folder and the run id, held for the run.
+    _claims: [Claim; 2],
+}
+
+/// A lock file created exclusively (check and create in one step), holding the launcher's pid, removed when the
+/// run ends: two launchers never share a folder or a run id. A claim whose launcher died is taken over.
+struct Claim(PathBuf);
+
+impl Claim {
+    fn take(path: PathBuf, what: &str) -> anyhow::Result<Self> {
+        for _ in 0..2 {
+            match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+                Ok(mut f) => {
+                    use std::io::Write;
+                    write!(f, "{}", std::process::id()).with_context(|| format!("writing {}", path.display()))?;
+                    return Ok(Self(path));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    if let Some(holder) = live_holder(&path) {
+                        anyhow::bail!(
+                            "{what} is taken by another silrig run (pid {holder}): wait for it, or choose another"
+                        );
+                    }
+                    // Its launcher died without removing it.
+                    let _ = std::fs::remove_file(&path);
+                }
+                Err(e) => return Err(e).with_context(|| format!("creating {}", path.display())),
+            }
+        }
+        anyhow::bail!("{what}: cannot claim {} (another run keeps taking it)", path.display())
+    }
+}
+
+/// The pid holding a claim file, if that process is alive. A file too fresh to hold a pid yet (its launcher is
+/// between creating and writing it) counts as held.
+fn live_holder(path: &Path) -> Option<i32> {
+    let holder: Option<i32> = std::fs::read_to_string(path).ok().and_then(|t| t.trim().parse().ok());
+    match holder {
+        // SAFETY: kill with signal 0 only asks whether the process exists.
+        Some(pid) => (pid > 0 && unsafe { libc::kill(pid, 0) } == 0).then_some(pid),
+        None => {
+            let age = std::fs::metadata(path).and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
+            age.is_none_or(|a| a < Duration::from_secs(5)).then_some(0)
+        }
+    }
+}
+
+/// Remove run-id claims (`/tmp/silrig_<run>.lock`) whose launcher died (a `kill -9`); returns how many.
+fn remove_stale_claims() -> usize {
+    let mut removed = 0;
+    for entry in std::fs::read_dir("/tmp").into_iter().flatten().flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with("silrig_") && name.ends_with(".lock") && live_holder(&entry.path()).is_none() {
+            removed += usize::from(std::fs::remove_file(entry.path()).is_ok());
+        }
+    }
+    removed
+}
+
+impl Drop for Claim {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
 }
 
 /// Phase 1: the scenario with `--fault` flags added and validated, a folder that holds no run yet, the effective
@@ -176,6 +239,16 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         out.display()
     );
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let claims = [
+        Claim::take(out.join(".silrig-run.lock"), &format!("the folder {}", out.display()))?,
+        Claim::take(PathBuf::from(format!("/tmp/silrig_{run_id}.lock")), &format!("run id {run_id}"))?,
+    ];
+    // Checked again now that the folder is ours: a run that finished between the first check and the claim.
+    anyhow::ensure!(
+        !out.join("trace.csv").exists(),
+        "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
+        out.display()
+    );
     let scenario_path = out.join("scenario.toml");
     std::fs::write(&scenario_path, scenario.to_toml())?;
     // A crashed run with this id may have left resources behind; they must not poison this one.
@@ -185,16 +258,18 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         anyhow::bail!("run id {run_id} is in use by live processes: {}; choose another --run-id", who.join(", "));
     }
     let dead = ipc::cleanup_dead_runs(&run_id);
-    if !dead.is_empty() {
+    let claims_removed = remove_stale_claims();
+    if !dead.is_empty() || claims_removed > 0 {
         let runs: Vec<&str> = dead.iter().map(|r| r.run.as_str()).collect();
         let files: usize = dead.iter().map(|r| r.removed_shm_files.len()).sum();
         eprintln!(
-            "silrig run: removed what {} dead run(s) left on this machine ({files} shared-memory files): {}",
+            "silrig run: removed what {} dead run(s) left on this machine ({files} shared-memory files, \
+             {claims_removed} run-id locks): {}",
             dead.len(),
             runs.join(", ")
         );
     }
-    Ok(Prepared { scenario, run_id, out, scenario_path })
+    Ok(Prepared { scenario, run_id, out, scenario_path, _claims: claims })
 }
 
 /// The OS-floor timer loop beside a realtime rig, for the scenario's duration at the scenario's period.
@@ -262,7 +337,7 @@ fn finish_baseline(
 /// `failures` filled in.
 pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     signals::install_termination_flag();
-    let Prepared { scenario, run_id, out, scenario_path } = prepare(opts)?;
+    let Prepared { scenario, run_id, out, scenario_path, _claims } = prepare(opts)?;
     let controller = opts.controller_launch();
     let mut args = ProcessArgs {
         config: Some(scenario_path),
