@@ -32,23 +32,34 @@ impl ActuatorLimits {
     }
 
     /// Check the limits make sense; the error names the problem.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self, travel: (f64, f64)) -> Result<(), String> {
         if !(self.min.is_finite() && self.max.is_finite() && self.min < self.max) {
             return Err(format!("position limits must be finite with min < max, got {}..{}", self.min, self.max));
         }
+        if self.min < travel.0 || self.max > travel.1 {
+            return Err(format!(
+                "position limits must lie within {}..{}, got {}..{}",
+                travel.0, travel.1, self.min, self.max
+            ));
+        }
         if let Some(r) = self.rate_limit_per_s
-            && !(r > 0.0)
+            && !(r > 0.0 && r <= MAX_RATE_LIMIT_PER_S)
         {
-            return Err(format!("rate limit must be positive, got {r}"));
+            return Err(format!("rate limit must be within (0, {MAX_RATE_LIMIT_PER_S}] per s, got {r}"));
         }
         if let Some(tau) = self.lag_time_constant_s
-            && !(tau > 0.0 && tau.is_finite())
+            && !(tau > 0.0 && tau <= MAX_LAG_S)
         {
-            return Err(format!("lag time constant must be positive, got {tau}"));
+            return Err(format!("lag time constant must be within (0, {MAX_LAG_S}] s, got {tau}"));
         }
         Ok(())
     }
 }
+
+/// Largest rate limit, units (deg or throttle fraction) per second.
+pub const MAX_RATE_LIMIT_PER_S: f64 = 10_000.0;
+/// Largest first-order lag time constant, s.
+pub const MAX_LAG_S: f64 = 10.0;
 
 /// Which limits bound one update.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

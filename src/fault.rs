@@ -88,6 +88,8 @@ impl FaultAction {
 /// Measured channels a sensor fault can hit (the state as the plant publishes it).
 pub const SENSOR_CHANNELS: [&str; 10] =
     ["vt_fps", "alpha_rad", "beta_rad", "phi_rad", "theta_rad", "psi_rad", "p_radps", "q_radps", "r_radps", "alt_ft"];
+/// Largest sensor noise (std) or |bias|, in the channel's unit (rad, rad/s, ft/s, ft): beyond any real sensor.
+pub const MAX_SENSOR_ERROR: f64 = 1000.0;
 /// Surfaces an actuator fault can hit.
 pub const SURFACES: [&str; 3] = ["aileron", "elevator", "rudder"];
 
@@ -243,6 +245,22 @@ impl Fault {
         positive("delay_ms", self.delay_ms)?;
         positive("max_us", self.max_us)?;
         positive("std", self.std)?;
+        // Upper bounds: a window longer than the run, a stall longer than a second or noise beyond any sensor's
+        // range is a typo, not a test.
+        for (key, v, max) in [
+            ("duration_s", self.duration_s, duration_s),
+            ("restart_after_s", self.restart_after_s, duration_s),
+            ("delay_ms", self.delay_ms, 1000.0),
+            ("max_us", self.max_us, 1_000_000.0),
+            ("std", self.std, MAX_SENSOR_ERROR),
+            ("bias", self.bias.map(f64::abs), MAX_SENSOR_ERROR),
+        ] {
+            if let Some(x) = v
+                && x > max
+            {
+                return err(key, format!("must be at most {max}, got {x}"));
+            }
+        }
         if let Some(r) = self.restart_after_s
             && !(r >= 0.0 && r.is_finite())
         {

@@ -236,6 +236,9 @@ impl PlantOptions {
     }
 }
 
+/// Most ticks in one run: a trace row of 39 numbers per tick stays in memory (about 300 MB at this many).
+pub const MAX_TICKS: u64 = 1_000_000;
+
 /// Largest extra transport delay, ticks (the rig's plant keeps the last 8 commands).
 pub const MAX_TRANSPORT_DELAY_TICKS: u64 = 5;
 
@@ -455,7 +458,18 @@ impl Scenario {
             }
         }
         let d = &self.disturbance;
-        finite("disturbance.amplitude_radps2", d.amplitude_radps2)?;
+        if !(d.amplitude_radps2.abs() <= 100.0) {
+            return err(
+                "disturbance.amplitude_radps2",
+                format!("must be within -100..100 rad/s^2, got {}", d.amplitude_radps2),
+            );
+        }
+        if d.frequency_radps > 1000.0 {
+            return err(
+                "disturbance.frequency_radps",
+                format!("must be at most 1000 rad/s, got {}", d.frequency_radps),
+            );
+        }
         if !(d.frequency_radps >= 0.0 && d.frequency_radps.is_finite()) {
             return err("disturbance.frequency_radps", format!("must be >= 0, got {}", d.frequency_radps));
         }
@@ -478,23 +492,34 @@ impl Scenario {
             let key = e.split([' ', '[', ':']).next().unwrap_or("").to_string();
             (format!("controller.{key}"), e)
         })?;
-        for (name, a) in [
-            ("elevator_deg", &self.actuators.elevator_deg),
-            ("aileron_deg", &self.actuators.aileron_deg),
-            ("rudder_deg", &self.actuators.rudder_deg),
-            ("throttle", &self.actuators.throttle),
+        let surface = (-crate::wire::SURFACE_CMD_LIMIT_DEG, crate::wire::SURFACE_CMD_LIMIT_DEG);
+        for (name, a, travel) in [
+            ("elevator_deg", &self.actuators.elevator_deg, surface),
+            ("aileron_deg", &self.actuators.aileron_deg, surface),
+            ("rudder_deg", &self.actuators.rudder_deg, surface),
+            ("throttle", &self.actuators.throttle, (0.0, 1.0)),
         ] {
-            a.validate().map_err(|e| (format!("actuators.{name}"), e))?;
+            a.validate(travel).map_err(|e| (format!("actuators.{name}"), e))?;
         }
         let t = &self.timing;
-        if !(t.dt_s > 0.0 && t.dt_s <= 0.1) {
-            return err("timing.dt_s", format!("must be within (0, 0.1] s, got {}", t.dt_s));
+        if !(t.dt_s >= 1e-4 && t.dt_s <= 0.1) {
+            return err("timing.dt_s", format!("must be within 0.0001..0.1 s (10 kHz to 10 Hz), got {}", t.dt_s));
         }
         if !(t.duration_s > 0.0 && t.duration_s <= 3600.0) {
             return err("timing.duration_s", format!("must be within (0, 3600] s, got {}", t.duration_s));
         }
         if t.duration_s < t.dt_s {
             return err("timing.duration_s", format!("is shorter than one step ({} s)", t.dt_s));
+        }
+        if t.ticks() > MAX_TICKS {
+            return err(
+                "timing.duration_s",
+                format!(
+                    "is {} ticks of {} s; a run has at most {MAX_TICKS} (its trace is kept in memory)",
+                    t.ticks(),
+                    t.dt_s
+                ),
+            );
         }
         if t.transport_delay_ticks > MAX_TRANSPORT_DELAY_TICKS {
             return err(

@@ -63,10 +63,16 @@ fn large_step_is_rate_limited_then_position_limited() {
 
 #[test]
 fn limits_are_validated() {
-    assert!(ActuatorLimits::position_only(1.0, -1.0).validate().is_err());
+    let surface = (-90.0, 90.0);
+    assert!(ActuatorLimits::position_only(1.0, -1.0).validate(surface).is_err());
     let bad_rate = ActuatorLimits { rate_limit_per_s: Some(-5.0), ..ActuatorLimits::position_only(-1.0, 1.0) };
-    assert!(bad_rate.validate().unwrap_err().contains("rate limit"));
+    assert!(bad_rate.validate(surface).unwrap_err().contains("rate limit"));
+    let huge_rate = ActuatorLimits { rate_limit_per_s: Some(1e9), ..ActuatorLimits::position_only(-1.0, 1.0) };
+    assert!(huge_rate.validate(surface).unwrap_err().contains("within (0, 10000]"));
     let bad_lag = ActuatorLimits { lag_time_constant_s: Some(0.0), ..ActuatorLimits::position_only(-1.0, 1.0) };
-    assert!(bad_lag.validate().unwrap_err().contains("lag"));
-    assert!(ActuatorSetLimits::default().elevator_deg.validate().is_ok());
+    assert!(bad_lag.validate(surface).unwrap_err().contains("lag"));
+    // An elevator that travels a million degrees, a throttle that goes to 2: beyond the physical range.
+    assert!(ActuatorLimits::position_only(-25.0, 1e6).validate(surface).unwrap_err().contains("within -90..90"));
+    assert!(ActuatorLimits::position_only(0.0, 2.0).validate((0.0, 1.0)).unwrap_err().contains("within 0..1"));
+    assert!(ActuatorSetLimits::default().elevator_deg.validate(surface).is_ok());
 }

@@ -44,5 +44,5 @@ fn timer_baseline_prints_json_text_and_hgrm() {
 fn timer_baseline_rejects_a_zero_period() {
     let (code, _, err) = silrig(&["timer-baseline", "--period-ms", "0"]);
     assert_eq!(code, 2);
-    assert!(err.contains("--period-ms must be positive"), "{err}");
+    assert!(err.contains("--period-ms must be within 0.1..1000 ms, got 0"), "{err}");
 }

@@ -213,3 +213,65 @@ fn two_runs_started_together_never_share_a_folder_or_a_run_id() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn every_number_that_enters_is_range_checked_with_our_message_and_exit_2() {
+    let dir = temp_dir("ranges");
+    let robust = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robust.toml")).unwrap();
+    let flags: [(&[&str], &str); 9] = [
+        (&["--command-budget-ms", "0"], "--command-budget-ms must be within 0.01..1000 ms, got 0"),
+        (&["--command-budget-ms", "NaN"], "--command-budget-ms must be within 0.01..1000 ms, got NaN"),
+        (&["--command-budget-ms", "-1"], "--command-budget-ms must be within 0.01..1000 ms, got -1"),
+        (&["--command-spin-us", "1e12"], "--command-spin-us must be within 0..10000 us"),
+        (&["--restart-backoff-ms", "nan"], "--restart-backoff-ms must be within 0..60000 ms, got NaN"),
+        (&["--startup-timeout-s", "1e30"], "--startup-timeout-s must be within 0.1..3600 s"),
+        (&["--fault", "controller:stop@1s,for=1e9s"], "`faults[0].duration_s`: must be at most 10"),
+        (&["--fault", "plant:sensor-noise@1s,channel=p_radps,std=1e300"], "`faults[0].std`: must be at most 1000"),
+        (&["--fault", "plant:sensor-bias@1s,channel=p_radps,bias=-5000"], "`faults[0].bias`: must be at most 1000"),
+    ];
+    let edits = [
+        ("dt_s = 0.01", "dt_s = 1e-300", "`timing.dt_s`: must be within 0.0001..0.1 s"),
+        ("dt_s = 0.01", "dt_s = 1e-4\n", "a run has at most 1000000"),
+        (
+            "amplitude_radps2 = 0.1",
+            "amplitude_radps2 = 1e300",
+            "`disturbance.amplitude_radps2`: must be within -100..100",
+        ),
+        ("max = 25.0", "max = 1e6", "`actuators.elevator_deg`: position limits must lie within -90..90"),
+        ("rate_limit_per_s = 60.0", "rate_limit_per_s = 1e9", "`actuators.elevator_deg`: rate limit must be within"),
+    ];
+    let mut cases: Vec<(Vec<String>, String)> =
+        flags.iter().map(|(f, m)| (f.iter().map(|s| s.to_string()).collect(), m.to_string())).collect();
+    for (i, (from, to, message)) in edits.iter().enumerate() {
+        assert!(robust.contains(from), "{from}");
+        let path = dir.join(format!("bad-{i}.toml"));
+        // A 10 kHz step is allowed; 200 s of it is two million ticks, which is not.
+        let text = if *to == "dt_s = 1e-4\n" {
+            robust.replacen(from, "dt_s = 0.0001", 1).replacen("duration_s = 10.0", "duration_s = 200.0", 1)
+        } else {
+            robust.replacen(from, to, 1)
+        };
+        std::fs::write(&path, text).unwrap();
+        cases.push((vec![path.to_str().unwrap().to_string()], message.to_string()));
+    }
+    for (args, message) in cases {
+        let out = dir.join("never");
+        let child = Command::new(SILRIG)
+            .arg("run")
+            .args(&args)
+            .args(["--out", out.to_str().unwrap()])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let o = wait_with_watchdog(child, Duration::from_secs(30));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(&message), "{args:?}: expected {message:?} in {stderr}");
+        assert!(!out.exists(), "{args:?}: nothing written");
+    }
+    let o = Command::new(SILRIG).args(["timer-baseline", "--duration-s", "1e12"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--duration-s must be within 0.01..3600 s"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -17,13 +17,13 @@ pub const SUBCOMMAND: &str = "timer-baseline";
 #[derive(Debug, Clone, PartialEq, clap::Args)]
 pub struct BaselineArgs {
     /// How long to run, s.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub duration_s: f64,
     /// Period, ms.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub period_ms: f64,
     /// SCHED_FIFO priority to ask for (1..=99); 0 stays with SCHED_OTHER.
-    #[arg(long, default_value_t = 80)]
+    #[arg(long, default_value_t = 80, allow_negative_numbers = true)]
     pub fifo_priority: i32,
     /// Wait on an absolute timerfd in an iceoryx2 WaitSet instead of clock_nanosleep.
     #[arg(long)]
@@ -64,8 +64,9 @@ impl BaselineArgs {
 /// what to print (text or JSON).
 pub fn run(args: &BaselineArgs) -> anyhow::Result<String> {
     let BaselineArgs { duration_s, period_ms, fifo_priority, .. } = *args;
-    anyhow::ensure!(duration_s > 0.0, "--duration-s must be positive, got {duration_s}");
-    anyhow::ensure!(period_ms > 0.0, "--period-ms must be positive, got {period_ms}");
+    // Bounded so the loop's nanosecond arithmetic cannot overflow into an instant, empty "measurement".
+    crate::rig::flag_in_range("duration-s", duration_s, 0.01, 3600.0, "s").map_err(|e| anyhow::anyhow!(e))?;
+    crate::rig::flag_in_range("period-ms", period_ms, 0.1, 1000.0, "ms").map_err(|e| anyhow::anyhow!(e))?;
     anyhow::ensure!((0..=99).contains(&fifo_priority), "--fifo-priority must be 0..=99, got {fifo_priority}");
     if fifo_priority > 0
         && let Some(warning) = clock::try_realtime(fifo_priority).warning

@@ -47,12 +47,12 @@ pub enum CheckError {
     #[error("{0}")]
     Usage(String),
     /// A case could not be set up (not a verdict on the controller).
-    #[error("case `{case}`: {source:#}")]
+    #[error("case `{case}`: {problem:#}")]
     Setup {
         /// The case.
         case: String,
-        /// What failed.
-        source: anyhow::Error,
+        /// What failed (named so that it is not also printed as the error's source).
+        problem: anyhow::Error,
     },
 }
 
@@ -127,13 +127,14 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         supervision: SupervisionOptions { restart: RestartMode::Never, max_restarts: 0, restart_backoff_ms: 200.0 },
         controller_cmd: opts.controller_cmd.clone(),
         controller: ControllerKind::Builtin,
-        external_timeout_s: 0.0,
+        // Not used: the controller is always one the launcher starts.
+        external_timeout_s: 120.0,
     }
 }
 
 /// Fly one case (twice for determinism) and judge it.
 fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict, CheckError> {
-    let setup = |source: anyhow::Error| CheckError::Setup { case: case.name.clone(), source };
+    let setup = |problem: anyhow::Error| CheckError::Setup { case: case.name.clone(), problem };
     let started = std::time::Instant::now();
     let case_dir = out.join(&case.name);
     std::fs::create_dir_all(&case_dir).with_context(|| format!("creating {}", case_dir.display())).map_err(setup)?;
@@ -231,6 +232,6 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
         cases,
     }
     .concluded();
-    verdict.write(&out).map_err(|source| CheckError::Setup { case: "(verdict files)".into(), source })?;
+    verdict.write(&out).map_err(|problem| CheckError::Setup { case: "(verdict files)".into(), problem })?;
     Ok(verdict)
 }

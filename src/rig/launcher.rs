@@ -209,6 +209,10 @@ impl Drop for Claim {
 /// Phase 1: the scenario with `--fault` flags added and validated, a folder that holds no run yet, the effective
 /// scenario written there, and the run id's namespace free of a crashed run's leftovers.
 fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
+    opts.process.validate().map_err(|e| anyhow::anyhow!(e))?;
+    opts.supervision.validate().map_err(|e| anyhow::anyhow!(e))?;
+    super::flag_in_range("external-timeout-s", opts.external_timeout_s, 0.1, 86_400.0, "s")
+        .map_err(|e| anyhow::anyhow!(e))?;
     let mut scenario = load_scenario(opts.config.as_deref(), opts.duration_s)?;
     scenario.faults.extend(opts.faults.iter().cloned());
     scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("fault plan: `{key}`: {problem}"))?;

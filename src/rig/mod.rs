@@ -48,26 +48,40 @@ impl RigMode {
 #[derive(Debug, Clone, PartialEq, clap::Args)]
 pub struct ProcessOptions {
     /// Same-tick mode: how long the plant waits for the command of the tick it just published, ms.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     pub command_budget_ms: f64,
     /// Realtime: after publishing, the plant polls for the command this long before it blocks, µs (0: block at
     /// once). A blocked wait costs a vCPU wake-up (about 70 µs on this kind of VM); polling costs at most this much
     /// CPU per tick.
-    #[arg(long, default_value_t = 400.0)]
+    #[arg(long, default_value_t = 400.0, allow_negative_numbers = true)]
     pub command_spin_us: f64,
     /// Consumers flag their input stale after this many periods without a sample.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, allow_negative_numbers = true)]
     pub stale_after_periods: u32,
     /// Plant: how long it holds the last command after the controller goes silent before it commands the trim
     /// surfaces and flags failsafe, ms.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true)]
     pub controller_hold_ms: f64,
     /// How long the plant waits for the controller and logger to connect, s.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub startup_timeout_s: f64,
 }
 
+/// `Err` naming the flag when `v` is outside `lo..=hi` (NaN included): every numeric flag has a documented range.
+pub fn flag_in_range(flag: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), String> {
+    if (lo..=hi).contains(&v) { Ok(()) } else { Err(format!("--{flag} must be within {lo}..{hi} {unit}, got {v}")) }
+}
+
 impl ProcessOptions {
+    /// Every flag within its documented range.
+    pub fn validate(&self) -> Result<(), String> {
+        flag_in_range("command-budget-ms", self.command_budget_ms, 0.01, 1000.0, "ms")?;
+        flag_in_range("command-spin-us", self.command_spin_us, 0.0, 10_000.0, "us")?;
+        flag_in_range("stale-after-periods", f64::from(self.stale_after_periods), 1.0, 1000.0, "periods")?;
+        flag_in_range("controller-hold-ms", self.controller_hold_ms, 1.0, 60_000.0, "ms")?;
+        flag_in_range("startup-timeout-s", self.startup_timeout_s, 0.1, 3600.0, "s")
+    }
+
     /// The flags that give these options to a process.
     pub fn to_argv(&self) -> Vec<String> {
         vec![
@@ -112,8 +126,9 @@ pub struct ProcessArgs {
 }
 
 impl ProcessArgs {
-    /// The scenario with the duration override applied, validated.
+    /// The scenario with the duration override applied, validated (and the tuning flags with it).
     pub fn scenario(&self) -> anyhow::Result<Scenario> {
+        self.options.validate().map_err(|e| anyhow::anyhow!(e))?;
         load_scenario(self.config.as_deref(), self.duration_s)
     }
 

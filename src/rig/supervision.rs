@@ -28,11 +28,19 @@ pub struct SupervisionOptions {
     #[arg(long, value_enum, default_value = "never")]
     pub restart: RestartMode,
     /// on-failure: restarts allowed per process.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
     pub max_restarts: u32,
     /// on-failure: pause before the first restart, ms (doubling each time).
-    #[arg(long, default_value_t = 200.0)]
+    #[arg(long, default_value_t = 200.0, allow_negative_numbers = true)]
     pub restart_backoff_ms: f64,
+}
+
+impl SupervisionOptions {
+    /// Every flag within its documented range.
+    pub fn validate(&self) -> Result<(), String> {
+        super::flag_in_range("max-restarts", f64::from(self.max_restarts), 0.0, 100.0, "restarts")?;
+        super::flag_in_range("restart-backoff-ms", self.restart_backoff_ms, 0.0, 60_000.0, "ms")
+    }
 }
 
 /// A child process the launcher started: reaped once, signalled only while not reaped.
