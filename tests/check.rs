@@ -23,10 +23,7 @@ const TIMING_CRITERIA: [&str; 4] =
     ["compute_p99", "sense_to_actuate_p99", "deadline_misses_max", "every_tick_answered"];
 
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("silrig-check-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("check", test)
 }
 
 /// `libsilrig_client.so` beside the binaries (cargo test does not build the cdylib).

@@ -19,10 +19,7 @@ const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("silrig-clients-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("clients", test)
 }
 
 fn run_id(test: &str) -> String {

@@ -14,10 +14,7 @@ use common::{no_shared_memory_left, wait_with_watchdog};
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 
 fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("silrig-rig-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("rig", test)
 }
 
 fn run_id(test: &str) -> String {

@@ -120,8 +120,18 @@ pub struct CaseResult {
     pub envelope: Vec<[f32; 4]>,
 }
 
-/// Fly case `index` of `scenario`'s dispersions under `seed`; returns the result and, when flown, the trace.
-pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index: u64) -> (CaseResult, Option<Trace>) {
+/// A flown case in full: the sampled scenario, its trace and its summary (what `silrig sim --sample` writes).
+pub struct Flight {
+    /// The scenario with the case's sampled values.
+    pub scenario: Scenario,
+    /// Its trace.
+    pub trace: Trace,
+    /// Its control-quality figures.
+    pub summary: Summary,
+}
+
+/// Fly case `index` of `scenario`'s dispersions under `seed`; returns the result and, when flown, the flight.
+pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index: u64) -> (CaseResult, Option<Flight>) {
     let sampled = dispersion::sample(&scenario.dispersions, seed, index);
     let values: Vec<f64> = sampled.iter().map(|(_, v)| *v).collect();
     let infeasible = |reason: String| CaseResult {
@@ -167,7 +177,7 @@ pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index
         judgements,
         envelope,
     };
-    (result, Some(trace))
+    (result, Some(Flight { scenario: case, trace, summary }))
 }
 
 /// Fly case `index` (the result only).

@@ -241,7 +241,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
 /// `silrig sim CONFIG --sample I`: fly case I alone, with its trace, summary and plots in `out`; returns the text
 /// (the sampled values, the summary, each criterion as `cases.csv` has it) and the files written.
 pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow::Result<(String, Vec<PathBuf>)> {
-    let (result, trace) = case::fly_with_trace(&campaign.scenario, &campaign.criteria, seed, index);
+    let (result, flight) = case::fly_with_trace(&campaign.scenario, &campaign.criteria, seed, index);
     let mut text = format!("case {index} of {} (seed {seed}): {}\n", campaign.config, result.outcome.label());
     for (key, value) in campaign.parameters.iter().zip(&result.values) {
         text += &format!("  {key} = {value}\n");
@@ -250,13 +250,10 @@ pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow
     let case_json = out.join("case.json");
     std::fs::write(&case_json, serde_json::to_string_pretty(&result)? + "\n")
         .with_context(|| format!("writing {}", case_json.display()))?;
-    let Some(trace) = trace else {
+    let Some(case::Flight { scenario, trace, summary }) = flight else {
         text += &format!("  infeasible: {}\n", result.reason);
         return Ok((text, vec![case_json]));
     };
-    let values: Vec<(String, f64)> = campaign.parameters.iter().cloned().zip(result.values.iter().copied()).collect();
-    let scenario = campaign.scenario.with_values(&values).map_err(|e| anyhow::anyhow!(e))?;
-    let summary = crate::summary::summarize(&trace, &scenario);
     let mut files = crate::outputs::write_run(out, &scenario, &trace, &summary)?;
     files.push(case_json);
     text += &summary.to_text();

@@ -243,7 +243,7 @@ pub unsafe extern "C" fn silrig_session_save_checkpoint(session: *mut SilrigSess
         }
         // SAFETY: the caller gives a NUL-terminated string.
         let text = unsafe { CStr::from_ptr(text) }.to_string_lossy();
-        s.session.save_checkpoint(&text).map_err(|e| SessionError::Setup(format!("saving the checkpoint: {e}")))?;
+        s.session.save_checkpoint(&text);
         Ok(Status::Ok)
     })
 }

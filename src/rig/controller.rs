@@ -109,9 +109,8 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
         }
         if session.checkpoint_due()
             && let Some(text) = law.checkpoint()
-            && let Err(e) = session.save_checkpoint(&text)
         {
-            eprintln!("silrig-controller: cannot save a checkpoint: {e}");
+            session.save_checkpoint(&text);
         }
     };
     if let Some(e) = &error {

@@ -358,13 +358,12 @@ impl ControllerSession {
         self.save_checkpoints && self.last_tick.is_some_and(|(_, tick)| tick.is_multiple_of(CHECKPOINT_EVERY_TICKS))
     }
 
-    /// Save the state a restarted controller resumes from (written atomically to the run's folder).
-    pub fn save_checkpoint(&self, text: &str) -> std::io::Result<()> {
-        // Handed to the writer thread: the file I/O stays off the loop, and errors are reported there.
+    /// Save the state a restarted controller resumes from: handed to a writer thread, which writes it atomically to
+    /// the run's folder off the loop and reports a failed write on stderr.
+    pub fn save_checkpoint(&self, text: &str) {
         if let Some(w) = &self.checkpoints {
             w.save(text.to_string());
         }
-        Ok(())
     }
 
     /// Block until the next plant sample to answer (the newest one waiting: after a stall, older ones are skipped

@@ -1,9 +1,17 @@
-//! Helpers the tests that start the rig's processes share: a watchdog that kills and reaps only the child it was
-//! given, and the check that a run left no shared memory behind.
+//! Helpers the tests that start the rig's processes share: a fresh folder per test, a watchdog that kills and reaps
+//! only the child it was given, and the check that a run left no shared memory behind.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Output};
 use std::time::{Duration, Instant};
+
+/// An empty folder of this test process and test: `<tmp>/silrig-<suite>-<pid>-<test>`.
+pub fn temp_dir(suite: &str, test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("silrig-{suite}-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
 
 /// Wait for a child with a watchdog: past `limit` it is killed (by its pid) and reaped, and the test fails.
 pub fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
