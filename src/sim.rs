@@ -359,15 +359,57 @@ impl PlantRunner {
         }
     }
 
-    /// Continue from a saved checkpoint.
-    pub fn restore(&mut self, c: &PlantCheckpoint) {
+    /// Continue from a saved checkpoint of a run of `ticks` ticks. A checkpoint that could not have come from this
+    /// run (a tick beyond it, a state outside the model's envelope, a surface beyond its travel) is refused with
+    /// the field and the range, and the runner is left as it was.
+    pub fn restore(&mut self, c: &PlantCheckpoint, ticks: u64) -> Result<(), String> {
+        if c.tick >= ticks {
+            return Err(format!("tick {} is beyond the run's {ticks} ticks", c.tick));
+        }
+        let x = &c.state;
+        use crate::units::readable;
+        let deg = f64::to_radians;
+        let envelope = [
+            ("vt_fps", x.vt_fps, 1.0, 5_000.0),
+            ("alpha_rad", x.alpha_rad, -deg(90.0), deg(90.0)),
+            ("beta_rad", x.beta_rad, -deg(90.0), deg(90.0)),
+            ("phi_rad", x.phi_rad, -1e3, 1e3),
+            ("theta_rad", x.theta_rad, -deg(90.0), deg(90.0)),
+            ("psi_rad", x.psi_rad, -1e3, 1e3),
+            ("p_radps", x.p_radps, -100.0, 100.0),
+            ("q_radps", x.q_radps, -100.0, 100.0),
+            ("r_radps", x.r_radps, -100.0, 100.0),
+            ("north_ft", x.north_ft, -1e9, 1e9),
+            ("east_ft", x.east_ft, -1e9, 1e9),
+            ("alt_ft", x.alt_ft, -1e4, 1e6),
+            ("power_pct", x.power_pct, 0.0, 100.0),
+        ];
+        for (field, value, lo, hi) in envelope {
+            if !(lo..=hi).contains(&value) {
+                let (value, lo, hi) = (readable(value), readable(lo), readable(hi));
+                return Err(format!("state.{field} = {value} is outside {lo}..{hi}"));
+            }
+        }
+        for ((a, p), name) in
+            self.actuators.iter().zip(c.actuator_positions).zip(["aileron", "elevator", "rudder", "throttle"])
+        {
+            if !(a.limits.min..=a.limits.max).contains(&p) {
+                return Err(format!(
+                    "{name} position {} is outside its travel {}..{}",
+                    readable(p),
+                    a.limits.min,
+                    a.limits.max
+                ));
+            }
+        }
         self.tick = c.tick;
         self.state = c.state;
         for (a, p) in self.actuators.iter_mut().zip(c.actuator_positions) {
-            a.position = p.clamp(a.limits.min, a.limits.max);
+            a.position = p;
         }
         // The noise sequence of a restarted plant is not the one the killed plant would have drawn.
         self.measure();
+        Ok(())
     }
 }
 
@@ -492,4 +534,38 @@ pub fn run(s: &Scenario) -> Result<Trace, SetupError> {
         plant.step(&acting);
     }
     Ok(trace)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_checkpoint_that_cannot_come_from_this_run_is_refused_naming_the_field() {
+        let scenario = Scenario::embedded_default();
+        let ticks = scenario.timing.ticks();
+        let mut runner = PlantRunner::new(&scenario).unwrap();
+        let good = runner.checkpoint();
+        let refused = |edit: &dyn Fn(&mut PlantCheckpoint)| {
+            let mut c = good;
+            edit(&mut c);
+            let mut r = PlantRunner::new(&scenario).unwrap();
+            let before = r.checkpoint();
+            let e = r.restore(&c, ticks).unwrap_err();
+            assert_eq!(r.checkpoint(), before, "a refused checkpoint changed the runner");
+            e
+        };
+        assert_eq!(
+            refused(&|c| c.tick = 1_000_000_000_000),
+            format!("tick 1000000000000 is beyond the run's {ticks} ticks")
+        );
+        assert_eq!(refused(&|c| c.state.vt_fps = 0.0), "state.vt_fps = 0 is outside 1..5000");
+        assert_eq!(refused(&|c| c.state.alt_ft = f64::NAN), "state.alt_ft = NaN is outside -10000..1e6");
+        assert_eq!(refused(&|c| c.state.q_radps = 1e300), "state.q_radps = 1e300 is outside -100..100");
+        assert!(refused(&|c| c.actuator_positions[1] = 90.0).starts_with("elevator position 90 is outside its travel"));
+        let mut later = good;
+        later.tick = 500;
+        assert_eq!(runner.restore(&later, ticks), Ok(()));
+        assert_eq!(runner.checkpoint().tick, 500);
+    }
 }

@@ -300,15 +300,17 @@ impl Summary {
         }
         out += "  surface   peak(deg)  rate-limit  pos-limit  rms rate(dps)  after 5 s  rms cmd rate\n";
         for s in &self.surfaces {
+            // NaN: the run ended before the window began, or had no command to differentiate.
+            let figure = |v: f64| if v.is_nan() { "n/a".to_string() } else { format!("{v:.3}") };
             out += &format!(
-                "  {:<9} {:>9.2} {:>11} {:>10} {:>14.3} {:>10.3} {:>13.3}\n",
+                "  {:<9} {:>9.2} {:>11} {:>10} {:>14} {:>10} {:>13}\n",
                 s.name,
                 s.peak_deg,
                 s.ticks_at_rate_limit,
                 s.ticks_at_position_limit,
-                s.rms_rate_dps,
-                s.rms_rate_late_dps,
-                s.rms_command_rate_dps
+                figure(s.rms_rate_dps),
+                figure(s.rms_rate_late_dps),
+                figure(s.rms_command_rate_dps)
             );
         }
         let found: Vec<String> = self

@@ -33,3 +33,9 @@ pub fn deg_to_rad(deg: f64) -> f64 {
 pub fn rad_to_deg(rad: f64) -> f64 {
     rad.to_degrees()
 }
+
+/// A number for a message: plain when it reads well, in exponent form when it is huge or tiny (`1e300`, not three
+/// hundred digits).
+pub fn readable(value: f64) -> String {
+    if value != 0.0 && !(1e-4..1e6).contains(&value.abs()) { format!("{value:e}") } else { format!("{value}") }
+}

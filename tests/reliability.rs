@@ -1,7 +1,9 @@
 //! Nothing outlives its run, and an early end is never "clean": `kill -9` of the launcher ends every process it
 //! started (a stopped plant included) and the next run removes what they left, saying so; an outside SIGTERM to
 //! the plant or the logger fails the run; Ctrl-C and SIGTERM to the launcher stop it with 130 and 143 and say when;
-//! a plant restarted after an unplanned `kill -9` continues from its checkpoint. Each test has its own run id and
+//! a plant restarted after an unplanned `kill -9` continues from its checkpoint, and one restarted between two
+//! checkpoints marks where the flights join; damaged checkpoints are refused; every life of a process is in the
+//! report; a dead peer is cleaned up by the launcher. Each test has its own run id and
 //! folder, signals only the processes it started (by pid) and checks that no shared memory is left.
 
 use std::path::{Path, PathBuf};
@@ -270,5 +272,171 @@ fn every_number_that_enters_is_range_checked_with_our_message_and_exit_2() {
     let o = Command::new(SILRIG).args(["timer-baseline", "--duration-s", "1e12"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--duration-s must be within 0.01..3600 s"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Run the launcher to its end with these flags; (exit code, stdout + stderr, report.json, events.jsonl).
+fn run_to_end(id: &str, out: &Path, args: &[&str]) -> (Option<i32>, String, serde_json::Value, String) {
+    let o = wait_with_watchdog(launch(id, out, args), Duration::from_secs(90));
+    let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    let report = std::fs::read_to_string(out.join("report.json"))
+        .map_or(serde_json::Value::Null, |t| serde_json::from_str(&t).unwrap());
+    let events = std::fs::read_to_string(out.join("events.jsonl")).unwrap_or_default();
+    (o.status.code(), text, report, events)
+}
+
+/// Wait until the launcher has injected the fault described as `what` (its `fault-injected` event).
+fn wait_for_injection(out: &Path, what: &str) {
+    let start = Instant::now();
+    while !std::fs::read_to_string(out.join("events.jsonl"))
+        .unwrap_or_default()
+        .lines()
+        .any(|l| l.contains("\"fault-injected\"") && l.contains(what))
+    {
+        assert!(start.elapsed() < Duration::from_secs(30), "`{what}` was never injected");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn a_peer_that_dies_is_cleaned_up_by_the_launcher_and_every_life_is_in_the_report() {
+    let dir = temp_dir("peer-dies");
+    let id = run_id("peer-dies");
+    let out = dir.join("run");
+    let launcher = launch(&id, &out, &["--duration-s", "3", "--fault", "controller:kill@1s,restart_after=0.3s"]);
+    wait_until_ticking(&out);
+    // Every file of the run is its owner's only: iceoryx2 makes its node counter world-writable, the rig narrows it.
+    let shared: Vec<_> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with(&format!("sr_{id}_")))
+        .collect();
+    assert!(!shared.is_empty());
+    for e in shared {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = e.metadata().unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode & 0o077, 0, "{} has mode {mode:o}", e.path().display());
+    }
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(o.status.success(), "{text}{}", String::from_utf8_lossy(&o.stderr));
+    // The dead controller's node is removed by the launcher, off the plant's tick.
+    let events = std::fs::read_to_string(out.join("events.jsonl")).unwrap();
+    let removed = events.lines().find(|l| l.contains("\"dead-nodes-removed\"")).unwrap_or_else(|| panic!("{events}"));
+    assert!(removed.contains("\"launcher\"") && removed.contains("`controller`"), "{removed}");
+    // Both lives of the controller are in the report and the printed table, each with how it ended.
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let lives: Vec<&serde_json::Value> =
+        report["lives"].as_array().unwrap().iter().filter(|l| l["process"] == "controller").collect();
+    assert_eq!(lives.len(), 2, "{}", report["lives"]);
+    assert_eq!(lives[0]["exit"], "killed by signal 9 (the fault plan)");
+    assert!(lives[0]["report"].is_null());
+    assert_eq!(lives[1]["report"], "controller.report.json");
+    assert!(text.contains("controller #1") && text.contains("controller #2"), "{text}");
+    assert!(text.contains("2 lives: the latencies and counters below are those of its last life"), "{text}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_plant_killed_for_good_ends_the_flight_early_and_the_run_fails_saying_when() {
+    let dir = temp_dir("plant-gone");
+    let id = run_id("plant-gone");
+    let out = dir.join("run");
+    let (code, text, report, _) = run_to_end(&id, &out, &["--duration-s", "3", "--fault", "plant:kill@1s"]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("FAILED: plant: ended by the fault plan and not restarted: the flight ended at t = 1."),
+        "{text}"
+    );
+    // The dead plant stays in the process table, the throughput counts what it flew, the summary has no NaN.
+    assert!(text.contains("killed by signal 9 (the fault plan), no report"), "{text}");
+    assert!(report["cycles_per_s"].as_f64().unwrap() > 0.0, "{}", report["cycles_per_s"]);
+    assert!(!text.contains("NaN"), "{text}");
+    assert!(text.contains("n/a"), "{text}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_plant_restarted_between_two_checkpoints_marks_where_the_flights_join() {
+    let dir = temp_dir("splice");
+    let id = run_id("splice");
+    let out = dir.join("run");
+    // Killed half way between two checkpoints (every 10 ticks): the restarted plant flies ticks again.
+    let (code, text, report, events) =
+        run_to_end(&id, &out, &["--duration-s", "3", "--fault", "plant:kill@1.55s,restart_after=0.3s"]);
+    assert_eq!(code, Some(0), "{text}");
+    let mark = events.lines().find(|l| l.contains("\"flight-discontinuity\"")).unwrap_or_else(|| panic!("{events}"));
+    assert!(mark.contains("flew again from tick") && mark.contains("differed by phi"), "{mark}");
+    assert_eq!(report["discontinuities"].as_array().unwrap().len(), 1, "{}", report["discontinuities"]);
+    assert!(report["faults"][0]["discontinuity"]["at_s"].as_f64().unwrap() > 1.5);
+    assert!(text.contains("the logged flight has 1 discontinuity"), "{text}");
+    let logger: &serde_json::Value =
+        report["processes"].as_array().unwrap().iter().find(|p| p["process"] == "logger").unwrap();
+    assert_eq!(logger["counters"]["flight_discontinuities"], 1);
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_damaged_plant_checkpoint_stops_the_restart_rather_than_flying_again_from_the_start() {
+    let dir = temp_dir("bad-plant-ckpt");
+    let id = run_id("bad-plant-ckpt");
+    let out = dir.join("run");
+    let launcher = launch(&id, &out, &["--duration-s", "4", "--fault", "plant:kill@1s,restart_after=1s"]);
+    wait_for_injection(&out, "plant kill");
+    // Torn, as a disk that filled mid-write would leave it.
+    std::fs::write(out.join("plant.checkpoint.json"), "{\"tick\": 100, \"state\": {\"vt_fps\": 5").unwrap();
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(text.contains("cannot resume") && text.contains("plant.checkpoint.json"), "{text}");
+    // Nothing of a second flight was spliced in: the logged time only moves forward and stops at the kill.
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let t: Vec<f64> = trace.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert!(t.windows(2).all(|w| w[1] > w[0]), "the trace's time goes back");
+    assert!(*t.last().unwrap() < 1.2, "rows after the kill: {}", t.last().unwrap());
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_controller_checkpoint_with_absurd_weights_is_refused_and_the_events_say_it_started_fresh() {
+    let dir = temp_dir("bad-ctl-ckpt");
+    let id = run_id("bad-ctl-ckpt");
+    let out = dir.join("run");
+    let launcher = launch(&id, &out, &["--duration-s", "3", "--fault", "controller:kill@1s,restart_after=0.5s"]);
+    wait_for_injection(&out, "controller kill");
+    let path = out.join("controller.checkpoint.json");
+    let mut weights: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    weights[0][0] = serde_json::json!(1e300);
+    std::fs::write(&path, weights.to_string()).unwrap();
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{text}");
+    let events = std::fs::read_to_string(out.join("events.jsonl")).unwrap();
+    let joined = events.lines().find(|l| l.contains("\"controller-joined\"")).unwrap_or_else(|| panic!("{events}"));
+    assert!(joined.contains("fresh state (its checkpoint was rejected: channel 0 has a weight of 1e300"), "{joined}");
+    assert!(events.contains("\"checkpoint-rejected\""), "{events}");
+    // The plant never flew a command built on those weights.
+    let plant: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plant.report.json")).unwrap()).unwrap();
+    assert_eq!(plant["counters"]["commands_invalid"], 0);
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_run_id_whose_iceoryx2_folder_is_squatted_by_a_file_is_refused_naming_the_file() {
+    let dir = temp_dir("squat");
+    let id = run_id("squat");
+    let squat = PathBuf::from(format!("/tmp/silrig_{id}"));
+    std::fs::write(&squat, "not a folder").unwrap();
+    let (code, text, _, _) = run_to_end(&id, &dir.join("run"), &["--duration-s", "1"]);
+    std::fs::remove_file(&squat).unwrap();
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains(&format!("/tmp/silrig_{id} exists and is not a folder")), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -42,8 +42,14 @@ int main(void) {
     double integral[3];
     int started = 0;
     const char *saved = silrig_session_restored_checkpoint(session);
-    if (saved != NULL && sscanf(saved, "%lf %lf %lf", &integral[0], &integral[1], &integral[2]) == 3) {
-        started = 1;
+    if (saved != NULL) {
+        /* Integrators of surface positions: three finite numbers within the surfaces' travel, or not ours. */
+        int fits = sscanf(saved, "%lf %lf %lf", &integral[0], &integral[1], &integral[2]) == 3;
+        for (int c = 0; fits && c < 3; c++) {
+            fits = isfinite(integral[c]) && fabs(integral[c]) <= TRAVEL[c];
+        }
+        started = fits;
+        silrig_session_checkpoint_used(session, fits, fits ? NULL : "not three integrators within the surfaces' travel");
     }
 
     silrig_plant_sample_t sample;

@@ -80,6 +80,9 @@ int silrig_session_setpoint_deg(silrig_session *session, double setpoint_deg_out
  * controller the launcher restarts finds that text in silrig_session_restored_checkpoint (NULL otherwise; owned by
  * the session). */
 const char *silrig_session_restored_checkpoint(silrig_session *session);
+/* Say whether you resumed from the restored checkpoint: used 1, or 0 with a reason (or NULL) saying why it did not
+ * fit; the run's events then tell which state the controller joined the flight with. */
+int silrig_session_checkpoint_used(silrig_session *session, int used, const char *reason);
 int silrig_session_checkpoint_due(silrig_session *session);
 int silrig_session_save_checkpoint(silrig_session *session, const char *text);
 

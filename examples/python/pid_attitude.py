@@ -56,7 +56,14 @@ class PidAttitude(Controller):
         return json.dumps(self.integral)
 
     def restore(self, text):
-        self.integral = json.loads(text)
+        # Three finite integrators within the surfaces' travel, or the text is not a checkpoint of ours.
+        try:
+            integral = [float(x) for x in json.loads(text)]
+        except (ValueError, TypeError):
+            return False
+        if len(integral) != 3 or not all(math.isfinite(x) and abs(x) <= t for x, t in zip(integral, TRAVEL)):
+            return False
+        self.integral = integral
         return True
 
 

@@ -71,6 +71,7 @@ def _load():
         "silrig_session_setpoint_deg": ([session_p, c_double_p], ctypes.c_int),
         "silrig_session_restored_checkpoint": ([session_p], ctypes.c_char_p),
         "silrig_session_checkpoint_due": ([session_p], ctypes.c_int),
+        "silrig_session_checkpoint_used": ([session_p, ctypes.c_int, ctypes.c_char_p], ctypes.c_int),
         "silrig_session_save_checkpoint": ([session_p, ctypes.c_char_p], ctypes.c_int),
         "silrig_session_close": ([session_p, ctypes.c_char_p], ctypes.c_int),
     }
@@ -160,6 +161,10 @@ class Session:
         _check(code)
         return True
 
+    def checkpoint_used(self, used, reason=None):
+        """Say whether you resumed from `restored_checkpoint` (False: with the reason it did not fit)."""
+        _check(self._lib.silrig_session_checkpoint_used(self._handle, int(bool(used)), None if reason is None else reason.encode()))
+
     def checkpoint_due(self):
         """Whether the session wants a checkpoint now."""
         return self._lib.silrig_session_checkpoint_due(self._handle) == 1
@@ -213,9 +218,9 @@ def serve(controller):
         return 2
     with session:
         saved = session.restored_checkpoint
-        if saved is not None and not controller.restore(saved):
-            print("silrig_client: warning: the checkpoint does not fit this controller; starting fresh",
-                  file=sys.stderr)
+        if saved is not None:
+            # The session says in the run's events whether the controller resumed or started fresh.
+            session.checkpoint_used(bool(controller.restore(saved)), "the controller's restore() returned False")
         controller.start(session)
         dt_s = session.dt_s
         while True:

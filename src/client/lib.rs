@@ -219,6 +219,34 @@ pub unsafe extern "C" fn silrig_session_restored_checkpoint(session: *mut Silrig
     unsafe { session_mut(session) }.ok().and_then(|s| s.restored.as_ref()).map_or(std::ptr::null(), |c| c.as_ptr())
 }
 
+/// Say whether the controller resumed from the restored checkpoint: `used` 1, or 0 with `reason` (may be NULL)
+/// saying why it did not fit. The run's events then say which state the controller joined the flight with; without
+/// this call they say the controller did not tell.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `reason` is NULL or a NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_checkpoint_used(
+    session: *mut SilrigSession,
+    used: c_int,
+    reason: *const c_char,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        let outcome = if used != 0 {
+            Ok(())
+        } else if reason.is_null() {
+            Err("the controller did not say why".to_string())
+        } else {
+            // SAFETY: the caller gives a NUL-terminated string.
+            Err(unsafe { CStr::from_ptr(reason) }.to_string_lossy().into_owned())
+        };
+        s.session.checkpoint_used(outcome);
+        Ok(Status::Ok)
+    })
+}
+
 /// 1 when the session wants a checkpoint now (after the command just sent), 0 otherwise.
 ///
 /// # Safety

@@ -6,6 +6,10 @@
 //! u = g^-1 v, where g = T(phi, theta) J^-1 qbar S_w diag(b, c, b) D_nom maps deflections (deg) to Euler-angle
 //! accelerations. The weights adapt by W_dot = Gamma S h(x).
 
+/// The largest |RBF weight| a checkpoint may hand a restarted controller: adaptation in every scenario we fly keeps
+/// them below 1 (the paper's are about 1e-3), so anything near this is a damaged checkpoint, not a learnt state.
+pub const MAX_RESTORED_WEIGHT: f64 = 1e3;
+
 pub mod rbf;
 
 use crate::plant::aero::{MEAN_CHORD_FT, WING_AREA_FT2, WING_SPAN_FT};
@@ -184,19 +188,25 @@ impl AttitudeController {
     }
 
     /// Replace the RBF weights (a restarted controller resuming from a checkpoint); `weights[c]` must have one
-    /// entry per node. Returns false, changing nothing, when the sizes do not match.
-    pub fn set_weights(&mut self, weights: &[Vec<f64>; 3]) -> bool {
-        if weights
-            .iter()
-            .zip(&self.networks)
-            .any(|(w, n)| w.len() != n.weights.len() || w.iter().any(|x| !x.is_finite()))
-        {
-            return false;
+    /// finite entry per node, each within ±[`MAX_RESTORED_WEIGHT`]. Refused, changing nothing, with the reason.
+    pub fn set_weights(&mut self, weights: &[Vec<f64>; 3]) -> Result<(), String> {
+        for (c, (w, n)) in weights.iter().zip(&self.networks).enumerate() {
+            if w.len() != n.weights.len() {
+                return Err(format!(
+                    "channel {c} has {} weights; this controller's network has {}",
+                    w.len(),
+                    n.weights.len()
+                ));
+            }
+            if let Some(x) = w.iter().find(|x| !(x.abs() <= MAX_RESTORED_WEIGHT)) {
+                let x = crate::units::readable(*x);
+                return Err(format!("channel {c} has a weight of {x}, outside ±{MAX_RESTORED_WEIGHT}"));
+            }
         }
         for (n, w) in self.networks.iter_mut().zip(weights) {
             n.weights.copy_from_slice(w);
         }
-        true
+        Ok(())
     }
 
     /// g(x): Euler-angle acceleration per degree of (aileron, elevator, rudder) at this measurement.
@@ -252,6 +262,24 @@ impl AttitudeController {
 mod tests {
     use super::*;
     use crate::plant::tables::F16_TABLES;
+
+    #[test]
+    fn restored_weights_must_fit_the_network_and_stay_finite_and_bounded() {
+        let mut c = AttitudeController::new(ControllerGains::default(), &F16_TABLES);
+        let n = c.networks()[0].weights.len();
+        let good: [Vec<f64>; 3] = std::array::from_fn(|_| vec![1e-3; n]);
+        assert_eq!(c.set_weights(&good), Ok(()));
+        let mut huge = good.clone();
+        huge[1][0] = 1e300;
+        assert_eq!(c.set_weights(&huge), Err("channel 1 has a weight of 1e300, outside ±1000".into()));
+        let mut nan = good.clone();
+        nan[2][1] = f64::NAN;
+        assert!(c.set_weights(&nan).unwrap_err().contains("weight of NaN"));
+        let short: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; n - 1]);
+        assert!(c.set_weights(&short).unwrap_err().contains("weights; this controller's network has"));
+        // A refusal changes nothing.
+        assert!(c.networks().iter().all(|net| net.weights.iter().all(|w| *w == 1e-3)));
+    }
 
     #[test]
     fn nominal_derivatives_match_controller_md_near_six_degrees_alpha() {

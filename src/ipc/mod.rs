@@ -21,8 +21,8 @@ pub mod subscriber;
 pub mod waitset;
 
 pub use namespace::{
-    CleanupReport, DEAD_RUN_GRACE, NodeSummary, RUN_ID_MAX_LEN, RunId, SHM_DIR, cleanup_dead_runs, cleanup_run,
-    create_node, rig_config,
+    CleanupReport, DEAD_RUN_GRACE, NodeSummary, RUN_ID_MAX_LEN, RunId, SHM_DIR, cleanup_dead_nodes, cleanup_dead_runs,
+    cleanup_run, create_node, rig_config,
 };
 pub use publisher::{SendReceipt, StreamPublisher};
 pub use stream::{StreamEvent, StreamService, StreamSettings, StreamSpec, new_epoch, open_stream};

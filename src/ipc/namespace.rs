@@ -75,14 +75,66 @@ pub fn rig_config(run: &RunId) -> Config {
     cfg
 }
 
-/// Create a node of the run with the run's config.
+/// Create a node of the run with the run's config. Every file the run has is left readable and writable by its
+/// owner only.
 pub fn create_node(run: &RunId, name: &str) -> Result<Node<ipc::Service>, IpcError> {
     let node_name = NodeName::new(name).map_err(|e| IpcError::Name { name: name.into(), detail: format!("{e:?}") })?;
-    NodeBuilder::new().name(&node_name).config(&rig_config(run)).create::<ipc::Service>().map_err(|e| IpcError::Node {
-        run: run.to_string(),
-        node: name.into(),
-        detail: e.to_string(),
+    let node = NodeBuilder::new().name(&node_name).config(&rig_config(run)).create::<ipc::Service>().map_err(|e| {
+        IpcError::Node { run: run.to_string(), node: name.into(), detail: node_failure_detail(run, &e.to_string()) }
+    })?;
+    restrict_global_mgmt(run);
+    Ok(node)
+}
+
+/// iceoryx2's reason, with the cause we can see when it only says "internal error": a run's root path taken by
+/// something that is not a folder of ours.
+fn node_failure_detail(run: &RunId, iceoryx2_reason: &str) -> String {
+    let root = run.root_dir();
+    // Without its trailing slash, so that a file there is seen as one.
+    match std::fs::symlink_metadata(root.components().as_path()) {
+        Ok(m) if !m.is_dir() => format!(
+            "{} exists and is not a folder (it is where iceoryx2 keeps the run's state): remove it, or choose another \
+             run id ({iceoryx2_reason})",
+            root.components().as_path().display()
+        ),
+        _ => iceoryx2_reason.to_string(),
+    }
+}
+
+/// iceoryx2 creates the node counter it shares between all nodes of a root path (`<prefix>node.<version>.global_mgmt`
+/// in `/dev/shm`) writable by everyone; the run's other files are owner-only, and so should this be. Every node
+/// narrows it after creating itself (the file exists by then; narrowing twice is harmless).
+fn restrict_global_mgmt(run: &RunId) {
+    use std::os::unix::fs::PermissionsExt;
+    let prefix = run.prefix();
+    for entry in std::fs::read_dir(SHM_DIR).into_iter().flatten().flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if name.starts_with(&prefix) && name.ends_with(".global_mgmt") {
+            let _ = std::fs::set_permissions(entry.path(), std::fs::Permissions::from_mode(0o600));
+        }
+    }
+}
+
+/// Remove the resources of the run's dead nodes (a process that was killed), leaving the live ones alone; returns
+/// the nodes removed. The launcher does this when it reaps a death, so that no process of the run pays for it
+/// inside its loop.
+pub fn cleanup_dead_nodes(run: &RunId) -> Result<Vec<NodeSummary>, IpcError> {
+    let mut removed = Vec::new();
+    if !run.root_dir().is_dir() {
+        return Ok(removed);
+    }
+    Node::<ipc::Service>::list(&rig_config(run), |state| {
+        if let NodeState::Dead(view) = state {
+            let who = summary_of(view.details());
+            if view.try_remove_stale_resources().is_ok() {
+                removed.push(who);
+            }
+        }
+        CallbackProgression::Continue
     })
+    .map_err(|e| IpcError::Cleanup { run: run.to_string(), detail: format!("listing nodes: {e:?}") })?;
+    Ok(removed)
 }
 
 /// A node found during cleanup.

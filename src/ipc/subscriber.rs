@@ -137,6 +137,28 @@ impl<T: WireSample> StreamSubscriber<T> {
         &self.listener
     }
 
+    /// Block until a wake-up is pending or the monotonic clock reaches `deadline_ns`, whichever comes first (a
+    /// signal may end it early), without consuming the wake-up: [`Self::drain`] does. The listener's own
+    /// `timed_wait` times out in whole kernel ticks (a socket timeout: 4 ms on a 250 Hz kernel), so a 2 ms wait
+    /// for a command that never comes lasted 6 to 8 ms and overran the plant's tick; `ppoll` keeps to the
+    /// microsecond.
+    pub fn wait_readable_until(&self, deadline_ns: u64) {
+        use iceoryx2::prelude::FileDescriptorBased;
+        let remaining_ns = deadline_ns.saturating_sub(crate::clock::monotonic_ns());
+        let timeout = libc::timespec {
+            tv_sec: (remaining_ns / 1_000_000_000) as libc::time_t,
+            tv_nsec: (remaining_ns % 1_000_000_000) as libc::c_long,
+        };
+        // SAFETY: the descriptor is only polled, never closed or handed on; the listener owns it and outlives
+        // the call.
+        let fd = unsafe { self.listener.file_descriptor().native_handle() };
+        let mut poll_fd = libc::pollfd { fd, events: libc::POLLIN, revents: 0 };
+        // SAFETY: one valid pollfd, a valid timespec, no signal mask change.
+        unsafe {
+            libc::ppoll(&mut poll_fd, 1, &timeout, std::ptr::null());
+        }
+    }
+
     /// Running totals.
     pub fn stats(&self) -> SubscriberStats {
         self.stats.get()

@@ -35,9 +35,10 @@ pub trait Controller {
         None
     }
 
-    /// Resume from what [`Controller::checkpoint`] saved; false leaves the controller as it was.
-    fn restore(&mut self, _saved: &str) -> bool {
-        false
+    /// Resume from what [`Controller::checkpoint`] saved; an error (why it does not fit) leaves the controller
+    /// as it was, and the run's events say the controller started fresh and why.
+    fn restore(&mut self, _saved: &str) -> Result<(), String> {
+        Err("this controller keeps no state to resume".into())
     }
 }
 
@@ -77,8 +78,10 @@ impl Controller for AttitudeLaw {
         serde_json::to_string(&weights).ok()
     }
 
-    fn restore(&mut self, saved: &str) -> bool {
-        serde_json::from_str::<[Vec<f64>; 3]>(saved).is_ok_and(|w| self.controller.set_weights(&w))
+    fn restore(&mut self, saved: &str) -> Result<(), String> {
+        let weights =
+            serde_json::from_str::<[Vec<f64>; 3]>(saved).map_err(|e| format!("not three lists of RBF weights: {e}"))?;
+        self.controller.set_weights(&weights)
     }
 }
 
@@ -88,10 +91,8 @@ impl Controller for AttitudeLaw {
 pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller>) -> anyhow::Result<ProcessReport> {
     let names = law.diagnostic_names();
     let mut session = ControllerSession::open(args.clone(), scenario, &names)?;
-    if let Some(saved) = session.restored_checkpoint()
-        && !law.restore(saved)
-    {
-        eprintln!("silrig-controller: warning: the checkpoint does not fit this controller; starting fresh");
+    if let Some(saved) = session.restored_checkpoint().map(str::to_owned) {
+        session.checkpoint_used(law.restore(&saved));
     }
     let dt_s = session.dt_s();
     let mut diagnostics = vec![0.0; names.len()];

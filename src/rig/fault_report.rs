@@ -27,6 +27,28 @@ pub struct FaultRecord {
     pub plant_samples_lost: u64,
     /// Logged ticks without a command between injection and recovery.
     pub command_samples_lost: u64,
+    /// Where the logged flight joins a re-flown one after this fault (a restarted plant), and by how much.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discontinuity: Option<Discontinuity>,
+}
+
+/// A place where the logged flight joins a re-flown one: a restarted plant flew again from a tick older than the
+/// last one written.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Discontinuity {
+    /// Simulated time of the first row of the re-flown flight, s.
+    pub at_s: f64,
+    /// Which ticks were flown twice, and the jump between the two flights.
+    pub detail: String,
+}
+
+/// Every flight discontinuity of the run (`flight-discontinuity` events of the logger), planned or not.
+pub fn discontinuities(out_dir: &Path, dt_s: f64) -> Vec<Discontinuity> {
+    read_events(out_dir).iter().filter(|e| e.kind == "flight-discontinuity").map(|e| discontinuity(e, dt_s)).collect()
+}
+
+fn discontinuity(e: &Event, dt_s: f64) -> Discontinuity {
+    Discontinuity { at_s: e.tick.unwrap_or(0) as f64 * dt_s, detail: e.detail.clone() }
 }
 
 /// CLOCK_MONOTONIC time of the plant's first tick 0, from its `ticking` event.
@@ -56,7 +78,7 @@ const RECOVERIES: [&str; 6] = [
 ];
 
 /// Records for every fault of `plan`.
-pub fn fault_records(plan: &[Fault], out_dir: &Path) -> Vec<FaultRecord> {
+pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultRecord> {
     let events = read_events(out_dir);
     let Some(t0) = plant_t0_ns(out_dir) else {
         return plan.iter().map(empty).collect();
@@ -99,6 +121,7 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path) -> Vec<FaultRecord> {
                 recovered_at_s: recovery.map(|e| rel(e.t_ns)),
                 plant_samples_lost: plant_lost,
                 command_samples_lost: command_lost,
+                discontinuity: window.iter().find(|e| e.kind == "flight-discontinuity").map(|e| discontinuity(e, dt_s)),
             }
         })
         .collect()
@@ -114,6 +137,7 @@ fn empty(f: &Fault) -> FaultRecord {
         recovered_at_s: None,
         plant_samples_lost: 0,
         command_samples_lost: 0,
+        discontinuity: None,
     }
 }
 

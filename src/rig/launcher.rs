@@ -255,6 +255,14 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     );
     let scenario_path = out.join("scenario.toml");
     std::fs::write(&scenario_path, scenario.to_toml())?;
+    let root = run_id.root_dir();
+    anyhow::ensure!(
+        // Without its trailing slash, so that a file there is seen as one.
+        std::fs::symlink_metadata(root.components().as_path()).ok().is_none_or(|m| m.is_dir()),
+        "run id {run_id}: {} exists and is not a folder (iceoryx2 keeps the run's state there): remove it, or \
+         choose another --run-id",
+        root.components().as_path().display()
+    );
     // A crashed run with this id may have left resources behind; they must not poison this one.
     let pre = ipc::cleanup_run(&run_id)?;
     if !pre.is_clean() {
@@ -366,6 +374,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     let ended_by_plan = sup.ended_by_plan();
     faults.release_stopped(&mut sup);
     sup.stop_all()?;
+    sup.note_final_reports();
     let timer_baseline = match baseline.as_mut() {
         Some(b) => finish_baseline(b, &scenario, &out, !sup.failures.is_empty())?,
         None => None,
@@ -375,7 +384,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     if controller == ControllerLaunch::External {
         wait_for_external_report(&out);
     }
-    let mut failures = sup.failures;
+    let mut failures = std::mem::take(&mut sup.failures);
     let mut processes = Vec::new();
     for role in Role::ALL {
         match read_report(&out, role.label()) {
@@ -387,25 +396,30 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     }
     let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
     let control = trace.as_ref().map(|t| summarize(t, &scenario));
-    let stopped_by = signals::termination_signal().map(|signal| {
-        let flown_s = trace
-            .as_ref()
-            .and_then(|t| t.column("t_s"))
-            .and_then(|t| t.last().copied())
-            .map_or(0.0, |t| t + scenario.timing.dt_s);
-        super::run_report::StoppedBy {
-            signal: signals::name(signal).into(),
-            at_s: flown_s,
-            exit_status: signals::exit_status_for(signal),
-        }
+    let flown_s = trace
+        .as_ref()
+        .and_then(|t| t.column("t_s"))
+        .and_then(|t| t.last().copied())
+        .map_or(0.0, |t| t + scenario.timing.dt_s);
+    if ended_by_plan.contains(&Role::Plant) {
+        // Nothing flies without a plant: the plan ended the flight early, which is not the run the scenario asks.
+        failures.push(format!(
+            "plant: ended by the fault plan and not restarted: the flight ended at t = {flown_s:.2} s of {:.2} s",
+            scenario.timing.duration_s
+        ));
+    }
+    let stopped_by = signals::termination_signal().map(|signal| super::run_report::StoppedBy {
+        signal: signals::name(signal).into(),
+        at_s: flown_s,
+        exit_status: signals::exit_status_for(signal),
     });
     let cleanup = ipc::cleanup_run(&run_id)?;
     let leftovers = if cleanup.is_clean() { Vec::new() } else { vec![format!("{cleanup:?}")] };
-    let ticks = processes
-        .iter()
-        .find(|p| p.process == Role::Plant.label())
-        .and_then(|p| p.counters.get("ticks").copied())
-        .unwrap_or(0);
+    // A plant that left no report (killed), or whose report covers only its last life, flew at least what the
+    // logger wrote.
+    let plant_ticks =
+        processes.iter().find(|p| p.process == Role::Plant.label()).and_then(|p| p.counters.get("ticks").copied());
+    let ticks = plant_ticks.unwrap_or(0).max((flown_s / scenario.timing.dt_s).round() as u64);
     let wall_s = sup.wall_s;
     let report = RigReport {
         run_id: run_id.to_string(),
@@ -417,9 +431,11 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         wall_s,
         cycles_per_s: if wall_s > 0.0 { ticks as f64 / wall_s } else { 0.0 },
         processes,
+        lives: sup.lives,
         timer_baseline,
         control,
-        faults: super::fault_report::fault_records(&scenario.faults, &out),
+        faults: super::fault_report::fault_records(&scenario.faults, &out, scenario.timing.dt_s),
+        discontinuities: super::fault_report::discontinuities(&out, scenario.timing.dt_s),
         duration_s: scenario.timing.duration_s,
         stopped_by,
         failures,

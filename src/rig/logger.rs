@@ -81,6 +81,8 @@ struct Writer {
     diagnostic_names: Vec<String>,
     rows: u64,
     last_tick: Option<u64>,
+    /// The plant sample of the last row written (its epoch tells which plant life flew it).
+    last_written: Option<PlantSample>,
 }
 
 impl Writer {
@@ -145,6 +147,7 @@ impl Writer {
         )?;
         self.rows += 1;
         self.last_tick = Some(p.tick);
+        self.last_written = Some(plant.sample);
         if self.rows.is_multiple_of(FLUSH_EVERY_ROWS) {
             self.flush()?;
         }
@@ -164,6 +167,18 @@ impl Writer {
 fn last_logged_tick(trace: &Trace, dt_s: f64) -> Option<u64> {
     let t = trace.rows.last()?[trace.index("t_s")?];
     Some((t / dt_s).round() as u64)
+}
+
+/// Ticks a restarted plant flew again.
+struct Reflown {
+    /// The plant life (epoch) re-flying them.
+    epoch: u64,
+    /// The first tick it flew again.
+    first_tick: u64,
+    /// Its state minus the written one at the last written tick: phi, theta, psi, alpha, deg.
+    jump_deg: Option<[f64; 4]>,
+    /// At the last written tick its sample equals the written one in every state and surface value.
+    identical: bool,
 }
 
 /// The logger's side of the run's streams.
@@ -216,6 +231,9 @@ pub struct LoggerLoop {
     missing_since: Option<u64>,
     /// The diagnostic names the newest controller epoch announced.
     announced: Option<Vec<String>>,
+    /// A restarted plant re-flying ticks already written (its checkpoint is older than its predecessor's last
+    /// tick, or it had none): those samples are not written, and the first row it adds is a discontinuity.
+    reflown: Option<Reflown>,
     done: bool,
     error: Option<anyhow::Error>,
 }
@@ -241,6 +259,7 @@ impl LoggerLoop {
             diagnostic_names: Vec::new(),
             rows: 0,
             last_tick: resume_after,
+            last_written: None,
         };
         // A previous logger of this run started the trace: continue under its header.
         if let Some(previous) = previous {
@@ -253,7 +272,13 @@ impl LoggerLoop {
                 ("ipc_command_to_logger", "command publish to receive at the logger"),
             ],
         );
-        rec.declare(&["rows_written", "rows_without_command", "plant_ticks_missing", "invalid_samples"]);
+        rec.declare(&[
+            "rows_written",
+            "rows_without_command",
+            "plant_ticks_missing",
+            "invalid_samples",
+            "flight_discontinuities",
+        ]);
         Ok(Self {
             ticks: scenario.timing.ticks(),
             scenario,
@@ -266,6 +291,7 @@ impl LoggerLoop {
             pending_command: BTreeMap::new(),
             missing_since: None,
             announced: None,
+            reflown: None,
             done: false,
             error: None,
         })
@@ -405,8 +431,10 @@ impl LoggerLoop {
                 && self.writer.rows + u64::from(self.resume_after.is_some()) > 0
             {
                 // A restarted plant re-simulating ticks already logged: keep the first record of each tick.
+                self.note_reflown(&sample.sample);
                 continue;
             }
+            self.mark_discontinuity(&sample.sample);
             let command = self.pending_command.remove(&tick);
             self.note_command_gap(tick, command.is_some());
             if !self.loop_faults.is_empty() {
@@ -422,6 +450,56 @@ impl LoggerLoop {
             self.pending_command.retain(|t, _| *t > tick);
         }
         Ok(())
+    }
+
+    /// A sample of a tick already written, from a plant life other than the one that wrote it: remember which
+    /// ticks were flown twice and, at the last written tick, how far the two flights are apart.
+    fn note_reflown(&mut self, sample: &PlantSample) {
+        let Some(written) = self.writer.last_written else { return };
+        if sample.header.epoch == written.header.epoch {
+            return;
+        }
+        let r = self.reflown.get_or_insert(Reflown {
+            epoch: sample.header.epoch,
+            first_tick: sample.header.tick,
+            jump_deg: None,
+            identical: false,
+        });
+        r.first_tick = r.first_tick.min(sample.header.tick);
+        if sample.header.tick == written.header.tick {
+            // phi, theta, psi (state[3..6]) and alpha (state[1]), rad to deg.
+            let d = |i: usize| (sample.state[i] - written.state[i]).to_degrees();
+            r.jump_deg = Some([d(3), d(4), d(5), d(1)]);
+            r.identical = sample.state == written.state && sample.surfaces_deg == written.surfaces_deg;
+        }
+    }
+
+    /// The first row a plant life writes after another life re-flew ticks already written: the trace joins two
+    /// flights here. Said in an event (which the fault table and the report show) with the size of the jump.
+    fn mark_discontinuity(&mut self, sample: &PlantSample) {
+        let Some(r) = self.reflown.take_if(|r| r.epoch == sample.header.epoch) else { return };
+        let last = self.writer.last_tick.unwrap_or(0);
+        let tick = sample.header.tick;
+        if r.identical && r.first_tick == last {
+            // It resumed from a checkpoint of the last written tick itself: the same state, one flight.
+            let detail = format!("the restarted plant flew tick {last} again with the state already written: no jump");
+            self.events.emit(Some(tick), "flight-continued", detail);
+            return;
+        }
+        let jump = match r.jump_deg {
+            Some([phi, theta, psi, alpha]) => format!(
+                "at tick {last} the two flights differed by phi {phi:+.3}, theta {theta:+.3}, psi {psi:+.3}, \
+                 alpha {alpha:+.3} deg"
+            ),
+            None => format!("the re-flown tick {last} never arrived, so the jump is unknown"),
+        };
+        let detail = format!(
+            "rows from tick {tick} come from a restarted plant that flew again from tick {} (ticks {}..{last} \
+             were already written and are kept from the first flight); {jump}",
+            r.first_tick, r.first_tick
+        );
+        self.rec.count("flight_discontinuities", 1);
+        self.events.emit(Some(tick), "flight-discontinuity", detail);
     }
 
     /// Mark where rows start and stop going without a command.

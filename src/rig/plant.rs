@@ -4,7 +4,8 @@
 //! same [`crate::sim::PlantRunner`] as `silrig sim`.
 //!
 //! Realtime: absolute-deadline ticks with `clock_nanosleep(TIMER_ABSTIME)`; a tick that starts a whole period late
-//! is an overrun: the missed ticks are skipped and counted, never caught up in a burst. Lockstep: no sleeping; the
+//! is an overrun: the periods that passed without a tick are counted and never caught up in a burst. No tick number
+//! is skipped: simulated time pauses while the plant cannot run (stopped, delayed) and then falls behind wall time. Lockstep: no sleeping; the
 //! plant waits for every command, and never runs further ahead of the logger than its queue holds.
 //!
 //! The process runs in four phases: [`PlantLoop::setup`] (scenario, model, recorder, watchdog settings),
@@ -232,7 +233,7 @@ impl PlantLoop {
         rec.declare(&[
             "ticks",
             "overruns",
-            "skipped_ticks",
+            "periods_without_tick",
             "command_misses",
             "commands_received",
             "commands_invalid",
@@ -282,17 +283,30 @@ impl PlantLoop {
         })
     }
 
-    /// A restarted plant (`--resume`) continues the flight from the checkpoint its predecessor saved.
-    pub fn resume_from_checkpoint(&mut self) {
+    /// A restarted plant (`--resume`) continues the flight from the checkpoint its predecessor saved. Without one
+    /// (its predecessor died before saving any), it flies again from tick 0 and says so; the logger marks where
+    /// the new flight joins the logged one. A checkpoint that exists but cannot be used (torn, garbage, out of
+    /// range) is an error: flying again from tick 0 would splice a different flight into the run.
+    pub fn resume_from_checkpoint(&mut self) -> anyhow::Result<()> {
         let path = &self.checkpoint_path;
-        match std::fs::read_to_string(path).map(|t| serde_json::from_str::<PlantCheckpoint>(&t)) {
-            Ok(Ok(c)) => {
-                self.runner.restore(&c);
-                let detail = format!("continuing from the checkpoint at tick {}", c.tick);
-                self.events.emit(Some(c.tick), "plant-resumed", detail);
+        let text = match std::fs::read_to_string(path) {
+            Ok(text) => text,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                let detail = format!("no checkpoint in {}: flying again from tick 0", path.display());
+                eprintln!("silrig-plant: warning: --resume: {detail}");
+                self.events.emit(Some(0), "plant-restarted-from-start", detail);
+                return Ok(());
             }
-            _ => eprintln!("silrig-plant: warning: --resume without a readable {}; starting over", path.display()),
-        }
+            Err(e) => anyhow::bail!("cannot resume: reading {}: {e}", path.display()),
+        };
+        let checkpoint = serde_json::from_str::<PlantCheckpoint>(&text)
+            .map_err(|e| anyhow::anyhow!("cannot resume: {} is not a plant checkpoint: {e}", path.display()))?;
+        self.runner
+            .restore(&checkpoint, self.ticks)
+            .map_err(|e| anyhow::anyhow!("cannot resume: {}: {e}", path.display()))?;
+        let detail = format!("continuing from the checkpoint at tick {}", checkpoint.tick);
+        self.events.emit(Some(checkpoint.tick), "plant-resumed", detail);
+        Ok(())
     }
 
     /// Phase 3: tick until the end of the scenario or SIGTERM; returns how the loop ended.
@@ -328,7 +342,7 @@ impl PlantLoop {
         self.gather_commands(ports, receipt.t_send_ns)?;
         let held = self.choose_command();
         if self.realtime && held {
-            self.watch_controller(ports);
+            self.watch_controller();
         }
         if let Some(a) = self.applied_answers {
             *self.rec.command_age_ticks.entry(self.sim_tick - a).or_insert(0) += 1;
@@ -349,9 +363,15 @@ impl PlantLoop {
             if !std::mem::take(&mut self.overrun_counted) {
                 self.rec.count("overruns", 1);
             }
-            self.rec.count("skipped_ticks", outcome.skipped);
+            self.rec.count("periods_without_tick", outcome.skipped);
             let late_ms = outcome.wake_lateness_ns as f64 / 1e6;
-            let detail = format!("woke {late_ms:.2} ms late; {} tick(s) skipped", outcome.skipped);
+            let detail = format!(
+                "woke {late_ms:.2} ms late: {} period(s) passed without a tick; simulated time paused there (tick {} \
+                 follows tick {} and is now that much behind wall time)",
+                outcome.skipped,
+                self.sim_tick,
+                self.sim_tick.saturating_sub(1)
+            );
             self.events.emit(Some(self.sim_tick), "overrun", detail);
         }
         self.expected_wall_tick = outcome.next_tick;
@@ -419,7 +439,7 @@ impl PlantLoop {
                 return Ok(());
             }
             // EINTR (SIGSTOP/SIGCONT, SIGTERM) just ends this wait early; the loop looks again.
-            let _ = ports.commands.listener().timed_wait(|_| {}, Duration::from_nanos(wait_until - now));
+            ports.commands.wait_readable_until(wait_until);
         }
     }
 
@@ -482,15 +502,13 @@ impl PlantLoop {
 
     /// A held command: the controller is stale after a few periods without a fresh command, and after the hold
     /// the plant flies the failsafe (trim) surfaces until commands return.
-    fn watch_controller(&mut self, ports: &PlantPorts) {
+    fn watch_controller(&mut self) {
         let tick = self.sim_tick;
         let w = &mut self.watchdog;
         let silent_ns = monotonic_ns().saturating_sub(w.last_fresh_ns);
         if !w.stale && silent_ns >= w.stale_after_ns {
             w.stale = true;
             self.events.emit(Some(tick), "controller-stale", format!("no command for {} ms", silent_ns / 1_000_000));
-            // A dead controller's publisher must go before a new one can take its place; a stopped one stays.
-            let _ = ports.command_stream.try_cleanup_dead_nodes();
         }
         if !w.in_failsafe && silent_ns >= w.hold_ns {
             w.in_failsafe = true;
@@ -565,7 +583,7 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let mut ports = PlantPorts::connect(args)?;
     let ended = if ports.wait_for_peers(args.options.startup_timeout_s)? {
         if args.resume {
-            plant.resume_from_checkpoint();
+            plant.resume_from_checkpoint()?;
         }
         let ended = plant.fly(&mut ports)?;
         if ended == "completed" {

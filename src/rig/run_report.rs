@@ -2,7 +2,7 @@
 //! floor measured beside them, control quality of the logged trace, the fault table, failures and leftovers; and
 //! the run's figures.
 
-use super::fault_report::FaultRecord;
+use super::fault_report::{Discontinuity, FaultRecord};
 use super::report::{MachineConditions, ProcessReport};
 use crate::bench::timer_baseline::BaselineReport;
 use crate::summary::Summary;
@@ -30,14 +30,20 @@ pub struct RigReport {
     pub wall_s: f64,
     /// Plant ticks per wall second (the lockstep throughput figure).
     pub cycles_per_s: f64,
-    /// The three processes' reports.
+    /// The three processes' reports: of a restarted process, its last life's (earlier lives' are in `lives`).
     pub processes: Vec<ProcessReport>,
+    /// Every process the launcher started, one entry per life, with how it ended and its report file.
+    #[serde(default)]
+    pub lives: Vec<ProcessLife>,
     /// The OS floor measured beside a realtime run.
     pub timer_baseline: Option<BaselineReport>,
     /// Control quality of the logged trace (as `silrig sim` reports it).
     pub control: Option<Summary>,
     /// Every fault of the plan and what became of it.
     pub faults: Vec<FaultRecord>,
+    /// Every place the logged flight joins a re-flown one (a restarted plant), planned or not.
+    #[serde(default)]
+    pub discontinuities: Vec<Discontinuity>,
     /// The scenario's duration, s.
     #[serde(default)]
     pub duration_s: f64,
@@ -48,6 +54,27 @@ pub struct RigReport {
     pub failures: Vec<String>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
     pub leftovers: Vec<String>,
+}
+
+/// One life of a process the launcher started: from its start to its exit (each restart starts a new life).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ProcessLife {
+    /// plant, controller or logger.
+    pub process: String,
+    /// 1 for the first start, 2 after the first restart, ...
+    pub life: u32,
+    /// Process id.
+    pub pid: u32,
+    /// When it started, s of wall time from the start of the run.
+    pub started_at_s: f64,
+    /// When the launcher saw it end, s of wall time from the start of the run.
+    pub ended_at_s: Option<f64>,
+    /// How it ended as the launcher saw it: `exit status 0 at the end of the run`, `killed by signal 9 (the fault
+    /// plan)`, ...
+    pub exit: String,
+    /// The report this life wrote (`plant.report.json`, or `plant.life1.report.json` for a life that was
+    /// followed by a restart), if it wrote one: a process killed with SIGKILL writes none.
+    pub report: Option<String>,
 }
 
 /// How the user stopped a run.
@@ -85,7 +112,7 @@ pub(super) fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scen
         let title = format!("{} ({}, run {}): latency distributions", report.scenario, report.mode, report.run_id);
         crate::plot::plot_percentile_distributions(&series, out, "latency", &title)?;
     }
-    if !report.faults.is_empty() && report.control.is_some() {
+    if !(report.faults.is_empty() && report.discontinuities.is_empty()) && report.control.is_some() {
         let trace = Trace::load(&out.join("trace.csv"))?;
         let mut marks = Vec::new();
         for f in &report.faults {
@@ -100,10 +127,32 @@ pub(super) fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scen
                 marks.push(crate::plot::TimelineEvent { t_s: t, label: "recovered".into() });
             }
         }
+        for d in &report.discontinuities {
+            marks.push(crate::plot::TimelineEvent { t_s: d.at_s, label: "discontinuity".into() });
+        }
         let title = format!("{} ({}, run {}): faults", report.scenario, report.mode, report.run_id);
         crate::plot::plot_timeline(&trace, &marks, out, "faults", &title)?;
     }
     Ok(())
+}
+
+/// Command ages in doubling buckets (1, 2, 3-4, 5-8, ...), so a long outage is a few entries on one line and not
+/// one per tick it lasted.
+pub fn command_age_buckets(ages: &std::collections::BTreeMap<u64, u64>) -> Vec<String> {
+    let mut buckets: std::collections::BTreeMap<(u64, u64), u64> = Default::default();
+    for (&age, &count) in ages {
+        let (lo, hi) = if age <= 2 {
+            (age, age)
+        } else {
+            let hi = age.next_power_of_two();
+            (hi / 2 + 1, hi)
+        };
+        *buckets.entry((lo, hi)).or_insert(0) += count;
+    }
+    buckets
+        .into_iter()
+        .map(|((lo, hi), n)| if lo == hi { format!("{lo}: {n}") } else { format!("{lo}-{hi}: {n}") })
+        .collect()
 }
 
 impl RigReport {
@@ -121,8 +170,19 @@ impl RigReport {
         if let Some(s) = &self.stopped_by {
             out += &format!("stopped by the user ({}) at t = {:.2} s of {:.2} s\n", s.signal, s.at_s, self.duration_s);
         }
+        for d in &self.discontinuities {
+            out += &format!("flight discontinuity at t = {:.2} s: {}\n", d.at_s, d.detail);
+        }
         if self.failures.is_empty() && self.stopped_by.is_none() {
-            out += "all processes ended cleanly\n";
+            out += "all processes ended cleanly";
+            if !self.discontinuities.is_empty() {
+                out += &format!(
+                    "; the logged flight has {} discontinuit{} (above)",
+                    self.discontinuities.len(),
+                    if self.discontinuities.len() == 1 { "y" } else { "ies" }
+                );
+            }
+            out += "\n";
         } else {
             for f in &self.failures {
                 out += &format!("FAILED: {f}\n");
@@ -150,8 +210,38 @@ impl RigReport {
             self.conditions_end.load_average[0],
             c.kernel
         );
-        for p in &self.processes {
-            out += &format!("  {:<10} pid {:<7} {:<34} {}\n", p.process, p.pid, p.scheduling, p.ended);
+        for role in crate::topology::Role::ALL.map(|r| r.label()) {
+            let lives: Vec<&ProcessLife> = self.lives.iter().filter(|l| l.process == role).collect();
+            let report = self.processes.iter().find(|p| p.process == role);
+            if lives.is_empty() {
+                // Not started by the launcher (`--controller external`): its report is all there is.
+                if let Some(p) = report {
+                    out += &format!("  {:<10} pid {:<7} {:<34} {}\n", p.process, p.pid, p.scheduling, p.ended);
+                }
+                continue;
+            }
+            for l in &lives {
+                let name = if lives.len() > 1 { format!("{role} #{}", l.life) } else { role.to_string() };
+                let own = report.filter(|p| p.pid == l.pid);
+                let scheduling = own.map_or("-", |p| p.scheduling.as_str());
+                let ended = match (own, &l.report) {
+                    (Some(p), _) => p.ended.clone(),
+                    (None, Some(file)) => format!("{} (its report: {file})", l.exit),
+                    (None, None) => format!("{}, no report", l.exit),
+                };
+                let span = match l.ended_at_s {
+                    Some(end) if lives.len() > 1 => format!(" [{:.2}..{:.2} s]", l.started_at_s, end),
+                    _ => String::new(),
+                };
+                out += &format!("  {name:<10} pid {:<7} {scheduling:<34} {ended}{span}\n", l.pid);
+            }
+            if lives.len() > 1 && report.is_some() {
+                out += &format!(
+                    "  {:<10} {} lives: the latencies and counters below are those of its last life\n",
+                    "",
+                    lives.len()
+                );
+            }
         }
         out
     }
@@ -184,8 +274,11 @@ impl RigReport {
             let counters: Vec<String> = p.counters.iter().map(|(k, v)| format!("{k} {v}")).collect();
             out += &format!("  {:<10} {}\n", p.process, counters.join(", "));
             if !p.command_age_ticks.is_empty() {
-                let ages: Vec<String> = p.command_age_ticks.iter().map(|(a, n)| format!("{a}: {n}")).collect();
-                out += &format!("  {:<10} command age at use (ticks: count) {}\n", "", ages.join(", "));
+                out += &format!(
+                    "  {:<10} command age at use (ticks: count) {}\n",
+                    "",
+                    command_age_buckets(&p.command_age_ticks).join(", ")
+                );
             }
         }
         out += &format!("  wall time {:.3} s, {:.0} plant cycles/s\n\n", self.wall_s, self.cycles_per_s);
@@ -212,6 +305,9 @@ impl RigReport {
                 f.plant_samples_lost,
                 f.command_samples_lost
             );
+            if let Some(d) = &f.discontinuity {
+                out += &format!("  {:<32} flight discontinuity at {:.3} s (below)\n", "", d.at_s);
+            }
         }
         out
     }
@@ -219,5 +315,33 @@ impl RigReport {
     /// A latency summary by name, from any process.
     pub fn latency(&self, name: &str) -> Option<&crate::timing::LatencySummary> {
         self.processes.iter().flat_map(|p| &p.latencies).find(|l| l.name == name).map(|l| &l.summary)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn command_ages_of_a_long_outage_fit_on_a_few_entries() {
+        // One tick of each age 1..=506, as a 5 s outage leaves them, and the usual 1-tick age.
+        let mut ages: std::collections::BTreeMap<u64, u64> = (1..=506).map(|a| (a, 1)).collect();
+        *ages.get_mut(&1).unwrap() += 900;
+        let b = command_age_buckets(&ages);
+        assert_eq!(
+            b,
+            [
+                "1: 901",
+                "2: 1",
+                "3-4: 2",
+                "5-8: 4",
+                "9-16: 8",
+                "17-32: 16",
+                "33-64: 32",
+                "65-128: 64",
+                "129-256: 128",
+                "257-512: 250"
+            ]
+        );
     }
 }

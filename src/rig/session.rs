@@ -25,6 +25,19 @@ use std::time::Duration;
 /// How long a controller joining a running plant blends from the current surface positions to its command, s.
 pub const BUMPLESS_BLEND_S: f64 = 0.5;
 
+/// Where a controller's state came from when it started.
+#[derive(Debug, Clone, PartialEq)]
+enum Resumed {
+    /// No checkpoint was offered.
+    Fresh,
+    /// It resumed from the checkpoint its predecessor saved.
+    Checkpoint,
+    /// It was offered one and refused it, for this reason.
+    Rejected(String),
+    /// It was offered one and never said ([`ControllerSession::checkpoint_used`]).
+    Unconfirmed,
+}
+
 /// With a fault plan, the session asks for a checkpoint every this many ticks.
 const CHECKPOINT_EVERY_TICKS: u64 = 10;
 
@@ -229,6 +242,8 @@ pub struct ControllerSession {
     checkpoints: Option<super::CheckpointWriter>,
     save_checkpoints: bool,
     restored: Option<String>,
+    /// What the controller said it did with `restored`.
+    resumed: Resumed,
     blend_ticks: u64,
     /// First tick of the bumpless blend: set when the first sample is not the plant's tick 0.
     blend: Option<u64>,
@@ -314,6 +329,7 @@ impl ControllerSession {
             checkpoints: realtime.then(|| super::CheckpointWriter::new(checkpoint_path)),
             // Any realtime controller may be restarted, planned or not: recovery must not depend on which.
             save_checkpoints: realtime,
+            resumed: if restored.is_some() { Resumed::Unconfirmed } else { Resumed::Fresh },
             restored,
             blend_ticks: (BUMPLESS_BLEND_S / dt).round().max(1.0) as u64,
             blend: None,
@@ -350,6 +366,20 @@ impl ControllerSession {
     /// What a predecessor of this controller saved, when the session was opened with `--resume`.
     pub fn restored_checkpoint(&self) -> Option<&str> {
         self.restored.as_deref()
+    }
+
+    /// Say whether the controller resumed from [`Self::restored_checkpoint`] (`Err`: why it did not fit). A
+    /// refusal is an event and a warning, and the controller counts as fresh; the event when it joins the flight
+    /// says which it was.
+    pub fn checkpoint_used(&mut self, outcome: Result<(), String>) {
+        self.resumed = match outcome {
+            Ok(()) => Resumed::Checkpoint,
+            Err(why) => {
+                eprintln!("silrig controller: warning: the checkpoint was not used ({why}); starting fresh");
+                self.events.emit(None, "checkpoint-rejected", format!("the controller started fresh: {why}"));
+                Resumed::Rejected(why)
+            }
+        };
     }
 
     /// Whether the controller should hand a checkpoint to [`Self::save_checkpoint`] now: every few ticks of a
@@ -440,9 +470,15 @@ impl ControllerSession {
         match self.last_tick {
             None if tick > 0 => {
                 self.blend = Some(tick);
-                let state = if self.restored.is_some() { "checkpointed" } else { "fresh" };
-                let detail =
-                    format!("plant already at tick {tick}: {state} state, {BUMPLESS_BLEND_S} s bumpless blend");
+                let state = match &self.resumed {
+                    Resumed::Fresh => "fresh state".to_string(),
+                    Resumed::Checkpoint => "checkpointed state".to_string(),
+                    Resumed::Rejected(why) => format!("fresh state (its checkpoint was rejected: {why})"),
+                    Resumed::Unconfirmed => {
+                        "a checkpoint was offered; the controller did not say whether it used it".to_string()
+                    }
+                };
+                let detail = format!("plant already at tick {tick}: {state}, {BUMPLESS_BLEND_S} s bumpless blend");
                 self.events.emit(Some(tick), "controller-joined", detail);
             }
             Some((last_epoch, _)) if last_epoch != epoch => {

@@ -5,7 +5,8 @@
 use super::ProcessArgs;
 use super::events::EventLog;
 use super::launcher::ControllerLaunch;
-use super::report::read_report;
+use super::report::{read_report, report_path};
+use super::run_report::ProcessLife;
 use crate::topology::Role;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -282,6 +283,8 @@ pub(super) struct Supervisor {
     pub(super) wall_s: f64,
     /// Processes that failed, and how.
     pub(super) failures: Vec<String>,
+    /// Every process started, one entry per life (a restart starts a new life).
+    pub(super) lives: Vec<ProcessLife>,
 }
 
 impl Supervisor {
@@ -306,12 +309,14 @@ impl Supervisor {
             plant_done_at: None,
             wall_s: 0.0,
             failures: Vec::new(),
+            lives: Vec::new(),
         };
         for role in [Role::Logger, Role::Controller, Role::Plant] {
             if role == Role::Controller && sup.controller == ControllerLaunch::External {
                 continue;
             }
             let process = sup.spawn(role, false)?;
+            sup.begin_life(role, 1, process.pid());
             sup.processes.push(RoleProcess::started(role, process, 0));
             std::thread::sleep(Duration::from_millis(20));
         }
@@ -361,6 +366,35 @@ impl Supervisor {
         Ok(ChildProcess::new(child))
     }
 
+    fn begin_life(&mut self, role: Role, life: u32, pid: u32) {
+        self.lives.push(ProcessLife {
+            process: role.label().into(),
+            life,
+            pid,
+            started_at_s: self.started.elapsed().as_secs_f64(),
+            ended_at_s: None,
+            exit: "running".into(),
+            report: None,
+        });
+    }
+
+    /// Note how the life of process `pid` ended; a death by a signal leaves an iceoryx2 node behind, which the
+    /// launcher removes here, off every process's loop.
+    fn end_life(&mut self, pid: u32, status: ExitStatus, how: &str) {
+        let at_s = self.started.elapsed().as_secs_f64();
+        if let Some(life) = self.lives.iter_mut().rev().find(|l| l.pid == pid && l.ended_at_s.is_none()) {
+            life.ended_at_s = Some(at_s);
+            life.exit = format!("{}{how}", describe(status));
+        }
+        if status.code().is_none()
+            && let Ok(removed) = crate::ipc::cleanup_dead_nodes(&self.args.run_id)
+            && !removed.is_empty()
+        {
+            let who: Vec<String> = removed.iter().map(|n| format!("`{}` (pid {})", n.name, n.pid)).collect();
+            self.events.emit(None, "dead-nodes-removed", format!("by the launcher: {}", who.join(", ")));
+        }
+    }
+
     /// Time since the processes were started.
     pub(super) fn elapsed(&self) -> Duration {
         self.started.elapsed()
@@ -395,7 +429,9 @@ impl Supervisor {
                 }
             }
             p.exit_handled = true;
-            let role = p.role;
+            let (role, pid, planned) = (p.role, p.process.pid(), p.planned_exit);
+            self.end_life(pid, status, if planned { " (the fault plan)" } else { "" });
+            let p = &mut self.processes[i];
             if std::mem::take(&mut p.planned_exit) {
                 p.killed_by_plan = true;
                 let restarting = p.restart_at.is_some();
@@ -472,12 +508,38 @@ impl Supervisor {
                 continue;
             }
             let (role, restarts) = (p.role, p.restarts + 1);
+            self.keep_report_of_life(role, restarts);
             let process = self.spawn(role, role.resumes())?;
             let pid = process.pid();
+            self.begin_life(role, restarts + 1, pid);
             self.processes[i] = RoleProcess::started(role, process, restarts);
             self.events.emit(None, "process-restarted", format!("{role} as pid {pid} (restart {restarts})"));
         }
         Ok(())
+    }
+
+    /// A process that is restarted keeps the report of the life that ended (one it wrote on SIGTERM, say) as
+    /// `<role>.life<N>.report.json`, so the next life's report does not overwrite it.
+    fn keep_report_of_life(&mut self, role: Role, life: u32) {
+        let current = report_path(&self.args.out, role.label());
+        let kept = self.args.out.join(format!("{}.life{life}.report.json", role.label()));
+        if std::fs::rename(&current, &kept).is_ok()
+            && let Some(l) = self.lives.iter_mut().find(|l| l.process == role.label() && l.life == life)
+        {
+            l.report = Some(kept.file_name().expect("a file name").to_string_lossy().into_owned());
+        }
+    }
+
+    /// After the run, the last life of each role gets the report it wrote, if any.
+    pub(super) fn note_final_reports(&mut self) {
+        for role in Role::ALL {
+            let path = report_path(&self.args.out, role.label());
+            if let Some(l) = self.lives.iter_mut().rev().find(|l| l.process == role.label())
+                && path.exists()
+            {
+                l.report = Some(path.file_name().expect("a file name").to_string_lossy().into_owned());
+            }
+        }
     }
 
     /// The plant has ended for good and the logger has too (or had 2 s to write its last rows).
@@ -500,12 +562,16 @@ impl Supervisor {
         for p in self.processes.iter_mut() {
             p.process.signal(libc::SIGTERM);
         }
-        for p in self.processes.iter_mut() {
+        for i in 0..self.processes.len() {
+            let p = &mut self.processes[i];
             let already_ended = p.process.has_ended();
             let status = p.process.finish(Duration::from_secs(5))?;
-            if !already_ended && !status.success() && !self.failures.iter().any(|f| f.starts_with(p.role.label())) {
-                let tail = stderr_tail(&self.args.out, p.role);
-                self.failures.push(format!("{}: {}{tail}", p.role, describe(status)));
+            let (role, pid) = (p.role, p.process.pid());
+            // A life already noted stays as it was: only open ones are ended here.
+            self.end_life(pid, status, if already_ended { "" } else { " at the end of the run" });
+            if !already_ended && !status.success() && !self.failures.iter().any(|f| f.starts_with(role.label())) {
+                let tail = stderr_tail(&self.args.out, role);
+                self.failures.push(format!("{role}: {}{tail}", describe(status)));
             }
         }
         Ok(())
