@@ -440,3 +440,60 @@ fn a_run_id_whose_iceoryx2_folder_is_squatted_by_a_file_is_refused_naming_the_fi
     assert!(text.contains(&format!("/tmp/silrig_{id} exists and is not a folder")), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A 64 KiB tmpfs mounted for one test, unmounted however the test ends.
+struct SmallDisk(PathBuf);
+
+impl SmallDisk {
+    fn mount(at: PathBuf) -> Self {
+        std::fs::create_dir_all(&at).unwrap();
+        let o = Command::new("mount").args(["-t", "tmpfs", "-o", "size=64k", "tmpfs"]).arg(&at).output().unwrap();
+        assert!(o.status.success(), "this test mounts a small tmpfs (as root): {}", String::from_utf8_lossy(&o.stderr));
+        Self(at)
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+#[test]
+fn a_full_disk_is_named_with_the_file_and_the_process_and_leaves_every_file_whole_or_absent() {
+    let dir = temp_dir("full-disk");
+    let id = run_id("full-disk");
+    let disk = SmallDisk::mount(dir.join("disk"));
+    let out = disk.0.join("run");
+    let (code, text, _, _) = run_to_end(&id, &out, &["--duration-s", "3"]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(!text.contains("panicked"), "{text}");
+    // The logger's error reaches the launcher's own stderr, naming the file, though its log is on the full disk.
+    assert!(
+        text.contains("silrig-logger: error: writing") && text.contains("trace.csv: No space left on device"),
+        "{text}"
+    );
+    assert!(text.contains("FAILED"), "{text}");
+    for entry in std::fs::read_dir(&out).unwrap().flatten() {
+        let path = entry.path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let bytes = std::fs::read(&path).unwrap();
+        if name.ends_with(".csv") || name.ends_with(".jsonl") || name.ends_with(".log") {
+            assert!(bytes.is_empty() || bytes.ends_with(b"\n"), "{name} ends mid-line");
+        }
+        if name.ends_with(".csv") {
+            let text = String::from_utf8(bytes).unwrap();
+            let fields = text.lines().next().unwrap().split(',').count();
+            assert!(text.lines().all(|l| l.split(',').count() == fields), "{name} has a partial row");
+        } else if name.ends_with(".json") {
+            assert!(serde_json::from_slice::<serde_json::Value>(&bytes).is_ok(), "{name} is not whole");
+        } else if name.ends_with(".png") || name.ends_with(".hgrm") {
+            assert!(!bytes.is_empty(), "{name} is empty");
+        }
+        assert!(!name.ends_with(".tmp"), "{name} left behind");
+    }
+    drop(disk);
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -5,7 +5,6 @@
 
 use crate::clock::{self, SchedPolicy, TickSchedule};
 use crate::timing::{LatencyHistogram, LatencySummary, summary_line, summary_table_header};
-use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -76,7 +75,7 @@ pub fn run(args: &BaselineArgs) -> anyhow::Result<String> {
     let source = if args.timerfd { TickSource::TimerfdWaitSet } else { TickSource::Nanosleep };
     let report = timer_baseline_with(source, duration_s, (period_ms * 1e6).round() as u64)?;
     if let Some(path) = &args.hgrm {
-        std::fs::write(path, &report.hgrm).with_context(|| format!("writing {}", path.display()))?;
+        crate::outputs::write_atomically(path, &report.hgrm)?;
     }
     Ok(if args.json { serde_json::to_string_pretty(&report)? + "\n" } else { report.to_text() })
 }

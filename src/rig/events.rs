@@ -46,11 +46,13 @@ impl EventLog {
             detail: detail.into(),
         };
         let line = serde_json::to_string(&event).expect("an event serialises") + "\n";
-        let written = std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(&self.path)
-            .and_then(|mut f| f.write_all(line.as_bytes()));
+        let written = std::fs::OpenOptions::new().create(true).append(true).open(&self.path).and_then(|mut f| {
+            let before = f.metadata()?.len();
+            f.write_all(line.as_bytes()).inspect_err(|_| {
+                // A full disk may have taken part of the line: the log keeps whole lines only.
+                let _ = f.set_len(before);
+            })
+        });
         if let Err(e) = written {
             eprintln!("silrig-{}: cannot append to {}: {e}", self.process, self.path.display());
         }

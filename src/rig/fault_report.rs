@@ -107,9 +107,11 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
                 .filter(|e| DETECTIONS.contains(&e.kind.as_str()))
                 .min_by_key(|e| (e.process == "launcher", e.t_ns));
             let failsafe = window.iter().find(|e| e.kind == "failsafe-engaged");
-            let recovery = window
-                .iter()
-                .find(|e| RECOVERIES.contains(&e.kind.as_str()) && detection.is_none_or(|d| e.t_ns >= d.t_ns));
+            // A restarted logger says it resumed before it sees (and reports) the gap its absence left.
+            let recovery = window.iter().find(|e| {
+                RECOVERIES.contains(&e.kind.as_str())
+                    && (e.kind == "logger-resumed" || detection.is_none_or(|d| e.t_ns >= d.t_ns))
+            });
             let end_ns = recovery.map_or(next_ns.min(inj + 2_000_000_000), |e| e.t_ns);
             let (plant_lost, command_lost) = losses(&timing, inj, end_ns);
             FaultRecord {

@@ -341,7 +341,25 @@ fn finish_baseline(
         baseline.signal(libc::SIGKILL);
     }
     baseline.finish(Duration::from_secs_f64(scenario.timing.duration_s + 10.0))?;
-    Ok(std::fs::read_to_string(out.join("timer-baseline.json")).ok().and_then(|t| serde_json::from_str(&t).ok()))
+    let path = out.join("timer-baseline.json");
+    let report = std::fs::read_to_string(&path).ok().and_then(|t| serde_json::from_str(&t).ok());
+    if report.is_none() {
+        // Killed, or its output did not fit on the disk: no file rather than a torn one.
+        let _ = std::fs::remove_file(&path);
+    }
+    Ok(report)
+}
+
+/// A figure the disk could not take is left empty by the plotting library: remove it rather than leave a file
+/// that is not a figure.
+fn remove_empty_figures(out: &Path) {
+    for entry in std::fs::read_dir(out).into_iter().flatten().flatten() {
+        let path = entry.path();
+        let figure = path.extension().is_some_and(|e| e == "png" || e == "svg");
+        if figure && entry.metadata().is_ok_and(|m| m.len() == 0) {
+            let _ = std::fs::remove_file(path);
+        }
+    }
 }
 
 /// Run the three processes to the end of the scenario and return the merged report (also written as
@@ -421,7 +439,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         processes.iter().find(|p| p.process == Role::Plant.label()).and_then(|p| p.counters.get("ticks").copied());
     let ticks = plant_ticks.unwrap_or(0).max((flown_s / scenario.timing.dt_s).round() as u64);
     let wall_s = sup.wall_s;
-    let report = RigReport {
+    let mut report = RigReport {
         run_id: run_id.to_string(),
         scenario: scenario.name.clone(),
         mode: opts.mode.label().into(),
@@ -441,7 +459,14 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         failures,
         leftovers,
     };
-    std::fs::write(out.join("report.json"), serde_json::to_string_pretty(&report)? + "\n")?;
-    write_plots(&report, &out, &scenario)?;
+    // A full disk must not cost the user the report: it is printed whatever happens to the files.
+    if let Err(e) = write_plots(&report, &out, &scenario) {
+        report.failures.push(format!("silrig run: the figures: {e:#}"));
+        remove_empty_figures(&out);
+    }
+    if let Err(e) = super::write_atomically(&out.join("report.json"), &(serde_json::to_string_pretty(&report)? + "\n"))
+    {
+        report.failures.push(format!("silrig run: {e}"));
+    }
     Ok(report)
 }

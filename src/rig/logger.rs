@@ -26,7 +26,7 @@ use crate::wire::{CommandSample, ControllerInfo, LogAckSample, PlantSample};
 use iceoryx2::prelude::CallbackProgression;
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// A plant sample waits this many newer samples for its command before it is written without one.
@@ -53,30 +53,69 @@ pub const TIMING_COLUMNS: [&str; 12] = [
     "command_missing",
 ];
 
-/// Open `name` in `dir` for appending; a new file gets `header` first. Appending is what lets a restarted logger
-/// continue a run's log without overwriting anything.
-fn open_append(dir: &Path, name: &str, header: &str) -> std::io::Result<BufWriter<File>> {
-    let path = dir.join(name);
-    let fresh = std::fs::metadata(&path).map_or(true, |m| m.len() == 0);
-    let mut file = OpenOptions::new().create(true).append(true).open(&path)?;
-    if fresh {
-        writeln!(file, "{header}")?;
-    } else {
-        // A writer killed mid-line leaves a torn last line; start ours on a new line so it stays the only damage.
-        let text = std::fs::read(&path)?;
-        if text.last() != Some(&b'\n') {
-            writeln!(file)?;
+/// A CSV file the logger appends whole rows to, in batches. A batch the disk does not take whole (a full disk) is
+/// cut back out, so the file only ever holds whole rows; the error names the file.
+struct RowFile {
+    path: PathBuf,
+    file: File,
+    /// Rows not written yet.
+    pending: String,
+    /// The file's length at its last whole row, bytes.
+    whole_len: u64,
+}
+
+impl RowFile {
+    /// Open `name` in `dir` for appending; a new file gets `header` first. Appending is what lets a restarted
+    /// logger continue a run's log without overwriting anything.
+    fn open(dir: &Path, name: &str, header: &str) -> std::io::Result<Self> {
+        let path = dir.join(name);
+        let named = |e: std::io::Error| std::io::Error::new(e.kind(), format!("{}: {e}", path.display()));
+        let fresh = std::fs::metadata(&path).map_or(true, |m| m.len() == 0);
+        let mut file = OpenOptions::new().create(true).append(true).open(&path).map_err(named)?;
+        if fresh {
+            writeln!(file, "{header}").map_err(named)?;
+        } else {
+            // A writer killed mid-line leaves a torn last line; start ours on a new line so it stays the only damage.
+            let text = std::fs::read(&path).map_err(named)?;
+            if text.last() != Some(&b'\n') {
+                writeln!(file).map_err(named)?;
+            }
+        }
+        let whole_len = file.metadata().map_err(named)?.len();
+        Ok(Self { path, file, pending: String::new(), whole_len })
+    }
+
+    fn push(&mut self, row: std::fmt::Arguments) {
+        use std::fmt::Write as _;
+        let _ = self.pending.write_fmt(row);
+        self.pending.push('\n');
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        let written = self.file.write_all(self.pending.as_bytes());
+        let batch = std::mem::take(&mut self.pending);
+        match written {
+            Ok(()) => {
+                self.whole_len += batch.len() as u64;
+                Ok(())
+            }
+            Err(e) => {
+                let _ = self.file.set_len(self.whole_len);
+                Err(std::io::Error::new(e.kind(), format!("writing {}: {e}", self.path.display())))
+            }
         }
     }
-    Ok(BufWriter::new(file))
 }
 
 struct Writer {
     out_dir: PathBuf,
     /// Opened with the first row, whose header names the diagnostics the controller announced; already open when
     /// a previous logger of the run wrote one.
-    trace: Option<BufWriter<File>>,
-    timing: BufWriter<File>,
+    trace: Option<RowFile>,
+    timing: RowFile,
     /// The diagnostic columns of the trace, after its loop columns.
     diagnostic_names: Vec<String>,
     rows: u64,
@@ -91,7 +130,7 @@ impl Writer {
         if self.trace.is_none() {
             let header: Vec<&str> =
                 trace::LOOP_COLUMNS.iter().copied().chain(diagnostic_names.iter().map(String::as_str)).collect();
-            self.trace = Some(open_append(&self.out_dir, "trace.csv", &header.join(","))?);
+            self.trace = Some(RowFile::open(&self.out_dir, "trace.csv", &header.join(","))?);
             self.diagnostic_names = diagnostic_names.to_vec();
         }
         Ok(())
@@ -121,7 +160,7 @@ impl Writer {
             }
         };
         let trace = self.trace.as_mut().ok_or_else(|| std::io::Error::other("trace.csv written before its header"))?;
-        writeln!(trace, "{}", Trace::format_row(&row))?;
+        trace.push(format_args!("{}", Trace::format_row(&row)));
         let p = &plant.sample.header;
         let (cs, ce, ct, cr, cn) =
             command.map_or((String::new(), String::new(), String::new(), String::new(), String::new()), |c| {
@@ -134,8 +173,7 @@ impl Writer {
                     c.sample.compute_ns.to_string(),
                 )
             });
-        writeln!(
-            self.timing,
+        self.timing.push(format_args!(
             "{},{},{},{},{},{},{cs},{ce},{ct},{cr},{cn},{}",
             p.tick,
             p.seq,
@@ -144,7 +182,7 @@ impl Writer {
             plant.t_recv_ns,
             plant.sample.flags,
             u8::from(command.is_none())
-        )?;
+        ));
         self.rows += 1;
         self.last_tick = Some(p.tick);
         self.last_written = Some(plant.sample);
@@ -255,7 +293,7 @@ impl LoggerLoop {
         let mut writer = Writer {
             out_dir: args.out.clone(),
             trace: None,
-            timing: open_append(&args.out, "timing.csv", &TIMING_COLUMNS.join(","))?,
+            timing: RowFile::open(&args.out, "timing.csv", &TIMING_COLUMNS.join(","))?,
             diagnostic_names: Vec::new(),
             rows: 0,
             last_tick: resume_after,
@@ -328,7 +366,11 @@ impl LoggerLoop {
         {
             self.error = Some(e);
         }
-        self.writer.flush()?;
+        if let Err(e) = self.writer.flush()
+            && self.error.is_none()
+        {
+            self.error = Some(e.into());
+        }
         Ok(exit)
     }
 
@@ -541,7 +583,11 @@ impl LoggerLoop {
             (None, LoopEnd::Stopped, false) => "stopped".into(),
         };
         let meta = ReportMeta::new(args, &self.scenario.name, request_scheduling(Role::Logger, false), ended);
-        let report = self.rec.finish(meta, &args.out)?;
+        // On a full disk the report cannot be written either: say both, the loop's error first.
+        let report = self.rec.finish(meta, &args.out).map_err(|report_error| match &self.error {
+            Some(e) => anyhow::anyhow!("{e:#}; and the report: {report_error}"),
+            None => report_error.into(),
+        })?;
         match self.error {
             Some(e) => Err(e),
             None => Ok(report),

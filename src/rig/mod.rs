@@ -247,6 +247,8 @@ impl CheckpointWriter {
             .spawn(move || {
                 crate::clock::leave_realtime_scheduling();
                 let (slot, ready) = &*shared;
+                // A full disk fails every write: say so when it starts and when it ends, not ten times a second.
+                let mut failing = false;
                 loop {
                     let text = {
                         let mut guard = slot.lock().unwrap_or_else(|e| e.into_inner());
@@ -255,8 +257,16 @@ impl CheckpointWriter {
                         }
                         guard.take().expect("checked")
                     };
-                    if let Err(e) = write_atomically(&target, &text) {
-                        eprintln!("silrig: cannot write {}: {e}", target.display());
+                    match write_atomically(&target, &text) {
+                        Err(e) if !failing => {
+                            failing = true;
+                            eprintln!("silrig: {e} (the checkpoint stays the last one written; retrying every save)");
+                        }
+                        Ok(()) if failing => {
+                            failing = false;
+                            eprintln!("silrig: {} written again", target.display());
+                        }
+                        _ => {}
                     }
                 }
             })
@@ -272,13 +282,7 @@ impl CheckpointWriter {
     }
 }
 
-/// Write `text` beside `path`, then rename it over `path`: a process killed mid-write leaves the previous file
-/// whole (the checkpoints a restarted plant or controller resumes from).
-pub fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, text)?;
-    std::fs::rename(&tmp, path)
-}
+pub use crate::outputs::write_atomically;
 
 /// The exit status of a rig process: 0 when it ended cleanly, 1 when it ended on an error it reported, 2 when it
 /// could not run at all (bad arguments, scenario or peer); the reason goes to stderr.

@@ -100,7 +100,7 @@ impl Recorder {
         std::fs::create_dir_all(out_dir)?;
         let mut latencies = Vec::new();
         for (name, description, h) in &self.histograms {
-            std::fs::write(out_dir.join(format!("{name}.hgrm")), h.hgrm())?;
+            super::write_atomically(&out_dir.join(format!("{name}.hgrm")), &h.hgrm())?;
             latencies.push(NamedLatency {
                 name: name.clone(),
                 description: description.clone(),
@@ -120,7 +120,10 @@ impl Recorder {
             counters: self.counters,
             command_age_ticks: self.command_age_ticks,
         };
-        std::fs::write(report_path(out_dir, &self.process), serde_json::to_string_pretty(&report)? + "\n")?;
+        super::write_atomically(
+            &report_path(out_dir, &self.process),
+            &(serde_json::to_string_pretty(&report)? + "\n"),
+        )?;
         Ok(report)
     }
 }

@@ -191,7 +191,10 @@ impl RigReport {
         if !self.leftovers.is_empty() {
             out += &format!("iceoryx2 leftovers after cleanup: {}\n", self.leftovers.join("; "));
         }
-        out += &format!("report: {}/report.json\n", self.out_dir);
+        let path = Path::new(&self.out_dir).join("report.json");
+        if path.exists() {
+            out += &format!("report: {}\n", path.display());
+        }
         out
     }
 

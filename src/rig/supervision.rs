@@ -50,16 +50,32 @@ pub(super) struct ChildProcess {
     status: Option<ExitStatus>,
     /// It leads a process group of its own (a user's shell command): signals go to the whole group.
     group: bool,
+    /// The thread copying its output to its log ([`forward_output`]).
+    output: Option<std::thread::JoinHandle<()>>,
 }
 
 impl ChildProcess {
     pub(super) fn new(child: std::process::Child) -> Self {
-        Self { child, status: None, group: false }
+        Self { child, status: None, group: false, output: None }
     }
 
     /// A child started with `process_group(0)`: signalled as a group, so it and what it started stop together.
     pub(super) fn group_leader(child: std::process::Child) -> Self {
-        Self { child, status: None, group: true }
+        Self { child, status: None, group: true, output: None }
+    }
+
+    fn with_output(mut self, output: std::thread::JoinHandle<()>) -> Self {
+        self.output = Some(output);
+        self
+    }
+
+    /// Once it has ended, give the copy of its output a moment to reach the log, so what it said last is there
+    /// when its exit is judged (a grandchild still holding the pipe is not waited for).
+    fn let_output_catch_up(&mut self) {
+        let deadline = Instant::now() + Duration::from_millis(500);
+        while self.output.as_ref().is_some_and(|t| !t.is_finished()) && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(2));
+        }
     }
 
     pub(super) fn pid(&self) -> u32 {
@@ -70,6 +86,9 @@ impl ChildProcess {
     pub(super) fn poll(&mut self) -> std::io::Result<Option<ExitStatus>> {
         if self.status.is_none() {
             self.status = self.child.try_wait()?;
+            if self.status.is_some() {
+                self.let_output_catch_up();
+            }
         }
         Ok(self.status)
     }
@@ -98,6 +117,7 @@ impl ChildProcess {
         if self.status.is_none() {
             self.signal(libc::SIGKILL);
             self.status = Some(self.child.wait()?);
+            self.let_output_catch_up();
         }
         Ok(self.status.expect("reaped"))
     }
@@ -121,6 +141,48 @@ pub(super) fn end_with_launcher(command: &mut Command, signal: libc::c_int) {
             Ok(())
         });
     }
+}
+
+/// Copy a child's output (stdout and stderr, one pipe) into `log_path` line by line. When the log cannot be
+/// written (a full disk), the rest goes to the launcher's own stderr after one line saying why, so nothing the
+/// process said is lost; the child itself never sees the failure, and never dies writing its error to a full disk.
+fn forward_output(
+    reader: std::io::PipeReader,
+    log_path: PathBuf,
+    role: Role,
+    marker: Option<String>,
+) -> std::thread::JoinHandle<()> {
+    use std::io::{BufRead, Write};
+    std::thread::spawn(move || {
+        let mut log = std::fs::OpenOptions::new().create(true).append(true).open(&log_path);
+        let mut to_log = |line: &[u8]| -> std::io::Result<()> {
+            let file = log.as_mut().map_err(|e| std::io::Error::new(e.kind(), e.to_string()))?;
+            let before = file.metadata()?.len();
+            let mut whole = line.to_vec();
+            whole.push(b'\n');
+            // A line the disk takes only in part is cut back out.
+            file.write_all(&whole).inspect_err(|_| {
+                let _ = file.set_len(before);
+            })
+        };
+        let mut failed = false;
+        for line in
+            marker.into_iter().map(String::into_bytes).map(Ok).chain(std::io::BufReader::new(reader).split(b'\n'))
+        {
+            let Ok(line) = line else { break };
+            if !failed && let Err(e) = to_log(&line) {
+                failed = true;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "silrig run: cannot write {}: {e}; what the {role} says follows here",
+                    log_path.display()
+                );
+            }
+            if failed {
+                let _ = writeln!(std::io::stderr(), "silrig run: {role}: {}", String::from_utf8_lossy(&line));
+            }
+        }
+    })
 }
 
 /// An exit status as a person reads it.
@@ -327,11 +389,10 @@ impl Supervisor {
     /// so what the dead one said stays readable).
     fn spawn(&self, role: Role, resume: bool) -> anyhow::Result<ChildProcess> {
         let log_path = self.args.out.join(format!("{role}.stderr.log"));
-        let mut log = std::fs::OpenOptions::new().create(true).append(true).open(&log_path)?;
-        if resume {
-            use std::io::Write;
-            writeln!(log, "--- silrig run: {role} restarted ---")?;
-        }
+        let (reader, writer) = std::io::pipe().context("creating a pipe for a process's output")?;
+        let log = writer.try_clone()?;
+        let marker = resume.then(|| format!("--- silrig run: {role} restarted ---"));
+        let output = forward_output(reader, log_path, role, marker);
         let args = ProcessArgs { resume, ..self.args.clone() };
         if let (Role::Controller, ControllerLaunch::Command(cmd)) = (role, &self.controller) {
             use std::os::unix::process::CommandExt;
@@ -345,11 +406,11 @@ impl Supervisor {
                 // Its own process group: a stop or kill fault reaches whatever it started as well.
                 .process_group(0)
                 .stdin(Stdio::null())
-                .stdout(log.try_clone()?)
-                .stderr(log)
+                .stdout(log)
+                .stderr(writer)
                 .spawn()
                 .with_context(|| format!("starting the controller command `{cmd}`"))?;
-            return Ok(ChildProcess::group_leader(child));
+            return Ok(ChildProcess::group_leader(child).with_output(output));
         }
         let exe = self.bin_dir.join(role.binary());
         let mut command = Command::new(&exe);
@@ -359,11 +420,11 @@ impl Supervisor {
         let child = command
             .args(args.to_argv())
             .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(log)
+            .stdout(log)
+            .stderr(writer)
             .spawn()
             .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
-        Ok(ChildProcess::new(child))
+        Ok(ChildProcess::new(child).with_output(output))
     }
 
     fn begin_life(&mut self, role: Role, life: u32, pid: u32) {
