@@ -3,7 +3,8 @@
 //! in behaviour, `SILRIG_UPDATE_README=1 cargo test --release --test fault_matrix` writes the new table; the diff
 //! then shows what changed. Only what does not depend on the machine's timing is in the table: the exit status,
 //! which process detected the fault, whether the failsafe engaged, whether the loop recovered, whether the flight
-//! has a discontinuity, and the report's verdict line.
+//! has a discontinuity, and the report's verdict line. (A delay is not here: whether its samples come late enough
+//! for the peers to flag them, and so whether anything "recovers", depends on the machine's load.)
 
 use std::path::Path;
 use std::process::Command;
@@ -17,7 +18,7 @@ const START: &str = "<!-- fault-matrix: written by tests/fault_matrix.rs -->";
 const END: &str = "<!-- fault-matrix end -->";
 
 /// (fault flags, what an engineer should expect)
-const ROWS: [(&str, &str); 9] = [
+const ROWS: [(&str, &str); 8] = [
     (
         "controller:kill@1s,restart_after=0.3s",
         "plant holds, then trim failsafe; the restarted controller resumes its weights and blends in",
@@ -30,7 +31,6 @@ const ROWS: [(&str, &str); 9] = [
     ),
     ("plant:kill@1s", "nothing flies without a plant: the run fails, saying when the flight ended"),
     ("plant:stop@1s,for=0.5s", "controller idles on a silent plant; simulated time pauses, no tick is skipped"),
-    ("plant:delay@1s,delay=35ms", "one overrun, no burst to catch up"),
     (
         "logger:kill@1s,restart_after=0.3s",
         "the restarted logger appends after the last row; the rows of its absence are a gap",

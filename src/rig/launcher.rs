@@ -432,7 +432,14 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         exit_status: signals::exit_status_for(signal),
     });
     let cleanup = ipc::cleanup_run(&run_id)?;
-    let leftovers = if cleanup.is_clean() { Vec::new() } else { vec![format!("{cleanup:?}")] };
+    // Processes of this run still alive after every child was reaped: something else joined the run.
+    let leftovers = cleanup
+        .alive
+        .iter()
+        .map(|n| {
+            format!("node `{}` of pid {} is still alive, so the run's shared memory was left in place", n.name, n.pid)
+        })
+        .collect();
     // A plant that left no report (killed), or whose report covers only its last life, flew at least what the
     // logger wrote.
     let plant_ticks =
