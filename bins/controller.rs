@@ -12,5 +12,5 @@ struct Cli {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    silrig::rig::exit_status("controller", silrig::rig::controller::run_controller(&cli.args))
+    silrig::rig::finish_process("controller", &cli.args, silrig::rig::controller::run_controller(&cli.args))
 }

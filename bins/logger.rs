@@ -12,5 +12,5 @@ struct Cli {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    silrig::rig::exit_status("logger", silrig::rig::logger::run_logger(&cli.args))
+    silrig::rig::finish_process("logger", &cli.args, silrig::rig::logger::run_logger(&cli.args))
 }

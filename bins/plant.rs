@@ -12,5 +12,5 @@ struct Cli {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    silrig::rig::exit_status("plant", silrig::rig::plant::run_plant(&cli.args))
+    silrig::rig::finish_process("plant", &cli.args, silrig::rig::plant::run_plant(&cli.args))
 }

@@ -497,3 +497,18 @@ fn a_full_disk_is_named_with_the_file_and_the_process_and_leaves_every_file_whol
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_process_started_by_hand_that_fails_at_start_up_leaves_no_iceoryx2_files() {
+    let dir = temp_dir("by-hand");
+    let id = run_id("by-hand");
+    let o = Command::new(env!("CARGO_BIN_EXE_silrig-plant"))
+        .args(["--run-id", &id, "--startup-timeout-s", "0.5", "--out", dir.join("run").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no controller and logger connected within 0.5 s"));
+    assert!(!Path::new(&format!("/tmp/silrig_{id}")).exists(), "the run's iceoryx2 folder is left");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -284,6 +284,29 @@ impl CheckpointWriter {
 
 pub use crate::outputs::write_atomically;
 
+/// End a rig process: its exit status ([`exit_status`]), and, for a process started by hand (not by `silrig
+/// run`, which cleans up after its run), the run's iceoryx2 files once no process of the run is left, so a process
+/// that fails at start-up leaves no `/tmp/silrig_<run>` folder or shared memory behind.
+pub fn finish_process(
+    process: &str,
+    args: &ProcessArgs,
+    result: anyhow::Result<report::ProcessReport>,
+) -> std::process::ExitCode {
+    let status = exit_status(process, result);
+    if !started_by_launcher() {
+        // Removes nothing while another process of the run is alive.
+        let _ = crate::ipc::cleanup_run(&args.run_id);
+    }
+    status
+}
+
+/// Whether our parent is `silrig` (the launcher), read from /proc.
+fn started_by_launcher() -> bool {
+    // SAFETY: getppid has no preconditions.
+    let parent = unsafe { libc::getppid() };
+    std::fs::read_to_string(format!("/proc/{parent}/comm")).is_ok_and(|c| c.trim() == "silrig")
+}
+
 /// The exit status of a rig process: 0 when it ended cleanly, 1 when it ended on an error it reported, 2 when it
 /// could not run at all (bad arguments, scenario or peer); the reason goes to stderr.
 pub fn exit_status(process: &str, result: anyhow::Result<report::ProcessReport>) -> std::process::ExitCode {
