@@ -38,9 +38,11 @@ pub struct SurfaceFigures {
     pub name: String,
     /// Largest |deflection|, deg.
     pub peak_deg: f64,
-    /// Ticks in which the rate limit cut the motion.
+    /// Ticks at which the rate limit cut the motion: rows whose deflection moved a whole rate limit's worth from
+    /// the row before.
     pub ticks_at_rate_limit: u64,
-    /// Ticks spent at a position limit with the command beyond it.
+    /// Ticks at a position limit: rows whose deflection sits on a stop (counted as the rate-limit hits are, from
+    /// the deflection alone, so a delayed command column does not shift it).
     pub ticks_at_position_limit: u64,
     /// RMS of the actual surface rate over the run, deg/s.
     pub rms_rate_dps: f64,
@@ -79,7 +81,7 @@ pub struct ChannelFigures {
 pub struct Summary {
     /// Scenario name.
     pub scenario: String,
-    /// Ticks in the trace.
+    /// Samples in the trace (N + 1 for N steps: t = 0 to the duration).
     pub ticks: u64,
     /// Loop period, s.
     pub dt_s: f64,
@@ -215,11 +217,9 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
                 Some(m) => pos.windows(2).filter(|w| (w[1] - w[0]).abs() >= m * (1.0 - 1e-9)).count() as u64,
                 None => 0,
             };
-            let ticks_at_position_limit = pos
-                .iter()
-                .zip(&cmd)
-                .filter(|(p, c)| (**p >= lim.max && **c > lim.max) || (**p <= lim.min && **c < lim.min))
-                .count() as u64;
+            let on_stop = |p: f64, stop: f64| (p - stop).abs() <= 1e-9 * stop.abs().max(1.0);
+            let ticks_at_position_limit =
+                pos.iter().filter(|p| on_stop(**p, lim.max) || on_stop(**p, lim.min)).count() as u64;
             let late_rates = rates.iter().zip(&t).filter(|(_, ti)| **ti >= RMS_RATE_FROM_S).map(|(r, _)| *r);
             SurfaceFigures {
                 name: name.to_string(),
@@ -278,7 +278,11 @@ fn opt_s(v: Option<f64>) -> String {
 impl Summary {
     /// Readable report.
     pub fn to_text(&self) -> String {
-        let mut out = format!("scenario {}: {} ticks of {} s\n", self.scenario, self.ticks, self.dt_s);
+        let t_end = self.ticks.saturating_sub(1) as f64 * self.dt_s;
+        let mut out = format!(
+            "scenario {}: {} samples every {} s, t = 0 to {t_end:.2} s\n",
+            self.scenario, self.ticks, self.dt_s
+        );
         out += "  angle   set    initial  final     settle(0.5deg)  settle(2%)\n";
         for a in &self.angles {
             out += &format!(

@@ -69,6 +69,8 @@ fn synthetic(rows: usize, phase: f64) -> Trace {
                     "r_dps" => s(1.0, 0.3),
                     "vt_mps" => 150.0,
                     "alt_ft" => 25_000.0 + 10.0 * t,
+                    "nz_g" => 1.0 + s(0.3, 0.9),
+                    "ny_g" => s(0.05, 1.1),
                     "aileron_cmd_deg" => s(-10.0, 1.3),
                     "aileron_deg" => s(-10.0, 1.3) * 0.95,
                     "elevator_cmd_deg" => -0.56 + s(3.0, 0.7),
