@@ -26,7 +26,8 @@ pub fn write_run(
     std::fs::write(&scenario_path, scenario.to_toml())
         .with_context(|| format!("writing {}", scenario_path.display()))?;
     let mut files = vec![trace_path, summary_path, scenario_path];
-    files.extend(crate::plot::plot_closed_loop(trace, out_dir, &plot_title(scenario))?);
+    let f_true = crate::f_true::from_trace(trace, scenario);
+    files.extend(crate::plot::plot_closed_loop(trace, f_true.as_ref(), out_dir, &plot_title(scenario))?);
     Ok(files)
 }
 

@@ -279,7 +279,11 @@ impl PlantRunner {
         let (sensor_faults, surface_faults) = plant_model_faults(&s.faults);
         let mut runner = Self {
             model,
-            forcing: ExternalForcing { speed_hold: s.plant.speed_hold, ..Default::default() },
+            forcing: ExternalForcing {
+                speed_hold: s.plant.speed_hold,
+                sideslip_hold: s.plant.sideslip_hold,
+                ..Default::default()
+            },
             disturbance: s.disturbance.clone(),
             disturbance_mask: s.disturbance.channel_mask(),
             actuators,

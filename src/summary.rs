@@ -1,5 +1,6 @@
 //! Control-quality figures of a closed-loop trace: settling times, final values, alpha, surface peaks, time at the
-//! rate and position limits, RMS surface rate (the chattering figure), a limit-cycle detector, final |S| and max |W|.
+//! rate and position limits, RMS surface rate (the chattering figure), a limit-cycle detector, final |S|, max |W| and
+//! the RMS error of the RBF estimate f_hat against the true f ([`crate::f_true`]).
 //! Computed from the trace alone (plus the scenario's set points and limits), so the single-process and the
 //! multi-process runs are judged by the same code.
 
@@ -74,6 +75,9 @@ pub struct ChannelFigures {
     pub final_abs_s: f64,
     /// Largest |W| entry over the run.
     pub max_abs_w: f64,
+    /// RMS of f_hat - f_true over the run, rad/s^2: how far the RBF estimate is from the lumped function it
+    /// estimates ([`crate::f_true`]); NaN without an `fhat_<channel>` column.
+    pub rms_f_error_radps2: f64,
 }
 
 /// All figures of one run.
@@ -93,6 +97,15 @@ pub struct Summary {
     pub alpha_peak_deg: f64,
     /// Largest |p|, |q|, |r| from `RATES_FROM_S` on, deg/s.
     pub body_rate_max_late_dps: [f64; 3],
+    /// Altitude at the end minus at the start, ft.
+    pub altitude_change_ft: f64,
+    /// Airspeed at the end minus at the start, m/s (0 under the speed hold).
+    pub airspeed_change_mps: f64,
+    /// Energy height (h + VT^2 / 2g) at the end minus at the start, ft: the mechanical energy per unit weight the
+    /// flight gained. Under the speed hold it is all altitude, supplied by the hold where the engine falls short.
+    pub energy_height_change_ft: f64,
+    /// The airspeed was held (VT_dot = 0) by the scenario's speed hold.
+    pub speed_hold: bool,
     /// aileron, elevator, rudder.
     pub surfaces: Vec<SurfaceFigures>,
     /// Oscillations in the last `LIMIT_CYCLE_WINDOW_S`, per signal examined.
@@ -195,6 +208,14 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
         })
         .collect();
     let alpha = col(trace, "alpha_deg");
+    let (alt, vt) = (col(trace, "alt_ft"), col(trace, "vt_mps"));
+    let change = |x: &[f64]| x.last().zip(x.first()).map_or(f64::NAN, |(b, a)| b - a);
+    let energy_height_ft = |k: usize| {
+        let vt_fps = vt[k] / crate::units::M_PER_FT;
+        alt[k] + vt_fps * vt_fps / (2.0 * crate::plant::constants::GRAVITY_FPS2)
+    };
+    let energy_height_change_ft =
+        if alt.is_empty() { f64::NAN } else { energy_height_ft(alt.len() - 1) - energy_height_ft(0) };
     // NaN when the run ends before `from`: there is nothing to judge, which is not the same as zero.
     let late = |name: &str, from: f64| -> f64 {
         let late: Vec<f64> =
@@ -238,10 +259,12 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
             .map(|s| oscillation(s, &t, &col(trace, s)))
             .collect();
     // Only a sliding-mode controller (ours) reports S and W; a user's controller has other diagnostics.
+    let f_true = crate::f_true::from_trace(trace, scenario);
     let channels = CHANNELS
         .iter()
-        .filter(|ch| trace.index(&format!("s_{ch}")).is_some())
-        .map(|ch| {
+        .enumerate()
+        .filter(|(_, ch)| trace.index(&format!("s_{ch}")).is_some())
+        .map(|(c, ch)| {
             let s = col(trace, &format!("s_{ch}"));
             let w_cols: Vec<usize> = trace
                 .columns
@@ -253,7 +276,11 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
             let max_abs_w = trace.rows.iter().flat_map(|r| w_cols.iter().map(move |i| r[*i].abs())).fold(0.0, f64::max);
             // Rows without a command (a lost controller) carry NaN: report the last known |S|.
             let final_abs_s = s.iter().rev().find(|v| v.is_finite()).map_or(f64::NAN, |v| v.abs());
-            ChannelFigures { name: ch.to_string(), final_abs_s, max_abs_w }
+            let rms_f_error_radps2 = match (&f_true, trace.column(&format!("fhat_{ch}"))) {
+                (Some(f), Some(fhat)) => crate::f_true::rms_error(&fhat, &f[c]),
+                _ => f64::NAN,
+            };
+            ChannelFigures { name: ch.to_string(), final_abs_s, max_abs_w, rms_f_error_radps2 }
         })
         .collect();
     Summary {
@@ -264,6 +291,10 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
         alpha_final_deg: alpha.last().copied().unwrap_or(f64::NAN),
         alpha_peak_deg: alpha.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         body_rate_max_late_dps: [late("p_dps", RATES_FROM_S), late("q_dps", RATES_FROM_S), late("r_dps", RATES_FROM_S)],
+        altitude_change_ft: change(&alt),
+        airspeed_change_mps: change(&vt),
+        energy_height_change_ft,
+        speed_hold: scenario.plant.speed_hold,
         surfaces,
         limit_cycle: oscillations.iter().any(|o| o.sustained),
         oscillations,
@@ -302,6 +333,13 @@ impl Summary {
         } else {
             out += &format!("  max |p|, |q|, |r| after {RATES_FROM_S} s: {p:.3}, {q:.3}, {r:.3} deg/s\n");
         }
+        out += &format!(
+            "  flight path: altitude {:+.1} ft, airspeed {:+.2} m/s{}, energy height {:+.1} ft\n",
+            self.altitude_change_ft,
+            self.airspeed_change_mps,
+            if self.speed_hold { " (speed hold)" } else { "" },
+            self.energy_height_change_ft
+        );
         out += "  surface   peak(deg)  rate-limit  pos-limit  rms rate(dps)  after 5 s  rms cmd rate\n";
         for s in &self.surfaces {
             out += &format!(
@@ -326,7 +364,10 @@ impl Summary {
             if found.is_empty() { "none".to_string() } else { format!("YES: {}", found.join("; ")) }
         );
         for c in &self.channels {
-            out += &format!("  channel {:<6} final |S| {:.2e}  max |W| {:.2e}\n", c.name, c.final_abs_s, c.max_abs_w);
+            out += &format!(
+                "  channel {:<6} final |S| {:.2e}  max |W| {:.2e}  rms(f_hat - f) {:.3} rad/s^2\n",
+                c.name, c.final_abs_s, c.max_abs_w, c.rms_f_error_radps2
+            );
         }
         out
     }

@@ -214,6 +214,9 @@ fn speed_hold_freezes_vt_and_leaves_the_other_derivatives() {
     let held = model.derivative(&x, &u, &ExternalForcing { speed_hold: true, ..Default::default() });
     assert_eq!(held[0], 0.0);
     assert_eq!(&free[1..], &held[1..]);
+    let no_sideslip = model.derivative(&x, &u, &ExternalForcing { sideslip_hold: true, ..Default::default() });
+    assert_eq!(no_sideslip[2], 0.0);
+    assert_eq!((&free[..2], &free[3..]), (&no_sideslip[..2], &no_sideslip[3..]));
 }
 
 #[test]

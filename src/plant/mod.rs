@@ -170,6 +170,9 @@ pub struct ExternalForcing {
     /// Freeze the airspeed (VT_dot = 0), as the paper's scenario assumes. The other derivatives are unchanged: a
     /// force along the velocity that cancels VT_dot leaves alpha_dot and beta_dot as they are.
     pub speed_hold: bool,
+    /// Freeze the sideslip (beta_dot = 0), as the paper's derivation assumes ("the sideslip is assumed to be
+    /// zero"): a side force outside the book's model. For reproducing the paper's figures, not for flying.
+    pub sideslip_hold: bool,
     /// Disturbance added to the Euler-angle accelerations (phi, theta, psi), rad/s^2; mapped to the body rates
     /// through T(phi, theta)^-1.
     pub euler_accel_disturbance_radps2: [f64; 3],
@@ -314,7 +317,7 @@ impl F16Model {
         let dum = u_fps * u_fps + w_fps * w_fps;
         let vt_dot_free = (u_fps * udot + v_fps * vdot + w_fps * wdot) / vt;
         let alpha_dot = (u_fps * wdot - w_fps * udot) / dum;
-        let beta_dot = (vt * vdot - v_fps * vt_dot_free) * cbta / dum;
+        let beta_dot = if forcing.sideslip_hold { 0.0 } else { (vt * vdot - v_fps * vt_dot_free) * cbta / dum };
 
         // Kinematics.
         let phi_dot = p + (sth / cth) * (qsph + r * cph);
