@@ -53,16 +53,22 @@ pub fn from_trace(trace: &Trace, scenario: &Scenario) -> Option<[Vec<f64>; 3]> {
     };
     let euler_rates =
         |m: &Measurement| euler_rate_matrix(m.euler_rad[0], m.euler_rad[1]) * Vector3::from(m.body_rates_radps);
-    let mut f = [vec![f64::NAN; trace.rows.len()], vec![f64::NAN; trace.rows.len()], vec![f64::NAN; trace.rows.len()]];
-    for k in 0..trace.rows.len().saturating_sub(1) {
-        let (now, next) = (row(k), row(k + 1));
-        let (m, m_next) = (measure(&now), measure(&next));
-        let held = Vector3::new(now[9], now[10], now[11]);
+    let rows = trace.rows.len();
+    // Per row once: the measurement, its Euler-angle rates and the disturbance at its time (the next step's start).
+    let measurements: Vec<Measurement> = (0..rows).map(|k| measure(&row(k))).collect();
+    let rates: Vec<Vector3<f64>> = measurements.iter().map(euler_rates).collect();
+    let disturbance = |t: f64| Vector3::from(scenario.disturbance.at(t, &mask));
+    let mut f = [vec![f64::NAN; rows], vec![f64::NAN; rows], vec![f64::NAN; rows]];
+    let mut d_start = disturbance(trace.rows.first().map_or(0.0, |r| r[index[0]]));
+    for k in 0..rows.saturating_sub(1) {
+        let now = row(k);
         let t = now[0];
-        let disturbance = |t: f64| Vector3::from(scenario.disturbance.at(t, &mask));
-        let d_mean = (disturbance(t) + 4.0 * disturbance(t + 0.5 * dt) + disturbance(t + dt)) / 6.0;
-        let accel = (euler_rates(&m_next) - euler_rates(&m)) / dt;
-        let value = accel - controller.control_effectiveness(&m) * held - d_mean;
+        let d_end = disturbance(t + dt);
+        let d_mean = (d_start + 4.0 * disturbance(t + 0.5 * dt) + d_end) / 6.0;
+        d_start = d_end;
+        let held = Vector3::new(now[9], now[10], now[11]);
+        let accel = (rates[k + 1] - rates[k]) / dt;
+        let value = accel - controller.control_effectiveness(&measurements[k]) * held - d_mean;
         for (channel, v) in f.iter_mut().zip(value.iter()) {
             channel[k] = *v;
         }
@@ -134,9 +140,9 @@ mod tests {
             rates += (f + g * u(k) + d_mean) * dt;
         }
         let got = from_trace(&trace, &scenario).unwrap();
-        for k in 0..5 {
-            for c in 0..3 {
-                assert!((got[c][k] - f[c]).abs() < 1e-9, "row {k}, channel {c}: {} vs {}", got[c][k], f[c]);
+        for (c, channel) in got.iter().enumerate() {
+            for (k, v) in channel[..5].iter().enumerate() {
+                assert!((v - f[c]).abs() < 1e-9, "row {k}, channel {c}: {v} vs {}", f[c]);
             }
         }
         assert!(got.iter().all(|ch| ch[5].is_nan()), "the last row has no step after it");

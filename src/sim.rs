@@ -397,13 +397,12 @@ impl PlantRunner {
         let dt = self.dt_s;
         let c = &command.surfaces;
         let modes = if self.surface_faults.is_empty() { [ActuatorFault::None; 3] } else { self.surface_modes() };
-        let hits = [
+        [
             self.actuators[0].update_with_fault(c.aileron_deg, dt, modes[0]),
             self.actuators[1].update_with_fault(c.elevator_deg, dt, modes[1]),
             self.actuators[2].update_with_fault(c.rudder_deg, dt, modes[2]),
             self.actuators[3].update(command.throttle, dt),
-        ];
-        hits
+        ]
     }
 
     /// Move the actuators under `command` ([`PlantRunner::actuate`]) and integrate one step with their positions

@@ -50,6 +50,8 @@ pub enum StopReason {
 }
 
 /// What [`ControllerSession::next_sample`] gives.
+// The sample is handed over by value once per tick: boxing it would allocate in the loop.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Next {
     /// A plant sample to answer with one [`ControllerSession::send`].
