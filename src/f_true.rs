@@ -101,9 +101,9 @@ mod tests {
 
     #[test]
     fn f_true_of_a_plant_that_is_exactly_the_controllers_model_is_its_f() {
-        // Rows made up from x2_dot = f + g u + d with a known f, constant attitude rates integrated exactly: the
-        // recovered f_true must be that f. Wings level and theta constant keep T(phi, theta) constant and the
-        // Euler rates equal to T (p, q, r); qbar from a constant airspeed and altitude keeps g constant.
+        // Rows made up from x2_dot = f + g u + d with a known f, the Euler rates advanced each step by its exact
+        // mean: the recovered f_true must be that f. The attitude and air data held fixed keep T(phi, theta) and g
+        // constant, so the rows' body rates are T^-1 x2.
         let mut scenario = Scenario::embedded_default();
         scenario.controller = ControllerGains::default();
         scenario.disturbance.amplitude_radps2 = 0.3;

@@ -15,8 +15,9 @@ const STATES: &str = "fig1_states";
 
 /// Draw the closed-loop figures of `trace` into `out_dir` (created if missing), each as PNG and SVG:
 /// `fig1_states` (alpha; Euler angles; body rates; surfaces and their commands) always, its columns required;
-/// `fig2_sliding` (sliding surfaces `s_<channel>` and RBF estimates `fhat_<channel>`, each beside `f_true` of its
-/// channel when given, 3x2) if the trace has any of those columns, and `fig3_weights` (the RBF weights `w_<channel>_<k>` of each channel) if it has any weight column;
+/// `fig2_sliding` (sliding surfaces `s_<channel>` and RBF estimates `fhat_<channel>`, each over `f_true` of its
+/// channel when given, 3x2) if the trace has any of those columns, and `fig3_weights` (the RBF weights
+/// `w_<channel>_<k>` of each channel) if it has any weight column;
 /// such a figure with only some of its columns is an error naming a missing one. `title` goes on top of every figure.
 /// Every column is checked before any file is written. Returns the files written, PNG before SVG, figure by figure.
 pub fn plot_closed_loop(
