@@ -192,10 +192,14 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Sim { config, out, .. } => {
             let scenario = load_scenario(config.as_deref(), None)?;
             let out = out.unwrap_or_else(|| Path::new("out").join(&scenario.name));
-            let (summary, files) = silrig::outputs::simulate(&scenario, &out)?;
-            print!("{}", summary.to_text());
-            for f in files {
+            let run = silrig::outputs::simulate(&scenario, &out)?;
+            print!("{}", run.summary.to_text());
+            for f in run.files {
                 println!("wrote {}", f.display());
+            }
+            if let Some(exit) = run.left_envelope {
+                eprintln!("error: {exit}; the files above hold the flight up to the sample before");
+                return Ok(ExitCode::FAILURE);
             }
         }
         Command::Compare { configs, out } => {
@@ -207,6 +211,12 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 println!("wrote {}", f.display());
             }
             println!("runs written under {}", out.display());
+            for (name, exit) in &comparison.left_envelope {
+                eprintln!("error: {name}: {exit}; compared as far as it flew");
+            }
+            if !comparison.left_envelope.is_empty() {
+                return Ok(ExitCode::FAILURE);
+            }
         }
         Command::Run(opts) => {
             let report = silrig::rig::launcher::run(&opts)?;

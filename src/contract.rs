@@ -63,6 +63,7 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
         ("FLAG_FAILSAFE", u64::from(wire::FLAG_FAILSAFE), "the failsafe output is active"),
         ("FLAG_RATE_LIMITED", u64::from(wire::FLAG_RATE_LIMITED), "a surface moved at its rate limit this tick"),
         ("FLAG_COMMAND_REFUSED", u64::from(wire::FLAG_COMMAND_REFUSED), "command refused (NaN/out of range): hold"),
+        ("FLAG_END_OF_RUN", u64::from(wire::FLAG_END_OF_RUN), "the plant's last sample: last tick, its deflections"),
         ("SURFACE_CMD_LIMIT_DEG", wire::SURFACE_CMD_LIMIT_DEG as u64, "|surface command| beyond this, deg: refused"),
         ("MAX_DIAGNOSTICS", wire::MAX_DIAGNOSTICS as u64, "diagnostics a command sample carries at most"),
         ("DIAGNOSTIC_NAME_BYTES", wire::DIAGNOSTIC_NAME_BYTES as u64, "bytes of a diagnostic name, NUL-padded"),

@@ -34,8 +34,7 @@ pub struct Criteria {
     pub body_rate_max_dps: Option<BodyRateLimit>,
     /// Ticks in which a surface's rate limit cut its motion, as a fraction of the ticks flown (worst surface).
     pub rate_limit_fraction_max: Option<f64>,
-    /// Ticks in which a surface sat at a position limit with its command beyond it, as a fraction of the ticks
-    /// flown (worst surface).
+    /// Ticks in which a surface sat at a position limit, as a fraction of the ticks flown (worst surface).
     pub position_limit_fraction_max: Option<f64>,
     /// No sustained oscillation of an angle or surface in the last 3 s (the summary's limit-cycle detector).
     #[serde(default)]

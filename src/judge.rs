@@ -212,7 +212,7 @@ fn saturation_fraction(summary: Option<&Summary>, max: f64, kind: Saturation) ->
         ),
         Saturation::Position => (
             "position_limit_fraction_max",
-            "position limit with its command beyond it",
+            "position limit",
             "the controller asks for more deflection than the surface has: no authority left for a disturbance",
         ),
     };

@@ -3,7 +3,7 @@
 //! The library holds all the math (F-16 plant, integrator, actuators), and the binaries in `bins/` are thin shells
 //! over it. Pure modules ([`plant`], [`integrator`], [`actuator`], [`control`]) do no I/O, IPC or clock reads.
 //! The closed loop: [`scenario`] (TOML scenarios), [`sim`] (the single-process loop), [`summary`] (control-quality
-//! figures), [`trace`] and [`outputs`] (files).
+//! figures), [`f_true`] (the true lumped function the RBF networks estimate), [`trace`] and [`outputs`] (files).
 //!
 //! Transport and timing: [`wire`] (the sample types on the wire), [`ipc`] (iceoryx2 streams, per-run namespaces,
 //! WaitSet loop, timerfd ticks, cleanup), [`clock`] (monotonic clock, absolute sleeps, SCHED_FIFO, tick schedule),
@@ -22,6 +22,7 @@ pub mod contract;
 pub mod control;
 pub mod criteria;
 pub mod dispersion;
+pub mod f_true;
 pub mod fault;
 pub mod integrator;
 pub mod ipc;

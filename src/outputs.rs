@@ -3,6 +3,7 @@
 //! side-by-side table).
 
 use crate::scenario::Scenario;
+use crate::sim::LeftEnvelope;
 use crate::summary::Summary;
 use crate::trace::Trace;
 use anyhow::Context;
@@ -35,17 +36,29 @@ pub fn write_run(
     std::fs::write(&scenario_path, scenario.to_toml())
         .with_context(|| format!("writing {}", scenario_path.display()))?;
     let mut files = vec![trace_path, summary_path, scenario_path];
-    files.extend(crate::plot::plot_closed_loop(trace, out_dir, &plot_title(scenario))?);
+    let f_true = crate::f_true::from_trace(trace, scenario);
+    files.extend(crate::plot::plot_closed_loop(trace, f_true.as_ref(), out_dir, &plot_title(scenario))?);
     Ok(files)
 }
 
-/// `silrig sim`: fly the scenario's closed loop in one process and write its run into `out_dir`; returns the
-/// summary and the files written.
-pub fn simulate(scenario: &Scenario, out_dir: &Path) -> anyhow::Result<(Summary, Vec<PathBuf>)> {
-    let trace = crate::sim::run(scenario)?;
+/// What [`simulate`] flew and wrote.
+#[derive(Debug)]
+pub struct Simulated {
+    /// The control-quality figures.
+    pub summary: Summary,
+    /// The files written.
+    pub files: Vec<PathBuf>,
+    /// Set when the flight left the model's envelope: the files hold it up to there.
+    pub left_envelope: Option<LeftEnvelope>,
+}
+
+/// `silrig sim`: fly the scenario's closed loop in one process and write its run into `out_dir` (as far as it
+/// flew, if it left the model's envelope).
+pub fn simulate(scenario: &Scenario, out_dir: &Path) -> anyhow::Result<Simulated> {
+    let (trace, left_envelope) = crate::sim::fly(scenario)?;
     let summary = crate::summary::summarize(&trace, scenario);
     let files = write_run(out_dir, scenario, &trace, &summary)?;
-    Ok((summary, files))
+    Ok(Simulated { summary, files, left_envelope })
 }
 
 /// What [`compare`] produced.
@@ -55,6 +68,8 @@ pub struct Comparison {
     pub summaries: Vec<Summary>,
     /// The overlay figure's files.
     pub overlay: Vec<PathBuf>,
+    /// The runs that left the model's envelope (scenario name, when and why); each is compared as far as it flew.
+    pub left_envelope: Vec<(String, LeftEnvelope)>,
 }
 
 /// `silrig compare`: fly each scenario in one process, write each run under `out_dir/<scenario name>`, and draw
@@ -62,15 +77,17 @@ pub struct Comparison {
 pub fn compare(scenarios: &[Scenario], out_dir: &Path) -> anyhow::Result<Comparison> {
     let mut summaries = Vec::new();
     let mut traces = Vec::new();
+    let mut left_envelope = Vec::new();
     for scenario in scenarios {
-        let trace = crate::sim::run(scenario)?;
+        let (trace, left) = crate::sim::fly(scenario)?;
+        left_envelope.extend(left.map(|exit| (scenario.name.clone(), exit)));
         let summary = crate::summary::summarize(&trace, scenario);
         write_run(&out_dir.join(&scenario.name), scenario, &trace, &summary)?;
         summaries.push(summary);
         traces.push((scenario.name.clone(), trace));
     }
     let overlay = crate::plot::plot_overlay(&traces, out_dir, "overlay")?;
-    Ok(Comparison { summaries, overlay })
+    Ok(Comparison { summaries, overlay, left_envelope })
 }
 
 /// Title of a scenario's figures: its name and what it shows.

@@ -169,6 +169,10 @@ pub struct PlantOptions {
     /// Freeze the airspeed (VT_dot = 0), as the paper assumes.
     #[serde(default)]
     pub speed_hold: bool,
+    /// Freeze the sideslip (beta_dot = 0), as the paper's derivation assumes: for reproducing its figures only (see
+    /// [`crate::plant::ExternalForcing::sideslip_hold`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub sideslip_hold: bool,
     /// CG position, fraction of the mean chord.
     #[serde(default = "default_xcg")]
     pub xcg: f64,
@@ -190,7 +194,13 @@ fn one() -> f64 {
 
 impl Default for PlantOptions {
     fn default() -> Self {
-        Self { speed_hold: false, xcg: default_xcg(), aero_scale: AeroScale::default(), mass_scale: 1.0 }
+        Self {
+            speed_hold: false,
+            sideslip_hold: false,
+            xcg: default_xcg(),
+            aero_scale: AeroScale::default(),
+            mass_scale: 1.0,
+        }
     }
 }
 

@@ -2,10 +2,18 @@
 //! of one scenario give bit-identical traces. The multi-process rig reuses [`PlantRunner`], [`measurement`] and
 //! [`trace_row`], so both produce the same trace.
 //!
-//! Tick k: the plant's snapshot at t_k (state and the surface positions the actuators hold at t_k) goes to the
-//! controller; its command acts from tick k (`same-tick`) or from tick k+1 (`next-tick`); the actuators then move
-//! over [t_k, t_k+1) under the applied command, and RK4 integrates the plant over that step with the new surface
-//! positions and the throttle held.
+//! A run of duration T at period dt has N = T / dt steps and N + 1 samples, t_k = k dt for k = 0..N (a 10 s run at
+//! 0.01 s: 1001 samples, t = 0.00 to 10.00 s). Tick k: the plant's snapshot at t_k (state and load factors, with
+//! the surfaces where the actuators left them) goes to the controller; its command acts from tick k (`same-tick`)
+//! or from tick k+1 (`next-tick`); the actuators then take their position for [t_k, t_k+1) under the applied
+//! command and hold it (zero-order hold), and RK4 integrates the plant over that step. At the last sample the
+//! actuators still take their position under its command, but nothing is integrated past the end.
+//!
+//! Row k of the trace shows the state at t_k and the deflections held over [t_k, t_k+1): what acted on the
+//! aircraft from that sample on, never a position the surface left at t_k.
+//!
+//! Every integrated state is checked against the model's envelope ([`crate::plant::envelope`]): a flight that
+//! leaves it ends there ([`LeftEnvelope`]), with its trace up to the last state inside.
 //!
 //! Plant-model faults of the scenario's plan act here, so `silrig sim` and the rig apply them identically: actuator
 //! faults in [`PlantRunner::step`] (over the step that starts at a tick inside the fault's window), sensor faults on
@@ -16,6 +24,7 @@ use crate::actuator::{Actuator, ActuatorFault, LimitHits};
 use crate::control::{AttitudeController, ControllerDiagnostics, Measurement, SurfaceCommand};
 use crate::fault::{Fault, FaultAction, SENSOR_CHANNELS, SURFACES};
 use crate::integrator::rk4_step;
+use crate::plant::envelope::{self, EnvelopeError};
 use crate::plant::trim::trim_level_flight;
 use crate::plant::{ControlInputs, ExternalForcing, F16Model, F16State, STATE_NAMES, engine};
 use crate::rng::SplitMix64;
@@ -39,6 +48,10 @@ pub enum SetupError {
         /// VT_dot at throttle 1, ft/s^2.
         at_full: f64,
     },
+    /// The initial state is outside the model's envelope (a scenario built in code rather than through
+    /// [`Scenario::validate`]).
+    #[error("initial condition: outside the model's envelope: {0}")]
+    OutsideEnvelope(#[from] EnvelopeError),
     /// A plant-model fault of the plan is malformed (a scenario built in code rather than through
     /// [`Scenario::validate`]).
     #[error("faults[{index}].{key}: {problem}")]
@@ -52,6 +65,32 @@ pub enum SetupError {
     },
 }
 
+/// A flight that left the model's envelope: when, and which state.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("the state left the model's envelope at t = {t_s:.2} s: {error}")]
+pub struct LeftEnvelope {
+    /// Simulated time of the first state outside, s (the flight is kept up to the sample before it).
+    pub t_s: f64,
+    /// The state at fault and why.
+    pub error: EnvelopeError,
+}
+
+/// Why a closed-loop run did not fly its whole scenario.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// It could not start.
+    #[error(transparent)]
+    Setup(#[from] SetupError),
+    /// It left the model's envelope; `trace` holds the flight up to the last sample inside.
+    #[error("{exit} (the trace ends at the sample before)")]
+    LeftEnvelope {
+        /// When and why.
+        exit: LeftEnvelope,
+        /// The flight so far.
+        trace: Box<Trace>,
+    },
+}
+
 /// What the plant reports each tick.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlantSnapshot {
@@ -61,10 +100,32 @@ pub struct PlantSnapshot {
     pub t_s: f64,
     /// The 13 states as measured: the true state plus any active sensor fault (see [`PlantRunner::true_state`]).
     pub state: F16State,
-    /// Surface positions held by the actuators at t_s: aileron, elevator, rudder, deg.
+    /// Surface positions the actuators hold now: aileron, elevator, rudder, deg. Taken when a tick begins, that is
+    /// the deflection held over the step that ended at t_s (the initial position at tick 0); after
+    /// [`PlantRunner::actuate`], the one for the step that starts at t_s.
     pub surfaces_deg: [f64; 3],
-    /// Throttle position, 0..1.
+    /// Throttle position, 0..1 (as the surfaces).
     pub throttle: f64,
+    /// Normal load factor at the accelerometer, g, of the true state with these surface positions
+    /// ([`crate::plant::ModelOutputs::nz_g`]).
+    pub nz_g: f64,
+    /// Lateral load factor at the accelerometer, g ([`crate::plant::ModelOutputs::ny_g`]).
+    pub ny_g: f64,
+}
+
+/// The actuator positions held over one step, as row k of the trace shows them: the deflections and throttle the
+/// actuators took at t_k, acting until t_k+1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldActuators {
+    /// Aileron, elevator, rudder, deg.
+    pub surfaces_deg: [f64; 3],
+    /// Throttle, 0..1.
+    pub throttle: f64,
+}
+
+impl HeldActuators {
+    /// Positions not known (the plant sample that carries them never came): NaN.
+    pub const UNKNOWN: Self = Self { surfaces_deg: [f64::NAN; 3], throttle: f64::NAN };
 }
 
 /// What the actuators are told to do for one tick.
@@ -194,6 +255,7 @@ impl PlantRunner {
             }
         };
         state.power_pct = engine::commanded_power_pct(throttle);
+        envelope::check(&state)?;
         let a = &s.actuators;
         let actuators = [
             Actuator::new(a.aileron_deg, surfaces.aileron_deg),
@@ -217,7 +279,11 @@ impl PlantRunner {
         let (sensor_faults, surface_faults) = plant_model_faults(&s.faults);
         let mut runner = Self {
             model,
-            forcing: ExternalForcing { speed_hold: s.plant.speed_hold, ..Default::default() },
+            forcing: ExternalForcing {
+                speed_hold: s.plant.speed_hold,
+                sideslip_hold: s.plant.sideslip_hold,
+                ..Default::default()
+            },
             disturbance: s.disturbance.clone(),
             disturbance_mask: s.disturbance.channel_mask(),
             actuators,
@@ -285,36 +351,67 @@ impl PlantRunner {
         self.initial_command
     }
 
-    /// The state as measured (with any active sensor fault) and the surface positions now. Cheap, and the same
-    /// however often it is called within a tick: the sensor noise of a tick is drawn when the tick begins.
+    /// The state as measured (with any active sensor fault), the surface positions now, and the load factors of
+    /// the true state with them (one evaluation of the equations of motion). The same however often it is called
+    /// within a tick: the sensor noise of a tick is drawn when the tick begins.
     pub fn snapshot(&self) -> PlantSnapshot {
+        let held = self.held();
+        let forcing = ExternalForcing {
+            euler_accel_disturbance_radps2: self.disturbance.at(self.t_s(), &self.disturbance_mask),
+            ..self.forcing
+        };
+        let (_, outputs) = self.model.derivative_with_outputs(&self.state, &self.inputs(), &forcing);
         PlantSnapshot {
             tick: self.tick,
             t_s: self.t_s(),
             state: self.measured,
+            surfaces_deg: held.surfaces_deg,
+            throttle: held.throttle,
+            nz_g: outputs.nz_g,
+            ny_g: outputs.ny_g,
+        }
+    }
+
+    /// The actuator positions now.
+    pub fn held(&self) -> HeldActuators {
+        HeldActuators {
             surfaces_deg: [self.actuators[0].position, self.actuators[1].position, self.actuators[2].position],
             throttle: self.actuators[3].position,
         }
     }
 
-    /// Move the actuators under `command` (each surface in the failure mode its active fault gives, if any) and
-    /// integrate one step; then take the next tick's measurement.
-    pub fn step(&mut self, command: &ActuatorCommand) -> StepHits {
-        let dt = self.dt_s;
-        let c = &command.surfaces;
-        let modes = if self.surface_faults.is_empty() { [ActuatorFault::None; 3] } else { self.surface_modes() };
-        let hits = [
-            self.actuators[0].update_with_fault(c.aileron_deg, dt, modes[0]),
-            self.actuators[1].update_with_fault(c.elevator_deg, dt, modes[1]),
-            self.actuators[2].update_with_fault(c.rudder_deg, dt, modes[2]),
-            self.actuators[3].update(command.throttle, dt),
-        ];
-        let inputs = ControlInputs {
+    /// The actuator positions as the equations of motion take them.
+    fn inputs(&self) -> ControlInputs {
+        ControlInputs {
             aileron_deg: self.actuators[0].position,
             elevator_deg: self.actuators[1].position,
             rudder_deg: self.actuators[2].position,
             throttle: self.actuators[3].position,
-        };
+        }
+    }
+
+    /// Move the actuators under `command` (each surface in the failure mode its active fault gives, if any) to the
+    /// positions they hold over the step that starts at the current tick. [`PlantRunner::step`] does this first; on
+    /// its own it serves the last sample of a run, whose deflections are logged but not flown.
+    pub fn actuate(&mut self, command: &ActuatorCommand) -> StepHits {
+        let dt = self.dt_s;
+        let c = &command.surfaces;
+        let modes = if self.surface_faults.is_empty() { [ActuatorFault::None; 3] } else { self.surface_modes() };
+        [
+            self.actuators[0].update_with_fault(c.aileron_deg, dt, modes[0]),
+            self.actuators[1].update_with_fault(c.elevator_deg, dt, modes[1]),
+            self.actuators[2].update_with_fault(c.rudder_deg, dt, modes[2]),
+            self.actuators[3].update(command.throttle, dt),
+        ]
+    }
+
+    /// Move the actuators under `command` ([`PlantRunner::actuate`]) and integrate one step with their positions
+    /// held; then take the next tick's measurement. A new state outside the model's envelope is not taken: the
+    /// plant stays at the current tick (with the actuators moved) and the flight is over.
+    pub fn step(&mut self, command: &ActuatorCommand) -> Result<StepHits, LeftEnvelope> {
+        let hits = self.actuate(command);
+        let dt = self.dt_s;
+        let inputs = self.inputs();
         let t0 = self.tick as f64 * dt;
         let (model, base, dist, mask) = (&self.model, self.forcing, &self.disturbance, &self.disturbance_mask);
         let x = rk4_step(
@@ -326,10 +423,12 @@ impl PlantRunner {
             &self.state.to_array(),
             dt,
         );
-        self.state = F16State::from_array(&x);
+        let next = F16State::from_array(&x);
+        envelope::check(&next).map_err(|error| LeftEnvelope { t_s: t0 + dt, error })?;
+        self.state = next;
         self.tick += 1;
         self.measure();
-        hits
+        Ok(hits)
     }
 }
 
@@ -455,9 +554,15 @@ pub fn measurement(s: &PlantSnapshot) -> Measurement {
     }
 }
 
-/// The loop part of a `trace.csv` row ([`crate::trace::LOOP_COLUMNS`]): the snapshot at t_k and the command
-/// acting on it; the controller's diagnostics follow.
-pub fn trace_row(snap: &PlantSnapshot, command: &SurfaceCommand, diagnostics: &[f64]) -> Vec<f64> {
+/// The loop part of a `trace.csv` row ([`crate::trace::LOOP_COLUMNS`]): the snapshot at t_k, the controller's
+/// command computed from it, and the actuator positions held over [t_k, t_k+1) (the positions the plant reports
+/// with its next sample, or after the last tick's [`PlantRunner::actuate`]); the controller's diagnostics follow.
+pub fn trace_row(
+    snap: &PlantSnapshot,
+    held: &HeldActuators,
+    command: &SurfaceCommand,
+    diagnostics: &[f64],
+) -> Vec<f64> {
     let x = &snap.state;
     let mut row = Vec::with_capacity(trace::LOOP_COLUMNS.len() + diagnostics.len());
     row.extend_from_slice(&[
@@ -472,13 +577,15 @@ pub fn trace_row(snap: &PlantSnapshot, command: &SurfaceCommand, diagnostics: &[
         rad_to_deg(x.r_radps),
         x.vt_fps * M_PER_FT,
         x.alt_ft,
+        snap.nz_g,
+        snap.ny_g,
         command.aileron_deg,
         command.elevator_deg,
         command.rudder_deg,
-        snap.surfaces_deg[0],
-        snap.surfaces_deg[1],
-        snap.surfaces_deg[2],
-        snap.throttle,
+        held.surfaces_deg[0],
+        held.surfaces_deg[1],
+        held.surfaces_deg[2],
+        held.throttle,
     ]);
     row.extend_from_slice(diagnostics);
     row
@@ -507,31 +614,50 @@ pub fn setpoint_rad(s: &Scenario) -> [f64; 3] {
     [deg_to_rad(s.setpoint.phi_deg), deg_to_rad(s.setpoint.theta_deg), deg_to_rad(s.setpoint.psi_deg)]
 }
 
-/// Run a scenario's closed loop to the end and return its trace.
-pub fn run(s: &Scenario) -> Result<Trace, SetupError> {
+/// Run a scenario's closed loop as far as it flies: its trace, and how it left the model's envelope if it did
+/// (the trace then ends at the last sample inside).
+pub fn fly(s: &Scenario) -> Result<(Trace, Option<LeftEnvelope>), SetupError> {
+    match run(s) {
+        Ok(trace) => Ok((trace, None)),
+        Err(SimError::Setup(e)) => Err(e),
+        Err(SimError::LeftEnvelope { exit, trace }) => Ok((*trace, Some(exit))),
+    }
+}
+
+/// Run a scenario's closed loop to the end and return its trace: N + 1 rows, t = 0 to the duration.
+pub fn run(s: &Scenario) -> Result<Trace, SimError> {
     let mut plant = PlantRunner::new(s)?;
     let mut controller = AttitudeController::new(s.controller.clone(), plant.model.tables());
     let setpoint = setpoint_rad(s);
     let dt = s.timing.dt_s;
-    let ticks = s.timing.ticks();
+    let steps = s.timing.ticks();
     let mut trace = Trace::new(trace::columns(s.controller.rbf.nodes()));
-    trace.rows.reserve(ticks as usize);
+    trace.rows.reserve(steps as usize + 1);
     // The commands computed but not yet acting, oldest first: the one computed `delay` ticks ago acts now.
     let delay = s.timing.command_delay_ticks() as usize;
     let mut pending = std::collections::VecDeque::with_capacity(delay + 1);
     let mut acting = plant.initial_command();
     let mut diagnostics = vec![0.0; trace.columns.len() - trace::LOOP_COLUMNS.len()];
-    for _ in 0..ticks {
+    for tick in 0..=steps {
         let snap = plant.snapshot();
         let (surfaces, diag) = controller.step(&measurement(&snap), &setpoint, dt);
         write_attitude_diagnostics(&mut diagnostics, &diag, &controller);
-        trace.rows.push(trace_row(&snap, &surfaces, &diagnostics));
         // The throttle is held: the controller commands surfaces only.
         pending.push_back(ActuatorCommand { surfaces, throttle: acting.throttle });
         if pending.len() > delay {
             acting = pending.pop_front().expect("not empty");
         }
-        plant.step(&acting);
+        // The last sample's deflections are logged, but nothing is flown past the end.
+        let stepped = if tick < steps {
+            plant.step(&acting).map(drop)
+        } else {
+            plant.actuate(&acting);
+            Ok(())
+        };
+        trace.rows.push(trace_row(&snap, &plant.held(), &surfaces, &diagnostics));
+        if let Err(exit) = stepped {
+            return Err(SimError::LeftEnvelope { exit, trace: Box::new(trace) });
+        }
     }
     Ok(trace)
 }

@@ -1,5 +1,6 @@
 //! Control-quality figures of a closed-loop trace: settling times, final values, alpha, surface peaks, time at the
-//! rate and position limits, RMS surface rate (the chattering figure), a limit-cycle detector, final |S| and max |W|.
+//! rate and position limits, RMS surface rate (the chattering figure), a limit-cycle detector, final |S|, max |W| and
+//! the RMS error of the RBF estimate f_hat against the true f ([`crate::f_true`]).
 //! Computed from the trace alone (plus the scenario's set points and limits), so the single-process and the
 //! multi-process runs are judged by the same code.
 
@@ -38,9 +39,11 @@ pub struct SurfaceFigures {
     pub name: String,
     /// Largest |deflection|, deg.
     pub peak_deg: f64,
-    /// Ticks in which the rate limit cut the motion.
+    /// Ticks at which the rate limit cut the motion: rows whose deflection moved a whole rate limit's worth from
+    /// the row before.
     pub ticks_at_rate_limit: u64,
-    /// Ticks spent at a position limit with the command beyond it.
+    /// Ticks at a position limit: rows whose deflection sits on a stop (counted as the rate-limit hits are, from
+    /// the deflection alone, so a delayed command column does not shift it).
     pub ticks_at_position_limit: u64,
     /// RMS of the actual surface rate over the run, deg/s.
     pub rms_rate_dps: f64,
@@ -72,6 +75,9 @@ pub struct ChannelFigures {
     pub final_abs_s: f64,
     /// Largest |W| entry over the run.
     pub max_abs_w: f64,
+    /// RMS of f_hat - f_true over the run, rad/s^2: how far the RBF estimate is from the lumped function it
+    /// estimates ([`crate::f_true`]); NaN without an `fhat_<channel>` column.
+    pub rms_f_error_radps2: f64,
 }
 
 /// All figures of one run.
@@ -79,7 +85,7 @@ pub struct ChannelFigures {
 pub struct Summary {
     /// Scenario name.
     pub scenario: String,
-    /// Ticks in the trace.
+    /// Samples in the trace (N + 1 for N steps: t = 0 to the duration).
     pub ticks: u64,
     /// Loop period, s.
     pub dt_s: f64,
@@ -91,6 +97,15 @@ pub struct Summary {
     pub alpha_peak_deg: f64,
     /// Largest |p|, |q|, |r| from `RATES_FROM_S` on, deg/s.
     pub body_rate_max_late_dps: [f64; 3],
+    /// Altitude at the end minus at the start, ft.
+    pub altitude_change_ft: f64,
+    /// Airspeed at the end minus at the start, m/s (0 under the speed hold).
+    pub airspeed_change_mps: f64,
+    /// Energy height (h + VT^2 / 2g) at the end minus at the start, ft: the mechanical energy per unit weight the
+    /// flight gained. Under the speed hold it is all altitude, supplied by the hold where the engine falls short.
+    pub energy_height_change_ft: f64,
+    /// The airspeed was held (VT_dot = 0) by the scenario's speed hold.
+    pub speed_hold: bool,
     /// aileron, elevator, rudder.
     pub surfaces: Vec<SurfaceFigures>,
     /// Oscillations in the last `LIMIT_CYCLE_WINDOW_S`, per signal examined.
@@ -193,6 +208,14 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
         })
         .collect();
     let alpha = col(trace, "alpha_deg");
+    let (alt, vt) = (col(trace, "alt_ft"), col(trace, "vt_mps"));
+    let change = |x: &[f64]| x.last().zip(x.first()).map_or(f64::NAN, |(b, a)| b - a);
+    let energy_height_ft = |k: usize| {
+        let vt_fps = vt[k] / crate::units::M_PER_FT;
+        alt[k] + vt_fps * vt_fps / (2.0 * crate::plant::constants::GRAVITY_FPS2)
+    };
+    let energy_height_change_ft =
+        if alt.is_empty() { f64::NAN } else { energy_height_ft(alt.len() - 1) - energy_height_ft(0) };
     // NaN when the run ends before `from`: there is nothing to judge, which is not the same as zero.
     let late = |name: &str, from: f64| -> f64 {
         let late: Vec<f64> =
@@ -215,11 +238,9 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
                 Some(m) => pos.windows(2).filter(|w| (w[1] - w[0]).abs() >= m * (1.0 - 1e-9)).count() as u64,
                 None => 0,
             };
-            let ticks_at_position_limit = pos
-                .iter()
-                .zip(&cmd)
-                .filter(|(p, c)| (**p >= lim.max && **c > lim.max) || (**p <= lim.min && **c < lim.min))
-                .count() as u64;
+            let on_stop = |p: f64, stop: f64| (p - stop).abs() <= 1e-9 * stop.abs().max(1.0);
+            let ticks_at_position_limit =
+                pos.iter().filter(|p| on_stop(**p, lim.max) || on_stop(**p, lim.min)).count() as u64;
             let late_rates = rates.iter().zip(&t).filter(|(_, ti)| **ti >= RMS_RATE_FROM_S).map(|(r, _)| *r);
             SurfaceFigures {
                 name: name.to_string(),
@@ -238,10 +259,12 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
             .map(|s| oscillation(s, &t, &col(trace, s)))
             .collect();
     // Only a sliding-mode controller (ours) reports S and W; a user's controller has other diagnostics.
+    let f_true = crate::f_true::from_trace(trace, scenario);
     let channels = CHANNELS
         .iter()
-        .filter(|ch| trace.index(&format!("s_{ch}")).is_some())
-        .map(|ch| {
+        .enumerate()
+        .filter(|(_, ch)| trace.index(&format!("s_{ch}")).is_some())
+        .map(|(c, ch)| {
             let s = col(trace, &format!("s_{ch}"));
             let w_cols: Vec<usize> = trace
                 .columns
@@ -253,7 +276,11 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
             let max_abs_w = trace.rows.iter().flat_map(|r| w_cols.iter().map(move |i| r[*i].abs())).fold(0.0, f64::max);
             // Rows without a command (a lost controller) carry NaN: report the last known |S|.
             let final_abs_s = s.iter().rev().find(|v| v.is_finite()).map_or(f64::NAN, |v| v.abs());
-            ChannelFigures { name: ch.to_string(), final_abs_s, max_abs_w }
+            let rms_f_error_radps2 = match (&f_true, trace.column(&format!("fhat_{ch}"))) {
+                (Some(f), Some(fhat)) => crate::f_true::rms_error(&fhat, &f[c]),
+                _ => f64::NAN,
+            };
+            ChannelFigures { name: ch.to_string(), final_abs_s, max_abs_w, rms_f_error_radps2 }
         })
         .collect();
     Summary {
@@ -264,6 +291,10 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
         alpha_final_deg: alpha.last().copied().unwrap_or(f64::NAN),
         alpha_peak_deg: alpha.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         body_rate_max_late_dps: [late("p_dps", RATES_FROM_S), late("q_dps", RATES_FROM_S), late("r_dps", RATES_FROM_S)],
+        altitude_change_ft: change(&alt),
+        airspeed_change_mps: change(&vt),
+        energy_height_change_ft,
+        speed_hold: scenario.plant.speed_hold,
         surfaces,
         limit_cycle: oscillations.iter().any(|o| o.sustained),
         oscillations,
@@ -278,7 +309,11 @@ fn opt_s(v: Option<f64>) -> String {
 impl Summary {
     /// Readable report.
     pub fn to_text(&self) -> String {
-        let mut out = format!("scenario {}: {} ticks of {} s\n", self.scenario, self.ticks, self.dt_s);
+        let t_end = self.ticks.saturating_sub(1) as f64 * self.dt_s;
+        let mut out = format!(
+            "scenario {}: {} samples every {} s, t = 0 to {t_end:.2} s\n",
+            self.scenario, self.ticks, self.dt_s
+        );
         out += "  angle   set    initial  final     settle(0.5deg)  settle(2%)\n";
         for a in &self.angles {
             out += &format!(
@@ -298,6 +333,13 @@ impl Summary {
         } else {
             out += &format!("  max |p|, |q|, |r| after {RATES_FROM_S} s: {p:.3}, {q:.3}, {r:.3} deg/s\n");
         }
+        out += &format!(
+            "  flight path: altitude {:+.1} ft, airspeed {:+.2} m/s{}, energy height {:+.1} ft\n",
+            self.altitude_change_ft,
+            self.airspeed_change_mps,
+            if self.speed_hold { " (speed hold)" } else { "" },
+            self.energy_height_change_ft
+        );
         out += "  surface   peak(deg)  rate-limit  pos-limit  rms rate(dps)  after 5 s  rms cmd rate\n";
         for s in &self.surfaces {
             // NaN: the run ended before the window began, or had no command to differentiate.
@@ -324,7 +366,10 @@ impl Summary {
             if found.is_empty() { "none".to_string() } else { format!("YES: {}", found.join("; ")) }
         );
         for c in &self.channels {
-            out += &format!("  channel {:<6} final |S| {:.2e}  max |W| {:.2e}\n", c.name, c.final_abs_s, c.max_abs_w);
+            out += &format!(
+                "  channel {:<6} final |S| {:.2e}  max |W| {:.2e}  rms(f_hat - f) {:.3} rad/s^2\n",
+                c.name, c.final_abs_s, c.max_abs_w, c.rms_f_error_radps2
+            );
         }
         out
     }

@@ -1,12 +1,16 @@
-//! The closed-loop trace: one row per tick, named columns, written as `trace.csv`. The single-process loop, the
+//! The closed-loop trace: one row per sample, named columns, written as `trace.csv`. The single-process loop, the
 //! logger process and the plots all speak this one format.
+//!
+//! Row convention: a run of N steps has N + 1 rows, t = 0 to the duration. Row k holds the state (and load factors)
+//! at t_k, the command the controller computed from it, and the actuator positions held over [t_k, t_k+1)
+//! (zero-order hold): the deflections that acted on the aircraft from that sample on, row 0 included.
 
 use std::io::{BufRead, Write};
 use std::path::Path;
 
 /// Columns every closed-loop trace starts with, in order: the plant's state and surfaces and the command, whatever
 /// the controller. The controller's diagnostics follow (see [`attitude_diagnostic_names`] for ours).
-pub const LOOP_COLUMNS: [&str; 18] = [
+pub const LOOP_COLUMNS: [&str; 20] = [
     "t_s",
     "phi_deg",
     "theta_deg",
@@ -18,6 +22,8 @@ pub const LOOP_COLUMNS: [&str; 18] = [
     "r_dps",
     "vt_mps",
     "alt_ft",
+    "nz_g",
+    "ny_g",
     "aileron_cmd_deg",
     "elevator_cmd_deg",
     "rudder_cmd_deg",
@@ -200,8 +206,8 @@ mod tests {
     #[test]
     fn columns_list_weights_per_channel_and_node() {
         let c = columns(5);
-        assert_eq!(c.len(), 24 + 15);
-        assert_eq!(c[24], "w_phi_1");
+        assert_eq!(c.len(), 26 + 15);
+        assert_eq!(c[26], "w_phi_1");
         assert_eq!(c.last().unwrap(), "w_psi_5");
     }
 }

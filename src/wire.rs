@@ -11,7 +11,7 @@ use iceoryx2::prelude::ZeroCopySend;
 /// The layout version as a literal, so that the type names can be built from it with `concat!`.
 macro_rules! layout_version {
     () => {
-        2
+        3
     };
 }
 
@@ -126,6 +126,10 @@ pub const FLAG_SATURATED: u32 = 1 << 1;
 pub const FLAG_FAILSAFE: u32 = 1 << 2;
 /// At least one surface moved at its rate limit during this tick.
 pub const FLAG_RATE_LIMITED: u32 = 1 << 3;
+/// `PlantSample::flags`: the plant's last sample of the run, after its last tick (the end of the scenario, or a
+/// state that left the model's envelope). It repeats that tick's state with the surfaces the actuators took under
+/// that tick's command, which no later sample would carry; a controller does not answer it.
+pub const FLAG_END_OF_RUN: u32 = 1 << 5;
 
 /// `CommandSample::flags`: the controller's command for this tick was refused (NaN, infinity or out of range) and
 /// not sent; the plant holds its last valid command, as for a missing one.
@@ -166,10 +170,18 @@ pub struct PlantSample with header {
     /// The 13 states in `F16State` order and book units: vt_fps, alpha_rad, beta_rad, phi_rad, theta_rad, psi_rad,
     /// p_radps, q_radps, r_radps, north_ft, east_ft, alt_ft, power_pct.
     pub state: [f64; 13],
-    /// Surface positions after the actuators, deg: aileron, elevator, rudder.
+    /// Surface positions the actuators hold now, deg: aileron, elevator, rudder. Sampled when the tick begins,
+    /// before this tick's command acts: the deflections held over the step from the previous tick to this one
+    /// (the trace's row of the previous tick shows them). In the end-of-run sample: those the last tick's command
+    /// set.
     pub surfaces_deg: [f64; 3],
-    /// Throttle after its limits, 0..1.
+    /// Throttle after its limits, 0..1 (sampled as the surfaces).
     pub throttle: f64,
+    /// Normal load factor, g: the accelerometer 15 ft ahead of the CG along body -z (specific force: 1 g in level
+    /// flight, cos(theta) when trimmed).
+    pub nz_g: f64,
+    /// Lateral load factor, g: the same accelerometer along body +y (out the right wing).
+    pub ny_g: f64,
     /// Simulated time of this state, s.
     pub t_sim_s: f64,
     /// `FLAG_*` bits.
@@ -240,7 +252,7 @@ pub struct LogAckSample with header {
 // would only be caught at run time.
 const _: () = assert!(core::mem::size_of::<SampleHeader>() == 40);
 const _: () = assert!(core::mem::align_of::<SampleHeader>() == 8);
-const _: () = assert!(core::mem::size_of::<PlantSample>() == 192);
+const _: () = assert!(core::mem::size_of::<PlantSample>() == 208);
 const _: () = assert!(core::mem::align_of::<PlantSample>() == 8);
 const _: () = assert!(core::mem::size_of::<CommandSample>() == 608);
 const _: () = assert!(core::mem::size_of::<LogAckSample>() == 48);
@@ -333,6 +345,8 @@ impl PlantSample {
             state: [0.0; 13],
             surfaces_deg: [0.0; 3],
             throttle: 0.0,
+            nz_g: 0.0,
+            ny_g: 0.0,
             t_sim_s: 0.0,
             flags: 0,
             _pad: 0,
@@ -350,7 +364,7 @@ impl PlantSample {
             &["surfaces_deg[0] aileron", "surfaces_deg[1] elevator", "surfaces_deg[2] rudder"],
             &self.surfaces_deg,
         )?;
-        check_finite(t, &["throttle", "t_sim_s"], &[self.throttle, self.t_sim_s])
+        check_finite(t, &["throttle", "nz_g", "ny_g", "t_sim_s"], &[self.throttle, self.nz_g, self.ny_g, self.t_sim_s])
     }
 }
 
@@ -480,16 +494,16 @@ mod tests {
     #[test]
     fn sizes_alignment_and_type_names_are_the_contract() {
         assert_eq!(core::mem::size_of::<SampleHeader>(), 40);
-        assert_eq!(core::mem::size_of::<PlantSample>(), 192);
+        assert_eq!(core::mem::size_of::<PlantSample>(), 208);
         assert_eq!(core::mem::size_of::<CommandSample>(), 608);
         assert_eq!(core::mem::align_of::<PlantSample>(), 8);
         assert_eq!(core::mem::align_of::<CommandSample>(), 8);
         // Safety of `type_name`: only reads the string the derive generated.
         unsafe {
-            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v2");
-            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v2");
-            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v2");
-            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v2");
+            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v3");
+            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v3");
+            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v3");
+            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v3");
         }
         for name in [PlantSample::TYPE_NAME, CommandSample::TYPE_NAME, SampleHeader::TYPE_NAME, LogAckSample::TYPE_NAME]
         {
@@ -528,7 +542,7 @@ mod tests {
         let mut p = PlantSample::zeroed();
         p.state[3] = f64::NAN;
         let msg = p.validate().unwrap_err().to_string();
-        assert!(msg.contains("silrig::PlantSample::v2") && msg.contains("state[3] phi_rad"), "{msg}");
+        assert!(msg.contains("silrig::PlantSample::v3") && msg.contains("state[3] phi_rad"), "{msg}");
         assert!(msg.contains("NaN"), "{msg}");
 
         let mut p = PlantSample::zeroed();

@@ -173,7 +173,7 @@ fn the_default_suite_passes_with_our_controller() {
     }
     let timing_failed = cases.iter().any(|case| !c.failed(case).is_empty());
     assert_eq!(c.code, Some(if timing_failed { 1 } else { 0 }), "{}{}", c.stdout, c.stderr);
-    assert_eq!(c.measured("lockstep-determinism", "deterministic"), "identical over 1000 ticks");
+    assert_eq!(c.measured("lockstep-determinism", "deterministic"), "identical over 1001 ticks");
     assert!(c.measured("realtime-deadline", "sense_to_actuate_p99").contains("x OS floor"));
     assert!(c.stdout.contains("verdict: "), "{}", c.stdout);
     c.junit_agrees();
@@ -198,7 +198,8 @@ fn a_healthy_python_controller_passes_and_each_injected_fault_fails_only_its_cri
     );
     assert_eq!(nan.code, Some(1), "{}{}", nan.stdout, nan.stderr);
     assert_eq!(nan.failed("lockstep-flight"), BTreeSet::from(["no_invalid_command".to_string()]), "{}", nan.stdout);
-    assert_eq!(nan.measured("lockstep-flight", "no_invalid_command"), "5 invalid");
+    // Ticks 100, 200, ..., 600: a 6 s flight has its samples at t = 0 to 6.00 s.
+    assert_eq!(nan.measured("lockstep-flight", "no_invalid_command"), "6 invalid");
     assert!(nan.stdout.contains("reproduce:  silrig check tests/check/judge-a-controller.toml --case lockstep-flight"));
     nan.junit_agrees();
     nan.finish();

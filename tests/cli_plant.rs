@@ -75,6 +75,28 @@ fn bad_rows_name_the_line_and_column_and_exit_2_keeping_earlier_rows() {
 }
 
 #[test]
+fn states_outside_the_models_envelope_stop_naming_the_line_and_column_never_printing_nan() {
+    // VT = 0 divides by zero; 150,000 ft is above the atmosphere's 142,248 ft, where its density formula gives NaN.
+    let good = "500,0.5,-0.2,-1,1,-1,0.7,-0.8,0.9,1000,900,10000,90,0.9,20,-15,-20,0.4";
+    for (bad_row, needle) in [
+        (
+            "0,0.5,-0.2,-1,1,-1,0.7,-0.8,0.9,1000,900,10000,90,0.9,20,-15,-20,0.4",
+            "line 3, column `vt_fps`: outside the model's envelope: vt_fps = 0: the airspeed must be above 0",
+        ),
+        (
+            "500,0.5,-0.2,-1,1,-1,0.7,-0.8,0.9,1000,900,150000,90,0.9,20,-15,-20,0.4",
+            "line 3, column `alt_ft`: outside the model's envelope: alt_ft = 150000: above the atmosphere model's ceiling",
+        ),
+    ] {
+        let (code, out, err) = derivative(&format!("{HEADER}\n{good}\n{bad_row}\n{good}\n"));
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(needle), "stderr {err:?} lacks {needle:?}");
+        assert_eq!(out.lines().count(), 2, "the header and the good row stay written: {out}");
+        assert!(!out.to_lowercase().contains("nan"), "{out}");
+    }
+}
+
+#[test]
 fn trim_command_prints_text_and_json() {
     let out = Command::new(env!("CARGO_BIN_EXE_silrig"))
         .args(["trim", "--airspeed-mps", "150", "--altitude-ft", "25000", "--json"])

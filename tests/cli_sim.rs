@@ -33,7 +33,7 @@ fn sim_without_a_config_runs_the_embedded_default_and_is_reproducible() {
         assert!(x == y, "{file} differs between two runs");
     }
     let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(a.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["ticks"], 1000);
+    assert_eq!(summary["ticks"], 1001);
     assert_eq!(summary["limit_cycle"], false);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -48,6 +48,23 @@ fn compare_prints_runs_side_by_side_with_the_chattering_ratio() {
     let ratio: f64 = ratio_line.split_whitespace().last().unwrap().trim_end_matches('x').parse().unwrap();
     assert!(ratio > 10.0, "{ratio_line}");
     assert!(dir.join("paper-ideal-sign").join("trace.csv").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_flight_leaving_the_models_envelope_exits_1_saying_when_and_keeps_its_files() {
+    let dir = temp_dir("envelope");
+    let tumble = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenarios/tumble.toml");
+    let o = silrig(&["sim", tumble.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("the state left the model's envelope at t = 2.18 s: `beta_rad`"), "{err}");
+    let trace = std::fs::read_to_string(dir.join("trace.csv")).unwrap();
+    assert_eq!(trace.lines().count() - 1, 218, "rows t = 0 to 2.17 s");
+    assert!(!trace.contains("NaN"));
+    for file in ["summary.json", "fig1_states.png"] {
+        assert!(dir.join(file).exists(), "{file}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

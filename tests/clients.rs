@@ -153,13 +153,13 @@ fn robust() -> String {
 fn flies_lockstep_to_the_set_points(test: &str, controller_cmd: &str) {
     let r = run(test, &["--mode", "lockstep", "--controller-cmd", controller_cmd, &robust()]);
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
-    assert_eq!(r.counter("plant", "ticks"), 1000);
+    assert_eq!(r.counter("plant", "ticks"), 1001);
     assert_eq!(r.counter("plant", "command_misses"), 0, "a tick went unanswered");
-    assert_eq!(r.counter("controller", "commands_sent"), 1000);
+    assert_eq!(r.counter("controller", "commands_sent"), 1001);
     assert_eq!(r.counter("controller", "commands_refused"), 0);
     assert_eq!(r.process("controller")["ended"], "completed");
     let (header, rows) = r.trace();
-    assert_eq!(rows.len(), 1000);
+    assert_eq!(rows.len(), 1001);
     assert!(header.ends_with(&["err_phi_deg".into(), "err_theta_deg".into(), "err_psi_deg".into()]), "{header:?}");
     let last = rows.last().unwrap();
     for (angle, setpoint) in [("phi_deg", 0.0), ("theta_deg", 10.0), ("psi_deg", 0.0)] {
@@ -174,7 +174,7 @@ fn flies_lockstep_to_the_set_points(test: &str, controller_cmd: &str) {
 fn flies_realtime(test: &str, controller_cmd: &str) {
     let r = run(test, &["--duration-s", "2", "--controller-cmd", controller_cmd, &robust()]);
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
-    assert_eq!(r.counter("plant", "ticks"), 200);
+    assert_eq!(r.counter("plant", "ticks"), 201);
     assert!(r.counter("controller", "commands_sent") > 150);
     let latencies = |p: &str| r.process(p)["latencies"].as_array().unwrap().clone();
     let count = |p: &str, name: &str| {
@@ -184,7 +184,7 @@ fn flies_realtime(test: &str, controller_cmd: &str) {
     assert!(count("controller", "compute") > 150);
     assert!(count("controller", "ipc_plant_to_controller") > 150);
     assert!(count("plant", "sense_to_actuate") > 150);
-    assert_eq!(r.trace().1.len(), 200);
+    assert_eq!(r.trace().1.len(), 201);
     r.finish();
 }
 
@@ -233,7 +233,7 @@ fn in_loop_faults_and_a_restart_reach_a_users_controller() {
     let joined = r.event("controller", "controller-joined").expect("the restarted controller joined the flight");
     assert!(joined["detail"].as_str().unwrap().contains("checkpointed state"), "{joined}");
     assert!(r.event("plant", "controller-recovered").is_some());
-    assert_eq!(r.trace().1.len(), 300, "the logger lost rows");
+    assert_eq!(r.trace().1.len(), 301, "the logger lost rows");
     r.finish();
 }
 
@@ -273,7 +273,7 @@ fn a_controller_started_by_hand_joins_an_external_run() {
     let report: Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     let controller = report["processes"].as_array().unwrap().iter().find(|p| p["process"] == "controller").unwrap();
     assert_eq!(controller["ended"], "completed", "the controller saw the run end by itself");
-    assert_eq!(controller["counters"]["commands_sent"], 1000);
+    assert_eq!(controller["counters"]["commands_sent"], 1001);
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -296,10 +296,10 @@ fn a_client_of_another_layout_or_sample_size_is_refused_by_name() {
     let env = [("SILRIG_RUN_ID", "nobody"), ("SILRIG_OUT", out.to_str().unwrap())];
     let (code, err) = client("layout", &env);
     assert_eq!(code, Some(2));
-    assert!(err.contains("status -2") && err.contains("version 9") && err.contains("version 2"), "{err}");
+    assert!(err.contains("status -2") && err.contains("version 10") && err.contains("version 3"), "{err}");
     let (code, err) = client("size", &env);
     assert_eq!(code, Some(2));
-    assert!(err.contains("status -2") && err.contains("plant sample is 184 bytes, the contract's is 192"), "{err}");
+    assert!(err.contains("status -2") && err.contains("plant sample is 200 bytes, the contract's is 208"), "{err}");
     std::fs::remove_dir_all(&out).unwrap();
 }
 
@@ -345,7 +345,7 @@ fn a_second_controller_is_refused_and_the_run_goes_on() {
     assert!(err.contains("status -5") && err.contains("second controller"), "{err}");
     let o = wait_with_watchdog(launcher, Duration::from_secs(60));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
-    assert_eq!(std::fs::read_to_string(out.join("trace.csv")).unwrap().lines().count(), 301);
+    assert_eq!(std::fs::read_to_string(out.join("trace.csv")).unwrap().lines().count(), 302);
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -362,7 +362,7 @@ fn nan_commands_are_refused_counted_held_and_reported() {
     assert!(r.event("controller", "command-accepted").is_some());
     // Every tick was still recorded, and no NaN reached the trace.
     let (header, rows) = r.trace();
-    assert_eq!(rows.len(), 1000);
+    assert_eq!(rows.len(), 1001);
     let aileron_cmd = header.iter().position(|h| h == "aileron_cmd_deg").unwrap();
     assert!(rows.iter().all(|row| row[aileron_cmd].is_finite()));
     r.finish();
@@ -376,7 +376,7 @@ fn a_controller_that_never_answers_leaves_the_plant_in_failsafe() {
     assert!(r.event("plant", "failsafe-engaged").is_some());
     assert!(r.counter("plant", "failsafe_ticks") > 100);
     assert!(r.counter("controller", "samples_unanswered") > 100);
-    assert_eq!(r.trace().1.len(), 200);
+    assert_eq!(r.trace().1.len(), 201);
     r.finish();
 }
 

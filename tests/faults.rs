@@ -90,7 +90,7 @@ fn controller_sigkill_and_restart_failsafe_then_resume_with_the_gap_marked() {
     let (code, text, r, out) =
         run("ctl-kill", &["--duration-s", "4", "--fault", "controller:kill@1.5s,restart_after=0.5s"]);
     assert_eq!(code, Some(0), "{text}");
-    assert_eq!(process(&r, "plant")["counters"]["ticks"], 400, "the plant kept ticking");
+    assert_eq!(process(&r, "plant")["counters"]["ticks"], 401, "the plant kept ticking");
     let ev = events(&out);
     let stale = first(&ev, "plant", "controller-stale").expect("detected");
     let failsafe = first(&ev, "plant", "failsafe-engaged").expect("failsafe");
@@ -107,7 +107,7 @@ fn controller_sigkill_and_restart_failsafe_then_resume_with_the_gap_marked() {
     );
     assert!(process(&r, "plant")["counters"]["failsafe_ticks"].as_u64().unwrap() > 0);
     // The log is complete, with the gap marked in the rows and in timing.csv.
-    assert_eq!(trace_rows(&out), 400);
+    assert_eq!(trace_rows(&out), 401);
     let without = process(&r, "logger")["counters"]["rows_without_command"].as_u64().unwrap();
     assert!(without > 0);
     let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();
@@ -129,7 +129,7 @@ fn plant_sigkill_and_restart_continues_the_flight_from_its_checkpoint() {
     // Every tick is logged exactly once, in order.
     let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
     let t: Vec<f64> = trace.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
-    assert_eq!(t.len(), 300);
+    assert_eq!(t.len(), 301);
     assert!(t.windows(2).all(|w| w[1] > w[0]), "ticks out of order or repeated");
     assert_eq!(r["failures"].as_array().unwrap().len(), 0);
 }
@@ -142,10 +142,10 @@ fn logger_stopped_500_ms_loses_no_sample() {
     for c in ["plant_samples_lost", "command_samples_lost", "plant_ticks_missing"] {
         assert_eq!(logger["counters"][c], 0, "{c}");
     }
-    assert_eq!(trace_rows(&out), 300);
+    assert_eq!(trace_rows(&out), 301);
     // Every command the controller sent is in the log (on a loaded machine the controller may skip a stale sample,
     // which leaves a row without a command that the logger did not lose).
-    let with_command = 300 - logger["counters"]["rows_without_command"].as_u64().unwrap();
+    let with_command = 301 - logger["counters"]["rows_without_command"].as_u64().unwrap();
     assert_eq!(with_command, process(&r, "controller")["counters"]["commands_sent"].as_u64().unwrap());
     assert!(first(&events(&out), "launcher", "fault-ended").is_some());
 }
@@ -162,7 +162,7 @@ fn controller_stopped_500_ms_is_detected_and_recovered() {
     // end its loop.
     let ended = process(&r, "controller")["ended"].as_str().unwrap().to_string();
     assert!(ended == "completed" || ended == "terminated by signal", "{ended}");
-    assert_eq!(trace_rows(&out), 300);
+    assert_eq!(trace_rows(&out), 301);
 }
 
 /// Runs of ticks published back to back (two consecutive intervals under 1 ms): what catching up in a burst looks
@@ -184,7 +184,7 @@ fn a_15_ms_delay_in_the_plant_is_one_overrun_and_no_burst() {
     // 5 ms late, less than a period, so it runs at once (the only back-to-back publish) and the loop is back on
     // its grid.
     assert!(plant["counters"]["overruns"].as_u64().unwrap() >= 1);
-    assert_eq!(plant["counters"]["ticks"], 200);
+    assert_eq!(plant["counters"]["ticks"], 201);
     assert!(first(&events(&out), "plant", "overrun").is_some());
     assert!(first(&events(&out), "plant", "fault-injected").is_some());
     assert_eq!(bursts(&out), 0);
@@ -201,7 +201,7 @@ fn a_35_ms_delay_counts_the_periods_without_a_tick_instead_of_bursting() {
     assert!(plant["counters"].get("skipped_ticks").is_none());
     assert!(plant["counters"]["overruns"].as_u64().unwrap() >= 1);
     assert_eq!(bursts(&out), 0);
-    assert_eq!(plant["counters"]["ticks"], 200, "the flight still has all its ticks");
+    assert_eq!(plant["counters"]["ticks"], 201, "the flight still has all its ticks");
 }
 
 #[test]

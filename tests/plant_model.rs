@@ -153,6 +153,25 @@ fn trim_at_150_mps_and_25000_ft_leaves_no_derivative() {
 }
 
 #[test]
+fn load_factors_match_the_reference_data_and_level_flight() {
+    // The textbook prints no Nz or Ny for its check case; the reference data's README (shared/f16-data, table of
+    // the check case) gives AeroBench's at the accelerometer 15 ft ahead of the CG: Nz 4.794348736 (xcg 0.4) and
+    // 4.276448778 (0.35), Ny 0.8585245608 and 0.8080944575. AeroBench's Nz is the load factor minus 1 g.
+    let (x, u) = check_case();
+    for (xcg, nz_aerobench, ny) in [(0.4, 4.794348736, 0.8585245608), (0.35, 4.276448778, 0.8080944575)] {
+        let (_, out) = F16Model::new(xcg).derivative_with_outputs(&x, &u, &ExternalForcing::default());
+        assert!((out.nz_g - (nz_aerobench + 1.0)).abs() < 1e-8, "xcg {xcg}: nz {}", out.nz_g);
+        assert!((out.ny_g - ny).abs() < 1e-8, "xcg {xcg}: ny {}", out.ny_g);
+    }
+    // Trimmed wings-level flight: the accelerometer reads gravity's body-z share, cos(theta), and nothing sideways.
+    let model = F16Model::default();
+    let trim = trim_level_flight(&model, m_to_ft(150.0), 25_000.0).unwrap();
+    let (_, out) = model.derivative_with_outputs(&trim.state, &trim.controls, &ExternalForcing::default());
+    assert!((out.nz_g - trim.state.theta_rad.cos()).abs() < 1e-9, "nz {} theta {}", out.nz_g, trim.state.theta_rad);
+    assert!(out.ny_g.abs() < 1e-12, "ny {}", out.ny_g);
+}
+
+#[test]
 fn trimmed_aircraft_flies_60_s_hands_off_with_theta_drift_below_0_01_deg() {
     let model = F16Model::default();
     let trim = trim_level_flight(&model, m_to_ft(150.0), 25_000.0).unwrap();
@@ -195,6 +214,9 @@ fn speed_hold_freezes_vt_and_leaves_the_other_derivatives() {
     let held = model.derivative(&x, &u, &ExternalForcing { speed_hold: true, ..Default::default() });
     assert_eq!(held[0], 0.0);
     assert_eq!(&free[1..], &held[1..]);
+    let no_sideslip = model.derivative(&x, &u, &ExternalForcing { sideslip_hold: true, ..Default::default() });
+    assert_eq!(no_sideslip[2], 0.0);
+    assert_eq!((&free[..2], &free[3..]), (&no_sideslip[..2], &no_sideslip[3..]));
 }
 
 #[test]

@@ -206,7 +206,7 @@ fn two_runs_started_together_never_share_a_folder_or_a_run_id() {
         );
         let winner = if a.status.success() { &out1 } else { &out2 };
         let rows = std::fs::read_to_string(winner.join("trace.csv")).unwrap().lines().count() - 1;
-        assert_eq!(rows, 150, "one row per tick, written once");
+        assert_eq!(rows, 151, "one row per tick, written once");
         no_shared_memory_left(&id1);
         no_shared_memory_left(&id2);
     }

@@ -115,7 +115,7 @@ fn a_2_s_realtime_run_completes_with_every_report_field() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{text}\n{}", String::from_utf8_lossy(&o.stderr));
     assert!(text.contains("plant.wake_lateness") && text.contains("os-floor.wake_lateness"), "{text}");
-    check_report(&report(&out), 200, Mode::RealtimeWithBaseline);
+    check_report(&report(&out), 201, Mode::RealtimeWithBaseline);
     for f in ["trace.csv", "timing.csv", "latency.png", "fig1_states.png", "plant.sense_to_actuate.hgrm"] {
         assert!(out.join(f).exists(), "{f}");
     }
@@ -132,12 +132,38 @@ fn lockstep_matches_sim(scenario: &str, test: &str) {
     let child = silrig_run(&[scenario, "--mode", "lockstep", "--run-id", &id, "--out", rig_out.to_str().unwrap()]);
     let o = wait_with_watchdog(child, Duration::from_secs(60));
     assert!(o.status.success(), "{}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-    check_report(&report(&rig_out), 1000, Mode::Lockstep);
+    check_report(&report(&rig_out), 1001, Mode::Lockstep);
     diagnostics_were_announced(&rig_out);
     let sim = Command::new(SILRIG).args(["sim", scenario, "--out", sim_out.to_str().unwrap()]).output().unwrap();
     assert!(sim.status.success());
     let (a, b) = (std::fs::read(rig_out.join("trace.csv")).unwrap(), std::fs::read(sim_out.join("trace.csv")).unwrap());
     assert!(a == b, "lockstep trace differs from silrig sim for {scenario}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_flight_leaving_the_models_envelope_ends_the_run_with_the_reason_and_the_same_trace_as_sim() {
+    let tumble = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenarios/tumble.toml").display().to_string();
+    let dir = temp_dir("envelope");
+    let id = run_id("envelope");
+    let (rig_out, sim_out) = (dir.join("rig"), dir.join("sim"));
+    let child = silrig_run(&[&tumble, "--mode", "lockstep", "--run-id", &id, "--out", rig_out.to_str().unwrap()]);
+    let o = wait_with_watchdog(child, Duration::from_secs(60));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("the state left the model's envelope at t = 2.18 s: `beta_rad`"), "{stdout}");
+    let r = report(&rig_out);
+    assert!(process(&r, "plant")["ended"].as_str().unwrap().contains("left the model's envelope"));
+    for peer in ["controller", "logger"] {
+        assert_eq!(process(&r, peer)["ended"], "completed", "{peer} saw the run end");
+    }
+    // The plant's end-of-run sample completed the last row: the rig logged exactly what `silrig sim` flew.
+    let sim = Command::new(SILRIG).args(["sim", &tumble, "--out", sim_out.to_str().unwrap()]).output().unwrap();
+    assert_eq!(sim.status.code(), Some(1));
+    let (a, b) = (std::fs::read(rig_out.join("trace.csv")).unwrap(), std::fs::read(sim_out.join("trace.csv")).unwrap());
+    assert!(a == b, "the rig's trace differs from silrig sim's");
+    assert_eq!(String::from_utf8_lossy(&a).lines().count() - 1, 218);
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -217,8 +243,8 @@ fn two_rigs_with_different_run_ids_do_not_interfere() {
         String::from_utf8_lossy(&oa.stdout),
         String::from_utf8_lossy(&ob.stdout)
     );
-    check_report(&report(&a), 1000, Mode::Lockstep);
-    check_report(&report(&b), 1000, Mode::Lockstep);
+    check_report(&report(&a), 1001, Mode::Lockstep);
+    check_report(&report(&b), 1001, Mode::Lockstep);
     for (out, name) in [(&a, "paper"), (&b, "robust")] {
         let sim_out = dir.join(format!("sim-{name}"));
         Command::new(SILRIG).args(["sim", &config(name), "--out", sim_out.to_str().unwrap()]).output().unwrap();
@@ -254,7 +280,7 @@ fn a_second_controller_for_the_same_run_is_refused() {
     // The running rig is unharmed.
     let o = wait_with_watchdog(child, Duration::from_secs(60));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
-    check_report(&report(&out), 300, Mode::Realtime);
+    check_report(&report(&out), 301, Mode::Realtime);
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -147,13 +147,14 @@ pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index
         Ok(s) => s,
         Err(e) => return (infeasible(format!("sampled scenario out of range: {e}")), None),
     };
-    let trace = match crate::sim::run(&case) {
-        Ok(t) => t,
+    let (trace, left_envelope) = match crate::sim::fly(&case) {
+        Ok(flight) => flight,
         Err(e) => return (infeasible(e.to_string()), None),
     };
     let summary = summarize(&trace, &case);
     let judgements = judge_flight(criteria, &case, Some(&trace), Some(&summary));
-    let departed = departure(&trace);
+    // A flight that left the model's envelope ended there; if it had not left the data before, that is when.
+    let departed = departure(&trace).or_else(|| left_envelope.map(|e| (e.t_s, e.error.to_string())));
     let mut failed: Vec<String> = judgements.iter().filter(|j| !j.passed).map(|j| j.criterion.clone()).collect();
     // A departure fails the case whatever the criteria say: past it the model has no data.
     if let Some((t, why)) = &departed {

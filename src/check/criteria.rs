@@ -141,14 +141,13 @@ fn run_completed(scenario: &Scenario, runs: &[RunEvidence]) -> Judgement {
         let which = if runs.len() > 1 { format!("run {}: ", i + 1) } else { String::new() };
         problems.extend(run.report.failures.iter().map(|f| format!("{which}{f}")));
         let last_t = run.trace.as_ref().and_then(|t| t.column("t_s")).and_then(|t| t.last().copied());
-        // The trace's last row is the start of the last tick.
-        flown_s = flown_s.min(last_t.map_or(0.0, |t| t + scenario.timing.dt_s));
+        // The trace's last row is the end of the flight (t = duration for a whole one).
+        flown_s = flown_s.min(last_t.unwrap_or(0.0));
         match last_t {
             None => problems.push(format!("{which}the logger recorded no tick")),
-            Some(t) if t < duration - 1.5 * scenario.timing.dt_s => problems.push(format!(
-                "{which}the logged flight ended at {:.2} s of {duration:.2} s",
-                t + scenario.timing.dt_s
-            )),
+            Some(t) if t < duration - 0.5 * scenario.timing.dt_s => {
+                problems.push(format!("{which}the logged flight ended at {t:.2} s of {duration:.2} s"))
+            }
             Some(_) => {}
         }
     }
@@ -344,7 +343,8 @@ fn resume_jump(scenario: &Scenario, report: &RigReport, trace: Option<&Trace>, m
     let commands: Vec<Vec<f64>> = COMMAND_COLUMNS.iter().map(|c| column(c)).collect();
     let actual: Vec<Vec<f64>> = SURFACE_COLUMNS.iter().map(|c| column(c)).collect();
     let has_command = |k: usize| commands.iter().all(|c| c.get(k).is_some_and(|v| v.is_finite()));
-    // Per comeback: the first command after it against where the surface actually was at that tick.
+    // Per comeback: the first command after it against where the surface actually was when it came (the deflection
+    // held up to that tick: the row before's).
     let mut worst: Option<(f64, &str, f64)> = None;
     let mut resumed = 0;
     for (i, back_s) in comebacks(scenario, Some(Role::Controller)) {
@@ -355,7 +355,7 @@ fn resume_jump(scenario: &Scenario, report: &RigReport, trace: Option<&Trace>, m
         let Some(k) = (0..t.len()).find(|&k| t[k] >= back_s - 1e-9 && has_command(k)) else { continue };
         resumed += 1;
         for (c, name) in COMMAND_COLUMNS.iter().enumerate() {
-            let step = (commands[c][k] - actual[c][k]).abs();
+            let step = (commands[c][k] - actual[c][k.saturating_sub(1)]).abs();
             if worst.is_none_or(|w| step > w.0) {
                 worst = Some((step, name, t[k]));
             }

@@ -5,6 +5,11 @@
 pub const SEA_LEVEL_DENSITY_SLUGFT3: f64 = 2.377e-3;
 /// Altitude above which the temperature is constant, ft.
 pub const STRATOSPHERE_ALT_FT: f64 = 35_000.0;
+/// Fall of the temperature ratio per foot of altitude (the book's 0.703e-5 1/ft).
+pub const TEMPERATURE_RATIO_LAPSE_PER_FT: f64 = 0.703e-5;
+/// Top of the model's atmosphere, ft (about 142,248 ft): there the temperature ratio, and with it the density,
+/// reaches 0; above it the density formula raises a negative number to a fractional power (NaN).
+pub const ATMOSPHERE_CEILING_FT: f64 = 1.0 / TEMPERATURE_RATIO_LAPSE_PER_FT;
 
 /// Air data at one flight condition.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,7 +29,7 @@ pub struct AirData {
 /// Density, temperature and speed of sound at `alt_ft`; Mach and dynamic pressure at `vt_fps`.
 #[inline]
 pub fn air_data(vt_fps: f64, alt_ft: f64) -> AirData {
-    let tfac = 1.0 - 0.703e-5 * alt_ft;
+    let tfac = 1.0 - TEMPERATURE_RATIO_LAPSE_PER_FT * alt_ft;
     // The temperature breaks at 35,000 ft; the density formula deliberately does not (book, Appendix A).
     let temperature_degr = if alt_ft >= STRATOSPHERE_ALT_FT { 390.0 } else { 519.0 * tfac };
     let density_slugft3 = SEA_LEVEL_DENSITY_SLUGFT3 * tfac.powf(4.14);

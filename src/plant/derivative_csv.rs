@@ -1,7 +1,11 @@
 //! `silrig plant derivative`: state and control rows in, state-derivative rows out, for engineers who cross-check
-//! their own F-16 implementation against this one. Every value is printed so that it parses back to the same f64.
+//! their own F-16 implementation against this one. Every value is printed so that it parses back to the same f64;
+//! a row the model cannot take (outside [`super::envelope`]) stops the run naming its line and column, so no NaN is
+//! ever printed.
 
-use super::{ControlInputs, ExternalForcing, F16Model, F16State, STATE_DOT_NAMES, STATE_LEN, STATE_NAMES, aero};
+use super::{
+    ControlInputs, ExternalForcing, F16Model, F16State, STATE_DOT_NAMES, STATE_LEN, STATE_NAMES, aero, envelope,
+};
 use std::io::{BufRead, Write};
 
 /// Input columns besides the 13 states.
@@ -42,6 +46,25 @@ pub enum DerivativeCsvError {
         problem: &'static str,
         /// The cell text.
         text: String,
+    },
+    /// A row whose state lies outside the model's envelope ([`envelope::check`]).
+    #[error("line {line}, column `{column}`: outside the model's envelope: {problem}")]
+    OutsideEnvelope {
+        /// 1-based line number.
+        line: usize,
+        /// The state column at fault.
+        column: &'static str,
+        /// What is wrong, with the value.
+        problem: String,
+    },
+    /// The model gave a non-finite derivative for a row inside the envelope (a state the envelope does not yet
+    /// know to refuse): refused rather than printed.
+    #[error("line {line}: the model gives a non-finite `{derivative}` for this row")]
+    NonFinite {
+        /// 1-based line number.
+        line: usize,
+        /// The derivative column.
+        derivative: &'static str,
     },
     /// Reading or writing failed.
     #[error("i/o: {0}")]
@@ -115,7 +138,15 @@ pub fn run(input: impl BufRead, mut output: impl Write) -> Result<usize, Derivat
             aileron_deg: values[15],
             rudder_deg: values[16],
         };
+        envelope::check(&state).map_err(|e| DerivativeCsvError::OutsideEnvelope {
+            line: line_no,
+            column: e.state,
+            problem: format!("{} = {}: {}", e.state, e.value, e.problem),
+        })?;
         let d = F16Model::new(xcg).derivative(&state, &controls, &ExternalForcing::default());
+        if let Some(i) = d.iter().position(|v| !v.is_finite()) {
+            return Err(DerivativeCsvError::NonFinite { line: line_no, derivative: STATE_DOT_NAMES[i] });
+        }
         let row: Vec<String> = d.iter().map(|v| format!("{v:?}")).collect();
         writeln!(output, "{}", row.join(","))?;
         rows += 1;

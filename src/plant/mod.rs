@@ -2,13 +2,15 @@
 //! the CG position as a parameter. Pure math: no I/O, no clock, no allocation per call.
 //!
 //! Module map: [`tables`] (data and lookup rule), [`atmosphere`], [`aero`] (coefficient build-up), [`engine`]
-//! (gearing, power lag, thrust), [`trim`] (steady wings-level flight), [`derivative_csv`] (the CSV cross-check
-//! tool). The equations themselves are in [`F16Model::derivative`].
+//! (gearing, power lag, thrust), [`envelope`] (the states the equations are defined at), [`trim`] (steady
+//! wings-level flight), [`derivative_csv`] (the CSV cross-check tool). The equations themselves are in
+//! [`F16Model::derivative`], with the load factors Nz, Ny beside them ([`F16Model::derivative_with_outputs`]).
 
 pub mod aero;
 pub mod atmosphere;
 pub mod derivative_csv;
 pub mod engine;
+pub mod envelope;
 pub mod tables;
 pub mod trim;
 
@@ -35,6 +37,9 @@ pub mod constants {
     pub const JXZ_SLUGFT2: f64 = 982.0;
     /// Engine angular momentum along body x, slug ft^2/s.
     pub const ENGINE_MOMENTUM_SLUGFT2PS: f64 = 160.0;
+    /// Station of the accelerometer whose readings are the load factors Nz, Ny: this far ahead of the CG on the body
+    /// x axis, ft (the book's and AeroBench's 15 ft).
+    pub const ACCELEROMETER_AHEAD_OF_CG_FT: f64 = 15.0;
     /// Inertia coefficients c1..c9 as rounded in the reference implementation.
     pub const C: [f64; 9] = [-0.770, 0.02755, 1.055e-4, 1.642e-6, 0.9604, 1.759e-2, 1.792e-5, -0.7336, 1.587e-5];
 }
@@ -165,6 +170,9 @@ pub struct ExternalForcing {
     /// Freeze the airspeed (VT_dot = 0), as the paper's scenario assumes. The other derivatives are unchanged: a
     /// force along the velocity that cancels VT_dot leaves alpha_dot and beta_dot as they are.
     pub speed_hold: bool,
+    /// Freeze the sideslip (beta_dot = 0), as the paper's derivation assumes ("the sideslip is assumed to be
+    /// zero"): a side force outside the book's model. For reproducing the paper's figures, not for flying.
+    pub sideslip_hold: bool,
     /// Disturbance added to the Euler-angle accelerations (phi, theta, psi), rad/s^2; mapped to the body rates
     /// through T(phi, theta)^-1.
     pub euler_accel_disturbance_radps2: [f64; 3],
@@ -201,15 +209,21 @@ impl Default for F16Model {
     }
 }
 
-/// Body-axis outputs computed alongside the derivative.
+/// Outputs computed alongside the derivative.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AirDataOutputs {
+pub struct ModelOutputs {
     /// Dynamic pressure, lbf/ft^2.
     pub qbar_psf: f64,
     /// Mach number.
     pub mach: f64,
     /// Thrust, lbf.
     pub thrust_lbf: f64,
+    /// Normal load factor, g: what an accelerometer at [`constants::ACCELEROMETER_AHEAD_OF_CG_FT`] reads along
+    /// body -z (specific force, so gravity is not in it), divided by g. In trimmed wings-level flight it is
+    /// cos(theta), close to 1 (thrust along body x carries the rest of the weight). AeroBench's `Nz` is this minus 1.
+    pub nz_g: f64,
+    /// Lateral load factor, g: the same accelerometer along body +y (out the right wing), divided by g.
+    pub ny_g: f64,
 }
 
 impl F16Model {
@@ -234,14 +248,14 @@ impl F16Model {
         self.derivative_with_outputs(x, u, forcing).0
     }
 
-    /// State derivative plus air data and thrust.
+    /// State derivative plus air data, thrust and the load factors.
     #[inline]
     pub fn derivative_with_outputs(
         &self,
         x: &F16State,
         u: &ControlInputs,
         forcing: &ExternalForcing,
-    ) -> ([f64; STATE_LEN], AirDataOutputs) {
+    ) -> ([f64; STATE_LEN], ModelOutputs) {
         use constants::*;
         let [c1, c2, c3, c4, c5, c6, c7, c8, c9] = C;
         let he = ENGINE_MOMENTUM_SLUGFT2PS;
@@ -303,7 +317,7 @@ impl F16Model {
         let dum = u_fps * u_fps + w_fps * w_fps;
         let vt_dot_free = (u_fps * udot + v_fps * vdot + w_fps * wdot) / vt;
         let alpha_dot = (u_fps * wdot - w_fps * udot) / dum;
-        let beta_dot = (vt * vdot - v_fps * vt_dot_free) * cbta / dum;
+        let beta_dot = if forcing.sideslip_hold { 0.0 } else { (vt * vdot - v_fps * vt_dot_free) * cbta / dum };
 
         // Kinematics.
         let phi_dot = p + (sth / cth) * (qsph + r * cph);
@@ -338,13 +352,20 @@ impl F16Model {
         let east_dot = u_fps * s2 + v_fps * s4 + w_fps * s7;
         let alt_dot = u_fps * sth - v_fps * s5 - w_fps * s8;
 
+        // Load factors: the specific force of the aerodynamic forces (thrust acts along body x only) at the
+        // accelerometer station, whose angular-acceleration terms are q_dot and r_dot times its lever arm (the
+        // centripetal terms are neglected, as the book does); in g, z positive up.
+        let station = ACCELEROMETER_AHEAD_OF_CG_FT;
+        let nz_g = -(rmqs * k.cz - station * q_dot) / g;
+        let ny_g = (rmqs * k.cy + station * r_dot) / g;
+
         let vt_dot = if forcing.speed_hold { 0.0 } else { vt_dot_free };
         (
             [
                 vt_dot, alpha_dot, beta_dot, phi_dot, theta_dot, psi_dot, p_dot, q_dot, r_dot, north_dot, east_dot,
                 alt_dot, power_dot,
             ],
-            AirDataOutputs { qbar_psf: air.qbar_psf, mach: air.mach, thrust_lbf: thrust },
+            ModelOutputs { qbar_psf: air.qbar_psf, mach: air.mach, thrust_lbf: thrust, nz_g, ny_g },
         )
     }
 }

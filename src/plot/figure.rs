@@ -57,25 +57,42 @@ pub(super) struct Series {
     pub(super) label: String,
     pub(super) points: Vec<(f64, f64)>,
     pub(super) stroke: Stroke,
+    /// Whether its values set the panel's y range; a series that does not is drawn cut at the range's edges
+    /// ([`clip_to_y`]), so one far-off series cannot flatten the others.
+    pub(super) sets_y_range: bool,
 }
 
 impl Series {
     pub(super) fn solid(label: &str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
-        Self { label: label.to_string(), points, stroke: Stroke { color, width: 2, dash: Dash::Solid } }
+        Self::new(label, points, Stroke { color, width: 2, dash: Dash::Solid })
+    }
+
+    /// A thin solid line: a reference drawn under the data it is compared with.
+    pub(super) fn thin(label: &str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Self::new(label, points, Stroke { color, width: 1, dash: Dash::Solid })
     }
 
     pub(super) fn command(label: &str, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
-        Self { label: label.to_string(), points, stroke: Stroke { color, width: 1, dash: Dash::Dashed } }
+        Self::new(label, points, Stroke { color, width: 1, dash: Dash::Dashed })
     }
 
     pub(super) fn cycled(label: &str, points: Vec<(f64, f64)>, k: usize) -> Self {
-        Self { label: label.to_string(), points, stroke: Stroke::cycled(k) }
+        Self::new(label, points, Stroke::cycled(k))
     }
 
-    /// Runs of consecutive finite points.
-    pub(super) fn segments(&self) -> impl Iterator<Item = &[(f64, f64)]> {
-        self.points.split(|(x, y)| !(x.is_finite() && y.is_finite())).filter(|s| !s.is_empty())
+    fn new(label: &str, points: Vec<(f64, f64)>, stroke: Stroke) -> Self {
+        Self { label: label.to_string(), points, stroke, sets_y_range: true }
     }
+
+    /// The same series, drawn within the y range the panel's other series set and cut at its edges.
+    pub(super) fn within_others_range(self) -> Self {
+        Self { sets_y_range: false, ..self }
+    }
+}
+
+/// Runs of consecutive finite points.
+pub(super) fn segments(points: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> {
+    points.split(|(x, y)| !(x.is_finite() && y.is_finite())).filter(|s| !s.is_empty())
 }
 
 pub(super) struct LegendEntry {
@@ -143,6 +160,16 @@ impl Panel {
         self.series.iter().flat_map(|s| s.points.iter()).filter(|(x, y)| x.is_finite() && y.is_finite())
     }
 
+    /// The finite points of the series that set the y range (all of them if none does).
+    fn finite_ranging(&self) -> impl Iterator<Item = &(f64, f64)> {
+        let any = self.series.iter().any(|s| s.sets_y_range);
+        self.series
+            .iter()
+            .filter(move |s| s.sets_y_range || !any)
+            .flat_map(|s| s.points.iter())
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+    }
+
     pub(super) fn x_range(&self) -> (f64, f64) {
         let (lo, hi) = min_max(self.finite().map(|p| p.0));
         match self.x_scale {
@@ -156,7 +183,7 @@ impl Panel {
     }
 
     pub(super) fn y_range(&self) -> (f64, f64) {
-        let (lo, hi) = min_max(self.finite().map(|p| p.1));
+        let (lo, hi) = min_max(self.finite_ranging().map(|p| p.1));
         let (Some(lo), Some(hi)) = (lo, hi) else { return (-1.0, 1.0) };
         if self.y_from_zero && lo >= 0.0 && hi > 0.0 {
             return (0.0, hi * 1.05);
@@ -185,6 +212,34 @@ fn padded(lo: f64, hi: f64) -> (f64, f64) {
     }
     let pad = 0.05 * hi - 0.05 * lo;
     ((lo - pad).max(-f64::MAX), (hi + pad).min(f64::MAX))
+}
+
+/// `points` cut at y = lo and y = hi: a line that leaves the band ends on its edge (at the interpolated crossing)
+/// and resumes where it comes back; the points outside become NaN breaks.
+pub(super) fn clip_to_y(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<(f64, f64)> {
+    let inside = |y: f64| (lo..=hi).contains(&y);
+    // Where the line from a to b crosses the edge on the side of `outside` (a y beyond the band).
+    let edge = |(x0, y0): (f64, f64), (x1, y1): (f64, f64), outside: f64| {
+        let y = if outside > hi { hi } else { lo };
+        (x0 + (x1 - x0) * (y - y0) / (y1 - y0), y)
+    };
+    let gap = (f64::NAN, f64::NAN);
+    let mut out = Vec::with_capacity(points.len());
+    for (k, &p) in points.iter().enumerate() {
+        let prev = k.checked_sub(1).map(|j| points[j]).filter(|q| q.0.is_finite() && q.1.is_finite());
+        let finite = p.0.is_finite() && p.1.is_finite();
+        match (prev, finite) {
+            (Some(q), true) if inside(q.1) && !inside(p.1) => out.extend([edge(q, p, p.1), gap]),
+            (Some(q), true) if !inside(q.1) && inside(p.1) => out.extend([edge(q, p, q.1), p]),
+            // From one side of the band to the other in one step: the piece across it.
+            (Some(q), true) if !inside(q.1) && !inside(p.1) && (q.1 > hi) != (p.1 > hi) => {
+                out.extend([edge(q, p, q.1), edge(q, p, p.1), gap])
+            }
+            (_, true) if inside(p.1) => out.push(p),
+            _ => out.push(gap),
+        }
+    }
+    out
 }
 
 /// Where the legend of the whole figure goes.
@@ -255,8 +310,35 @@ mod tests {
     #[test]
     fn nan_splits_a_series_into_segments() {
         let s = Series::solid("x", vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0), (3.0, 4.0)], BLACK);
-        let segs: Vec<_> = s.segments().collect();
+        let segs: Vec<_> = segments(&s.points).collect();
         assert_eq!(segs.len(), 2);
         assert_eq!(segs[1].len(), 2);
+    }
+
+    #[test]
+    fn a_series_off_the_range_is_left_out_of_it_and_cut_at_its_edges() {
+        let inside = Series::solid("deflection", vec![(0.0, -10.0), (1.0, 10.0)], BLACK);
+        let far = Series::command("command", vec![(0.0, 0.0), (1.0, 62.8)], BLACK).within_others_range();
+        assert_eq!(Panel::new("", "", vec![inside, far]).y_range(), (-11.0, 11.0));
+        // Out at y = 10 (x = 0.5), back in at y = 10 (x = 2.5); a jump across the band keeps the piece across it.
+        let cut =
+            clip_to_y(&[(0.0, 0.0), (1.0, 20.0), (2.0, 30.0), (3.0, 0.0), (4.0, -20.0), (5.0, 20.0)], -10.0, 10.0);
+        let text: Vec<String> = cut.iter().map(|(x, y)| format!("{x:.2},{y:.2}")).collect();
+        assert_eq!(
+            text,
+            [
+                "0.00,0.00",
+                "0.50,10.00",
+                "NaN,NaN",
+                "NaN,NaN",
+                "2.67,10.00",
+                "3.00,0.00",
+                "3.50,-10.00",
+                "NaN,NaN",
+                "4.25,-10.00",
+                "4.75,10.00",
+                "NaN,NaN"
+            ]
+        );
     }
 }

@@ -7,7 +7,8 @@
 //! with its series), then laid out once and drawn twice, by the same code, on the bitmap and the SVG backend.
 //!
 //! Data rules shared by all figures: NaN and infinite samples are skipped (the line breaks there); y ranges are the
-//! data range padded by 5 %, and a constant or all-zero series gets a small symmetric range around its value.
+//! data range padded by 5 %, and a constant or all-zero series gets a small symmetric range around its value. A
+//! series marked to stay within the others' range (fig1's commands) does not widen it and is cut at its edges.
 //!
 //! The engine: `figure.rs` (the data), `axis.rs`, `layout.rs` (pixel sizes) and `render.rs` (both backends, the font,
 //! the files). Each figure family is one file that turns trace columns (`columns.rs`) into figures: `closed_loop.rs`,

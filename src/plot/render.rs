@@ -12,7 +12,7 @@ use plotters::style::{FontStyle, register_font};
 
 use super::PlotError;
 use super::axis::Axis;
-use super::figure::{Dash, Figure, FigureLegend, LegendEntry, Panel};
+use super::figure::{Dash, Figure, FigureLegend, LegendEntry, Panel, clip_to_y, segments};
 use super::layout::{
     CAPTION_SIZE, DESC_SIZE, EVENT_ROW, EVENT_SIZE, FLAG_GAP, LEGEND_ROW, LEGEND_SAMPLE, LEGEND_SIZE, Layout,
     LegendGrid, PAD, TICK_MARK, TICK_SIZE, TITLE_SIZE, font, in_range, layout, place_event_labels, show_x_desc,
@@ -169,7 +169,14 @@ fn draw_data<DB: DrawingBackend>(
 
     for series in &panel.series {
         let style = series.stroke.style();
-        for seg in series.segments() {
+        let clipped;
+        let points = if series.sets_y_range {
+            &series.points
+        } else {
+            clipped = clip_to_y(&series.points, y.lo, y.hi);
+            &clipped
+        };
+        for seg in segments(points) {
             if let [point] = seg {
                 // A lone point (one row, or between NaNs) has no line: mark it.
                 chart.draw_series(std::iter::once(Circle::new(*point, 2, series.stroke.color.filled())))?;

@@ -1,5 +1,6 @@
-//! The figures of the paper's adaptive SMC/RBF controller: fig2 (the sliding surface `s_<ch>` and the RBF estimate
-//! `fhat_<ch>` of each channel) and fig3 (the RBF weights `w_<ch>_<k>` of each channel).
+//! The figures of the paper's adaptive SMC/RBF controller: fig2 (the sliding surface `s_<ch>` of each channel, and
+//! its RBF estimate `fhat_<ch>` beside the true lumped function f of [`crate::f_true`], as the paper's Fig. 2 sets
+//! "the estimated and true RBFNN functions" side by side) and fig3 (the RBF weights `w_<ch>_<k>` of each channel).
 
 use std::path::Path;
 
@@ -7,6 +8,7 @@ use super::PlotError;
 use super::columns::{Columns, zip};
 use super::figure::{Figure, FigureLegend, LegendEntry, Panel, Series, palette};
 use crate::trace::{CHANNELS, Trace};
+use plotters::style::RGBColor;
 
 const SLIDING: &str = "fig2_sliding";
 const WEIGHTS: &str = "fig3_weights";
@@ -14,11 +16,17 @@ const WEIGHTS: &str = "fig3_weights";
 /// The controller's figures that `trace` has columns for, each with its file stem: fig2 if it has any `s_<ch>` or
 /// `fhat_<ch>` column, fig3 if it has any `w_<ch>_<k>` column. A trace of another controller has none and gets none;
 /// a figure with only some of its columns is an error naming a missing one, as that trace is ours but damaged.
-pub(super) fn figures(trace: &Trace, out_dir: &Path, title: &str) -> Result<Vec<(Figure, &'static str)>, PlotError> {
+/// `f_true` (per channel, one value per row), when given, is drawn beside each `fhat_<ch>`.
+pub(super) fn figures(
+    trace: &Trace,
+    f_true: Option<&[Vec<f64>; 3]>,
+    out_dir: &Path,
+    title: &str,
+) -> Result<Vec<(Figure, &'static str)>, PlotError> {
     let mut figures = Vec::new();
     let sliding_column = |ch: &&str| [format!("s_{ch}"), format!("fhat_{ch}")].iter().any(|c| trace.index(c).is_some());
     if CHANNELS.iter().any(sliding_column) {
-        figures.push((sliding(trace, out_dir, title)?, SLIDING));
+        figures.push((sliding(trace, f_true, out_dir, title)?, SLIDING));
     }
     if CHANNELS.iter().any(|ch| !weight_nodes(trace, ch).is_empty()) {
         figures.push((weights(trace, out_dir, title)?, WEIGHTS));
@@ -26,8 +34,11 @@ pub(super) fn figures(trace: &Trace, out_dir: &Path, title: &str) -> Result<Vec<
     Ok(figures)
 }
 
-/// Sliding surfaces (left) and RBF estimates (right), a row per channel.
-fn sliding(trace: &Trace, out_dir: &Path, title: &str) -> Result<Figure, PlotError> {
+/// Colour of the true f, under every channel's estimate.
+const F_TRUE_COLOUR: RGBColor = RGBColor(90, 90, 90);
+
+/// Sliding surfaces (left) and RBF estimates with the true f (right), a row per channel.
+fn sliding(trace: &Trace, f_true: Option<&[Vec<f64>; 3]>, out_dir: &Path, title: &str) -> Result<Figure, PlotError> {
     let file = out_dir.join(format!("{SLIDING}.png"));
     let data = Columns::new(trace, &file, "the trace")?;
     let t = data.get("t_s")?;
@@ -37,11 +48,20 @@ fn sliding(trace: &Trace, out_dir: &Path, title: &str) -> Result<Figure, PlotErr
         let s_col = format!("s_{ch}");
         let f_col = format!("fhat_{ch}");
         let s = Series::solid(&s_col, zip(&t, &data.get(&s_col)?), palette(k));
-        let f = Series::solid(&f_col, zip(&t, &data.get(&f_col)?), palette(k));
-        let mut left = Panel::new(&format!("sliding surface, {greek} channel"), &s_col, vec![s]);
-        let mut right = Panel::new(&format!("RBF estimate, {greek} channel"), &f_col, vec![f]);
+        let mut left = Panel::new(&format!("sliding surface S, {greek} channel"), "S (rad/s)", vec![s]);
         left.legend = false;
-        right.legend = false;
+        // The true f first, so the estimate is drawn over it.
+        let mut estimates = Vec::new();
+        let caption = match f_true {
+            Some(f) => {
+                estimates.push(Series::thin("f true", zip(&t, &f[k]), F_TRUE_COLOUR));
+                format!("RBF estimate f_hat and true f = d²{greek}/dt² − g·δ − d, {greek} channel")
+            }
+            None => format!("RBF estimate f_hat, {greek} channel"),
+        };
+        estimates.push(Series::solid("f_hat", zip(&t, &data.get(&f_col)?), palette(k)));
+        let mut right = Panel::new(&caption, "rad/s²", estimates);
+        right.legend = f_true.is_some();
         cells.push(Some(left));
         cells.push(Some(right));
     }

@@ -3,9 +3,11 @@
 //! `silrig sim`) and `timing.csv` (per-tick stamps, flags and gaps) as it goes, flushing every few rows, so a kill
 //! loses at most the last unflushed batch and never corrupts earlier lines.
 //!
-//! A plant sample whose command never comes (controller late, dead or stopped) is written once a few newer
-//! samples have arrived, with empty (NaN) command columns, and counted; samples lost on the wire show up as
-//! sequence gaps.
+//! Row k's deflections are those held over [t_k, t_k+1): the plant reports them with its next sample (or, for the
+//! last tick, with its end-of-run sample), so a row is written once its command and that next sample are in. A
+//! plant sample whose command never comes (controller late, dead or stopped) is written once a few newer samples
+//! have arrived, with empty (NaN) command columns, and counted; one whose next sample never comes gets empty
+//! deflection columns; samples lost on the wire show up as sequence gaps.
 //!
 //! Phases: [`LoggerLoop::setup`] (the files, continued after a previous logger's last row), [`LoggerPorts::connect`],
 //! the event loop ([`LoggerLoop::serve`]: take samples, write the rows that are ready, acknowledge), and
@@ -19,10 +21,10 @@ use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use crate::control::SurfaceCommand;
 use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
 use crate::scenario::Scenario;
-use crate::sim::trace_row;
+use crate::sim::{HeldActuators, trace_row};
 use crate::topology::{Role, Stream};
 use crate::trace::{self, Trace};
-use crate::wire::{CommandSample, ControllerInfo, LogAckSample, PlantSample};
+use crate::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantSample};
 use iceoryx2::prelude::CallbackProgression;
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -136,7 +138,12 @@ impl Writer {
         Ok(())
     }
 
-    fn row(&mut self, plant: &Received<PlantSample>, command: Option<&Received<CommandSample>>) -> std::io::Result<()> {
+    fn row(
+        &mut self,
+        plant: &Received<PlantSample>,
+        held: &HeldActuators,
+        command: Option<&Received<CommandSample>>,
+    ) -> std::io::Result<()> {
         let snap = snapshot(&plant.sample);
         let nan = f64::NAN;
         let row = match command {
@@ -152,11 +159,11 @@ impl Writer {
                 let given = s.diagnostics();
                 let n = given.len().min(diagnostics.len());
                 diagnostics[..n].copy_from_slice(&given[..n]);
-                trace_row(&snap, &cmd, &diagnostics)
+                trace_row(&snap, held, &cmd, &diagnostics)
             }
             None => {
                 let cmd = SurfaceCommand { aileron_deg: nan, elevator_deg: nan, rudder_deg: nan };
-                trace_row(&snap, &cmd, &vec![nan; self.diagnostic_names.len()])
+                trace_row(&snap, held, &cmd, &vec![nan; self.diagnostic_names.len()])
             }
         };
         let trace = self.trace.as_mut().ok_or_else(|| std::io::Error::other("trace.csv written before its header"))?;
@@ -263,6 +270,8 @@ pub struct LoggerLoop {
     /// The last tick a previous logger of this run wrote (a restart), which this one continues after.
     resume_after: Option<u64>,
     pending_plant: BTreeMap<u64, Received<PlantSample>>,
+    /// The plant's end-of-run sample: the deflections of its last tick.
+    end: Option<Received<PlantSample>>,
     /// Commands by the tick they answer.
     pending_command: BTreeMap<u64, Received<CommandSample>>,
     /// First tick of the current run of rows written without a command.
@@ -326,6 +335,7 @@ impl LoggerLoop {
             loop_faults,
             resume_after,
             pending_plant: BTreeMap::new(),
+            end: None,
             pending_command: BTreeMap::new(),
             missing_since: None,
             announced: None,
@@ -374,7 +384,8 @@ impl LoggerLoop {
         Ok(exit)
     }
 
-    /// Take what arrived, write every row that is ready, acknowledge; true once the last tick is written.
+    /// Take what arrived, write every row that is ready, acknowledge; true once the last tick is written (the
+    /// scenario's last, or the one the end-of-run sample names).
     fn step(
         &mut self,
         inputs: &LoggerInputs,
@@ -388,7 +399,8 @@ impl LoggerLoop {
             self.writer.flush()?;
             acks.send(self.writer.last_tick.unwrap_or(0), &LogAckSample::new(self.writer.rows))?;
         }
-        Ok(self.writer.last_tick.is_some_and(|t| t + 1 >= self.ticks))
+        let end_tick = self.end.as_ref().map(|e| e.sample.header.tick);
+        Ok(self.writer.last_tick.is_some_and(|t| t >= self.ticks || end_tick.is_some_and(|e| t >= e)))
     }
 
     fn take_samples(&mut self, inputs: &LoggerInputs) -> anyhow::Result<()> {
@@ -406,7 +418,9 @@ impl LoggerLoop {
                 return;
             }
             self.rec.record(IPC_PLANT_TO_LOGGER, r.age_ns() as i64);
-            if self.resume_after.is_none_or(|t| r.sample.header.tick > t) {
+            if r.sample.flags & wire::FLAG_END_OF_RUN != 0 {
+                self.end = Some(*r);
+            } else if self.resume_after.is_none_or(|t| r.sample.header.tick > t) {
                 self.pending_plant.insert(r.sample.header.tick, *r);
             }
         })?;
@@ -453,13 +467,24 @@ impl LoggerLoop {
         self.writer.start_trace(&names)
     }
 
-    /// Write the oldest waiting plant samples, each with the command answering it; one whose command has not come
-    /// while [`MISSING_COMMAND_WINDOW`] newer samples arrived (or at the end) is written without one.
+    /// The deflections held over [t_tick, t_tick+1): those of the next plant sample, or of the end-of-run sample
+    /// when it closes this tick.
+    fn held_after(&self, tick: u64) -> Option<HeldActuators> {
+        let next = self.pending_plant.get(&(tick + 1));
+        let end = self.end.as_ref().filter(|e| e.sample.header.tick == tick);
+        next.or(end).map(|r| HeldActuators { surfaces_deg: r.sample.surfaces_deg, throttle: r.sample.throttle })
+    }
+
+    /// Write the oldest waiting plant samples, each with the command answering it and the deflections the next
+    /// sample reports; one whose command or next sample has not come while [`MISSING_COMMAND_WINDOW`] newer samples
+    /// arrived (or at the end) is written without them.
     fn write_ready_rows(&mut self, final_flush: bool) -> anyhow::Result<()> {
         while let Some((&tick, _)) = self.pending_plant.first_key_value() {
             let newest = *self.pending_plant.keys().next_back().expect("non-empty");
+            let given_up = final_flush || newest >= tick + MISSING_COMMAND_WINDOW;
             let has_command = self.pending_command.contains_key(&tick);
-            if !(has_command || final_flush || newest >= tick + MISSING_COMMAND_WINDOW) {
+            let held = self.held_after(tick);
+            if !((has_command && held.is_some()) || given_up) {
                 break;
             }
             let sample = self.pending_plant.remove(&tick).expect("present");
@@ -486,7 +511,7 @@ impl LoggerLoop {
                 }
             }
             self.start_trace(tick)?;
-            self.writer.row(&sample, command.as_ref())?;
+            self.writer.row(&sample, &held.unwrap_or(HeldActuators::UNKNOWN), command.as_ref())?;
             self.rec.count("rows_written", 1);
             // Commands answering ticks already written can no longer be used.
             self.pending_command.retain(|t, _| *t > tick);

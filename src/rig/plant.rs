@@ -1,7 +1,10 @@
 //! `silrig-plant`: the time master. Each tick it publishes the plant sample, gathers the controller's command
 //! (same-tick: waits for the answer to this tick up to a budget; next-tick: takes the answer to the previous tick),
 //! holds the last command when none is in time (a miss), moves the actuators and integrates one step with the
-//! same [`crate::sim::PlantRunner`] as `silrig sim`.
+//! same [`crate::sim::PlantRunner`] as `silrig sim`. It flies the scenario's N + 1 samples (t = 0 to the duration;
+//! the last one only moves the actuators) and ends with an end-of-run sample ([`wire::FLAG_END_OF_RUN`]) that
+//! carries the deflections of the last tick, which the logger's last row shows. A state that leaves the model's
+//! envelope ends the flight the same way, one tick early, and the process with an error.
 //!
 //! Realtime: absolute-deadline ticks with `clock_nanosleep(TIMER_ABSTIME)`; a tick that starts a whole period late
 //! is an overrun: the periods that passed without a tick are counted and never caught up in a burst. No tick number
@@ -20,7 +23,7 @@ use crate::clock::{self, TickSchedule, monotonic_ns};
 use crate::control::SurfaceCommand;
 use crate::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
 use crate::scenario::Scenario;
-use crate::sim::{ActuatorCommand, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
+use crate::sim::{ActuatorCommand, LeftEnvelope, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
 use crate::topology::{Role, Stream};
 use crate::wire::{self, CommandSample, LogAckSample, PlantSample};
 use anyhow::Context;
@@ -52,6 +55,8 @@ pub fn plant_sample(snap: &PlantSnapshot, flags: u32) -> PlantSample {
         surfaces_deg: snap.surfaces_deg,
         throttle: snap.throttle,
         t_sim_s: snap.t_s,
+        nz_g: snap.nz_g,
+        ny_g: snap.ny_g,
         flags,
         ..PlantSample::zeroed()
     }
@@ -65,6 +70,8 @@ pub fn snapshot(s: &PlantSample) -> PlantSnapshot {
         state: crate::plant::F16State::from_array(&s.state),
         surfaces_deg: s.surfaces_deg,
         throttle: s.throttle,
+        nz_g: s.nz_g,
+        ny_g: s.ny_g,
     }
 }
 
@@ -205,6 +212,8 @@ pub struct PlantLoop {
     sim_tick: u64,
     /// This stall was already counted as an overrun when the tick's work ran past the next due time.
     overrun_counted: bool,
+    /// The flight left the model's envelope in the last step.
+    left_envelope: Option<LeftEnvelope>,
 }
 
 impl PlantLoop {
@@ -271,6 +280,7 @@ impl PlantLoop {
             expected_wall_tick: 0,
             sim_tick: 0,
             overrun_counted: false,
+            left_envelope: None,
             checkpoints: realtime.then(|| super::CheckpointWriter::new(checkpoint_path.clone())),
             checkpoint_path,
             scenario,
@@ -309,16 +319,36 @@ impl PlantLoop {
         Ok(())
     }
 
-    /// Phase 3: tick until the end of the scenario or SIGTERM; returns how the loop ended.
+    /// Phase 3: tick until the end of the scenario (ticks 0..=N), a state outside the model's envelope, or SIGTERM;
+    /// returns how the loop ended. The first two end with the end-of-run sample.
     pub fn fly(&mut self, ports: &mut PlantPorts) -> anyhow::Result<String> {
         self.start_clock();
-        while self.sim_tick < self.ticks {
+        loop {
             if signals::termination_requested() {
                 return Ok("terminated by signal".into());
             }
             self.tick(ports)?;
+            if let Some(exit) = self.left_envelope.take() {
+                self.events.emit(Some(self.sim_tick), "left-envelope", exit.to_string());
+                self.publish_end(ports)?;
+                let last_t = self.runner.snapshot().t_s;
+                return Ok(format!("error: {exit}; the flight is logged up to t = {last_t:.2} s"));
+            }
+            if self.sim_tick >= self.ticks {
+                self.publish_end(ports)?;
+                return Ok("completed".into());
+            }
+            self.sim_tick += 1;
         }
-        Ok("completed".into())
+    }
+
+    /// The end-of-run sample: the last tick's snapshot once the actuators have moved under its command, so the
+    /// logger's last row shows the deflections that tick set (what every other row takes from the next sample).
+    /// Never dropped by a loop fault.
+    fn publish_end(&mut self, ports: &mut PlantPorts) -> anyhow::Result<()> {
+        let snap = self.runner.snapshot();
+        ports.publisher.send(snap.tick, &plant_sample(&snap, self.flags | wire::FLAG_END_OF_RUN))?;
+        Ok(())
     }
 
     /// Tick 0 is due two periods from now, giving the peers' first wake-ups a margin.
@@ -348,7 +378,6 @@ impl PlantLoop {
             *self.rec.command_age_ticks.entry(self.sim_tick - a).or_insert(0) += 1;
         }
         self.step(held);
-        self.sim_tick += 1;
         self.rec.count("ticks", 1);
         Ok(())
     }
@@ -528,11 +557,18 @@ impl PlantLoop {
         }
     }
 
-    /// Move the actuators and integrate one step; count an overrun if the work ran past the next tick's due time;
-    /// save a checkpoint every few ticks (realtime).
+    /// Move the actuators and integrate one step (only move them at the last tick); count an overrun if the work
+    /// ran past the next tick's due time; save a checkpoint every few ticks (realtime).
     fn step(&mut self, held: bool) {
         let t0 = monotonic_ns();
-        let hits = self.runner.step(&self.applied);
+        let hits = if self.sim_tick < self.ticks {
+            self.runner.step(&self.applied).unwrap_or_else(|exit| {
+                self.left_envelope = Some(exit);
+                StepHits::default()
+            })
+        } else {
+            self.runner.actuate(&self.applied)
+        };
         self.rec.record(STEP_EXEC, (monotonic_ns() - t0) as i64);
         self.flags = step_flags(&hits, held) | if self.watchdog.in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
         if self.realtime {

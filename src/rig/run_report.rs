@@ -93,7 +93,8 @@ pub(super) fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scen
     if report.control.is_some() {
         let trace = Trace::load(&out.join("trace.csv"))?;
         // Rows without a command (a lost controller) have NaN command columns, which the plots skip.
-        crate::plot::plot_closed_loop(&trace, out, &crate::outputs::plot_title(scenario))?;
+        let f_true = crate::f_true::from_trace(&trace, scenario);
+        crate::plot::plot_closed_loop(&trace, f_true.as_ref(), out, &crate::outputs::plot_title(scenario))?;
     }
     let mut series: Vec<(String, Vec<(f64, f64)>)> = report
         .processes

@@ -19,7 +19,7 @@ use crate::clock::monotonic_ns;
 use crate::ipc::{self, IpcError, StreamPublisher, StreamService, StreamSubscriber, WaitOutcome};
 use crate::scenario::Scenario;
 use crate::topology::{Role, Stream};
-use crate::wire::{CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, PlantSample, WireSample};
+use crate::wire::{self, CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, PlantSample, WireSample};
 use std::time::Duration;
 
 /// How long a controller joining a running plant blends from the current surface positions to its command, s.
@@ -63,6 +63,8 @@ pub enum StopReason {
 }
 
 /// What [`ControllerSession::next_sample`] gives.
+// The sample is handed over by value once per tick: boxing it would allocate in the loop.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Next {
     /// A plant sample to answer with one [`ControllerSession::send`].
@@ -260,6 +262,8 @@ pub struct ControllerSession {
     ended: Option<String>,
     /// It gave up waiting for a plant: no launcher will clean the run's namespace, so [`Self::finish`] does.
     no_rig: bool,
+    /// The plant's end-of-run sample came: the run is over.
+    plant_ended: bool,
     // Dropped last: the services and ports above belong to it.
     _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
 }
@@ -342,6 +346,7 @@ impl ControllerSession {
             opened_ns: monotonic_ns(),
             ended: None,
             no_rig: false,
+            plant_ended: false,
             plant_stream,
             samples,
             commands,
@@ -409,7 +414,7 @@ impl ControllerSession {
             if signals::termination_requested() {
                 return Ok(self.stop(StopReason::TerminationRequested));
             }
-            if self.samples.stats().finished_notices > 0 {
+            if self.samples.stats().finished_notices > 0 || self.plant_ended {
                 return Ok(self.stop(StopReason::RunEnded));
             }
             match self.samples.wait(self.stale_after)? {
@@ -438,14 +443,19 @@ impl ControllerSession {
         let mut newest = None;
         let mut fresh = 0u64;
         let mut invalid = 0u64;
+        let mut ended = false;
         self.samples.receive_all(|r| {
             if r.invalid.is_some() {
                 invalid += 1;
+            } else if r.sample.flags & wire::FLAG_END_OF_RUN != 0 {
+                // The plant's last word: nothing to answer (it repeats a tick already flown).
+                ended = true;
             } else {
                 fresh += 1;
                 newest = Some(*r);
             }
         })?;
+        self.plant_ended |= ended;
         self.rec.count("samples_invalid", invalid);
         // After a stall several samples wait; acting on stale ones would only delay the newest.
         self.rec.count("samples_skipped", fresh.saturating_sub(1));
