@@ -89,11 +89,11 @@ fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement 
         Some(a) if a <= s.within_s => None,
         Some(a) => Some(format!(
             "{axis} only stayed within {} deg of its set point from {a:.2} s on, later than the {} s allowed; \
-             closed_loop.png in the run folder shows the response",
+             fig1_states.png in the run folder shows the response",
             s.band_deg, s.within_s
         )),
         None => Some(format!(
-            "{axis} was still more than {} deg from its set point at the end of the run; closed_loop.png in the run \
+            "{axis} was still more than {} deg from its set point at the end of the run; fig1_states.png in the run \
              folder shows the response",
             s.band_deg
         )),

@@ -561,6 +561,7 @@ pub fn trace_row(
     snap: &PlantSnapshot,
     held: &HeldActuators,
     command: &SurfaceCommand,
+    flight_segment: u32,
     diagnostics: &[f64],
 ) -> Vec<f64> {
     let x = &snap.state;
@@ -586,6 +587,7 @@ pub fn trace_row(
         held.surfaces_deg[1],
         held.surfaces_deg[2],
         held.throttle,
+        f64::from(flight_segment),
     ]);
     row.extend_from_slice(diagnostics);
     row
@@ -654,7 +656,8 @@ pub fn run(s: &Scenario) -> Result<Trace, SimError> {
             plant.actuate(&acting);
             Ok(())
         };
-        trace.rows.push(trace_row(&snap, &plant.held(), &surfaces, &diagnostics));
+        // One process, one flight: never a discontinuity.
+        trace.rows.push(trace_row(&snap, &plant.held(), &surfaces, 0, &diagnostics));
         if let Err(exit) = stepped {
             return Err(SimError::LeftEnvelope { exit, trace: Box::new(trace) });
         }

@@ -10,7 +10,7 @@ use std::path::Path;
 
 /// Columns every closed-loop trace starts with, in order: the plant's state and surfaces and the command, whatever
 /// the controller. The controller's diagnostics follow (see [`attitude_diagnostic_names`] for ours).
-pub const LOOP_COLUMNS: [&str; 20] = [
+pub const LOOP_COLUMNS: [&str; 21] = [
     "t_s",
     "phi_deg",
     "theta_deg",
@@ -31,6 +31,9 @@ pub const LOOP_COLUMNS: [&str; 20] = [
     "elevator_deg",
     "rudder_deg",
     "throttle",
+    // 0 until the first flight discontinuity, then one more at each: a restarted plant flew ticks again, and rows
+    // from here come from its flight (the rig's logger; `silrig sim` always writes 0).
+    "flight_segment",
 ];
 
 /// Controller channels in column-name form.
@@ -206,8 +209,8 @@ mod tests {
     #[test]
     fn columns_list_weights_per_channel_and_node() {
         let c = columns(5);
-        assert_eq!(c.len(), 26 + 15);
-        assert_eq!(c[26], "w_phi_1");
+        assert_eq!(c.len(), 27 + 15);
+        assert_eq!(c[27], "w_phi_1");
         assert_eq!(c.last().unwrap(), "w_psi_5");
     }
 }

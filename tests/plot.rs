@@ -78,6 +78,7 @@ fn synthetic(rows: usize, phase: f64) -> Trace {
                     "rudder_cmd_deg" => 2.0,
                     "rudder_deg" => 2.0 * (1.0 - (-5.0 * t).exp()),
                     "throttle" => 0.2586,
+                    "flight_segment" => 0.0,
                     "s_phi" => s(1.0, 2.0) * (-0.3 * t).exp(),
                     "s_theta" => s(0.3, 1.5) * (-0.2 * t).exp(),
                     "s_psi" => 0.0,

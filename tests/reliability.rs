@@ -376,6 +376,20 @@ fn a_plant_restarted_between_two_checkpoints_marks_where_the_flights_join() {
     let logger: &serde_json::Value =
         report["processes"].as_array().unwrap().iter().find(|p| p["process"] == "logger").unwrap();
     assert_eq!(logger["counters"]["flight_discontinuities"], 1);
+    // The trace itself marks the join: flight_segment steps from 0 to 1 at the discontinuity's row.
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let header: Vec<&str> = trace.lines().next().unwrap().split(',').collect();
+    let (t_col, seg_col) = (0, header.iter().position(|c| *c == "flight_segment").expect("a flight_segment column"));
+    let rows: Vec<(f64, f64)> = trace
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[t_col].parse().unwrap(), c[seg_col].parse().unwrap())
+        })
+        .collect();
+    let at_s = report["discontinuities"][0]["at_s"].as_f64().unwrap();
+    assert!(rows.iter().all(|(t, seg)| *seg == if *t + 1e-9 < at_s { 0.0 } else { 1.0 }), "segments: {rows:?}");
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -124,6 +124,8 @@ struct Writer {
     last_tick: Option<u64>,
     /// The plant sample of the last row written (its epoch tells which plant life flew it).
     last_written: Option<PlantSample>,
+    /// The trace's `flight_segment`: one more at each flight discontinuity.
+    flight_segment: u32,
 }
 
 impl Writer {
@@ -159,11 +161,11 @@ impl Writer {
                 let given = s.diagnostics();
                 let n = given.len().min(diagnostics.len());
                 diagnostics[..n].copy_from_slice(&given[..n]);
-                trace_row(&snap, held, &cmd, &diagnostics)
+                trace_row(&snap, held, &cmd, self.flight_segment, &diagnostics)
             }
             None => {
                 let cmd = SurfaceCommand { aileron_deg: nan, elevator_deg: nan, rudder_deg: nan };
-                trace_row(&snap, held, &cmd, &vec![nan; self.diagnostic_names.len()])
+                trace_row(&snap, held, &cmd, self.flight_segment, &vec![nan; self.diagnostic_names.len()])
             }
         };
         let trace = self.trace.as_mut().ok_or_else(|| std::io::Error::other("trace.csv written before its header"))?;
@@ -294,6 +296,9 @@ impl LoggerLoop {
         // What a previous logger of this run wrote, if anything.
         let previous = Trace::load(&args.out.join("trace.csv")).ok();
         let resume_after = previous.as_ref().and_then(|p| last_logged_tick(p, scenario.timing.dt_s));
+        // A restarted logger continues the segment count where its predecessor's last row left it.
+        let previous_segment =
+            previous.as_ref().and_then(|p| Some(p.rows.last()?[p.index("flight_segment")?])).map_or(0, |s| s as u32);
         if let Some(t) = resume_after {
             events.emit(Some(t), "logger-resumed", format!("continuing trace.csv after tick {t}"));
         }
@@ -307,6 +312,7 @@ impl LoggerLoop {
             rows: 0,
             last_tick: resume_after,
             last_written: None,
+            flight_segment: previous_segment,
         };
         // A previous logger of this run started the trace: continue under its header.
         if let Some(previous) = previous {
@@ -566,6 +572,7 @@ impl LoggerLoop {
             r.first_tick, r.first_tick
         );
         self.rec.count("flight_discontinuities", 1);
+        self.writer.flight_segment += 1;
         self.events.emit(Some(tick), "flight-discontinuity", detail);
     }
 
