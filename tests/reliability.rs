@@ -60,6 +60,12 @@ fn wait_until_ticking(out: &Path) {
     }
 }
 
+/// The `t_s` column of the run's trace.
+fn trace_times(out: &Path) -> Vec<f64> {
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    trace.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect()
+}
+
 fn pid_of(out: &Path, role: &str, launcher: u32) -> u32 {
     let exe = format!("silrig-{role}");
     *children_of(launcher)
@@ -173,8 +179,7 @@ fn a_plant_restarted_after_an_unplanned_kill_continues_from_its_checkpoint() {
     let events = std::fs::read_to_string(out.join("events.jsonl")).unwrap();
     assert!(events.contains("\"plant-resumed\""), "no resume from a checkpoint:\n{events}");
     // No splice: the logged time only moves forward, and the flight does not jump back to its start.
-    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
-    let t: Vec<f64> = trace.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    let t = trace_times(&out);
     assert!(t.windows(2).all(|w| w[1] > w[0]), "the trace's time goes back");
     assert!(*t.last().unwrap() > 3.9, "the flight reached its end");
     no_shared_memory_left(&id);
@@ -408,8 +413,7 @@ fn a_damaged_plant_checkpoint_stops_the_restart_rather_than_flying_again_from_th
     assert_eq!(o.status.code(), Some(1), "{text}");
     assert!(text.contains("cannot resume") && text.contains("plant.checkpoint.json"), "{text}");
     // Nothing of a second flight was spliced in: the logged time only moves forward and stops at the kill.
-    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
-    let t: Vec<f64> = trace.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    let t = trace_times(&out);
     assert!(t.windows(2).all(|w| w[1] > w[0]), "the trace's time goes back");
     assert!(*t.last().unwrap() < 1.2, "rows after the kill: {}", t.last().unwrap());
     no_shared_memory_left(&id);
