@@ -69,6 +69,11 @@ enum Command {
     /// check.json and check.junit.xml. Exit status 0: every case passed; 1: a case failed; 2: nothing could be
     /// judged (a malformed suite, a controller command that cannot run).
     Check(silrig::check::CheckOptions),
+    /// Fly a controller against a recorded flight: the recorded plant samples, tick by tick in lockstep, to our
+    /// controller or yours (--controller-cmd), and compare its commands with the recorded ones. Exit status 0: every
+    /// compared value within --tolerance (default: bit-identical); 1: a divergence (the first is printed, with a
+    /// table of the largest difference per field); 2: the recording or the controller could not be used.
+    Replay(silrig::replay::ReplayOptions),
     /// Print the wire contract a peer of the rig must match, or write it as a C header or a Python ctypes module.
     Contract {
         /// Write the C header (C11 or C++11) to this file.
@@ -235,6 +240,13 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 return Ok(ExitCode::from(130));
             }
             if !verdict.passed {
+                return Ok(ExitCode::FAILURE);
+            }
+        }
+        Command::Replay(opts) => {
+            let outcome = silrig::replay::replay(&opts)?;
+            print!("{}", outcome.to_text());
+            if !outcome.passed() {
                 return Ok(ExitCode::FAILURE);
             }
         }

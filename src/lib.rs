@@ -30,6 +30,8 @@ pub mod judge;
 pub mod outputs;
 pub mod plant;
 pub mod plot;
+pub mod recording;
+pub mod replay;
 pub mod rig;
 pub mod rng;
 pub mod scenario;

@@ -1,7 +1,8 @@
 //! `silrig-logger`: subscribes to the plant and command streams with queues deep enough to absorb a 1 s stall,
-//! pairs each plant sample with the command answering it, and writes `trace.csv` (the same columns and values as
-//! `silrig sim`) and `timing.csv` (per-tick stamps, flags and gaps) as it goes, flushing every few rows, so a kill
-//! loses at most the last unflushed batch and never corrupts earlier lines.
+//! pairs each plant sample with the command answering it, and writes each row, as it goes, to its sinks
+//! ([`crate::recording`]): `trace.csv` (the same columns and values as `silrig sim`), `timing.csv` (per-tick stamps,
+//! flags and gaps) and the MCAP recording (the samples as received, for viewers and replay). Sinks are flushed every
+//! few rows, so a kill loses at most the last unflushed batch and never corrupts earlier rows.
 //!
 //! Row k's deflections are those held over [t_k, t_k+1): the plant reports them with its next sample (or, for the
 //! last tick, with its end-of-run sample), so a row is written once its command and that next sample are in. A
@@ -20,6 +21,9 @@ use super::plant::snapshot;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use crate::control::SurfaceCommand;
 use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
+use crate::recording::csv::CsvSink;
+use crate::recording::mcap_file::McapSink;
+use crate::recording::{LoggedRow, RecordingMeta, RowSink};
 use crate::scenario::Scenario;
 use crate::sim::{HeldActuators, trace_row};
 use crate::topology::{Role, Stream};
@@ -27,9 +31,6 @@ use crate::trace::{self, Trace};
 use crate::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantSample};
 use iceoryx2::prelude::CallbackProgression;
 use std::collections::BTreeMap;
-use std::fs::{File, OpenOptions};
-use std::io::Write;
-use std::path::{Path, PathBuf};
 
 /// A plant sample waits this many newer samples for its command before it is written without one.
 pub const MISSING_COMMAND_WINDOW: u64 = 10;
@@ -39,85 +40,12 @@ pub const FLUSH_EVERY_ROWS: u64 = 10;
 const IPC_PLANT_TO_LOGGER: usize = 0;
 const IPC_COMMAND_TO_LOGGER: usize = 1;
 
-/// Columns of `timing.csv`.
-pub const TIMING_COLUMNS: [&str; 12] = [
-    "tick",
-    "plant_seq",
-    "plant_epoch",
-    "t_plant_send_ns",
-    "t_plant_recv_ns",
-    "plant_flags",
-    "command_seq",
-    "command_epoch",
-    "t_command_send_ns",
-    "t_command_recv_ns",
-    "compute_ns",
-    "command_missing",
-];
-
-/// A CSV file the logger appends whole rows to, in batches. A batch the disk does not take whole (a full disk) is
-/// cut back out, so the file only ever holds whole rows; the error names the file.
-struct RowFile {
-    path: PathBuf,
-    file: File,
-    /// Rows not written yet.
-    pending: String,
-    /// The file's length at its last whole row, bytes.
-    whole_len: u64,
-}
-
-impl RowFile {
-    /// Open `name` in `dir` for appending; a new file gets `header` first. Appending is what lets a restarted
-    /// logger continue a run's log without overwriting anything.
-    fn open(dir: &Path, name: &str, header: &str) -> std::io::Result<Self> {
-        let path = dir.join(name);
-        let named = |e: std::io::Error| std::io::Error::new(e.kind(), format!("{}: {e}", path.display()));
-        let fresh = std::fs::metadata(&path).map_or(true, |m| m.len() == 0);
-        let mut file = OpenOptions::new().create(true).append(true).open(&path).map_err(named)?;
-        if fresh {
-            writeln!(file, "{header}").map_err(named)?;
-        } else {
-            // A writer killed mid-line leaves a torn last line; start ours on a new line so it stays the only damage.
-            let text = std::fs::read(&path).map_err(named)?;
-            if text.last() != Some(&b'\n') {
-                writeln!(file).map_err(named)?;
-            }
-        }
-        let whole_len = file.metadata().map_err(named)?.len();
-        Ok(Self { path, file, pending: String::new(), whole_len })
-    }
-
-    fn push(&mut self, row: std::fmt::Arguments) {
-        use std::fmt::Write as _;
-        let _ = self.pending.write_fmt(row);
-        self.pending.push('\n');
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        if self.pending.is_empty() {
-            return Ok(());
-        }
-        let written = self.file.write_all(self.pending.as_bytes());
-        let batch = std::mem::take(&mut self.pending);
-        match written {
-            Ok(()) => {
-                self.whole_len += batch.len() as u64;
-                Ok(())
-            }
-            Err(e) => {
-                let _ = self.file.set_len(self.whole_len);
-                Err(std::io::Error::new(e.kind(), format!("writing {}: {e}", self.path.display())))
-            }
-        }
-    }
-}
-
+/// What the logger has written, and where it writes: every row goes to each sink (the CSV files, the MCAP
+/// recording), so the pairing and restart logic above them is written once.
 struct Writer {
-    out_dir: PathBuf,
-    /// Opened with the first row, whose header names the diagnostics the controller announced; already open when
-    /// a previous logger of the run wrote one.
-    trace: Option<RowFile>,
-    timing: RowFile,
+    sinks: Vec<Box<dyn RowSink>>,
+    /// Set once the sinks have the trace's columns (the first row, or a previous logger's `trace.csv` header).
+    started: bool,
     /// The diagnostic columns of the trace, after its loop columns.
     diagnostic_names: Vec<String>,
     rows: u64,
@@ -129,13 +57,16 @@ struct Writer {
 }
 
 impl Writer {
-    /// Start `trace.csv` with these diagnostic columns, unless it has started.
+    /// Give the sinks the trace's columns with these diagnostics, unless they have them.
     fn start_trace(&mut self, diagnostic_names: &[String]) -> std::io::Result<()> {
-        if self.trace.is_none() {
-            let header: Vec<&str> =
-                trace::LOOP_COLUMNS.iter().copied().chain(diagnostic_names.iter().map(String::as_str)).collect();
-            self.trace = Some(RowFile::open(&self.out_dir, "trace.csv", &header.join(","))?);
+        if !self.started {
+            let columns: Vec<String> =
+                trace::LOOP_COLUMNS.iter().map(|c| c.to_string()).chain(diagnostic_names.iter().cloned()).collect();
+            for sink in &mut self.sinks {
+                sink.start(&columns)?;
+            }
             self.diagnostic_names = diagnostic_names.to_vec();
+            self.started = true;
         }
         Ok(())
     }
@@ -146,9 +77,12 @@ impl Writer {
         held: &HeldActuators,
         command: Option<&Received<CommandSample>>,
     ) -> std::io::Result<()> {
+        if !self.started {
+            return Err(std::io::Error::other("trace.csv written before its header"));
+        }
         let snap = snapshot(&plant.sample);
         let nan = f64::NAN;
-        let row = match command {
+        let trace = match command {
             Some(c) => {
                 let s = &c.sample;
                 let cmd = SurfaceCommand {
@@ -168,32 +102,12 @@ impl Writer {
                 trace_row(&snap, held, &cmd, self.flight_segment, &vec![nan; self.diagnostic_names.len()])
             }
         };
-        let trace = self.trace.as_mut().ok_or_else(|| std::io::Error::other("trace.csv written before its header"))?;
-        trace.push(format_args!("{}", Trace::format_row(&row)));
-        let p = &plant.sample.header;
-        let (cs, ce, ct, cr, cn) =
-            command.map_or((String::new(), String::new(), String::new(), String::new(), String::new()), |c| {
-                let h = &c.sample.header;
-                (
-                    h.seq.to_string(),
-                    h.epoch.to_string(),
-                    h.t_send_ns.to_string(),
-                    c.t_recv_ns.to_string(),
-                    c.sample.compute_ns.to_string(),
-                )
-            });
-        self.timing.push(format_args!(
-            "{},{},{},{},{},{},{cs},{ce},{ct},{cr},{cn},{}",
-            p.tick,
-            p.seq,
-            p.epoch,
-            p.t_send_ns,
-            plant.t_recv_ns,
-            plant.sample.flags,
-            u8::from(command.is_none())
-        ));
+        let row = LoggedRow { plant, command, trace: &trace };
+        for sink in &mut self.sinks {
+            sink.row(&row)?;
+        }
         self.rows += 1;
-        self.last_tick = Some(p.tick);
+        self.last_tick = Some(plant.sample.header.tick);
         self.last_written = Some(plant.sample);
         if self.rows.is_multiple_of(FLUSH_EVERY_ROWS) {
             self.flush()?;
@@ -202,10 +116,17 @@ impl Writer {
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
-        if let Some(trace) = self.trace.as_mut() {
-            trace.flush()?;
+        for sink in &mut self.sinks {
+            sink.flush()?;
         }
-        self.timing.flush()
+        Ok(())
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        for sink in &mut self.sinks {
+            sink.finish()?;
+        }
+        Ok(())
     }
 }
 
@@ -304,10 +225,21 @@ impl LoggerLoop {
         }
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Logger, scenario.timing.dt_s, scenario.seed, events.clone());
+        let meta = RecordingMeta {
+            run_id: args.run_id.to_string(),
+            scenario_name: scenario.name.clone(),
+            scenario_toml: scenario.to_toml(),
+            mode: args.mode.label().into(),
+            ticks: scenario.timing.ticks(),
+        };
+        let recording = McapSink::create(&args.out, &meta)?;
+        if resume_after.is_some() {
+            let file = recording.path().display().to_string();
+            events.emit(resume_after, "recording-continued", format!("the recording continues in {file}"));
+        }
         let mut writer = Writer {
-            out_dir: args.out.clone(),
-            trace: None,
-            timing: RowFile::open(&args.out, "timing.csv", &TIMING_COLUMNS.join(","))?,
+            sinks: vec![Box::new(CsvSink::open(&args.out)?), Box::new(recording)],
+            started: false,
             diagnostic_names: Vec::new(),
             rows: 0,
             last_tick: resume_after,
@@ -382,7 +314,7 @@ impl LoggerLoop {
         {
             self.error = Some(e);
         }
-        if let Err(e) = self.writer.flush()
+        if let Err(e) = self.writer.finish()
             && self.error.is_none()
         {
             self.error = Some(e.into());
@@ -444,7 +376,7 @@ impl LoggerLoop {
     /// A controller epoch's diagnostic names. Once the trace has started its columns stay; a controller that names
     /// other diagnostics (another controller restarted into the run) is reported, its values written by position.
     fn on_announcement(&mut self, names: Vec<String>) {
-        if self.writer.trace.is_some() && names != self.writer.diagnostic_names {
+        if self.writer.started && names != self.writer.diagnostic_names {
             let detail = format!(
                 "the controller names {} diagnostics ({}), the trace has columns for {}: values are written by position",
                 names.len(),
@@ -459,7 +391,7 @@ impl LoggerLoop {
     /// The trace's diagnostic columns when its first row is due: those the controller announced, or, with no
     /// announcement (no controller yet), the scenario's controller's, said in an event.
     fn start_trace(&mut self, tick: u64) -> std::io::Result<()> {
-        if self.writer.trace.is_some() {
+        if self.writer.started {
             return Ok(());
         }
         let names = match &self.announced {

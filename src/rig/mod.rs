@@ -72,6 +72,15 @@ pub fn flag_in_range(flag: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result
     if (lo..=hi).contains(&v) { Ok(()) } else { Err(format!("--{flag} must be within {lo}..{hi} {unit}, got {v}")) }
 }
 
+impl Default for ProcessOptions {
+    /// The flags' defaults, as a process started without them has them.
+    fn default() -> Self {
+        use clap::{Args, FromArgMatches};
+        let matches = Self::augment_args(clap::Command::new("defaults")).get_matches_from(["defaults"]);
+        Self::from_arg_matches(&matches).expect("every flag has a default")
+    }
+}
+
 impl ProcessOptions {
     /// Every flag within its documented range.
     pub fn validate(&self) -> Result<(), String> {

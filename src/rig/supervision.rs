@@ -45,7 +45,7 @@ impl SupervisionOptions {
 }
 
 /// A child process the launcher started: reaped once, signalled only while not reaped.
-pub(super) struct ChildProcess {
+pub(crate) struct ChildProcess {
     child: std::process::Child,
     status: Option<ExitStatus>,
     /// It leads a process group of its own (a user's shell command): signals go to the whole group.
@@ -78,12 +78,12 @@ impl ChildProcess {
         }
     }
 
-    pub(super) fn pid(&self) -> u32 {
+    pub(crate) fn pid(&self) -> u32 {
         self.child.id()
     }
 
     /// The exit status, reaping the child if it has ended.
-    pub(super) fn poll(&mut self) -> std::io::Result<Option<ExitStatus>> {
+    pub(crate) fn poll(&mut self) -> std::io::Result<Option<ExitStatus>> {
         if self.status.is_none() {
             self.status = self.child.try_wait()?;
             if self.status.is_some() {
@@ -93,11 +93,11 @@ impl ChildProcess {
         Ok(self.status)
     }
 
-    pub(super) fn has_ended(&self) -> bool {
+    pub(crate) fn has_ended(&self) -> bool {
         self.status.is_some()
     }
 
-    pub(super) fn signal(&mut self, signal: libc::c_int) {
+    pub(crate) fn signal(&mut self, signal: libc::c_int) {
         if self.status.is_none() {
             let pid = self.child.id() as libc::pid_t;
             // SAFETY: kill(2) on the pid of a child we have not reaped yet (or the group it leads), so the pid
@@ -109,7 +109,7 @@ impl ChildProcess {
     }
 
     /// Wait up to `timeout` for the process to end; then SIGKILL it. Always reaps.
-    pub(super) fn finish(&mut self, timeout: Duration) -> std::io::Result<ExitStatus> {
+    pub(crate) fn finish(&mut self, timeout: Duration) -> std::io::Result<ExitStatus> {
         let deadline = Instant::now() + timeout;
         while self.poll()?.is_none() && Instant::now() < deadline {
             std::thread::sleep(Duration::from_millis(5));
@@ -141,6 +141,49 @@ pub(super) fn end_with_launcher(command: &mut Command, signal: libc::c_int) {
             Ok(())
         });
     }
+}
+
+/// Start `role`'s process of the run `args` describes, tied to this process's life ([`end_with_launcher`]): the
+/// rig binary from `bin_dir`, or for the controller a user's command ([`ControllerLaunch::Command`]) with the run's
+/// `SILRIG_*` variables, in a process group of its own so a stop or kill fault reaches whatever it started.
+pub(crate) fn start_process(
+    role: Role,
+    controller: &ControllerLaunch,
+    args: &ProcessArgs,
+    bin_dir: &Path,
+    stdout: Stdio,
+    stderr: Stdio,
+) -> anyhow::Result<ChildProcess> {
+    if let (Role::Controller, ControllerLaunch::Command(cmd)) = (role, controller) {
+        use std::os::unix::process::CommandExt;
+        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
+        let mut command = Command::new(&words[0]);
+        end_with_launcher(&mut command, libc::SIGTERM);
+        let child = command
+            .args(&words[1..])
+            .envs(args.to_env())
+            .env("SILRIG_CLIENT_LIB", bin_dir.join("libsilrig_client.so"))
+            .process_group(0)
+            .stdin(Stdio::null())
+            .stdout(stdout)
+            .stderr(stderr)
+            .spawn()
+            .with_context(|| format!("starting the controller command `{cmd}`"))?;
+        return Ok(ChildProcess::group_leader(child));
+    }
+    let exe = bin_dir.join(role.binary());
+    let mut command = Command::new(&exe);
+    // A stopped plant cannot act on SIGTERM until continued, and nobody is left to continue it: it gets SIGKILL
+    // (the next run removes what it leaves); the others end cleanly on SIGTERM, writing what they hold.
+    end_with_launcher(&mut command, if role == Role::Plant { libc::SIGKILL } else { libc::SIGTERM });
+    let child = command
+        .args(args.to_argv())
+        .stdin(Stdio::null())
+        .stdout(stdout)
+        .stderr(stderr)
+        .spawn()
+        .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
+    Ok(ChildProcess::new(child))
 }
 
 /// Copy a child's output (stdout and stderr, one pipe) into `log_path` line by line. When the log cannot be
@@ -186,7 +229,7 @@ fn forward_output(
 }
 
 /// An exit status as a person reads it.
-pub(super) fn describe(status: ExitStatus) -> String {
+pub(crate) fn describe(status: ExitStatus) -> String {
     use std::os::unix::process::ExitStatusExt;
     match (status.code(), status.signal()) {
         (Some(c), _) => format!("exit status {c}"),
@@ -394,37 +437,8 @@ impl Supervisor {
         let marker = resume.then(|| format!("--- silrig run: {role} restarted ---"));
         let output = forward_output(reader, log_path, role, marker);
         let args = ProcessArgs { resume, ..self.args.clone() };
-        if let (Role::Controller, ControllerLaunch::Command(cmd)) = (role, &self.controller) {
-            use std::os::unix::process::CommandExt;
-            let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
-            let mut command = Command::new(&words[0]);
-            end_with_launcher(&mut command, libc::SIGTERM);
-            let child = command
-                .args(&words[1..])
-                .envs(args.to_env())
-                .env("SILRIG_CLIENT_LIB", self.bin_dir.join("libsilrig_client.so"))
-                // Its own process group: a stop or kill fault reaches whatever it started as well.
-                .process_group(0)
-                .stdin(Stdio::null())
-                .stdout(log)
-                .stderr(writer)
-                .spawn()
-                .with_context(|| format!("starting the controller command `{cmd}`"))?;
-            return Ok(ChildProcess::group_leader(child).with_output(output));
-        }
-        let exe = self.bin_dir.join(role.binary());
-        let mut command = Command::new(&exe);
-        // A stopped plant cannot act on SIGTERM until continued, and nobody is left to continue it: it gets SIGKILL
-        // (the next run removes what it leaves); the others end cleanly on SIGTERM, writing what they hold.
-        end_with_launcher(&mut command, if role == Role::Plant { libc::SIGKILL } else { libc::SIGTERM });
-        let child = command
-            .args(args.to_argv())
-            .stdin(Stdio::null())
-            .stdout(log)
-            .stderr(writer)
-            .spawn()
-            .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
-        Ok(ChildProcess::new(child).with_output(output))
+        let process = start_process(role, &self.controller, &args, &self.bin_dir, log.into(), writer.into())?;
+        Ok(process.with_output(output))
     }
 
     fn begin_life(&mut self, role: Role, life: u32, pid: u32) {

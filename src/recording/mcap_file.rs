@@ -1,0 +1,250 @@
+//! The MCAP sink: the run as Foxglove and PlotJuggler open it. JSON messages with JSON Schemas (no plug-in needed)
+//! on [`super::topics`]: `/plant` and `/command` (every field as received, with header stamps, flags and the
+//! logger's receive stamp), `/trace` (the trace row by column name), `/timing` (the per-tick stamps) and `/events`
+//! (the run's `events.jsonl` lines as they appear). The run's identity and scenario are MCAP metadata.
+//!
+//! Chunks are LZ4-compressed and closed at every flush, so a killed logger leaves a file a reader can read up to
+//! its last flush; a restarted logger writes the next `recording-<n>.mcap`, never over an earlier one. Message log
+//! times are wall-clock (the monotonic stamps shifted by the offset between the clocks when the file was opened),
+//! so a viewer shows when the run flew; the monotonic stamps themselves are in the messages.
+
+use super::json::{push_f64, sample_json, sample_schema};
+use super::{
+    LoggedRow, RecordingMeta, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, meta_keys, recording_file_name,
+    timing_values, topics,
+};
+use crate::wire::{CommandSample, PlantSample, WIRE_LAYOUT_VERSION};
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+
+/// Channel ids of the topics.
+struct Channels {
+    plant: u16,
+    command: u16,
+    timing: u16,
+    events: u16,
+    /// Added with the trace's columns.
+    trace: Option<u16>,
+}
+
+/// The run's MCAP recording, being written.
+pub struct McapSink {
+    path: PathBuf,
+    writer: mcap::Writer<BufWriter<File>>,
+    channels: Channels,
+    /// Per-topic message counters (MCAP's `sequence`).
+    sequence: BTreeMap<u16, u32>,
+    trace_columns: Vec<String>,
+    events_path: PathBuf,
+    /// Bytes of `events.jsonl` already recorded.
+    events_read: u64,
+    /// Wall clock minus monotonic clock, ns.
+    wall_minus_monotonic_ns: i128,
+    finished: bool,
+}
+
+const RECEIVE_STAMP: (&str, &str) = ("t_recv_ns", "CLOCK_MONOTONIC when the logger took the sample from its queue, ns");
+
+fn schema_bytes(schema: &Value) -> Vec<u8> {
+    serde_json::to_vec(schema).expect("a JSON value serialises")
+}
+
+impl McapSink {
+    /// Create the run's next recording file in `out_dir` (`recording.mcap`, or `recording-<n>.mcap` after a
+    /// logger restart), with the run's metadata and the channels that do not depend on the controller.
+    pub fn create(out_dir: &Path, meta: &RecordingMeta) -> std::io::Result<Self> {
+        let (path, file) = (1..)
+            .map(|life| out_dir.join(recording_file_name(life)))
+            .find_map(|path| match OpenOptions::new().write(true).create_new(true).open(&path) {
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => None,
+                opened => Some((path.clone(), opened)),
+            })
+            .expect("some recording file name is free");
+        let file = file.map_err(|e| std::io::Error::new(e.kind(), format!("creating {}: {e}", path.display())))?;
+        let named = |e: mcap::McapError| std::io::Error::other(format!("writing {}: {e}", path.display()));
+        let options = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Lz4))
+            .profile("")
+            .library(format!("silrig {}", env!("CARGO_PKG_VERSION")));
+        let mut writer = options.create(BufWriter::new(file)).map_err(named)?;
+        let mut add = |topic: &str, name: &str, schema: Value| -> mcap::McapResult<u16> {
+            let schema_id = writer.add_schema(name, "jsonschema", &schema_bytes(&schema))?;
+            writer.add_channel(schema_id, topic, "json", &BTreeMap::new())
+        };
+        let plant = add(topics::PLANT, "silrig.PlantSample", sample_schema::<PlantSample>(&[RECEIVE_STAMP]));
+        let command = add(topics::COMMAND, "silrig.CommandSample", sample_schema::<CommandSample>(&[RECEIVE_STAMP]));
+        let timing = add(topics::TIMING, "silrig.Timing", timing_schema());
+        let events = add(topics::EVENTS, "silrig.Event", event_schema());
+        let channels = Channels {
+            plant: plant.map_err(named)?,
+            command: command.map_err(named)?,
+            timing: timing.map_err(named)?,
+            events: events.map_err(named)?,
+            trace: None,
+        };
+        let run = BTreeMap::from([
+            ("run_id".to_string(), meta.run_id.clone()),
+            ("scenario".to_string(), meta.scenario_name.clone()),
+            ("mode".to_string(), meta.mode.clone()),
+            ("ticks".to_string(), meta.ticks.to_string()),
+            ("silrig_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+            (meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string()),
+            ("file".to_string(), path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
+        ]);
+        writer.write_metadata(&mcap::records::Metadata { name: meta_keys::RUN.into(), metadata: run }).map_err(named)?;
+        let scenario = BTreeMap::from([(meta_keys::TOML.to_string(), meta.scenario_toml.clone())]);
+        writer
+            .write_metadata(&mcap::records::Metadata { name: meta_keys::SCENARIO.into(), metadata: scenario })
+            .map_err(named)?;
+        let wall_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+        Ok(Self {
+            events_path: out_dir.join("events.jsonl"),
+            path,
+            writer,
+            channels,
+            sequence: BTreeMap::new(),
+            trace_columns: Vec::new(),
+            events_read: 0,
+            wall_minus_monotonic_ns: wall_ns as i128 - i128::from(crate::clock::monotonic_ns()),
+            finished: false,
+        })
+    }
+
+    /// The file being written.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn wall_ns(&self, monotonic_ns: u64) -> u64 {
+        (i128::from(monotonic_ns) + self.wall_minus_monotonic_ns).clamp(0, i128::from(u64::MAX)) as u64
+    }
+
+    fn named(&self, e: mcap::McapError) -> std::io::Error {
+        std::io::Error::other(format!("writing {}: {e}", self.path.display()))
+    }
+
+    fn write(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64, data: &[u8]) -> std::io::Result<()> {
+        let sequence = self.sequence.entry(channel).or_insert(0);
+        *sequence = sequence.wrapping_add(1);
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: *sequence,
+            log_time: self.wall_ns(t_log_ns),
+            publish_time: self.wall_ns(t_publish_ns),
+        };
+        self.writer.write_to_known_channel(&header, data).map_err(|e| self.named(e))
+    }
+
+    /// Record the lines other processes appended to `events.jsonl` since the last call (whole lines only).
+    fn record_new_events(&mut self) -> std::io::Result<()> {
+        let Ok(mut file) = File::open(&self.events_path) else { return Ok(()) };
+        let mut text = Vec::new();
+        file.seek(SeekFrom::Start(self.events_read))?;
+        file.read_to_end(&mut text)?;
+        let Some(end) = text.iter().rposition(|&b| b == b'\n') else { return Ok(()) };
+        self.events_read += end as u64 + 1;
+        for line in text[..end].split(|&b| b == b'\n') {
+            // A line that is not an event (torn by a full disk, foreign) is left out, as the fault report does.
+            let Some(t_ns) = serde_json::from_slice::<Value>(line).ok().and_then(|v| v["t_ns"].as_u64()) else {
+                continue;
+            };
+            self.write(self.channels.events, t_ns, t_ns, line)?;
+        }
+        Ok(())
+    }
+}
+
+fn timing_schema() -> Value {
+    let properties: serde_json::Map<String, Value> = TIMING_COLUMNS
+        .iter()
+        .map(|c| (c.to_string(), json!({"type": ["integer", "null"], "minimum": 0})))
+        .collect();
+    json!({"title": "silrig timing.csv row", "type": "object", "properties": properties,
+           "description": "timing.csv's columns; the command's are null when no command answered the tick"})
+}
+
+fn event_schema() -> Value {
+    json!({"title": "silrig event", "type": "object", "properties": {
+        "t_ns": {"type": "integer", "description": "CLOCK_MONOTONIC, ns"},
+        "tick": {"type": "integer", "description": "plant tick, when the process knew it"},
+        "process": {"type": "string"},
+        "kind": {"type": "string"},
+        "detail": {"type": "string"}}})
+}
+
+fn trace_schema(columns: &[String]) -> Value {
+    let properties: serde_json::Map<String, Value> =
+        columns.iter().map(|c| (c.clone(), json!({"type": ["number", "null"]}))).collect();
+    json!({"title": "silrig trace.csv row", "type": "object", "properties": properties,
+           "description": "trace.csv's columns (the same as silrig sim); empty values are null"})
+}
+
+impl RowSink for McapSink {
+    fn start(&mut self, trace_columns: &[String]) -> std::io::Result<()> {
+        if self.channels.trace.is_none() {
+            let schema = schema_bytes(&trace_schema(trace_columns));
+            let schema_id = self.writer.add_schema("silrig.Trace", "jsonschema", &schema).map_err(|e| self.named(e))?;
+            // JSON objects have no column order; the channel keeps trace.csv's.
+            let columns = BTreeMap::from([(TRACE_COLUMNS_KEY.to_string(), trace_columns.join(","))]);
+            let channel = self.writer.add_channel(schema_id, topics::TRACE, "json", &columns);
+            self.channels.trace = Some(channel.map_err(|e| self.named(e))?);
+            self.trace_columns = trace_columns.to_vec();
+        }
+        Ok(())
+    }
+
+    fn row(&mut self, row: &LoggedRow) -> std::io::Result<()> {
+        let plant = row.plant;
+        let (t_recv, t_send) = (plant.t_recv_ns, plant.sample.header.t_send_ns);
+        let json = sample_json(&plant.sample, &[(RECEIVE_STAMP.0, t_recv)]);
+        self.write(self.channels.plant, t_recv, t_send, json.as_bytes())?;
+        if let Some(c) = row.command {
+            let json = sample_json(&c.sample, &[(RECEIVE_STAMP.0, c.t_recv_ns)]);
+            self.write(self.channels.command, c.t_recv_ns, c.sample.header.t_send_ns, json.as_bytes())?;
+        }
+        let trace = self.channels.trace.ok_or_else(|| std::io::Error::other("recording: a row before its columns"))?;
+        let mut json = String::with_capacity(32 * row.trace.len());
+        json.push('{');
+        for (i, (name, v)) in self.trace_columns.iter().zip(row.trace).enumerate() {
+            if i > 0 {
+                json.push(',');
+            }
+            json.push_str(&Value::String(name.clone()).to_string());
+            json.push(':');
+            push_f64(&mut json, *v);
+        }
+        json.push('}');
+        self.write(trace, t_recv, t_send, json.as_bytes())?;
+        let mut json = String::with_capacity(32 * TIMING_COLUMNS.len());
+        json.push('{');
+        for (i, (name, v)) in TIMING_COLUMNS.iter().zip(timing_values(row)).enumerate() {
+            if i > 0 {
+                json.push(',');
+            }
+            match v {
+                Some(v) => json.push_str(&format!("\"{name}\":{v}")),
+                None => json.push_str(&format!("\"{name}\":null")),
+            }
+        }
+        json.push('}');
+        self.write(self.channels.timing, t_recv, t_send, json.as_bytes())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.record_new_events()?;
+        // Closes the chunk: a reader can read everything up to here even if the logger dies next.
+        self.writer.flush().map_err(|e| self.named(e))
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        if !self.finished {
+            self.record_new_events()?;
+            self.finished = true;
+            self.writer.finish().map_err(|e| self.named(e))?;
+        }
+        Ok(())
+    }
+}

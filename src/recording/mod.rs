@@ -1,0 +1,150 @@
+//! What the logger writes, and reading it back: the sinks a logged row goes to ([`RowSink`]: `trace.csv` and
+//! `timing.csv` in [`csv`], the MCAP recording in [`mcap_file`]), the JSON form of wire samples and its schemas
+//! ([`json`]), and the reader replay uses ([`reader`]).
+//!
+//! The logger decides what a row is (pairing, gaps, restarts); a sink only writes it, so a new format is a new sink,
+//! not a second copy of that logic.
+
+pub mod csv;
+pub mod json;
+pub mod mcap_file;
+pub mod reader;
+
+use crate::ipc::Received;
+use crate::wire::{CommandSample, PlantSample};
+use std::path::{Path, PathBuf};
+
+/// One row the logger writes: a plant sample as received, the command that answered it (if one did), and the
+/// trace's values for the tick (the same columns as `silrig sim`).
+#[derive(Debug, Clone, Copy)]
+pub struct LoggedRow<'a> {
+    /// The plant sample, with the logger's receive stamp.
+    pub plant: &'a Received<PlantSample>,
+    /// The command answering it, with the logger's receive stamp.
+    pub command: Option<&'a Received<CommandSample>>,
+    /// The trace row, in the order of the columns given to [`RowSink::start`].
+    pub trace: &'a [f64],
+}
+
+/// Where the logger's rows go. Rows come in tick order; `flush` is called every few rows and at the end, and what a
+/// sink has flushed must survive the logger being killed right after.
+pub trait RowSink {
+    /// The trace's columns, before the first row.
+    fn start(&mut self, trace_columns: &[String]) -> std::io::Result<()>;
+    /// One row.
+    fn row(&mut self, row: &LoggedRow) -> std::io::Result<()>;
+    /// Make every row so far durable in the file.
+    fn flush(&mut self) -> std::io::Result<()>;
+    /// The logger is done: flush and close the file properly.
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.flush()
+    }
+}
+
+/// Columns of `timing.csv` (and fields of the recording's `/timing` messages).
+pub const TIMING_COLUMNS: [&str; 12] = [
+    "tick",
+    "plant_seq",
+    "plant_epoch",
+    "t_plant_send_ns",
+    "t_plant_recv_ns",
+    "plant_flags",
+    "command_seq",
+    "command_epoch",
+    "t_command_send_ns",
+    "t_command_recv_ns",
+    "compute_ns",
+    "command_missing",
+];
+
+/// A row's values under [`TIMING_COLUMNS`]; the command's are `None` when no command answered the tick.
+pub fn timing_values(row: &LoggedRow) -> [Option<u64>; TIMING_COLUMNS.len()] {
+    let p = &row.plant.sample.header;
+    let c = row.command.map(|c| (&c.sample.header, c.t_recv_ns, c.sample.compute_ns));
+    [
+        Some(p.tick),
+        Some(p.seq),
+        Some(p.epoch),
+        Some(p.t_send_ns),
+        Some(row.plant.t_recv_ns),
+        Some(u64::from(row.plant.sample.flags)),
+        c.map(|(h, _, _)| h.seq),
+        c.map(|(h, _, _)| h.epoch),
+        c.map(|(h, _, _)| h.t_send_ns),
+        c.map(|(_, recv, _)| recv),
+        c.map(|(_, _, compute)| compute),
+        Some(u64::from(c.is_none())),
+    ]
+}
+
+/// File name of the run's first recording; a restarted logger writes `recording-2.mcap`, then `-3`, and so on.
+pub const RECORDING_FILE: &str = "recording.mcap";
+
+/// The recording files of the run in `dir`, in the order their loggers wrote them.
+pub fn recording_files(dir: &Path) -> Vec<PathBuf> {
+    let mut found: Vec<(u32, PathBuf)> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|entry| {
+            let name = entry.file_name().into_string().ok()?;
+            let life = if name == RECORDING_FILE {
+                1
+            } else {
+                name.strip_prefix("recording-")?.strip_suffix(".mcap")?.parse().ok().filter(|n| *n >= 2)?
+            };
+            Some((life, entry.path()))
+        })
+        .collect();
+    found.sort();
+    found.into_iter().map(|(_, p)| p).collect()
+}
+
+/// The name of the `life`-th logger's recording file.
+pub fn recording_file_name(life: u32) -> String {
+    if life <= 1 { RECORDING_FILE.to_string() } else { format!("recording-{life}.mcap") }
+}
+
+/// What a recording says about its run, beside the samples (MCAP metadata `silrig`, and `scenario`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordingMeta {
+    /// The run id.
+    pub run_id: String,
+    /// The scenario's name.
+    pub scenario_name: String,
+    /// The scenario as the processes flew it (TOML), so a recording is enough to replay.
+    pub scenario_toml: String,
+    /// realtime or lockstep.
+    pub mode: String,
+    /// Ticks the scenario flies.
+    pub ticks: u64,
+}
+
+/// MCAP metadata keys.
+pub mod meta_keys {
+    /// The record with the run's identity.
+    pub const RUN: &str = "silrig";
+    /// The record holding the scenario's TOML under [`TOML`].
+    pub const SCENARIO: &str = "scenario";
+    /// Key of the scenario's TOML.
+    pub const TOML: &str = "toml";
+    /// Wire layout version of every sample in the file.
+    pub const LAYOUT_VERSION: &str = "layout_version";
+}
+
+/// Metadata key of the `/trace` channel: trace.csv's columns, comma-separated, in order.
+pub const TRACE_COLUMNS_KEY: &str = "columns";
+
+/// The recording's topics.
+pub mod topics {
+    /// Plant samples as received.
+    pub const PLANT: &str = "/plant";
+    /// The command answering each row's plant sample, as received.
+    pub const COMMAND: &str = "/command";
+    /// The trace row (`trace.csv`'s columns).
+    pub const TRACE: &str = "/trace";
+    /// Per-tick stamps (`timing.csv`'s columns).
+    pub const TIMING: &str = "/timing";
+    /// The run's events (`events.jsonl`).
+    pub const EVENTS: &str = "/events";
+}
