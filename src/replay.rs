@@ -76,6 +76,8 @@ pub struct ReplayOutcome {
     pub run_dir: PathBuf,
     /// The replay's own folder.
     pub out_dir: PathBuf,
+    /// The replay's own run id (its iceoryx2 namespace, removed when it ends).
+    pub run_id: String,
     /// Who answered: `silrig-controller` or the command.
     pub controller: String,
     /// Recorded plant samples sent.
@@ -386,6 +388,7 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<ReplayOutcome> {
 
     let timeout = Duration::from_secs_f64(opts.answer_timeout_s);
     let mut rig = ReplayRig::start(opts, &scenario_path, &out_dir)?;
+    let run_id = rig.run_id.to_string();
     let mut replayed = Vec::with_capacity(recorded.plant.len());
     let flown = (|| -> anyhow::Result<()> {
         rig.wait_connected(timeout)?;
@@ -410,6 +413,7 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<ReplayOutcome> {
     let outcome = ReplayOutcome {
         run_dir: opts.run_dir.clone(),
         out_dir: out_dir.clone(),
+        run_id,
         controller: opts.controller_cmd.clone().unwrap_or_else(|| Role::Controller.binary().to_string()),
         samples_sent: replayed.len() as u64,
         ticks_compared: comparison.compared,

@@ -45,6 +45,21 @@ pub struct ProcessReport {
     /// Command age at use, in ticks -> number of ticks (plant only).
     #[serde(default)]
     pub command_age_ticks: BTreeMap<u64, u64>,
+    /// CPU time the process used, user plus system, s (what it costs beside the loop's figures).
+    #[serde(default)]
+    pub cpu_s: f64,
+}
+
+/// CPU time this process has used so far, user plus system, s.
+fn process_cpu_s() -> f64 {
+    // SAFETY: getrusage fills the struct we own; RUSAGE_SELF is always valid.
+    let usage = unsafe {
+        let mut usage: libc::rusage = std::mem::zeroed();
+        libc::getrusage(libc::RUSAGE_SELF, &mut usage);
+        usage
+    };
+    let s = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    s(usage.ru_utime) + s(usage.ru_stime)
 }
 
 /// Collects a process's distributions and counters while it runs.
@@ -119,6 +134,7 @@ impl Recorder {
             latencies,
             counters: self.counters,
             command_age_ticks: self.command_age_ticks,
+            cpu_s: process_cpu_s(),
         };
         super::write_atomically(
             &report_path(out_dir, &self.process),
