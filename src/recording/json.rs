@@ -84,14 +84,14 @@ fn read_u64(bytes: &[u8]) -> u64 {
     u64::from_ne_bytes(bytes[..8].try_into().expect("8 bytes"))
 }
 
-/// Append the JSON number for `v`: the shortest decimal that parses back to the same f64; NaN and infinities have
-/// no JSON form and are written `null`.
+/// Append the JSON number for `v`: the shortest decimal that parses back to the same f64 (serde_json's formatter,
+/// several times faster than `{:?}`, which matters at lockstep rates); NaN and infinities have no JSON form and are
+/// written `null`.
 pub fn push_f64(out: &mut String, v: f64) {
-    if v.is_finite() {
-        let _ = write!(out, "{v:?}");
-    } else {
-        out.push_str("null");
-    }
+    // SAFETY: serde_json writes a JSON number (or `null` for a non-finite value), all ASCII, so the String stays
+    // UTF-8.
+    let bytes = unsafe { out.as_mut_vec() };
+    serde_json::to_writer(bytes, &v).expect("writing to a Vec cannot fail");
 }
 
 fn push_element(out: &mut String, element: Element, bytes: &[u8]) {
