@@ -252,7 +252,11 @@ impl Link {
 
     /// A publisher for a stream: express (no batching) at real-time priority; a full queue drops rather than
     /// blocks, because a late sample is worth nothing to the loop.
-    fn stream_publisher(&self, what: &str, congestion: CongestionControl) -> Result<zenoh::pubsub::Publisher<'static>, BridgeError> {
+    fn stream_publisher(
+        &self,
+        what: &str,
+        congestion: CongestionControl,
+    ) -> Result<zenoh::pubsub::Publisher<'static>, BridgeError> {
         self.session
             .declare_publisher(self.keys.of(what))
             .congestion_control(congestion)
@@ -286,7 +290,11 @@ impl Link {
 fn read_hello(bytes: &[u8], run: &str) -> Result<Hello, String> {
     let h = Hello::from_bytes(bytes)?;
     if h.run_id != run {
-        return Err(format!("a {} bridge of run `{}` is connected; this one serves run `{run}`", h.side.label(), h.run_id));
+        return Err(format!(
+            "a {} bridge of run `{}` is connected; this one serves run `{run}`",
+            h.side.label(),
+            h.run_id
+        ));
     }
     if h.layout_version != WIRE_LAYOUT_VERSION {
         return Err(format!(
@@ -529,7 +537,11 @@ impl PlantSide {
                 };
                 if let Some(e) = refused {
                     self.rec.count("samples_refused", 1);
-                    self.link.say("bridge-sample-refused", format!("refused a {what} sample from the network: {e}"), true);
+                    self.link.say(
+                        "bridge-sample-refused",
+                        format!("refused a {what} sample from the network: {e}"),
+                        true,
+                    );
                 }
             }
             Arrival::Finished => {}
@@ -641,18 +653,22 @@ impl ControllerSide {
             .timeout(RUN_INFO_TIMEOUT)
             .wait()
             .map_err(zenoh_err("asking for the run's scenario"))?;
-        let reply = replies
-            .recv()
-            .map_err(|_| anyhow::anyhow!("the plant-side bridge did not send the run's scenario within {RUN_INFO_TIMEOUT:?}"))?;
+        let reply = replies.recv().map_err(|_| {
+            anyhow::anyhow!("the plant-side bridge did not send the run's scenario within {RUN_INFO_TIMEOUT:?}")
+        })?;
         let sample = reply.result().map_err(|e| anyhow::anyhow!("the run's scenario: {:?}", e.payload().to_bytes()))?;
         let info: RunInfo = serde_json::from_slice(&sample.payload().to_bytes())?;
         let scenario_path = args.out.join("scenario.toml");
         crate::rig::write_atomically(&scenario_path, &info.scenario_toml)?;
-        let mut env: Vec<(String, String)> =
-            info.env.into_iter().filter(|(k, _)| k != SCENARIO_ENV && k != "SILRIG_OUT" && k != "SILRIG_RESUME").collect();
+        let mut env: Vec<(String, String)> = info
+            .env
+            .into_iter()
+            .filter(|(k, _)| k != SCENARIO_ENV && k != "SILRIG_OUT" && k != "SILRIG_RESUME")
+            .collect();
         env.push((SCENARIO_ENV.into(), scenario_path.display().to_string()));
         env.push(("SILRIG_OUT".into(), args.out.display().to_string()));
-        let local = ProcessArgs::from_env(env).map_err(|e| anyhow::anyhow!("the run's arguments from the plant side: {e}"))?;
+        let local =
+            ProcessArgs::from_env(env).map_err(|e| anyhow::anyhow!("the run's arguments from the plant side: {e}"))?;
         let lines: String =
             local.to_env().iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
         let env_path = args.out.join("controller.env");
@@ -730,12 +746,14 @@ impl ControllerSide {
                 }
                 match self.peer.heard(h, now) {
                     Some(PeerChange::Joined { epoch, replaced }) => {
-                        let how = replaced.map_or(" again".to_string(), |old| format!(" (restarted: epoch {old:x} before)"));
+                        let how =
+                            replaced.map_or(" again".to_string(), |old| format!(" (restarted: epoch {old:x} before)"));
                         let text = format!("the plant-side bridge (epoch {epoch:x}) answers{how}");
                         self.link.say("bridge-peer-joined", text, false);
                     }
                     Some(PeerChange::Rival { epoch }) => {
-                        let text = format!("a second plant-side bridge (epoch {epoch:x}) for run {}: ignored", self.link.run);
+                        let text =
+                            format!("a second plant-side bridge (epoch {epoch:x}) for run {}: ignored", self.link.run);
                         self.link.say("bridge-peer-refused", text, true);
                     }
                     _ => {}
@@ -750,7 +768,11 @@ impl ControllerSide {
                 Ok(_) => self.rec.count("samples_from_unserved_bridges", 1),
                 Err(e) => {
                     self.rec.count("samples_refused", 1);
-                    self.link.say("bridge-sample-refused", format!("refused a {what} sample from the network: {e}"), true);
+                    self.link.say(
+                        "bridge-sample-refused",
+                        format!("refused a {what} sample from the network: {e}"),
+                        true,
+                    );
                 }
             },
             Arrival::Finished => {

@@ -16,9 +16,8 @@ pub fn endpoint(text: &str) -> Result<String, String> {
         Some((p, _)) => return Err(format!("endpoint {text:?}: transport `{p}` is not tcp or udp")),
         None => ("tcp", text),
     };
-    let (host, port) = addr
-        .rsplit_once(':')
-        .ok_or_else(|| format!("endpoint {text:?}: give HOST:PORT (e.g. 192.168.1.20:7447)"))?;
+    let (host, port) =
+        addr.rsplit_once(':').ok_or_else(|| format!("endpoint {text:?}: give HOST:PORT (e.g. 192.168.1.20:7447)"))?;
     let port_ok = port.parse::<u16>().is_ok_and(|p| p > 0);
     if host.is_empty() || !port_ok {
         return Err(format!("endpoint {text:?}: give HOST:PORT with a port in 1..65535 (e.g. 192.168.1.20:7447)"));
@@ -151,7 +150,8 @@ impl Inbox {
 pub fn wait_readable(fds: &[i32], deadline_ns: u64) {
     let remaining_ns = deadline_ns.saturating_sub(crate::clock::monotonic_ns());
     let timeout = crate::clock::timespec_from_ns(remaining_ns);
-    let mut polls: Vec<libc::pollfd> = fds.iter().map(|&fd| libc::pollfd { fd, events: libc::POLLIN, revents: 0 }).collect();
+    let mut polls: Vec<libc::pollfd> =
+        fds.iter().map(|&fd| libc::pollfd { fd, events: libc::POLLIN, revents: 0 }).collect();
     // SAFETY: valid pollfds and timespec for the duration of the call, no signal mask change.
     unsafe { libc::ppoll(polls.as_mut_ptr(), polls.len() as libc::nfds_t, &timeout, std::ptr::null()) };
 }

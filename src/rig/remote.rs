@@ -51,7 +51,18 @@ impl RemoteBridge {
         let child = spawn(&exe, &argv, &log)?;
         events.emit(None, "process-started", format!("bridge as pid {}, listening on {listen}", child.pid()));
         let started = Instant::now();
-        Ok(Self { exe, argv, log, events, child, restarts: 0, started, quick_deaths: 0, restart_at: None, failure: None })
+        Ok(Self {
+            exe,
+            argv,
+            log,
+            events,
+            child,
+            restarts: 0,
+            started,
+            quick_deaths: 0,
+            restart_at: None,
+            failure: None,
+        })
     }
 
     /// A bridge that died is started again after a pause that doubles while it keeps dying young: the plant flies
