@@ -226,6 +226,8 @@ fn a_controller_on_the_other_host_answers_nearly_every_tick() {
     let ctl = controller(bridge.pid(), &run, &ctl_out);
     let (status, text) = launcher.wait(Duration::from_secs(120));
     assert!(status.success(), "{text}");
+    // The report, for `-- --nocapture` (the README's figures come from here).
+    eprintln!("{text}");
     // Next-tick by default across hosts, and the network leg beside sense-to-actuate.
     assert!(text.contains("bridge.network_rtt") && text.contains("plant.sense_to_actuate"), "{text}");
     let r = report(&out);
