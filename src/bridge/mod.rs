@@ -174,12 +174,8 @@ pub fn run_bridge(opts: &BridgeOptions) -> anyhow::Result<ProcessReport> {
         Side::Plant => PlantSide::start(opts, &endpoint)?.run()?,
         Side::Controller => ControllerSide::start(opts, &endpoint)?.run()?,
     };
-    let args = match side {
-        Side::Plant => args.clone(),
-        Side::Controller => ProcessArgs { mode: args.mode, ..args.clone() },
-    };
     rec.declare(&["peer_losses"]);
-    let meta = ReportMeta::new(&args, &scenario, scheduling, ended);
+    let meta = ReportMeta::new(args, &scenario, scheduling, ended);
     Ok(rec.finish(meta, &args.out)?)
 }
 
@@ -625,7 +621,7 @@ impl ControllerSide {
         loop {
             for arrival in link.inbox.take() {
                 let Arrival::Hello { bytes, .. } = arrival else { continue };
-                let h = Hello::from_bytes(&bytes).map_err(BridgeError::Zenoh)?;
+                let Ok(h) = Hello::from_bytes(&bytes) else { continue };
                 if h.run_id != link.run {
                     let (theirs, ours) = (h.run_id, link.run.clone());
                     return Err(BridgeError::OtherRun { endpoint: link.endpoint.clone(), theirs, ours });
