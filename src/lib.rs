@@ -15,6 +15,8 @@
 
 pub mod actuator;
 pub mod bench;
+#[cfg(feature = "bridge")]
+pub mod bridge;
 pub mod campaign;
 pub mod check;
 pub mod clock;

@@ -253,7 +253,7 @@ pub const MAX_TICKS: u64 = 1_000_000;
 pub const MAX_TRANSPORT_DELAY_TICKS: u64 = 5;
 
 /// When a command computed from the sample of tick k acts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum CommandTiming {
     /// From tick k: no transport delay (the paper's simulation).

@@ -129,6 +129,9 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         controller: ControllerKind::Builtin,
         // Not used: the controller is always one the launcher starts.
         external_timeout_s: 120.0,
+        bridge_listen: None,
+        // The case's scenario says.
+        command_timing: None,
     }
 }
 

@@ -51,6 +51,17 @@ impl<T: WireSample> StreamPublisher<T> {
             h.layout_version = crate::wire::WIRE_LAYOUT_VERSION;
             h._pad = 0;
         }
+        self.transmit(out)
+    }
+
+    /// Send a sample another publisher stamped (a bridge passing the stream on from another host): its `seq`,
+    /// `tick` and `epoch` are kept, so readers see the original publisher's losses and restarts; only `t_send_ns`
+    /// is stamped anew, because the sender's clock is another machine's.
+    pub fn forward(&mut self, sample: &T) -> Result<SendReceipt, IpcError> {
+        self.transmit(*sample)
+    }
+
+    fn transmit(&mut self, mut out: T) -> Result<SendReceipt, IpcError> {
         out.validate().map_err(|source| IpcError::InvalidSample { stream: self.stream, source })?;
         let loan = self.publisher.loan_uninit().map_err(|e| IpcError::Transfer {
             stream: self.stream,

@@ -67,6 +67,16 @@ pub struct LaunchOptions {
     /// --controller external: how long the plant waits for the controller to connect, s.
     #[arg(long, default_value_t = 120.0)]
     pub external_timeout_s: f64,
+    /// The controller runs on another host: start the plant-side bridge listening here (IP:PORT, tcp/IP:PORT or
+    /// udp/IP:PORT) instead of a controller, and wait up to --external-timeout-s for `silrig-bridge --connect` and a
+    /// controller on the other host. Next-tick timing unless --command-timing says otherwise. Needs silrig-bridge
+    /// (`cargo build --release --features bridge`).
+    #[arg(long, value_name = "ENDPOINT", conflicts_with_all = ["controller_cmd", "controller"])]
+    pub bridge_listen: Option<String>,
+    /// Override the scenario's command timing: same-tick (the plant waits up to --command-budget-ms for the answer
+    /// to the tick it just published) or next-tick.
+    #[arg(long, value_enum)]
+    pub command_timing: Option<crate::scenario::CommandTiming>,
 }
 
 /// Where the run's controller comes from (`--controller`).
@@ -92,6 +102,7 @@ pub enum ControllerLaunch {
 impl LaunchOptions {
     fn controller_launch(&self) -> ControllerLaunch {
         match (&self.controller_cmd, self.controller) {
+            _ if self.bridge_listen.is_some() => ControllerLaunch::External,
             (_, ControllerKind::External) => ControllerLaunch::External,
             (Some(cmd), _) => ControllerLaunch::Command(cmd.clone()),
             (None, _) => ControllerLaunch::Ours,
@@ -101,12 +112,12 @@ impl LaunchOptions {
 
 /// `<out>/controller.env`: the variables a controller of this run reads (`export NAME='value'` lines, for `.` in a
 /// shell); for `--controller external` also printed with how to start it.
-fn write_controller_env(args: &ProcessArgs, controller: &ControllerLaunch) -> anyhow::Result<()> {
+fn write_controller_env(args: &ProcessArgs, controller: &ControllerLaunch, remote: bool) -> anyhow::Result<()> {
     let env = args.to_env();
     let lines: String = env.iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
     let path = args.out.join("controller.env");
     std::fs::write(&path, lines).with_context(|| format!("writing {}", path.display()))?;
-    if *controller == ControllerLaunch::External {
+    if *controller == ControllerLaunch::External && !remote {
         eprintln!(
             "silrig run: waiting up to {} s for a controller on run {}; start yours with the run's variables, e.g.\n  \
              . {} && python3 examples/python/pid_attitude.py",
@@ -214,6 +225,11 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     super::flag_in_range("external-timeout-s", opts.external_timeout_s, 0.1, 86_400.0, "s")
         .map_err(|e| anyhow::anyhow!(e))?;
     let mut scenario = load_scenario(opts.config.as_deref(), opts.duration_s)?;
+    // Across hosts a network leg sits in every answer: next-tick unless the user asks for same-tick.
+    let across_hosts = opts.bridge_listen.is_some().then_some(crate::scenario::CommandTiming::NextTick);
+    if let Some(timing) = opts.command_timing.or(across_hosts) {
+        scenario.timing.command_timing = timing;
+    }
     scenario.faults.extend(opts.faults.iter().cloned());
     scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("fault plan: `{key}`: {problem}"))?;
     if opts.mode == RigMode::Lockstep
@@ -221,7 +237,7 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     {
         anyhow::bail!("fault plan: {} needs realtime mode (lockstep has no clock to fault)", f.describe());
     }
-    if opts.controller == ControllerKind::External
+    if (opts.controller == ControllerKind::External || opts.bridge_listen.is_some())
         && let Some(f) =
             scenario.faults.iter().find(|f| f.target() == Role::Controller && f.action().is_process_fault())
     {
@@ -309,10 +325,18 @@ fn start_baseline(scenario: &Scenario, out: &Path) -> anyhow::Result<ChildProces
 
 /// Phase 3: supervise until the plant has flown the scenario (and the logger has written it), SIGTERM or the
 /// watchdog on the whole run.
-fn supervise(sup: &mut Supervisor, faults: &mut FaultSchedule, scenario: &Scenario) -> anyhow::Result<()> {
+fn supervise(
+    sup: &mut Supervisor,
+    faults: &mut FaultSchedule,
+    scenario: &Scenario,
+    bridge: &mut Option<super::remote::RemoteBridge>,
+) -> anyhow::Result<()> {
     let timeout = Duration::from_secs_f64(scenario.timing.duration_s * 3.0 + 30.0);
     loop {
         faults.poll(sup)?;
+        if let Some(b) = bridge.as_mut() {
+            b.poll()?;
+        }
         sup.handle_exits()?;
         sup.restart_due()?;
         if sup.run_is_over() {
@@ -381,17 +405,25 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     if controller == ControllerLaunch::External {
         args.options.startup_timeout_s = opts.external_timeout_s;
     }
-    write_controller_env(&args, &controller)?;
+    write_controller_env(&args, &controller, opts.bridge_listen.is_some())?;
     let conditions_start = MachineConditions::now();
     let events = EventLog::new(&out, "launcher");
+    let mut bridge = match &opts.bridge_listen {
+        Some(listen) => Some(super::remote::RemoteBridge::start(listen, &args, events.clone())?),
+        None => None,
+    };
     let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone())?;
     let mut baseline =
         if opts.mode == RigMode::Realtime && !opts.no_baseline { Some(start_baseline(&scenario, &out)?) } else { None };
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
-    supervise(&mut sup, &mut faults, &scenario)?;
+    supervise(&mut sup, &mut faults, &scenario, &mut bridge)?;
     let ended_by_plan = sup.ended_by_plan();
     faults.release_stopped(&mut sup);
     sup.stop_all()?;
+    if let Some(b) = bridge.as_mut() {
+        b.stop()?;
+        sup.failures.extend(b.failure.take());
+    }
     sup.note_final_reports();
     let timer_baseline = match baseline.as_mut() {
         Some(b) => finish_baseline(b, &scenario, &out, !sup.failures.is_empty())?,
@@ -399,7 +431,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     };
     let conditions_end = MachineConditions::now();
 
-    if controller == ControllerLaunch::External {
+    if controller == ControllerLaunch::External && bridge.is_none() {
         wait_for_external_report(&out);
     }
     let mut failures = std::mem::take(&mut sup.failures);
@@ -407,9 +439,17 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     for role in Role::ALL {
         match read_report(&out, role.label()) {
             Ok(r) => processes.push(r),
+            // It reports on its own host.
+            Err(_) if role == Role::Controller && bridge.is_some() => {}
             // A process a planned fault killed for good has no report to give; anything else should have one.
             Err(_) if ended_by_plan.contains(&role) => {}
             Err(e) => failures.push(format!("{role}: no report ({e})")),
+        }
+    }
+    if bridge.is_some() {
+        match read_report(&out, "bridge") {
+            Ok(r) => processes.push(r),
+            Err(e) => failures.push(format!("bridge: no report ({e})")),
         }
     }
     let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());

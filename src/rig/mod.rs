@@ -13,6 +13,7 @@ pub mod launcher;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;
+pub mod remote;
 pub mod report;
 pub mod run_report;
 pub mod session;

@@ -1,0 +1,385 @@
+//! The controller on another host: two network namespaces joined by a veth pair stand for two hosts, the plant and
+//! the logger under `silrig run --bridge-listen` in one, `silrig-bridge --connect` and the unmodified
+//! `silrig-controller` in the other, which also gets a /dev/shm and /tmp of its own (a private mount namespace), so
+//! the run's iceoryx2 namespace exists twice, as on two machines. A realtime run answers nearly every tick; a link
+//! cut trips the plant's failsafe and the flight recovers when the link returns; a restarted controller-side bridge
+//! resumes the flight; an unreachable address, another run id and a second controller-side bridge get a clear error
+//! while the plant side flies on. Each test creates its namespaces, veth and processes and removes them in `Drop`,
+//! also when it fails; addresses exist only inside the namespaces. Needs root and iproute2; no timing bound is
+//! asserted.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Output, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+mod common;
+use common::no_shared_memory_left;
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+const BRIDGE: &str = env!("CARGO_BIN_EXE_silrig-bridge");
+const CONTROLLER: &str = env!("CARGO_BIN_EXE_silrig-controller");
+const PLANT_ADDR: &str = "10.217.0.1:7447";
+
+/// One realtime rig at a time: two cores are not enough for several with their timing intact.
+static ONE_RIG: Mutex<()> = Mutex::new(());
+
+fn ip(args: &[&str]) {
+    let o = Command::new("ip").args(args).output().expect("iproute2's `ip` (apt-get install iproute2)");
+    assert!(o.status.success(), "ip {}: {}", args.join(" "), String::from_utf8_lossy(&o.stderr));
+}
+
+/// Two namespaces and the veth pair between them; removed on drop (deleting a namespace removes its veth end).
+struct Hosts {
+    plant: String,
+    controller: String,
+    controller_if: String,
+}
+
+impl Hosts {
+    fn new(tag: &str) -> Self {
+        let base = format!("b{}{tag}", std::process::id() % 100_000);
+        let hosts =
+            Hosts { plant: format!("{base}p"), controller: format!("{base}c"), controller_if: format!("{base}c") };
+        let plant_if = format!("{base}p");
+        ip(&["netns", "add", &hosts.plant]);
+        ip(&["netns", "add", &hosts.controller]);
+        ip(&[
+            "link",
+            "add",
+            &plant_if,
+            "netns",
+            &hosts.plant,
+            "type",
+            "veth",
+            "peer",
+            "name",
+            &hosts.controller_if,
+            "netns",
+            &hosts.controller,
+        ]);
+        for (ns, dev, addr) in
+            [(&hosts.plant, &plant_if, "10.217.0.1/24"), (&hosts.controller, &hosts.controller_if, "10.217.0.2/24")]
+        {
+            ip(&["-n", ns, "addr", "add", addr, "dev", dev]);
+            ip(&["-n", ns, "link", "set", dev, "up"]);
+            ip(&["-n", ns, "link", "set", "lo", "up"]);
+        }
+        hosts
+    }
+
+    fn link(&self, up: bool) {
+        ip(&["-n", &self.controller, "link", "set", &self.controller_if, if up { "up" } else { "down" }]);
+    }
+}
+
+impl Drop for Hosts {
+    fn drop(&mut self) {
+        for ns in [&self.plant, &self.controller] {
+            let _ = Command::new("ip").args(["netns", "del", ns]).status();
+        }
+    }
+}
+
+/// A process this test started: killed by its pid and reaped on drop, unless it ended already.
+struct Proc(Option<Child>);
+
+impl Proc {
+    fn spawn(command: &mut Command) -> Self {
+        Self(Some(command.stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap()))
+    }
+
+    fn pid(&self) -> u32 {
+        self.0.as_ref().unwrap().id()
+    }
+
+    fn running(&mut self) -> bool {
+        self.0.as_mut().unwrap().try_wait().unwrap().is_none()
+    }
+
+    fn signal(&self, signal: libc::c_int) {
+        // SAFETY: kill(2) on our child's pid, not reaped yet (we hold the Child).
+        unsafe { libc::kill(self.pid() as libc::pid_t, signal) };
+    }
+
+    /// Wait up to `limit` for it to end; past that it is killed and the test fails.
+    fn wait(mut self, limit: Duration) -> (ExitStatus, String) {
+        let child = self.0.take().unwrap();
+        let o: Output = common::wait_with_watchdog(child, limit);
+        (o.status, String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr))
+    }
+}
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        if let Some(mut child) = self.0.take() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+/// A folder for one side of a test, outside /tmp, which the controller's host replaces with its own.
+fn folder(test: &str, side: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("bridge-{}-{test}-{side}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run_id(test: &str) -> String {
+    format!("b{}-{test}", std::process::id())
+}
+
+/// `silrig run --bridge-listen` on the plant's host.
+fn plant_host(hosts: &Hosts, run: &str, out: &Path, duration_s: &str) -> Proc {
+    Proc::spawn(Command::new("ip").args(["netns", "exec", &hosts.plant, SILRIG, "run", "--no-baseline"]).args([
+        "--run-id",
+        run,
+        "--out",
+        out.to_str().unwrap(),
+        "--duration-s",
+        duration_s,
+        "--external-timeout-s",
+        "30",
+        "--bridge-listen",
+        PLANT_ADDR,
+    ]))
+}
+
+/// `silrig-bridge --connect` on the controller's host, in a mount namespace of its own with a private /dev/shm and
+/// /tmp (the exec chain keeps the pid: it is the bridge's).
+fn controller_bridge(hosts: &Hosts, run: &str, out: &Path) -> Proc {
+    Proc::spawn(
+        Command::new("ip")
+            .args(["netns", "exec", &hosts.controller, "unshare", "--mount", "sh", "-c"])
+            .arg(r#"mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /tmp && exec "$@""#)
+            .args(["sh", BRIDGE, "--connect", PLANT_ADDR, "--run-id", run, "--out", out.to_str().unwrap()]),
+    )
+}
+
+/// A program run inside the namespaces (network and mount) of process `pid` on the controller's host.
+fn beside(pid: u32, program: &str) -> Command {
+    let mut c = Command::new("nsenter");
+    c.args(["-t", &pid.to_string(), "-m", "-n", program]);
+    c
+}
+
+/// The unmodified controller beside the bridge `bridge_pid`, once the bridge has written the run's scenario.
+fn controller(bridge_pid: u32, run: &str, out: &Path) -> Proc {
+    wait_for(Duration::from_secs(30), "the controller-side bridge writes controller.env", || {
+        out.join("controller.env").exists()
+    });
+    let scenario = out.join("scenario.toml");
+    Proc::spawn(beside(bridge_pid, CONTROLLER).arg(scenario).args(["--run-id", run, "--out", out.to_str().unwrap()]))
+}
+
+fn wait_for(limit: Duration, what: &str, mut done: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !done() {
+        assert!(start.elapsed() < limit, "{what}: not within {limit:?}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn events(out: &Path) -> Vec<Value> {
+    let text = std::fs::read_to_string(out.join("events.jsonl")).unwrap_or_default();
+    text.lines().filter_map(|l| serde_json::from_str(l).ok()).collect()
+}
+
+fn has_event(out: &Path, process: &str, kind: &str) -> bool {
+    events(out).iter().any(|e| e["process"] == process && e["kind"] == kind)
+}
+
+fn first_after(events: &[Value], process: &str, kind: &str, after_ns: u64) -> Option<u64> {
+    events
+        .iter()
+        .filter(|e| e["process"] == process && e["kind"] == kind)
+        .filter_map(|e| e["t_ns"].as_u64())
+        .find(|t| *t >= after_ns)
+}
+
+fn report(out: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
+}
+
+fn counter(report: &Value, process: &str, name: &str) -> u64 {
+    let p = report["processes"].as_array().unwrap().iter().find(|p| p["process"] == process).unwrap();
+    p["counters"][name].as_u64().unwrap_or_else(|| panic!("{process} has no counter {name}: {p}"))
+}
+
+fn monotonic_ns() -> u64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: a valid timespec to fill.
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+#[test]
+fn a_controller_on_the_other_host_answers_nearly_every_tick() {
+    let _one = ONE_RIG.lock().unwrap_or_else(|e| e.into_inner());
+    let hosts = Hosts::new("a");
+    let (run, out, ctl_out) = (run_id("answers"), folder("answers", "plant"), folder("answers", "controller"));
+    let launcher = plant_host(&hosts, &run, &out, "10");
+    let mut bridge = controller_bridge(&hosts, &run, &ctl_out);
+    let ctl = controller(bridge.pid(), &run, &ctl_out);
+    let (status, text) = launcher.wait(Duration::from_secs(120));
+    assert!(status.success(), "{text}");
+    // The report, for `-- --nocapture` (the README's figures come from here).
+    eprintln!("{text}");
+    // Next-tick by default across hosts, and the network leg beside sense-to-actuate.
+    assert!(text.contains("bridge.network_rtt") && text.contains("plant.sense_to_actuate"), "{text}");
+    let r = report(&out);
+    let ticks = counter(&r, "plant", "ticks");
+    let misses = counter(&r, "plant", "command_misses");
+    assert_eq!(ticks, 1001, "{text}");
+    assert!(misses * 100 <= ticks, "{misses} of {ticks} ticks without their command: {text}");
+    assert!(counter(&r, "bridge", "commands_in") >= ticks - misses);
+    let rtt = r["processes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|p| p["latencies"].as_array().unwrap())
+        .find(|l| l["name"] == "bridge.network_rtt")
+        .unwrap();
+    assert!(rtt["summary"]["count"].as_u64().unwrap() >= ticks - misses - 1, "{rtt}");
+    let scenario = std::fs::read_to_string(ctl_out.join("scenario.toml")).unwrap();
+    assert!(scenario.contains("command_timing = \"next-tick\""), "{scenario}");
+    // The controller side ends by itself with the flight, and so does the controller.
+    let (status, said) = ctl.wait(Duration::from_secs(30));
+    assert!(status.success(), "{said}");
+    let (status, said) = std::mem::replace(&mut bridge, Proc(None)).wait(Duration::from_secs(30));
+    assert!(status.success(), "{said}");
+    let ctl_report: Value =
+        serde_json::from_str(&std::fs::read_to_string(ctl_out.join("bridge.report.json")).unwrap()).unwrap();
+    assert_eq!(ctl_report["ended"], "completed", "{ctl_report}");
+    no_shared_memory_left(&run);
+    for dir in [out, ctl_out] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
+
+#[test]
+fn a_link_cut_trips_the_failsafe_and_the_flight_recovers_also_after_a_bridge_restart() {
+    let _one = ONE_RIG.lock().unwrap_or_else(|e| e.into_inner());
+    let hosts = Hosts::new("b");
+    let (run, out, ctl_out) = (run_id("cut"), folder("cut", "plant"), folder("cut", "controller"));
+    let launcher = plant_host(&hosts, &run, &out, "12");
+    let mut bridge = controller_bridge(&hosts, &run, &ctl_out);
+    let mut ctl = controller(bridge.pid(), &run, &ctl_out);
+    wait_for(Duration::from_secs(60), "the plant ticks", || has_event(&out, "plant", "ticking"));
+    std::thread::sleep(Duration::from_secs(2));
+
+    let cut_ns = monotonic_ns();
+    hosts.link(false);
+    std::thread::sleep(Duration::from_millis(500));
+    hosts.link(true);
+    let up_ns = monotonic_ns();
+    wait_for(Duration::from_secs(20), "the flight recovers after the cut", || {
+        first_after(&events(&out), "plant", "controller-recovered", up_ns).is_some()
+    });
+    let e = events(&out);
+    let failsafe = first_after(&e, "plant", "failsafe-engaged", cut_ns).expect("the cut trips the failsafe");
+    let lost = first_after(&e, "bridge", "bridge-peer-lost", cut_ns).expect("the plant side reports the lost peer");
+    let recovered = first_after(&e, "plant", "controller-recovered", up_ns).unwrap();
+    assert!(failsafe < recovered && lost < recovered);
+    eprintln!(
+        "link cut: failsafe {:.0} ms and peer lost {:.0} ms after the cut; flight recovered {:.0} ms after the link \
+         came back",
+        (failsafe - cut_ns) as f64 / 1e6,
+        (lost - cut_ns) as f64 / 1e6,
+        (recovered - up_ns) as f64 / 1e6
+    );
+
+    // The controller side's bridge dies; a new one beside the same controller resumes the flight.
+    assert!(bridge.running());
+    bridge.signal(libc::SIGKILL);
+    let _ = std::mem::replace(&mut bridge, Proc(None)).wait(Duration::from_secs(10));
+    let killed_ns = monotonic_ns();
+    let mut restarted = Proc::spawn(beside(ctl.pid(), BRIDGE).args([
+        "--connect",
+        PLANT_ADDR,
+        "--run-id",
+        &run,
+        "--out",
+        ctl_out.to_str().unwrap(),
+    ]));
+    wait_for(Duration::from_secs(20), "the flight resumes with the restarted bridge", || {
+        let e = events(&out);
+        e.iter().any(|e| e["kind"] == "bridge-peer-joined" && e["detail"].as_str().unwrap().contains("replacing"))
+            && first_after(&e, "plant", "controller-recovered", killed_ns).is_some()
+    });
+    let (status, text) = launcher.wait(Duration::from_secs(120));
+    assert!(status.success(), "{text}");
+    assert!(counter(&report(&out), "plant", "failsafe_ticks") > 0);
+    assert!(ctl.running() || ctl.wait(Duration::from_secs(1)).0.success());
+    let _ = restarted.wait_ended();
+    no_shared_memory_left(&run);
+    for dir in [out, ctl_out] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
+
+impl Proc {
+    /// Give it a moment to end by itself (the run is over); the drop kills it otherwise.
+    fn wait_ended(&mut self) -> bool {
+        let start = Instant::now();
+        while self.0.is_some() && self.running() && start.elapsed() < Duration::from_secs(10) {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        self.0.is_some() && !self.running()
+    }
+}
+
+#[test]
+fn an_unreachable_address_is_named() {
+    let out = common::temp_dir("bridge", "unreachable");
+    let run = run_id("unreachable");
+    // Port 1 on the loopback: nobody listens there.
+    let o = Command::new(BRIDGE)
+        .args(["--connect", "127.0.0.1:1", "--connect-timeout-s", "1", "--run-id", &run, "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{said}");
+    assert!(said.contains("no plant-side bridge answered at tcp/127.0.0.1:1 within 1 s"), "{said}");
+    assert!(said.contains("firewall"), "{said}");
+    let o = Command::new(BRIDGE).args(["--connect", "127.0.0.1", "--run-id", &run]).output().unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("HOST:PORT"));
+    no_shared_memory_left(&run);
+    let _ = std::fs::remove_dir_all(out);
+}
+
+#[test]
+fn another_run_id_and_a_second_controller_side_bridge_are_refused_while_the_plant_flies_on() {
+    let _one = ONE_RIG.lock().unwrap_or_else(|e| e.into_inner());
+    let hosts = Hosts::new("c");
+    let (run, out, ctl_out) = (run_id("refuse"), folder("refuse", "plant"), folder("refuse", "controller"));
+    let launcher = plant_host(&hosts, &run, &out, "8");
+    let bridge = controller_bridge(&hosts, &run, &ctl_out);
+    let _ctl = controller(bridge.pid(), &run, &ctl_out);
+    wait_for(Duration::from_secs(60), "the plant ticks", || has_event(&out, "plant", "ticking"));
+
+    let other_out = folder("refuse", "other");
+    let (status, said) = controller_bridge(&hosts, "someone-else", &other_out).wait(Duration::from_secs(30));
+    assert_eq!(status.code(), Some(2), "{said}");
+    assert!(said.contains(&format!("serves run `{run}`, not `someone-else`")), "{said}");
+
+    // A second controller-side bridge of the run, as from a third host (its own mount namespace).
+    let (status, said) = controller_bridge(&hosts, &run, &other_out).wait(Duration::from_secs(30));
+    assert_eq!(status.code(), Some(2), "{said}");
+    assert!(said.contains(&format!("run `{run}` already has a controller-side bridge")), "{said}");
+
+    let (status, text) = launcher.wait(Duration::from_secs(120));
+    assert!(status.success(), "{text}");
+    let r = report(&out);
+    let (ticks, misses) = (counter(&r, "plant", "ticks"), counter(&r, "plant", "command_misses"));
+    assert!(misses * 100 <= ticks, "the first bridge's flight went on: {misses} of {ticks} missed; {text}");
+    assert!(has_event(&out, "bridge", "bridge-peer-refused"));
+    no_shared_memory_left(&run);
+    for dir in [out, ctl_out, other_out] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
