@@ -11,7 +11,7 @@ use iceoryx2::prelude::ZeroCopySend;
 /// The layout version as a literal, so that the type names can be built from it with `concat!`.
 macro_rules! layout_version {
     () => {
-        3
+        4
     };
 }
 
@@ -184,6 +184,13 @@ pub struct PlantSample with header {
     pub ny_g: f64,
     /// Simulated time of this state, s.
     pub t_sim_s: f64,
+    /// How late the plant woke for this tick (actual minus ideal start, the cyclictest figure), ns; 0 in lockstep
+    /// (no sleeping) and in the end-of-run sample.
+    pub wake_lateness_ns: i64,
+    /// Execution time of the previous tick's step (actuators and RK4), ns: a tick's step runs after its sample is
+    /// published, so the next sample carries it (the end-of-run sample carries the last tick's); 0 in the first
+    /// sample of a plant life.
+    pub previous_step_exec_ns: u64,
     /// `FLAG_*` bits.
     pub flags: u32,
     /// Explicit padding, always 0.
@@ -252,7 +259,7 @@ pub struct LogAckSample with header {
 // would only be caught at run time.
 const _: () = assert!(core::mem::size_of::<SampleHeader>() == 40);
 const _: () = assert!(core::mem::align_of::<SampleHeader>() == 8);
-const _: () = assert!(core::mem::size_of::<PlantSample>() == 208);
+const _: () = assert!(core::mem::size_of::<PlantSample>() == 224);
 const _: () = assert!(core::mem::align_of::<PlantSample>() == 8);
 const _: () = assert!(core::mem::size_of::<CommandSample>() == 608);
 const _: () = assert!(core::mem::size_of::<LogAckSample>() == 48);
@@ -348,6 +355,8 @@ impl PlantSample {
             nz_g: 0.0,
             ny_g: 0.0,
             t_sim_s: 0.0,
+            wake_lateness_ns: 0,
+            previous_step_exec_ns: 0,
             flags: 0,
             _pad: 0,
         }

@@ -40,7 +40,7 @@ const IPC_PLANT_TO_LOGGER: usize = 0;
 const IPC_COMMAND_TO_LOGGER: usize = 1;
 
 /// Columns of `timing.csv`.
-pub const TIMING_COLUMNS: [&str; 12] = [
+pub const TIMING_COLUMNS: [&str; 14] = [
     "tick",
     "plant_seq",
     "plant_epoch",
@@ -53,6 +53,8 @@ pub const TIMING_COLUMNS: [&str; 12] = [
     "t_command_recv_ns",
     "compute_ns",
     "command_missing",
+    "wake_lateness_ns",
+    "step_exec_ns",
 ];
 
 /// A CSV file the logger appends whole rows to, in batches. A batch the disk does not take whole (a full disk) is
@@ -145,6 +147,7 @@ impl Writer {
         plant: &Received<PlantSample>,
         held: &HeldActuators,
         command: Option<&Received<CommandSample>>,
+        step_exec_ns: Option<u64>,
     ) -> std::io::Result<()> {
         let snap = snapshot(&plant.sample);
         let nan = f64::NAN;
@@ -182,15 +185,17 @@ impl Writer {
                     c.sample.compute_ns.to_string(),
                 )
             });
+        let step_exec = step_exec_ns.map_or(String::new(), |ns| ns.to_string());
         self.timing.push(format_args!(
-            "{},{},{},{},{},{},{cs},{ce},{ct},{cr},{cn},{}",
+            "{},{},{},{},{},{},{cs},{ce},{ct},{cr},{cn},{},{},{step_exec}",
             p.tick,
             p.seq,
             p.epoch,
             p.t_send_ns,
             plant.t_recv_ns,
             plant.sample.flags,
-            u8::from(command.is_none())
+            u8::from(command.is_none()),
+            plant.sample.wake_lateness_ns
         ));
         self.rows += 1;
         self.last_tick = Some(p.tick);
@@ -481,6 +486,14 @@ impl LoggerLoop {
         next.or(end).map(|r| HeldActuators { surfaces_deg: r.sample.surfaces_deg, throttle: r.sample.throttle })
     }
 
+    /// The execution time of this tick's step, which the sample closing the tick carries (as it carries the
+    /// deflections); none when that sample is from another plant life, which did not run this step.
+    fn step_exec_after(&self, tick: u64, epoch: u64) -> Option<u64> {
+        let next = self.pending_plant.get(&(tick + 1));
+        let end = self.end.as_ref().filter(|e| e.sample.header.tick == tick);
+        next.or(end).filter(|r| r.sample.header.epoch == epoch).map(|r| r.sample.previous_step_exec_ns)
+    }
+
     /// Write the oldest waiting plant samples, each with the command answering it and the deflections the next
     /// sample reports; one whose command or next sample has not come while [`MISSING_COMMAND_WINDOW`] newer samples
     /// arrived (or at the end) is written without them.
@@ -517,7 +530,8 @@ impl LoggerLoop {
                 }
             }
             self.start_trace(tick)?;
-            self.writer.row(&sample, &held.unwrap_or(HeldActuators::UNKNOWN), command.as_ref())?;
+            let step_exec_ns = self.step_exec_after(tick, sample.sample.header.epoch);
+            self.writer.row(&sample, &held.unwrap_or(HeldActuators::UNKNOWN), command.as_ref(), step_exec_ns)?;
             self.rec.count("rows_written", 1);
             // Commands answering ticks already written can no longer be used.
             self.pending_command.retain(|t, _| *t > tick);
