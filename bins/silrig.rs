@@ -78,11 +78,22 @@ enum Command {
         #[arg(long)]
         python: Option<PathBuf>,
     },
-    /// Micro-benchmarks of the model (median of batches; run on an idle machine).
-    Bench,
+    /// Micro-benchmarks of the model (median of batches; run on an idle machine); `bench ipc`: the transport's
+    /// ping-pong ceiling and the lockstep rig against it.
+    Bench {
+        #[command(subcommand)]
+        what: Option<BenchCommand>,
+    },
     /// Measure the OS timer floor: a bare absolute-deadline loop, wake-up lateness as cyclictest reports it.
     #[command(name = silrig::bench::timer_baseline::SUBCOMMAND)]
     TimerBaseline(silrig::bench::timer_baseline::BaselineArgs),
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// The iceoryx2 ping-pong ceiling between two processes on this machine, and lockstep rig runs as a ratio to it.
+    #[command(name = silrig::bench::ipc::SUBCOMMAND)]
+    Ipc(silrig::bench::ipc::IpcBenchArgs),
 }
 
 #[derive(Subcommand)]
@@ -251,7 +262,8 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 }
             }
         }
-        Command::Bench => {
+        Command::Bench { what: Some(BenchCommand::Ipc(args)) } => print!("{}", silrig::bench::ipc::run(&args)?),
+        Command::Bench { what: None } => {
             for figure in silrig::bench::plant_figures() {
                 println!("{figure}");
             }

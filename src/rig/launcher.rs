@@ -43,6 +43,9 @@ pub struct LaunchOptions {
     /// Do not run the OS-floor timer loop beside a realtime rig.
     #[arg(long)]
     pub no_baseline: bool,
+    /// No live status line while the run goes.
+    #[arg(long)]
+    pub quiet: bool,
     /// Loop and watchdog tuning, passed on to every process.
     #[command(flatten)]
     pub process: ProcessOptions,

@@ -18,6 +18,7 @@ use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::plant::snapshot;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
+use crate::clock::{TickSchedule, monotonic_ns};
 use crate::control::SurfaceCommand;
 use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
 use crate::scenario::Scenario;
@@ -35,6 +36,10 @@ use std::path::{Path, PathBuf};
 pub const MISSING_COMMAND_WINDOW: u64 = 10;
 /// Rows per flush (0.1 s of data at 100 Hz).
 pub const FLUSH_EVERY_ROWS: u64 = 10;
+/// Lockstep: the logger looks for new samples this often instead of being woken by each one, ns. Two wake-ups a
+/// tick of a third process on a two-core machine cost the plant and controller about a third of their speed
+/// (README, "Lockstep speed"); at 40,000 ticks/s this is 10 ticks a look, well inside the plant's window.
+pub const LOCKSTEP_POLL_NS: u64 = 250_000;
 
 const IPC_PLANT_TO_LOGGER: usize = 0;
 const IPC_COMMAND_TO_LOGGER: usize = 1;
@@ -288,6 +293,8 @@ pub struct LoggerLoop {
     /// A restarted plant re-flying ticks already written (its checkpoint is older than its predecessor's last
     /// tick, or it had none): those samples are not written, and the first row it adds is a discontinuity.
     reflown: Option<Reflown>,
+    /// Lockstep: paced by a timer ([`LOCKSTEP_POLL_NS`]) rather than woken by every sample.
+    lockstep: bool,
     done: bool,
     error: Option<anyhow::Error>,
 }
@@ -351,6 +358,7 @@ impl LoggerLoop {
             missing_since: None,
             announced: None,
             reflown: None,
+            lockstep: args.mode == super::RigMode::Lockstep,
             done: false,
             error: None,
         })
@@ -360,14 +368,28 @@ impl LoggerLoop {
     /// before the end, with or without its command.
     pub fn serve(&mut self, ports: &mut LoggerPorts) -> anyhow::Result<ipc::LoopExit> {
         let waitset = ipc::rig_waitset()?;
-        let plant_guard = waitset
-            .attach_notification(ports.inputs.plant.listener())
-            .map_err(|e| anyhow::anyhow!("attaching the plant stream: {e:?}"))?;
-        let command_guard = waitset
-            .attach_notification(ports.inputs.commands.listener())
+        let pace = match self.lockstep {
+            true => Some(ipc::TickTimer::new(TickSchedule::new(monotonic_ns() + LOCKSTEP_POLL_NS, LOCKSTEP_POLL_NS))?),
+            false => None,
+        };
+        let pace_guard = pace
+            .as_ref()
+            .map(|timer| waitset.attach_notification(timer))
+            .transpose()
+            .map_err(|e| anyhow::anyhow!("attaching the lockstep timer: {e:?}"))?;
+        let attach = |listener| (!self.lockstep).then(|| waitset.attach_notification(listener)).transpose();
+        let plant_guard =
+            attach(ports.inputs.plant.listener()).map_err(|e| anyhow::anyhow!("attaching the plant stream: {e:?}"))?;
+        let command_guard = attach(ports.inputs.commands.listener())
             .map_err(|e| anyhow::anyhow!("attaching the command stream: {e:?}"))?;
         let exit = ipc::run_waitset(&waitset, |id| {
-            if id.has_event_from(&plant_guard) || id.has_event_from(&command_guard) {
+            let paced = pace_guard.as_ref().is_some_and(|g| id.has_event_from(g));
+            if paced && let Some(timer) = &pace {
+                // Only clears the timer's readiness: however many expirations passed, one look takes everything.
+                let _ = timer.read_expirations();
+            }
+            let woken = [&plant_guard, &command_guard].iter().any(|g| g.as_ref().is_some_and(|g| id.has_event_from(g)));
+            if paced || woken {
                 match self.step(&ports.inputs, &mut ports.acks, false) {
                     Ok(true) => {
                         self.done = true;

@@ -444,7 +444,7 @@ impl ControllerSession {
         let mut fresh = 0u64;
         let mut invalid = 0u64;
         let mut ended = false;
-        self.samples.receive_all(|r| {
+        self.samples.drain(|r| {
             if r.invalid.is_some() {
                 invalid += 1;
             } else if r.sample.flags & wire::FLAG_END_OF_RUN != 0 {
