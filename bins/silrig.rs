@@ -65,6 +65,15 @@ enum Command {
     },
     /// Run the three-process rig (plant, controller, logger over iceoryx2) and report control quality and timing.
     Run(silrig::rig::launcher::LaunchOptions),
+    /// Watch a running rig of this machine: each process's tick, counters and p99s so far, refreshed every second
+    /// until the run ends. Read-only: it changes nothing the rig does.
+    Top {
+        /// Run id of the rig (as `silrig run` printed it).
+        run_id: silrig::ipc::RunId,
+        /// Stop after this many refreshes.
+        #[arg(long)]
+        count: Option<u64>,
+    },
     /// Fly a suite of cases with one controller and give a verdict a CI pipeline can gate on: a table,
     /// check.json and check.junit.xml. Exit status 0: every case passed; 1: a case failed; 2: nothing could be
     /// judged (a malformed suite, a controller command that cannot run).
@@ -238,6 +247,10 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             if let Some(stopped) = &report.stopped_by {
                 return Ok(ExitCode::from(stopped.exit_status));
             }
+        }
+        Command::Top { run_id, count } => {
+            silrig::rig::signals::install_termination_flag();
+            silrig::rig::status::top(&run_id, count)?;
         }
         Command::Check(opts) => {
             let verdict = silrig::check::run(&opts)?;

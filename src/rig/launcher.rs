@@ -9,6 +9,7 @@ use super::events::EventLog;
 use super::fault_schedule::FaultSchedule;
 use super::report::{MachineConditions, read_report};
 use super::run_report::{RigReport, write_plots};
+use super::status::LiveLine;
 use super::supervision::{ChildProcess, SupervisionOptions, Supervisor, find_program, split_command};
 use super::{ProcessArgs, ProcessOptions, RigMode, load_scenario, signals};
 use crate::bench::timer_baseline::{self, BaselineArgs, BaselineReport};
@@ -312,12 +313,20 @@ fn start_baseline(scenario: &Scenario, out: &Path) -> anyhow::Result<ChildProces
 
 /// Phase 3: supervise until the plant has flown the scenario (and the logger has written it), SIGTERM or the
 /// watchdog on the whole run.
-fn supervise(sup: &mut Supervisor, faults: &mut FaultSchedule, scenario: &Scenario) -> anyhow::Result<()> {
+fn supervise(
+    sup: &mut Supervisor,
+    faults: &mut FaultSchedule,
+    scenario: &Scenario,
+    mut live: Option<&mut LiveLine>,
+) -> anyhow::Result<()> {
     let timeout = Duration::from_secs_f64(scenario.timing.duration_s * 3.0 + 30.0);
     loop {
         faults.poll(sup)?;
         sup.handle_exits()?;
         sup.restart_due()?;
+        if let Some(live) = live.as_deref_mut() {
+            live.update(sup.lives.iter().filter(|l| l.life > 1).count() as u32);
+        }
         if sup.run_is_over() {
             return Ok(());
         }
@@ -391,7 +400,12 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     let mut baseline =
         if opts.mode == RigMode::Realtime && !opts.no_baseline { Some(start_baseline(&scenario, &out)?) } else { None };
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
-    supervise(&mut sup, &mut faults, &scenario)?;
+    let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
+    let supervised = supervise(&mut sup, &mut faults, &scenario, live.as_mut());
+    if let Some(live) = live {
+        live.finish();
+    }
+    supervised?;
     let ended_by_plan = sup.ended_by_plan();
     faults.release_stopped(&mut sup);
     sup.stop_all()?;

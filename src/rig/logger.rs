@@ -344,6 +344,7 @@ impl LoggerLoop {
             "invalid_samples",
             "flight_discontinuities",
         ]);
+        rec.start_status(&args.run_id);
         Ok(Self {
             ticks: scenario.timing.ticks(),
             scenario,
@@ -432,6 +433,10 @@ impl LoggerLoop {
             self.writer.flush()?;
             acks.send(self.writer.last_tick.unwrap_or(0), &LogAckSample::new(self.writer.rows))?;
         }
+        let (tick, dt_s) = (self.writer.last_tick.unwrap_or(0), self.scenario.timing.dt_s);
+        let lost =
+            [("plant_samples_lost", inputs.plant.stats().lost), ("command_samples_lost", inputs.commands.stats().lost)];
+        self.rec.status(tick, tick as f64 * dt_s, self.scenario.timing.duration_s, false, &lost);
         let end_tick = self.end.as_ref().map(|e| e.sample.header.tick);
         Ok(self.writer.last_tick.is_some_and(|t| t >= self.ticks || end_tick.is_some_and(|e| t >= e)))
     }

@@ -254,6 +254,7 @@ impl PlantLoop {
             "failsafe_ticks",
             "samples_dropped",
         ]);
+        rec.start_status(&args.run_id);
         let events = EventLog::new(&args.out, Role::Plant.label());
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
@@ -389,6 +390,11 @@ impl PlantLoop {
         }
         self.step(held);
         self.rec.count("ticks", 1);
+        let stats = ports.commands.stats();
+        let extra = [("commands_lost", stats.lost), ("controller_restarts", stats.publisher_restarts)];
+        let t_s = self.sim_tick as f64 * self.scenario.timing.dt_s;
+        let duration_s = self.scenario.timing.duration_s;
+        self.rec.status(self.sim_tick, t_s, duration_s, self.watchdog.in_failsafe, &extra);
         Ok(())
     }
 
