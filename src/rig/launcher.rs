@@ -7,8 +7,8 @@
 
 use super::events::EventLog;
 use super::fault_schedule::FaultSchedule;
-use super::report::{MachineConditions, read_report};
-use super::run_report::{RigReport, write_plots};
+use super::report::{MachineConditions, ProcessReport, read_report};
+use super::run_report::{ProcessLife, RigReport, write_plots};
 use super::status::LiveLine;
 use super::supervision::{ChildProcess, SupervisionOptions, Supervisor, find_program, split_command};
 use super::{ProcessArgs, ProcessOptions, RigMode, load_scenario, signals};
@@ -374,6 +374,21 @@ fn remove_empty_figures(out: &Path) {
     }
 }
 
+/// What a process the launcher stopped at the normal end of a run reports as "terminated by signal" (its SIGTERM)
+/// is shown as "stopped at end": the plant completed, nobody else sent a signal, and it exited cleanly when told.
+fn mark_stopped_at_end(processes: &mut [ProcessReport], lives: &[ProcessLife]) {
+    let plant_completed = processes.iter().any(|p| p.process == Role::Plant.label() && p.ended == "completed");
+    if !plant_completed || signals::termination_signal().is_some() {
+        return;
+    }
+    for p in processes.iter_mut().filter(|p| p.ended == "terminated by signal") {
+        let life = lives.iter().rev().find(|l| l.pid == p.pid);
+        if life.is_some_and(|l| l.exit == "exit status 0 at the end of the run") {
+            p.ended = "stopped at end".into();
+        }
+    }
+}
+
 /// Run the three processes to the end of the scenario and return the merged report (also written as
 /// `report.json`). An `Err` means the run could not be set up; a run whose processes failed returns `Ok` with
 /// `failures` filled in.
@@ -429,6 +444,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             Err(e) => failures.push(format!("{role}: no report ({e})")),
         }
     }
+    mark_stopped_at_end(&mut processes, &sup.lives);
     let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
     let control = trace.as_ref().map(|t| summarize(t, &scenario));
     let flown_s = trace
