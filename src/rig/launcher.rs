@@ -498,6 +498,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         stopped_by,
         failures,
         leftovers,
+        phases: super::run_report::phase_splits(&out, scenario.timing.dt_s, opts.mode == RigMode::Realtime),
     };
     // A full disk must not cost the user the report: it is printed whatever happens to the files.
     if let Err(e) = write_plots(&report, &out, &scenario) {

@@ -6,7 +6,7 @@ use super::fault_report::{Discontinuity, FaultRecord};
 use super::report::{MachineConditions, ProcessReport};
 use crate::bench::timer_baseline::BaselineReport;
 use crate::summary::Summary;
-use crate::timing::{summary_line, summary_table_header};
+use crate::timing::{LatencyHistogram, LatencySummary, summary_line, summary_table_header};
 use crate::trace::Trace;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -54,6 +54,58 @@ pub struct RigReport {
     pub failures: Vec<String>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
     pub leftovers: Vec<String>,
+    /// The plant's per-tick distributions split into warm-up (the first second) and steady state.
+    #[serde(default)]
+    pub phases: Vec<PhaseSplit>,
+}
+
+/// The first second of a run is its warm-up (caches, page faults, the peers' first wake-ups); the report shows it
+/// apart from the steady state after it, ns.
+pub const WARM_UP_NS: u64 = 1_000_000_000;
+
+/// One of the plant's per-tick distributions, split at the end of the warm-up.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PhaseSplit {
+    /// e.g. `plant.wake_lateness`.
+    pub name: String,
+    /// Ticks of the first second, µs.
+    pub warm_up: LatencySummary,
+    /// Ticks after it, µs.
+    pub steady: LatencySummary,
+}
+
+/// The plant's wake-up lateness (realtime) and step execution time split at the end of the warm-up, from the
+/// per-tick columns of the logger's `timing.csv` (ticks by simulated time: tick * dt < 1 s is warm-up).
+pub fn phase_splits(out: &Path, dt_s: f64, realtime: bool) -> Vec<PhaseSplit> {
+    let Ok(text) = std::fs::read_to_string(out.join("timing.csv")) else { return Vec::new() };
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let column = |name: &str| header.iter().position(|c| *c == name);
+    let (Some(tick), Some(wake), Some(exec)) = (column("tick"), column("wake_lateness_ns"), column("step_exec_ns"))
+    else {
+        return Vec::new();
+    };
+    let mut columns = vec![("plant.step_exec", exec)];
+    if realtime {
+        columns.insert(0, ("plant.wake_lateness", wake));
+    }
+    let warm_up_ticks = (WARM_UP_NS as f64 / 1e9 / dt_s).round() as u64;
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    columns
+        .into_iter()
+        .map(|(name, c)| {
+            let (mut warm_up, mut steady) = (LatencyHistogram::new(), LatencyHistogram::new());
+            for row in &rows {
+                let (Some(t), Some(v)) =
+                    (row.get(tick).and_then(|t| t.parse::<u64>().ok()), row.get(c).and_then(|v| v.parse::<i64>().ok()))
+                else {
+                    continue;
+                };
+                if t < warm_up_ticks { &mut warm_up } else { &mut steady }.record_ns(v);
+            }
+            PhaseSplit { name: name.into(), warm_up: warm_up.summary(), steady: steady.summary() }
+        })
+        .collect()
 }
 
 /// One life of a process the launcher started: from its start to its exit (each restart starts a new life).
@@ -265,6 +317,27 @@ impl RigReport {
                     b.source,
                     b.policy
                 );
+            }
+        }
+        if !self.phases.is_empty() {
+            out += &format!(
+                "\nwarm-up (the first second) apart from steady state (after it)\n{}\n",
+                summary_table_header()
+            );
+            for p in &self.phases {
+                out += &format!("{}\n", summary_line(&format!("{} warm-up", p.name), &p.warm_up));
+                out += &format!("{}\n", summary_line(&format!("{} steady", p.name), &p.steady));
+            }
+            let floor = self.timer_baseline.as_ref().and_then(|b| Some((b, b.lateness_steady?)));
+            if let Some((b, floor_steady)) = floor {
+                out += &format!("{}\n", summary_line("os-floor.wake_lateness steady", &floor_steady));
+                if let Some(plant) = self.phases.iter().find(|p| p.name == "plant.wake_lateness") {
+                    out += &format!(
+                        "steady state: plant wake-up lateness p99 is {:.2}x the OS floor's ({})\n",
+                        plant.steady.p99_us / floor_steady.p99_us,
+                        b.source
+                    );
+                }
             }
         }
         out.push('\n');
