@@ -126,7 +126,14 @@ fn a_2_s_realtime_run_completes_with_every_report_field() {
     assert!(o.status.success(), "{text}\n{}", String::from_utf8_lossy(&o.stderr));
     assert!(text.contains("plant.wake_lateness") && text.contains("os-floor.wake_lateness"), "{text}");
     check_report(&report(&out), 201, Mode::RealtimeWithBaseline);
-    for f in ["trace.csv", "timing.csv", "latency.png", "fig1_states.png", "plant.sense_to_actuate.hgrm"] {
+    for f in [
+        "trace.csv",
+        "timing.csv",
+        "latency.png",
+        "latency_histogram.png",
+        "fig1_states.png",
+        "plant.sense_to_actuate.hgrm",
+    ] {
         assert!(out.join(f).exists(), "{f}");
     }
     let hgrm = std::fs::read_to_string(out.join("plant.wake_lateness.hgrm")).unwrap();

@@ -74,6 +74,23 @@ pub struct PhaseSplit {
     pub steady: LatencySummary,
 }
 
+/// The plant's per-tick wake-up lateness (realtime) and step execution time from `timing.csv`, µs.
+fn per_tick_values_us(out: &Path, realtime: bool) -> Vec<(String, Vec<f64>)> {
+    let Ok(text) = std::fs::read_to_string(out.join("timing.csv")) else { return Vec::new() };
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let names: &[&str] = if realtime { &["wake_lateness_ns", "step_exec_ns"] } else { &["step_exec_ns"] };
+    names
+        .iter()
+        .filter_map(|name| {
+            let c = header.iter().position(|h| h == name)?;
+            let values = rows.iter().filter_map(|r| r.get(c)?.parse::<f64>().ok()).map(|ns| ns / 1e3).collect();
+            Some((format!("plant.{}", name.trim_end_matches("_ns")), values))
+        })
+        .collect()
+}
+
 /// The plant's wake-up lateness (realtime) and step execution time split at the end of the warm-up, from the
 /// per-tick columns of the logger's `timing.csv` (ticks by simulated time: tick * dt < 1 s is warm-up).
 pub fn phase_splits(out: &Path, dt_s: f64, realtime: bool) -> Vec<PhaseSplit> {
@@ -164,6 +181,11 @@ pub(super) fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scen
     if !series.is_empty() {
         let title = format!("{} ({}, run {}): latency distributions", report.scenario, report.mode, report.run_id);
         crate::plot::plot_percentile_distributions(&series, out, "latency", &title)?;
+    }
+    let per_tick = per_tick_values_us(out, report.mode == "realtime");
+    if per_tick.iter().any(|(_, v)| !v.is_empty()) {
+        let title = format!("{} ({}, run {}): per-tick histograms", report.scenario, report.mode, report.run_id);
+        crate::plot::plot_latency_histograms(&per_tick, 5.0, out, "latency_histogram", &title)?;
     }
     if !(report.faults.is_empty() && report.discontinuities.is_empty()) && report.control.is_some() {
         let trace = Trace::load(&out.join("trace.csv"))?;
