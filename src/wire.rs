@@ -503,16 +503,16 @@ mod tests {
     #[test]
     fn sizes_alignment_and_type_names_are_the_contract() {
         assert_eq!(core::mem::size_of::<SampleHeader>(), 40);
-        assert_eq!(core::mem::size_of::<PlantSample>(), 208);
+        assert_eq!(core::mem::size_of::<PlantSample>(), 224);
         assert_eq!(core::mem::size_of::<CommandSample>(), 608);
         assert_eq!(core::mem::align_of::<PlantSample>(), 8);
         assert_eq!(core::mem::align_of::<CommandSample>(), 8);
         // Safety of `type_name`: only reads the string the derive generated.
         unsafe {
-            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v3");
-            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v3");
-            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v3");
-            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v3");
+            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v4");
+            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v4");
+            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v4");
+            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v4");
         }
         for name in [PlantSample::TYPE_NAME, CommandSample::TYPE_NAME, SampleHeader::TYPE_NAME, LogAckSample::TYPE_NAME]
         {
@@ -551,7 +551,7 @@ mod tests {
         let mut p = PlantSample::zeroed();
         p.state[3] = f64::NAN;
         let msg = p.validate().unwrap_err().to_string();
-        assert!(msg.contains("silrig::PlantSample::v3") && msg.contains("state[3] phi_rad"), "{msg}");
+        assert!(msg.contains("silrig::PlantSample::v4") && msg.contains("state[3] phi_rad"), "{msg}");
         assert!(msg.contains("NaN"), "{msg}");
 
         let mut p = PlantSample::zeroed();
