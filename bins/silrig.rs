@@ -65,6 +65,15 @@ enum Command {
     },
     /// Run the three-process rig (plant, controller, logger over iceoryx2) and report control quality and timing.
     Run(silrig::rig::launcher::LaunchOptions),
+    /// Watch a running rig of this machine: each process's tick, counters and p99s so far, refreshed every second
+    /// until the run ends. Read-only: it changes nothing the rig does.
+    Top {
+        /// Run id of the rig (as `silrig run` printed it).
+        run_id: silrig::ipc::RunId,
+        /// Stop after this many refreshes.
+        #[arg(long)]
+        count: Option<u64>,
+    },
     /// Fly a suite of cases with one controller and give a verdict a CI pipeline can gate on: a table,
     /// check.json and check.junit.xml. Exit status 0: every case passed; 1: a case failed; 2: nothing could be
     /// judged (a malformed suite, a controller command that cannot run).
@@ -83,11 +92,22 @@ enum Command {
         #[arg(long)]
         python: Option<PathBuf>,
     },
-    /// Micro-benchmarks of the model (median of batches; run on an idle machine).
-    Bench,
+    /// Micro-benchmarks of the model (median of batches; run on an idle machine); `bench ipc`: the transport's
+    /// ping-pong ceiling and the lockstep rig against it.
+    Bench {
+        #[command(subcommand)]
+        what: Option<BenchCommand>,
+    },
     /// Measure the OS timer floor: a bare absolute-deadline loop, wake-up lateness as cyclictest reports it.
     #[command(name = silrig::bench::timer_baseline::SUBCOMMAND)]
     TimerBaseline(silrig::bench::timer_baseline::BaselineArgs),
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// The iceoryx2 ping-pong ceiling between two processes on this machine, and lockstep rig runs as a ratio to it.
+    #[command(name = silrig::bench::ipc::SUBCOMMAND)]
+    Ipc(silrig::bench::ipc::IpcBenchArgs),
 }
 
 #[derive(Subcommand)]
@@ -233,6 +253,10 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 return Ok(ExitCode::from(stopped.exit_status));
             }
         }
+        Command::Top { run_id, count } => {
+            silrig::rig::signals::install_termination_flag();
+            silrig::rig::status::top(&run_id, count)?;
+        }
         Command::Check(opts) => {
             let verdict = silrig::check::run(&opts)?;
             print!("{}", verdict.to_text());
@@ -263,7 +287,8 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 }
             }
         }
-        Command::Bench => {
+        Command::Bench { what: Some(BenchCommand::Ipc(args)) } => print!("{}", silrig::bench::ipc::run(&args)?),
+        Command::Bench { what: None } => {
             for figure in silrig::bench::plant_figures() {
                 println!("{figure}");
             }

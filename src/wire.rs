@@ -11,7 +11,7 @@ use iceoryx2::prelude::ZeroCopySend;
 /// The layout version as a literal, so that the type names can be built from it with `concat!`.
 macro_rules! layout_version {
     () => {
-        3
+        4
     };
 }
 
@@ -184,6 +184,13 @@ pub struct PlantSample with header {
     pub ny_g: f64,
     /// Simulated time of this state, s.
     pub t_sim_s: f64,
+    /// How late the plant woke for this tick (actual minus ideal start, the cyclictest figure), ns; 0 in lockstep
+    /// (no sleeping) and in the end-of-run sample.
+    pub wake_lateness_ns: i64,
+    /// Execution time of the previous tick's step (actuators and RK4), ns: a tick's step runs after its sample is
+    /// published, so the next sample carries it (the end-of-run sample carries the last tick's); 0 in the first
+    /// sample of a plant life.
+    pub previous_step_exec_ns: u64,
     /// `FLAG_*` bits.
     pub flags: u32,
     /// Explicit padding, always 0.
@@ -252,7 +259,7 @@ pub struct LogAckSample with header {
 // would only be caught at run time.
 const _: () = assert!(core::mem::size_of::<SampleHeader>() == 40);
 const _: () = assert!(core::mem::align_of::<SampleHeader>() == 8);
-const _: () = assert!(core::mem::size_of::<PlantSample>() == 208);
+const _: () = assert!(core::mem::size_of::<PlantSample>() == 224);
 const _: () = assert!(core::mem::align_of::<PlantSample>() == 8);
 const _: () = assert!(core::mem::size_of::<CommandSample>() == 608);
 const _: () = assert!(core::mem::size_of::<LogAckSample>() == 48);
@@ -348,6 +355,8 @@ impl PlantSample {
             nz_g: 0.0,
             ny_g: 0.0,
             t_sim_s: 0.0,
+            wake_lateness_ns: 0,
+            previous_step_exec_ns: 0,
             flags: 0,
             _pad: 0,
         }
@@ -494,16 +503,16 @@ mod tests {
     #[test]
     fn sizes_alignment_and_type_names_are_the_contract() {
         assert_eq!(core::mem::size_of::<SampleHeader>(), 40);
-        assert_eq!(core::mem::size_of::<PlantSample>(), 208);
+        assert_eq!(core::mem::size_of::<PlantSample>(), 224);
         assert_eq!(core::mem::size_of::<CommandSample>(), 608);
         assert_eq!(core::mem::align_of::<PlantSample>(), 8);
         assert_eq!(core::mem::align_of::<CommandSample>(), 8);
         // Safety of `type_name`: only reads the string the derive generated.
         unsafe {
-            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v3");
-            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v3");
-            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v3");
-            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v3");
+            assert_eq!(<PlantSample as ZeroCopySend>::type_name(), "silrig::PlantSample::v4");
+            assert_eq!(<CommandSample as ZeroCopySend>::type_name(), "silrig::CommandSample::v4");
+            assert_eq!(<SampleHeader as ZeroCopySend>::type_name(), "silrig::SampleHeader::v4");
+            assert_eq!(<LogAckSample as ZeroCopySend>::type_name(), "silrig::LogAckSample::v4");
         }
         for name in [PlantSample::TYPE_NAME, CommandSample::TYPE_NAME, SampleHeader::TYPE_NAME, LogAckSample::TYPE_NAME]
         {
@@ -542,7 +551,7 @@ mod tests {
         let mut p = PlantSample::zeroed();
         p.state[3] = f64::NAN;
         let msg = p.validate().unwrap_err().to_string();
-        assert!(msg.contains("silrig::PlantSample::v3") && msg.contains("state[3] phi_rad"), "{msg}");
+        assert!(msg.contains("silrig::PlantSample::v4") && msg.contains("state[3] phi_rad"), "{msg}");
         assert!(msg.contains("NaN"), "{msg}");
 
         let mut p = PlantSample::zeroed();

@@ -46,3 +46,26 @@ fn timer_baseline_rejects_a_zero_period() {
     assert_eq!(code, 2);
     assert!(err.contains("--period-ms must be within 0.1..1000 ms, got 0"), "{err}");
 }
+
+#[test]
+fn bench_ipc_measures_the_ceiling_and_a_lockstep_run_against_it() {
+    let (code, out, err) =
+        silrig(&["bench", "ipc", "--round-trips", "300", "--lockstep-ticks", "200", "--repeats", "1", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let ping = &report["ping_pongs"][0];
+    assert_eq!(ping["round_trips"], 300);
+    assert_eq!(ping["round_trip"]["count"], 300);
+    assert_eq!(report["lockstep"][0]["ticks"], 200);
+    let (ceiling, lockstep) =
+        (report["ceiling_per_s"].as_f64().unwrap(), report["lockstep_loop_per_s"].as_f64().unwrap());
+    assert!(ceiling > 0.0 && lockstep > 0.0, "{report}");
+    assert!((report["ratio"].as_f64().unwrap() - lockstep / ceiling).abs() < 1e-9);
+}
+
+#[test]
+fn bench_ipc_refuses_too_few_round_trips() {
+    let (code, _, err) = silrig(&["bench", "ipc", "--round-trips", "5"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--round-trips must be within 100..100000000 round trips, got 5"), "{err}");
+}

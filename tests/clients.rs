@@ -296,10 +296,10 @@ fn a_client_of_another_layout_or_sample_size_is_refused_by_name() {
     let env = [("SILRIG_RUN_ID", "nobody"), ("SILRIG_OUT", out.to_str().unwrap())];
     let (code, err) = client("layout", &env);
     assert_eq!(code, Some(2));
-    assert!(err.contains("status -2") && err.contains("version 10") && err.contains("version 3"), "{err}");
+    assert!(err.contains("status -2") && err.contains("version 11") && err.contains("version 4"), "{err}");
     let (code, err) = client("size", &env);
     assert_eq!(code, Some(2));
-    assert!(err.contains("status -2") && err.contains("plant sample is 200 bytes, the contract's is 208"), "{err}");
+    assert!(err.contains("status -2") && err.contains("plant sample is 216 bytes, the contract's is 224"), "{err}");
     std::fs::remove_dir_all(&out).unwrap();
 }
 

@@ -160,7 +160,7 @@ fn a_peer_with_another_wire_layout_gets_a_clear_error() {
     assert!(matches!(err, IpcError::OtherWireLayout { stream: "plant", .. }), "{err:?}");
     let msg = err.to_string();
     assert!(msg.starts_with("peer built with another wire layout: expected silrig::PlantSample::v0"), "{msg}");
-    assert!(msg.contains(&format!("the service carries {} (208 B, align 8)", PlantSample::TYPE_NAME)), "{msg}");
+    assert!(msg.contains(&format!("the service carries {} (224 B, align 8)", PlantSample::TYPE_NAME)), "{msg}");
 }
 
 #[test]

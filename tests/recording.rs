@@ -157,7 +157,7 @@ fn a_realtime_run_records_what_the_csv_files_hold() {
     for (line, message) in lines.zip(file["timing"].as_array().unwrap()) {
         for (column, cell) in header.iter().zip(line.split(',')) {
             let recorded = &message[*column];
-            let expected = if cell.is_empty() { Value::Null } else { cell.parse::<u64>().unwrap().into() };
+            let expected = if cell.is_empty() { Value::Null } else { cell.parse::<i64>().unwrap().into() };
             assert_eq!(*recorded, expected, "timing column {column}");
         }
     }

@@ -65,6 +65,9 @@ fn check_report(r: &Value, ticks: u64, mode: Mode) {
     let plant = process(r, "plant");
     assert_eq!(plant["counters"]["ticks"], ticks);
     assert_eq!(plant["ended"], "completed");
+    // The launcher's SIGTERM at the end is not a kill: a controller it stopped there says so.
+    let controller = process(r, "controller")["ended"].as_str().unwrap();
+    assert!(controller == "completed" || controller == "stopped at end", "{controller}");
     let logger = process(r, "logger");
     assert_eq!(logger["counters"]["rows_written"], ticks);
     for (p, counter) in
@@ -102,6 +105,13 @@ fn check_report(r: &Value, ticks: u64, mode: Mode) {
     }
     if mode == Mode::RealtimeWithBaseline {
         assert!(r["timer_baseline"]["lateness"]["count"].as_u64().unwrap() > 0);
+        assert!(r["timer_baseline"]["lateness_steady"]["count"].as_u64().unwrap() > 0);
+    }
+    // The plant's per-tick distributions split at 1 s of simulated time: ticks 0..=99 are the warm-up.
+    let phases: Vec<&str> = r["phases"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(phases, if realtime { vec!["plant.wake_lateness", "plant.step_exec"] } else { vec!["plant.step_exec"] });
+    for p in r["phases"].as_array().unwrap() {
+        assert_eq!((p["warm_up"]["count"].as_u64(), p["steady"]["count"].as_u64()), (Some(100), Some(ticks - 100)));
     }
 }
 
@@ -116,13 +126,49 @@ fn a_2_s_realtime_run_completes_with_every_report_field() {
     assert!(o.status.success(), "{text}\n{}", String::from_utf8_lossy(&o.stderr));
     assert!(text.contains("plant.wake_lateness") && text.contains("os-floor.wake_lateness"), "{text}");
     check_report(&report(&out), 201, Mode::RealtimeWithBaseline);
-    for f in ["trace.csv", "timing.csv", "latency.png", "fig1_states.png", "plant.sense_to_actuate.hgrm"] {
+    for f in [
+        "trace.csv",
+        "timing.csv",
+        "latency.png",
+        "latency_histogram.png",
+        "fig1_states.png",
+        "plant.sense_to_actuate.hgrm",
+    ] {
         assert!(out.join(f).exists(), "{f}");
     }
     let hgrm = std::fs::read_to_string(out.join("plant.wake_lateness.hgrm")).unwrap();
     assert!(hgrm.contains("Percentile") && hgrm.contains("#[Max"), "{hgrm}");
+    per_tick_timing_matches_the_report(&out, true);
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `timing.csv` has the plant's wake-up lateness and step execution time of every tick, and they are the values
+/// the report's distributions were recorded from (their maxima agree to the histogram's 3 significant digits).
+fn per_tick_timing_matches_the_report(out: &Path, realtime: bool) {
+    let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();
+    let mut lines = timing.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|c| *c == name).unwrap_or_else(|| panic!("no {name} column"));
+    let (wake, exec) = (column("wake_lateness_ns"), column("step_exec_ns"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let wake_ns: Vec<i64> = rows.iter().map(|r| r[wake].parse().unwrap()).collect();
+    let exec_ns: Vec<u64> = rows.iter().map(|r| r[exec].parse().unwrap()).collect();
+    let r = report(out);
+    let summary = |name: &str| {
+        let p = process(&r, "plant")["latencies"].as_array().unwrap().iter().find(|l| l["name"] == name).cloned();
+        p.unwrap()["summary"].clone()
+    };
+    let close =
+        |column_max_ns: f64, report_max_us: f64| (column_max_ns / 1e3 - report_max_us).abs() <= 2e-3 * report_max_us;
+    let exec_max = summary("plant.step_exec")["max_us"].as_f64().unwrap();
+    assert!(close(*exec_ns.iter().max().unwrap() as f64, exec_max), "step_exec column against {exec_max} us");
+    if realtime {
+        let wake_max = summary("plant.wake_lateness")["max_us"].as_f64().unwrap();
+        assert!(close(*wake_ns.iter().max().unwrap() as f64, wake_max), "wake_lateness column against {wake_max} us");
+    } else {
+        assert!(wake_ns.iter().all(|&w| w == 0), "lockstep does not sleep");
+    }
 }
 
 fn lockstep_matches_sim(scenario: &str, test: &str) {
@@ -134,6 +180,7 @@ fn lockstep_matches_sim(scenario: &str, test: &str) {
     assert!(o.status.success(), "{}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     check_report(&report(&rig_out), 1001, Mode::Lockstep);
     diagnostics_were_announced(&rig_out);
+    per_tick_timing_matches_the_report(&rig_out, false);
     let sim = Command::new(SILRIG).args(["sim", scenario, "--out", sim_out.to_str().unwrap()]).output().unwrap();
     assert!(sim.status.success());
     let (a, b) = (std::fs::read(rig_out.join("trace.csv")).unwrap(), std::fs::read(sim_out.join("trace.csv")).unwrap());

@@ -1,7 +1,9 @@
 //! Benchmarks run by `silrig bench`: the cost of one plant derivative, one RK4 step, and closed-loop steps per
 //! second in one process. Each figure is the median (and spread) of many batches, so one descheduled batch on a
-//! shared machine does not move it. Beside them, the OS timer floor ([`timer_baseline`]).
+//! shared machine does not move it. Beside them, the OS timer floor ([`timer_baseline`]) and the transport's
+//! ping-pong ceiling with the lockstep rig against it ([`ipc`]).
 
+pub mod ipc;
 pub mod timer_baseline;
 
 use crate::integrator::rk4_step;

@@ -108,6 +108,9 @@ pub struct BaselineReport {
     pub policy: SchedPolicy,
     /// Wake-up lateness (wake time minus due time), µs.
     pub lateness: LatencySummary,
+    /// The same after the first second (steady state, as the rig's report separates it from warm-up), µs.
+    #[serde(default)]
+    pub lateness_steady: Option<LatencySummary>,
     /// The five latest wake-ups, latest first, with their tick numbers.
     pub worst: Vec<Outlier>,
     /// `(percentile, µs)` points of the lateness distribution, for plots.
@@ -163,6 +166,8 @@ impl std::fmt::Display for TickSource {
 struct BaselineRecorder {
     schedule: TickSchedule,
     hist: LatencyHistogram,
+    /// Wake-ups after the first second.
+    steady: LatencyHistogram,
     worst: Vec<Outlier>,
     overruns: u64,
     skipped_ticks: u64,
@@ -170,13 +175,23 @@ struct BaselineRecorder {
 
 impl BaselineRecorder {
     fn new(schedule: TickSchedule) -> Self {
-        Self { schedule, hist: LatencyHistogram::new(), worst: Vec::with_capacity(6), overruns: 0, skipped_ticks: 0 }
+        Self {
+            schedule,
+            hist: LatencyHistogram::new(),
+            steady: LatencyHistogram::new(),
+            worst: Vec::with_capacity(6),
+            overruns: 0,
+            skipped_ticks: 0,
+        }
     }
 
     /// Record a wake-up at `now_ns` for `tick`; returns the tick to wait for next.
     fn record(&mut self, tick: u64, now_ns: u64) -> u64 {
         let outcome = self.schedule.on_wake(tick, now_ns);
         self.hist.record_ns(outcome.wake_lateness_ns);
+        if tick * self.schedule.period_ns >= crate::rig::run_report::WARM_UP_NS {
+            self.steady.record_ns(outcome.wake_lateness_ns);
+        }
         if outcome.is_overrun() {
             self.overruns += 1;
             self.skipped_ticks += outcome.skipped;
@@ -200,6 +215,7 @@ impl BaselineRecorder {
             skipped_ticks: self.skipped_ticks,
             policy: clock::current_policy(),
             lateness: self.hist.summary(),
+            lateness_steady: (self.steady.count() > 0).then(|| self.steady.summary()),
             worst: self.worst,
             percentile_points: self.hist.percentile_points(),
             hgrm: self.hist.hgrm(),

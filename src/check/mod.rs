@@ -122,6 +122,8 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         out: Some(out),
         run_id: None,
         no_baseline: false,
+        // The verdict table is what a CI log should show, not each case's live line.
+        quiet: true,
         process: opts.process.clone(),
         faults: Vec::new(),
         supervision: SupervisionOptions { restart: RestartMode::Never, max_restarts: 0, restart_backoff_ms: 200.0 },

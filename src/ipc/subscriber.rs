@@ -143,20 +143,22 @@ impl<T: WireSample> StreamSubscriber<T> {
     /// for a command that never comes lasted 6 to 8 ms and overran the plant's tick; `ppoll` keeps to the
     /// microsecond.
     pub fn wait_readable_until(&self, deadline_ns: u64) {
+        self.poll_readable(deadline_ns.saturating_sub(crate::clock::monotonic_ns()));
+    }
+
+    /// `ppoll` on the listener's descriptor for up to `timeout_ns`: > 0 readable, 0 timed out, < 0 interrupted.
+    fn poll_readable(&self, timeout_ns: u64) -> libc::c_int {
         use iceoryx2::prelude::FileDescriptorBased;
-        let remaining_ns = deadline_ns.saturating_sub(crate::clock::monotonic_ns());
         let timeout = libc::timespec {
-            tv_sec: (remaining_ns / 1_000_000_000) as libc::time_t,
-            tv_nsec: (remaining_ns % 1_000_000_000) as libc::c_long,
+            tv_sec: (timeout_ns / 1_000_000_000) as libc::time_t,
+            tv_nsec: (timeout_ns % 1_000_000_000) as libc::c_long,
         };
         // SAFETY: the descriptor is only polled, never closed or handed on; the listener owns it and outlives
         // the call.
         let fd = unsafe { self.listener.file_descriptor().native_handle() };
         let mut poll_fd = libc::pollfd { fd, events: libc::POLLIN, revents: 0 };
         // SAFETY: one valid pollfd, a valid timespec, no signal mask change.
-        unsafe {
-            libc::ppoll(&mut poll_fd, 1, &timeout, std::ptr::null());
-        }
+        unsafe { libc::ppoll(&mut poll_fd, 1, &timeout, std::ptr::null()) }
     }
 
     /// Running totals.
@@ -175,8 +177,8 @@ impl<T: WireSample> StreamSubscriber<T> {
         self.receive_all(on_sample)
     }
 
-    /// [`StreamSubscriber::drain`] without consuming wake-ups: right after [`StreamSubscriber::wait`], which did.
-    pub fn receive_all(&self, mut on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
+    /// [`StreamSubscriber::drain`] without consuming wake-ups.
+    fn receive_all(&self, mut on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
         let stream = self.stream;
         let mut stats = self.stats.get();
         let mut tracker = self.tracker.get();
@@ -208,16 +210,17 @@ impl<T: WireSample> StreamSubscriber<T> {
         Ok(n)
     }
 
-    /// Block until the publisher notifies something or `timeout` passes, without taking samples (see
-    /// [`StreamSubscriber::drain`]); the loop form of a WaitSet deadline, for a process that owns its signals.
+    /// Block until the publisher notifies something or `timeout` passes, without taking samples or consuming the
+    /// wake-up ([`StreamSubscriber::drain`] does both); the loop form of a WaitSet deadline, for a process that
+    /// owns its signals. A `ppoll` on the listener's descriptor: the listener's own `timed_wait` costs six system
+    /// calls a wait (a socket timeout set, the descriptor switched to blocking and back), which a lockstep loop
+    /// pays every tick.
     pub fn wait(&self, timeout: std::time::Duration) -> Result<WaitOutcome, IpcError> {
-        use iceoryx2::port::listener::ListenerWaitError;
-        match self.listener.timed_wait(|activation| self.note_event(activation.id.as_value()), timeout) {
-            Ok(0) => Ok(WaitOutcome::TimedOut),
-            Ok(_) => Ok(WaitOutcome::Notified),
-            Err(ListenerWaitError::InterruptSignal) => Ok(WaitOutcome::Interrupted),
-            Err(e) => Err(IpcError::Transfer { stream: self.stream, op: "listener wait", detail: format!("{e:?}") }),
-        }
+        Ok(match self.poll_readable(timeout.as_nanos().min(u128::from(u64::MAX)) as u64) {
+            0 => WaitOutcome::TimedOut,
+            n if n > 0 => WaitOutcome::Notified,
+            _ => WaitOutcome::Interrupted,
+        })
     }
 
     fn note_event(&self, id: usize) {

@@ -13,6 +13,7 @@ use std::fmt::Write as _;
 enum Element {
     F64,
     U64,
+    I64,
     U32,
     Header,
     /// `[u8; N]`: NUL-padded text.
@@ -22,7 +23,7 @@ enum Element {
 impl Element {
     fn size(self, text_len: usize) -> usize {
         match self {
-            Element::F64 | Element::U64 => 8,
+            Element::F64 | Element::U64 | Element::I64 => 8,
             Element::U32 => 4,
             Element::Header => size_of::<SampleHeader>(),
             Element::Text => text_len,
@@ -42,6 +43,7 @@ fn element_of(rust_type: &str) -> Option<(Element, usize)> {
     match rust_type.trim() {
         "f64" => Some((Element::F64, 0)),
         "u64" => Some((Element::U64, 0)),
+        "i64" => Some((Element::I64, 0)),
         "u32" => Some((Element::U32, 0)),
         "SampleHeader" => Some((Element::Header, 0)),
         t if t.starts_with("[u8;") => Some((Element::Text, 0)),
@@ -99,6 +101,9 @@ fn push_element(out: &mut String, element: Element, bytes: &[u8]) {
         Element::F64 => push_f64(out, f64::from_ne_bytes(bytes[..8].try_into().expect("8 bytes"))),
         Element::U64 => {
             let _ = write!(out, "{}", read_u64(bytes));
+        }
+        Element::I64 => {
+            let _ = write!(out, "{}", i64::from_ne_bytes(bytes[..8].try_into().expect("8 bytes")));
         }
         Element::U32 => {
             let _ = write!(out, "{}", u32::from_ne_bytes(bytes[..4].try_into().expect("4 bytes")));
@@ -163,6 +168,7 @@ fn property_schema(field: &WireField) -> Value {
     let item = match s.element {
         Element::F64 => serde_json::json!({"type": ["number", "null"]}),
         Element::U64 | Element::U32 => serde_json::json!({"type": "integer", "minimum": 0}),
+        Element::I64 => serde_json::json!({"type": "integer"}),
         Element::Header => object_schema(SampleHeader::NAME, SampleHeader::FIELDS, &[]),
         Element::Text => serde_json::json!({"type": "string"}),
     };
@@ -222,6 +228,10 @@ fn put_element(
         }
         Element::U64 => {
             let v = value.as_u64().ok_or_else(|| err(format!("expected an unsigned integer, found {value}")))?;
+            out[..8].copy_from_slice(&v.to_ne_bytes());
+        }
+        Element::I64 => {
+            let v = value.as_i64().ok_or_else(|| err(format!("expected an integer, found {value}")))?;
             out[..8].copy_from_slice(&v.to_ne_bytes());
         }
         Element::U32 => {
@@ -300,6 +310,8 @@ mod tests {
         s.surfaces_deg = [-1e-300, 25.0, f64::MIN_POSITIVE];
         s.t_sim_s = 0.41;
         s.flags = 0b101;
+        s.wake_lateness_ns = -12;
+        s.previous_step_exec_ns = 4321;
         s
     }
 

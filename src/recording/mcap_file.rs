@@ -160,7 +160,7 @@ impl McapSink {
 fn timing_schema() -> Value {
     let properties: serde_json::Map<String, Value> = TIMING_COLUMNS
         .iter()
-        .map(|c| (c.to_string(), json!({"type": ["integer", "null"], "minimum": 0})))
+        .map(|c| (c.to_string(), json!({"type": ["integer", "null"]})))
         .collect();
     json!({"title": "silrig timing.csv row", "type": "object", "properties": properties,
            "description": "timing.csv's columns; the command's are null when no command answered the tick"})

@@ -22,6 +22,8 @@ pub struct LoggedRow<'a> {
     pub plant: &'a Received<PlantSample>,
     /// The command answering it, with the logger's receive stamp.
     pub command: Option<&'a Received<CommandSample>>,
+    /// The plant's step execution time of this tick, ns: reported in the next sample, like the deflections.
+    pub step_exec_ns: Option<u64>,
     /// The trace row, in the order of the columns given to [`RowSink::start`].
     pub trace: &'a [f64],
 }
@@ -42,7 +44,7 @@ pub trait RowSink {
 }
 
 /// Columns of `timing.csv` (and fields of the recording's `/timing` messages).
-pub const TIMING_COLUMNS: [&str; 12] = [
+pub const TIMING_COLUMNS: [&str; 14] = [
     "tick",
     "plant_seq",
     "plant_epoch",
@@ -55,25 +57,32 @@ pub const TIMING_COLUMNS: [&str; 12] = [
     "t_command_recv_ns",
     "compute_ns",
     "command_missing",
+    "wake_lateness_ns",
+    "step_exec_ns",
 ];
 
-/// A row's values under [`TIMING_COLUMNS`]; the command's are `None` when no command answered the tick.
-pub fn timing_values(row: &LoggedRow) -> [Option<u64>; TIMING_COLUMNS.len()] {
+/// A row's values under [`TIMING_COLUMNS`]; the command's are `None` when no command answered the tick, the step
+/// time when the next sample has not come. Stamps are monotonic nanoseconds since boot, far inside i64; the wake-up
+/// lateness may be negative.
+pub fn timing_values(row: &LoggedRow) -> [Option<i64>; TIMING_COLUMNS.len()] {
     let p = &row.plant.sample.header;
     let c = row.command.map(|c| (&c.sample.header, c.t_recv_ns, c.sample.compute_ns));
+    let n = |v: u64| v as i64;
     [
-        Some(p.tick),
-        Some(p.seq),
-        Some(p.epoch),
-        Some(p.t_send_ns),
-        Some(row.plant.t_recv_ns),
-        Some(u64::from(row.plant.sample.flags)),
-        c.map(|(h, _, _)| h.seq),
-        c.map(|(h, _, _)| h.epoch),
-        c.map(|(h, _, _)| h.t_send_ns),
-        c.map(|(_, recv, _)| recv),
-        c.map(|(_, _, compute)| compute),
-        Some(u64::from(c.is_none())),
+        Some(n(p.tick)),
+        Some(n(p.seq)),
+        Some(n(p.epoch)),
+        Some(n(p.t_send_ns)),
+        Some(n(row.plant.t_recv_ns)),
+        Some(i64::from(row.plant.sample.flags)),
+        c.map(|(h, _, _)| n(h.seq)),
+        c.map(|(h, _, _)| n(h.epoch)),
+        c.map(|(h, _, _)| n(h.t_send_ns)),
+        c.map(|(_, recv, _)| n(recv)),
+        c.map(|(_, _, compute)| n(compute)),
+        Some(i64::from(c.is_none())),
+        Some(row.plant.sample.wake_lateness_ns),
+        row.step_exec_ns.map(n),
     ]
 }
 

@@ -7,8 +7,9 @@
 
 use super::events::EventLog;
 use super::fault_schedule::FaultSchedule;
-use super::report::{MachineConditions, read_report};
-use super::run_report::{RigReport, write_plots};
+use super::report::{MachineConditions, ProcessReport, read_report};
+use super::run_report::{ProcessLife, RigReport, write_plots};
+use super::status::LiveLine;
 use super::supervision::{ChildProcess, SupervisionOptions, Supervisor, find_program, split_command};
 use super::{ProcessArgs, ProcessOptions, RigMode, load_scenario, signals};
 use crate::bench::timer_baseline::{self, BaselineArgs, BaselineReport};
@@ -43,6 +44,9 @@ pub struct LaunchOptions {
     /// Do not run the OS-floor timer loop beside a realtime rig.
     #[arg(long)]
     pub no_baseline: bool,
+    /// No live status line while the run goes.
+    #[arg(long)]
+    pub quiet: bool,
     /// Loop and watchdog tuning, passed on to every process.
     #[command(flatten)]
     pub process: ProcessOptions,
@@ -330,6 +334,7 @@ fn supervise(
     faults: &mut FaultSchedule,
     scenario: &Scenario,
     bridge: &mut Option<super::remote::RemoteBridge>,
+    mut live: Option<&mut LiveLine>,
 ) -> anyhow::Result<()> {
     let timeout = Duration::from_secs_f64(scenario.timing.duration_s * 3.0 + 30.0);
     loop {
@@ -339,6 +344,9 @@ fn supervise(
         }
         sup.handle_exits()?;
         sup.restart_due()?;
+        if let Some(live) = live.as_deref_mut() {
+            live.update(sup.lives.iter().filter(|l| l.life > 1).count() as u32);
+        }
         if sup.run_is_over() {
             return Ok(());
         }
@@ -386,6 +394,21 @@ fn remove_empty_figures(out: &Path) {
     }
 }
 
+/// What a process the launcher stopped at the normal end of a run reports as "terminated by signal" (its SIGTERM)
+/// is shown as "stopped at end": the plant completed, nobody else sent a signal, and it exited cleanly when told.
+fn mark_stopped_at_end(processes: &mut [ProcessReport], lives: &[ProcessLife]) {
+    let plant_completed = processes.iter().any(|p| p.process == Role::Plant.label() && p.ended == "completed");
+    if !plant_completed || signals::termination_signal().is_some() {
+        return;
+    }
+    for p in processes.iter_mut().filter(|p| p.ended == "terminated by signal") {
+        let life = lives.iter().rev().find(|l| l.pid == p.pid);
+        if life.is_some_and(|l| l.exit == "exit status 0 at the end of the run") {
+            p.ended = "stopped at end".into();
+        }
+    }
+}
+
 /// Run the three processes to the end of the scenario and return the merged report (also written as
 /// `report.json`). An `Err` means the run could not be set up; a run whose processes failed returns `Ok` with
 /// `failures` filled in.
@@ -416,7 +439,12 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     let mut baseline =
         if opts.mode == RigMode::Realtime && !opts.no_baseline { Some(start_baseline(&scenario, &out)?) } else { None };
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
-    supervise(&mut sup, &mut faults, &scenario, &mut bridge)?;
+    let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
+    let supervised = supervise(&mut sup, &mut faults, &scenario, &mut bridge, live.as_mut());
+    if let Some(live) = live {
+        live.finish();
+    }
+    supervised?;
     let ended_by_plan = sup.ended_by_plan();
     faults.release_stopped(&mut sup);
     sup.stop_all()?;
@@ -452,6 +480,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             Err(e) => failures.push(format!("bridge: no report ({e})")),
         }
     }
+    mark_stopped_at_end(&mut processes, &sup.lives);
     let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
     let control = trace.as_ref().map(|t| summarize(t, &scenario));
     let flown_s = trace
@@ -505,6 +534,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         stopped_by,
         failures,
         leftovers,
+        phases: super::run_report::phase_splits(&out, scenario.timing.dt_s, opts.mode == RigMode::Realtime),
     };
     // A full disk must not cost the user the report: it is printed whatever happens to the files.
     if let Err(e) = write_plots(&report, &out, &scenario) {

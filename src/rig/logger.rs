@@ -19,6 +19,7 @@ use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::plant::snapshot;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
+use crate::clock::{TickSchedule, monotonic_ns};
 use crate::control::SurfaceCommand;
 use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
 use crate::recording::csv::CsvSink;
@@ -36,6 +37,10 @@ use std::collections::BTreeMap;
 pub const MISSING_COMMAND_WINDOW: u64 = 10;
 /// Rows per flush (0.1 s of data at 100 Hz).
 pub const FLUSH_EVERY_ROWS: u64 = 10;
+/// Lockstep: the logger looks for new samples this often instead of being woken by each one, ns. Two wake-ups a
+/// tick of a third process on a two-core machine cost the plant and controller about a third of their speed
+/// (README, "Lockstep speed"); at 40,000 ticks/s this is 10 ticks a look, well inside the plant's window.
+pub const LOCKSTEP_POLL_NS: u64 = 250_000;
 
 const IPC_PLANT_TO_LOGGER: usize = 0;
 const IPC_COMMAND_TO_LOGGER: usize = 1;
@@ -76,6 +81,7 @@ impl Writer {
         plant: &Received<PlantSample>,
         held: &HeldActuators,
         command: Option<&Received<CommandSample>>,
+        step_exec_ns: Option<u64>,
     ) -> std::io::Result<()> {
         if !self.started {
             return Err(std::io::Error::other("trace.csv written before its header"));
@@ -102,7 +108,7 @@ impl Writer {
                 trace_row(&snap, held, &cmd, self.flight_segment, &vec![nan; self.diagnostic_names.len()])
             }
         };
-        let row = LoggedRow { plant, command, trace: &trace };
+        let row = LoggedRow { plant, command, step_exec_ns, trace: &trace };
         for sink in &mut self.sinks {
             sink.row(&row)?;
         }
@@ -204,6 +210,8 @@ pub struct LoggerLoop {
     /// A restarted plant re-flying ticks already written (its checkpoint is older than its predecessor's last
     /// tick, or it had none): those samples are not written, and the first row it adds is a discontinuity.
     reflown: Option<Reflown>,
+    /// Lockstep: paced by a timer ([`LOCKSTEP_POLL_NS`]) rather than woken by every sample.
+    lockstep: bool,
     done: bool,
     error: Option<anyhow::Error>,
 }
@@ -264,6 +272,7 @@ impl LoggerLoop {
             "invalid_samples",
             "flight_discontinuities",
         ]);
+        rec.start_status(&args.run_id);
         Ok(Self {
             ticks: scenario.timing.ticks(),
             scenario,
@@ -278,6 +287,7 @@ impl LoggerLoop {
             missing_since: None,
             announced: None,
             reflown: None,
+            lockstep: args.mode == super::RigMode::Lockstep,
             done: false,
             error: None,
         })
@@ -287,14 +297,28 @@ impl LoggerLoop {
     /// before the end, with or without its command.
     pub fn serve(&mut self, ports: &mut LoggerPorts) -> anyhow::Result<ipc::LoopExit> {
         let waitset = ipc::rig_waitset()?;
-        let plant_guard = waitset
-            .attach_notification(ports.inputs.plant.listener())
-            .map_err(|e| anyhow::anyhow!("attaching the plant stream: {e:?}"))?;
-        let command_guard = waitset
-            .attach_notification(ports.inputs.commands.listener())
+        let pace = match self.lockstep {
+            true => Some(ipc::TickTimer::new(TickSchedule::new(monotonic_ns() + LOCKSTEP_POLL_NS, LOCKSTEP_POLL_NS))?),
+            false => None,
+        };
+        let pace_guard = pace
+            .as_ref()
+            .map(|timer| waitset.attach_notification(timer))
+            .transpose()
+            .map_err(|e| anyhow::anyhow!("attaching the lockstep timer: {e:?}"))?;
+        let attach = |listener| (!self.lockstep).then(|| waitset.attach_notification(listener)).transpose();
+        let plant_guard =
+            attach(ports.inputs.plant.listener()).map_err(|e| anyhow::anyhow!("attaching the plant stream: {e:?}"))?;
+        let command_guard = attach(ports.inputs.commands.listener())
             .map_err(|e| anyhow::anyhow!("attaching the command stream: {e:?}"))?;
         let exit = ipc::run_waitset(&waitset, |id| {
-            if id.has_event_from(&plant_guard) || id.has_event_from(&command_guard) {
+            let paced = pace_guard.as_ref().is_some_and(|g| id.has_event_from(g));
+            if paced && let Some(timer) = &pace {
+                // Only clears the timer's readiness: however many expirations passed, one look takes everything.
+                let _ = timer.read_expirations();
+            }
+            let woken = [&plant_guard, &command_guard].iter().any(|g| g.as_ref().is_some_and(|g| id.has_event_from(g)));
+            if paced || woken {
                 match self.step(&ports.inputs, &mut ports.acks, false) {
                     Ok(true) => {
                         self.done = true;
@@ -337,6 +361,10 @@ impl LoggerLoop {
             self.writer.flush()?;
             acks.send(self.writer.last_tick.unwrap_or(0), &LogAckSample::new(self.writer.rows))?;
         }
+        let (tick, dt_s) = (self.writer.last_tick.unwrap_or(0), self.scenario.timing.dt_s);
+        let lost =
+            [("plant_samples_lost", inputs.plant.stats().lost), ("command_samples_lost", inputs.commands.stats().lost)];
+        self.rec.status(tick, tick as f64 * dt_s, self.scenario.timing.duration_s, false, &lost);
         let end_tick = self.end.as_ref().map(|e| e.sample.header.tick);
         Ok(self.writer.last_tick.is_some_and(|t| t >= self.ticks || end_tick.is_some_and(|e| t >= e)))
     }
@@ -413,6 +441,14 @@ impl LoggerLoop {
         next.or(end).map(|r| HeldActuators { surfaces_deg: r.sample.surfaces_deg, throttle: r.sample.throttle })
     }
 
+    /// The execution time of this tick's step, which the sample closing the tick carries (as it carries the
+    /// deflections); none when that sample is from another plant life, which did not run this step.
+    fn step_exec_after(&self, tick: u64, epoch: u64) -> Option<u64> {
+        let next = self.pending_plant.get(&(tick + 1));
+        let end = self.end.as_ref().filter(|e| e.sample.header.tick == tick);
+        next.or(end).filter(|r| r.sample.header.epoch == epoch).map(|r| r.sample.previous_step_exec_ns)
+    }
+
     /// Write the oldest waiting plant samples, each with the command answering it and the deflections the next
     /// sample reports; one whose command or next sample has not come while [`MISSING_COMMAND_WINDOW`] newer samples
     /// arrived (or at the end) is written without them.
@@ -449,7 +485,8 @@ impl LoggerLoop {
                 }
             }
             self.start_trace(tick)?;
-            self.writer.row(&sample, &held.unwrap_or(HeldActuators::UNKNOWN), command.as_ref())?;
+            let step_exec_ns = self.step_exec_after(tick, sample.sample.header.epoch);
+            self.writer.row(&sample, &held.unwrap_or(HeldActuators::UNKNOWN), command.as_ref(), step_exec_ns)?;
             self.rec.count("rows_written", 1);
             // Commands answering ticks already written can no longer be used.
             self.pending_command.retain(|t, _| *t > tick);

@@ -18,6 +18,7 @@ pub mod report;
 pub mod run_report;
 pub mod session;
 pub mod signals;
+pub mod status;
 pub mod supervision;
 
 use crate::ipc::RunId;

@@ -214,6 +214,10 @@ pub struct PlantLoop {
     overrun_counted: bool,
     /// The flight left the model's envelope in the last step.
     left_envelope: Option<LeftEnvelope>,
+    /// This tick's wake-up lateness (0 in lockstep) and the last step's execution time, ns: the samples carry
+    /// them to the logger's `timing.csv`.
+    wake_lateness_ns: i64,
+    step_exec_ns: u64,
 }
 
 impl PlantLoop {
@@ -250,6 +254,7 @@ impl PlantLoop {
             "failsafe_ticks",
             "samples_dropped",
         ]);
+        rec.start_status(&args.run_id);
         let events = EventLog::new(&args.out, Role::Plant.label());
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
@@ -281,6 +286,8 @@ impl PlantLoop {
             sim_tick: 0,
             overrun_counted: false,
             left_envelope: None,
+            wake_lateness_ns: 0,
+            step_exec_ns: 0,
             checkpoints: realtime.then(|| super::CheckpointWriter::new(checkpoint_path.clone())),
             checkpoint_path,
             scenario,
@@ -347,7 +354,11 @@ impl PlantLoop {
     /// Never dropped by a loop fault.
     fn publish_end(&mut self, ports: &mut PlantPorts) -> anyhow::Result<()> {
         let snap = self.runner.snapshot();
-        ports.publisher.send(snap.tick, &plant_sample(&snap, self.flags | wire::FLAG_END_OF_RUN))?;
+        let sample = PlantSample {
+            previous_step_exec_ns: self.step_exec_ns,
+            ..plant_sample(&snap, self.flags | wire::FLAG_END_OF_RUN)
+        };
+        ports.publisher.send(snap.tick, &sample)?;
         Ok(())
     }
 
@@ -379,6 +390,11 @@ impl PlantLoop {
         }
         self.step(held);
         self.rec.count("ticks", 1);
+        let stats = ports.commands.stats();
+        let extra = [("commands_lost", stats.lost), ("controller_restarts", stats.publisher_restarts)];
+        let t_s = self.sim_tick as f64 * self.scenario.timing.dt_s;
+        let duration_s = self.scenario.timing.duration_s;
+        self.rec.status(self.sim_tick, t_s, duration_s, self.watchdog.in_failsafe, &extra);
         Ok(())
     }
 
@@ -387,6 +403,7 @@ impl PlantLoop {
         clock::sleep_until_ns(self.schedule.deadline_ns(self.expected_wall_tick));
         let outcome = self.schedule.on_wake(self.expected_wall_tick, monotonic_ns());
         self.rec.record(WAKE_LATENESS, outcome.wake_lateness_ns);
+        self.wake_lateness_ns = outcome.wake_lateness_ns;
         if outcome.skipped > 0 {
             // One stall is one overrun, whether it showed first as work past the deadline or as a late start.
             if !std::mem::take(&mut self.overrun_counted) {
@@ -437,7 +454,12 @@ impl PlantLoop {
             self.rec.count("samples_dropped", 1);
             ipc::SendReceipt { delivered: 0, t_send_ns: monotonic_ns() }
         } else {
-            ports.publisher.send(self.sim_tick, &plant_sample(&snap, self.flags))?
+            let sample = PlantSample {
+                wake_lateness_ns: self.wake_lateness_ns,
+                previous_step_exec_ns: self.step_exec_ns,
+                ..plant_sample(&snap, self.flags)
+            };
+            ports.publisher.send(self.sim_tick, &sample)?
         };
         self.publish_ns[(self.sim_tick % PUBLISH_STAMPS as u64) as usize] = receipt.t_send_ns;
         Ok(receipt)
@@ -569,7 +591,8 @@ impl PlantLoop {
         } else {
             self.runner.actuate(&self.applied)
         };
-        self.rec.record(STEP_EXEC, (monotonic_ns() - t0) as i64);
+        self.step_exec_ns = monotonic_ns() - t0;
+        self.rec.record(STEP_EXEC, self.step_exec_ns as i64);
         self.flags = step_flags(&hits, held) | if self.watchdog.in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
         if self.realtime {
             let late_ns = monotonic_ns() as i64 - self.schedule.deadline_ns(self.expected_wall_tick) as i64;

@@ -71,6 +71,8 @@ pub struct Recorder {
     pub counters: BTreeMap<String, u64>,
     /// Command age at use in ticks (plant only).
     pub command_age_ticks: BTreeMap<u64, u64>,
+    /// The live status this process publishes, once started.
+    status: Option<super::status::StatusFeed>,
 }
 
 impl Recorder {
@@ -84,13 +86,43 @@ impl Recorder {
                 .collect(),
             counters: BTreeMap::new(),
             command_age_ticks: BTreeMap::new(),
+            status: None,
         }
+    }
+
+    /// Publish this process's live status for `run` from now on ([`super::status`]).
+    pub fn start_status(&mut self, run: &crate::ipc::RunId) {
+        let prefix = format!("{}.", self.process);
+        let names = self.histograms.iter().map(|(n, _, _)| n.trim_start_matches(&prefix).to_string()).collect();
+        self.status = Some(super::status::StatusFeed::start(run, &self.process, names));
+    }
+
+    /// At most once a second, hand the counters over to the live status; `extra` are counters the process keeps
+    /// elsewhere until its end (a subscriber's losses and restarts).
+    pub fn status(&mut self, tick: u64, sim_s: f64, duration_s: f64, failsafe: bool, extra: &[(&str, u64)]) {
+        let Some(feed) = self.status.as_mut().filter(|f| f.snapshot_due()) else { return };
+        let mut counters = self.counters.clone();
+        counters.extend(extra.iter().map(|(k, v)| (k.to_string(), *v)));
+        feed.snapshot(super::status::ProcessStatus {
+            process: self.process.clone(),
+            pid: std::process::id(),
+            tick,
+            sim_s,
+            duration_s,
+            p99_us: BTreeMap::new(),
+            counters,
+            failsafe,
+            taken_ns: crate::clock::monotonic_ns(),
+        });
     }
 
     /// Record `value_ns` into distribution `index` (the order given to [`Recorder::new`]).
     #[inline]
     pub fn record(&mut self, index: usize, value_ns: i64) {
         self.histograms[index].2.record_ns(value_ns);
+        if let Some(feed) = &self.status {
+            feed.value(index, value_ns);
+        }
     }
 
     /// Add `n` to a counter.

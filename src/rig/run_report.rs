@@ -6,7 +6,7 @@ use super::fault_report::{Discontinuity, FaultRecord};
 use super::report::{MachineConditions, ProcessReport};
 use crate::bench::timer_baseline::BaselineReport;
 use crate::summary::Summary;
-use crate::timing::{summary_line, summary_table_header};
+use crate::timing::{LatencyHistogram, LatencySummary, summary_line, summary_table_header};
 use crate::trace::Trace;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -54,6 +54,75 @@ pub struct RigReport {
     pub failures: Vec<String>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
     pub leftovers: Vec<String>,
+    /// The plant's per-tick distributions split into warm-up (the first second) and steady state.
+    #[serde(default)]
+    pub phases: Vec<PhaseSplit>,
+}
+
+/// The first second of a run is its warm-up (caches, page faults, the peers' first wake-ups); the report shows it
+/// apart from the steady state after it, ns.
+pub const WARM_UP_NS: u64 = 1_000_000_000;
+
+/// One of the plant's per-tick distributions, split at the end of the warm-up.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PhaseSplit {
+    /// e.g. `plant.wake_lateness`.
+    pub name: String,
+    /// Ticks of the first second, µs.
+    pub warm_up: LatencySummary,
+    /// Ticks after it, µs.
+    pub steady: LatencySummary,
+}
+
+/// The plant's per-tick wake-up lateness (realtime) and step execution time from `timing.csv`, µs.
+fn per_tick_values_us(out: &Path, realtime: bool) -> Vec<(String, Vec<f64>)> {
+    let Ok(text) = std::fs::read_to_string(out.join("timing.csv")) else { return Vec::new() };
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let names: &[&str] = if realtime { &["wake_lateness_ns", "step_exec_ns"] } else { &["step_exec_ns"] };
+    names
+        .iter()
+        .filter_map(|name| {
+            let c = header.iter().position(|h| h == name)?;
+            let values = rows.iter().filter_map(|r| r.get(c)?.parse::<f64>().ok()).map(|ns| ns / 1e3).collect();
+            Some((format!("plant.{}", name.trim_end_matches("_ns")), values))
+        })
+        .collect()
+}
+
+/// The plant's wake-up lateness (realtime) and step execution time split at the end of the warm-up, from the
+/// per-tick columns of the logger's `timing.csv` (ticks by simulated time: tick * dt < 1 s is warm-up).
+pub fn phase_splits(out: &Path, dt_s: f64, realtime: bool) -> Vec<PhaseSplit> {
+    let Ok(text) = std::fs::read_to_string(out.join("timing.csv")) else { return Vec::new() };
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let column = |name: &str| header.iter().position(|c| *c == name);
+    let (Some(tick), Some(wake), Some(exec)) = (column("tick"), column("wake_lateness_ns"), column("step_exec_ns"))
+    else {
+        return Vec::new();
+    };
+    let mut columns = vec![("plant.step_exec", exec)];
+    if realtime {
+        columns.insert(0, ("plant.wake_lateness", wake));
+    }
+    let warm_up_ticks = (WARM_UP_NS as f64 / 1e9 / dt_s).round() as u64;
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    columns
+        .into_iter()
+        .map(|(name, c)| {
+            let (mut warm_up, mut steady) = (LatencyHistogram::new(), LatencyHistogram::new());
+            for row in &rows {
+                let (Some(t), Some(v)) =
+                    (row.get(tick).and_then(|t| t.parse::<u64>().ok()), row.get(c).and_then(|v| v.parse::<i64>().ok()))
+                else {
+                    continue;
+                };
+                if t < warm_up_ticks { &mut warm_up } else { &mut steady }.record_ns(v);
+            }
+            PhaseSplit { name: name.into(), warm_up: warm_up.summary(), steady: steady.summary() }
+        })
+        .collect()
 }
 
 /// One life of a process the launcher started: from its start to its exit (each restart starts a new life).
@@ -112,6 +181,11 @@ pub(super) fn write_plots(report: &RigReport, out: &Path, scenario: &crate::scen
     if !series.is_empty() {
         let title = format!("{} ({}, run {}): latency distributions", report.scenario, report.mode, report.run_id);
         crate::plot::plot_percentile_distributions(&series, out, "latency", &title)?;
+    }
+    let per_tick = per_tick_values_us(out, report.mode == "realtime");
+    if per_tick.iter().any(|(_, v)| !v.is_empty()) {
+        let title = format!("{} ({}, run {}): per-tick histograms", report.scenario, report.mode, report.run_id);
+        crate::plot::plot_latency_histograms(&per_tick, 5.0, out, "latency_histogram", &title)?;
     }
     if !(report.faults.is_empty() && report.discontinuities.is_empty()) && report.control.is_some() {
         let trace = Trace::load(&out.join("trace.csv"))?;
@@ -265,6 +339,27 @@ impl RigReport {
                     b.source,
                     b.policy
                 );
+            }
+        }
+        if !self.phases.is_empty() {
+            out += &format!(
+                "\nwarm-up (the first second) apart from steady state (after it)\n{}\n",
+                summary_table_header()
+            );
+            for p in &self.phases {
+                out += &format!("{}\n", summary_line(&format!("{} warm-up", p.name), &p.warm_up));
+                out += &format!("{}\n", summary_line(&format!("{} steady", p.name), &p.steady));
+            }
+            let floor = self.timer_baseline.as_ref().and_then(|b| Some((b, b.lateness_steady?)));
+            if let Some((b, floor_steady)) = floor {
+                out += &format!("{}\n", summary_line("os-floor.wake_lateness steady", &floor_steady));
+                if let Some(plant) = self.phases.iter().find(|p| p.name == "plant.wake_lateness") {
+                    out += &format!(
+                        "steady state: plant wake-up lateness p99 is {:.2}x the OS floor's ({})\n",
+                        plant.steady.p99_us / floor_steady.p99_us,
+                        b.source
+                    );
+                }
             }
         }
         out.push('\n');

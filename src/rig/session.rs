@@ -307,6 +307,7 @@ impl ControllerSession {
             "samples_unanswered",
             "interrupted_waits",
         ]);
+        rec.start_status(&args.run_id);
         let dt = scenario.timing.dt_s;
         let events = EventLog::new(&args.out, Role::Controller.label());
         let checkpoint_path = args.out.join("controller.checkpoint.json");
@@ -444,7 +445,7 @@ impl ControllerSession {
         let mut fresh = 0u64;
         let mut invalid = 0u64;
         let mut ended = false;
-        self.samples.receive_all(|r| {
+        self.samples.drain(|r| {
             if r.invalid.is_some() {
                 invalid += 1;
             } else if r.sample.flags & wire::FLAG_END_OF_RUN != 0 {
@@ -599,6 +600,10 @@ impl ControllerSession {
         match self.commands.send(tick, command) {
             Ok(_) => {
                 self.rec.count("commands_sent", 1);
+                let stats = self.samples.stats();
+                let extra = [("plant_samples_lost", stats.lost), ("plant_restarts", stats.publisher_restarts)];
+                let timing = &self.scenario.timing;
+                self.rec.status(tick, tick as f64 * timing.dt_s, timing.duration_s, false, &extra);
                 Ok(())
             }
             Err(e) => {
