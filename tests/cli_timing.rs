@@ -69,3 +69,41 @@ fn bench_ipc_refuses_too_few_round_trips() {
     assert_eq!(code, 2);
     assert!(err.contains("--round-trips must be within 100..100000000 round trips, got 5"), "{err}");
 }
+
+/// `silrig run --floor cyclictest` with its own run id and folder; (exit code, stdout + stderr, folder).
+fn run_with_cyclictest_floor(test: &str, path: Option<&str>) -> (Option<i32>, String, std::path::PathBuf) {
+    let out = std::env::temp_dir().join(format!("silrig-cli-timing-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let id = format!("t{}-{test}", std::process::id());
+    let mut command = Command::new(env!("CARGO_BIN_EXE_silrig"));
+    command.args(["run", "--quiet", "--floor", "cyclictest", "--duration-s", "1", "--run-id", &id, "--out"]).arg(&out);
+    if let Some(path) = path {
+        command.env("PATH", path);
+    }
+    let o = command.output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(!std::path::Path::new(&format!("/tmp/silrig_{id}")).exists(), "iceoryx2 root folder left behind");
+    (o.status.code(), text, out)
+}
+
+#[test]
+fn the_os_floor_can_be_taken_by_cyclictest_itself() {
+    let (code, text, out) = run_with_cyclictest_floor("cyclictest", None);
+    assert_eq!(code, Some(0), "{text}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let floor = &report["timer_baseline"];
+    assert_eq!(floor["source"], "Cyclictest", "{floor}");
+    // 1 s at 100 Hz: cyclictest's loop count is the scenario's ticks.
+    assert_eq!(floor["wakeups"], 100);
+    assert!(text.contains("the OS floor's p99 measured beside it (cyclictest (rt-tests), SCHED_FIFO 80)"), "{text}");
+    assert!(std::fs::read_to_string(out.join("cyclictest.txt")).unwrap().contains("# Total: 000000100"));
+    let _ = std::fs::remove_dir_all(&out);
+
+    // Without cyclictest on PATH the run is refused before anything flies.
+    let (code, text, out) = run_with_cyclictest_floor("no-cyclictest", Some("/nonexistent"));
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("--floor cyclictest: cyclictest is not installed (Debian: apt-get install rt-tests)"), "{text}");
+    assert!(!out.join("plant.report.json").exists(), "nothing flew");
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1,8 +1,10 @@
 //! Benchmarks run by `silrig bench`: the cost of one plant derivative, one RK4 step, and closed-loop steps per
 //! second in one process. Each figure is the median (and spread) of many batches, so one descheduled batch on a
 //! shared machine does not move it. Beside them, the OS timer floor ([`timer_baseline`]) and the transport's
-//! ping-pong ceiling with the lockstep rig against it ([`ipc`]).
+//! ping-pong ceiling with the lockstep rig against it ([`ipc`]), and the floor as cyclictest itself takes it
+//! ([`cyclictest`]).
 
+pub mod cyclictest;
 pub mod ipc;
 pub mod timer_baseline;
 

@@ -151,6 +151,8 @@ pub enum TickSource {
     /// A [`crate::ipc::TickTimer`] (absolute timerfd) attached to an iceoryx2 WaitSet: what a loop that also waits
     /// on listeners gets.
     TimerfdWaitSet,
+    /// cyclictest (rt-tests) itself, run beside the rig by `silrig run --floor cyclictest`.
+    Cyclictest,
 }
 
 impl std::fmt::Display for TickSource {
@@ -158,6 +160,7 @@ impl std::fmt::Display for TickSource {
         f.write_str(match self {
             TickSource::Nanosleep => "clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)",
             TickSource::TimerfdWaitSet => "absolute timerfd in an iceoryx2 WaitSet",
+            TickSource::Cyclictest => "cyclictest (rt-tests)",
         })
     }
 }

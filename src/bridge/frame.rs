@@ -179,7 +179,7 @@ mod tests {
         p.header.tick = 42;
         p.state[3] = 0.25;
         let bytes = to_bytes(&p);
-        assert_eq!(bytes.len(), 208);
+        assert_eq!(bytes.len(), size_of::<PlantSample>());
         assert_eq!(&bytes[8..16], &42u64.to_ne_bytes());
         assert_eq!(from_bytes::<PlantSample>(&bytes), Ok(p));
         let info = ControllerInfo::new(&["s_roll".to_string()]).unwrap();
@@ -193,10 +193,12 @@ mod tests {
         let mut bytes = to_bytes(&c);
         bytes.truncate(300);
         let e = from_bytes::<CommandSample>(&bytes).unwrap_err();
-        assert_eq!(e, FrameError::LayoutVersion { type_name: CommandSample::TYPE_NAME, got: 4, expected: 3 });
-        assert!(e.to_string().contains("layout version 4, this build speaks 3"), "{e}");
+        let (got, expected) = (WIRE_LAYOUT_VERSION + 1, WIRE_LAYOUT_VERSION);
+        assert_eq!(e, FrameError::LayoutVersion { type_name: CommandSample::TYPE_NAME, got, expected });
+        assert!(e.to_string().contains(&format!("layout version {got}, this build speaks {expected}")), "{e}");
         let e = from_bytes::<CommandSample>(&to_bytes(&PlantSample::zeroed())).unwrap_err();
-        assert!(matches!(e, FrameError::Size { got: 208, expected: 608, .. }), "{e}");
+        let (plant, command) = (size_of::<PlantSample>(), size_of::<CommandSample>());
+        assert!(matches!(e, FrameError::Size { got, expected, .. } if got == plant && expected == command), "{e}");
         assert!(matches!(from_bytes::<PlantSample>(&[0; 12]), Err(FrameError::TooShort { len: 12, .. })));
         let mut c = CommandSample::zeroed();
         c.throttle_cmd = 2.0;

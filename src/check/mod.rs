@@ -122,6 +122,7 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         out: Some(out),
         run_id: None,
         no_baseline: false,
+        floor: crate::rig::launcher::FloorSource::Builtin,
         // The verdict table is what a CI log should show, not each case's live line.
         quiet: true,
         process: opts.process.clone(),

@@ -48,6 +48,18 @@ pub struct McapSink {
 
 const RECEIVE_STAMP: (&str, &str) = ("t_recv_ns", "CLOCK_MONOTONIC when the logger took the sample from its queue, ns");
 
+/// An MCAP error as an I/O error naming the file, with its causes: the library's own message for a failed
+/// compressed write does not say that the disk is full, its source does.
+fn named_error(path: &Path, e: mcap::McapError) -> std::io::Error {
+    let mut text = format!("writing {}: {e}", path.display());
+    let mut source = std::error::Error::source(&e);
+    while let Some(cause) = source {
+        text.push_str(&format!(": {cause}"));
+        source = cause.source();
+    }
+    std::io::Error::other(text)
+}
+
 fn schema_bytes(schema: &Value) -> Vec<u8> {
     serde_json::to_vec(schema).expect("a JSON value serialises")
 }
@@ -64,7 +76,7 @@ impl McapSink {
             })
             .expect("some recording file name is free");
         let file = file.map_err(|e| std::io::Error::new(e.kind(), format!("creating {}: {e}", path.display())))?;
-        let named = |e: mcap::McapError| std::io::Error::other(format!("writing {}: {e}", path.display()));
+        let named = |e: mcap::McapError| named_error(&path, e);
         let options = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Lz4))
             .profile("")
@@ -123,7 +135,7 @@ impl McapSink {
     }
 
     fn named(&self, e: mcap::McapError) -> std::io::Error {
-        std::io::Error::other(format!("writing {}: {e}", self.path.display()))
+        named_error(&self.path, e)
     }
 
     fn write(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64, data: &[u8]) -> std::io::Result<()> {

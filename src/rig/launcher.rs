@@ -44,6 +44,10 @@ pub struct LaunchOptions {
     /// Do not run the OS-floor timer loop beside a realtime rig.
     #[arg(long)]
     pub no_baseline: bool,
+    /// Who takes the OS floor beside a realtime rig: builtin (`silrig timer-baseline`) or cyclictest (rt-tests,
+    /// which must be installed); the report names which.
+    #[arg(long, value_enum, default_value = "builtin")]
+    pub floor: FloorSource,
     /// No live status line while the run goes.
     #[arg(long)]
     pub quiet: bool,
@@ -81,6 +85,16 @@ pub struct LaunchOptions {
     /// to the tick it just published) or next-tick.
     #[arg(long, value_enum)]
     pub command_timing: Option<crate::scenario::CommandTiming>,
+}
+
+/// Who measures the OS floor beside a realtime run (`--floor`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FloorSource {
+    /// `silrig timer-baseline`: a bare clock_nanosleep loop with the rig's skip-on-overrun rule, which also gives
+    /// the floor's steady state apart from warm-up.
+    Builtin,
+    /// cyclictest itself (`cyclictest -q -m -t1 -p80 -i<period> -h`), the reference engineers already trust.
+    Cyclictest,
 }
 
 /// Where the run's controller comes from (`--controller`).
@@ -305,11 +319,25 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
 }
 
 /// The OS-floor timer loop beside a realtime rig, for the scenario's duration at the scenario's period.
-fn start_baseline(scenario: &Scenario, out: &Path) -> anyhow::Result<ChildProcess> {
+fn start_baseline(scenario: &Scenario, out: &Path, floor: FloorSource) -> anyhow::Result<ChildProcess> {
+    let priority = Role::Plant.fifo_priority().unwrap_or(0);
+    if floor == FloorSource::Cyclictest {
+        let mut command =
+            crate::bench::cyclictest::command(scenario.timing.duration_s, scenario.timing.period_ns(), priority)
+                .map_err(anyhow::Error::msg)?;
+        super::supervision::end_with_launcher(&mut command, libc::SIGKILL);
+        let child = command
+            .stdin(Stdio::null())
+            .stdout(std::fs::File::create(out.join(CYCLICTEST_OUTPUT))?)
+            .stderr(Stdio::null())
+            .spawn()
+            .context("starting cyclictest")?;
+        return Ok(ChildProcess::new(child));
+    }
     let args = BaselineArgs {
         duration_s: scenario.timing.duration_s,
         period_ms: scenario.timing.period_ns() as f64 / 1e6,
-        fifo_priority: Role::Plant.fifo_priority().unwrap_or(0),
+        fifo_priority: priority,
         timerfd: false,
         hgrm: Some(out.join("baseline.wake_lateness.hgrm")),
         json: true,
@@ -362,9 +390,13 @@ fn supervise(
     }
 }
 
+/// cyclictest's output in the run's folder, as it printed it.
+const CYCLICTEST_OUTPUT: &str = "cyclictest.txt";
+
 /// The baseline's report (None if it wrote none); after a failed run it is not waited for.
 fn finish_baseline(
     baseline: &mut ChildProcess,
+    floor: FloorSource,
     scenario: &Scenario,
     out: &Path,
     failed: bool,
@@ -373,6 +405,18 @@ fn finish_baseline(
         baseline.signal(libc::SIGKILL);
     }
     baseline.finish(Duration::from_secs_f64(scenario.timing.duration_s + 10.0))?;
+    if floor == FloorSource::Cyclictest {
+        let text = std::fs::read_to_string(out.join(CYCLICTEST_OUTPUT)).unwrap_or_default();
+        let timing = &scenario.timing;
+        let priority = Role::Plant.fifo_priority().unwrap_or(0);
+        return Ok(match crate::bench::cyclictest::parse(&text, timing.period_ns(), timing.duration_s, priority) {
+            Ok(report) => Some(report),
+            Err(e) => {
+                eprintln!("silrig run: warning: no OS floor: {e} (see {})", out.join(CYCLICTEST_OUTPUT).display());
+                None
+            }
+        });
+    }
     let path = out.join("timer-baseline.json");
     let report = std::fs::read_to_string(&path).ok().and_then(|t| serde_json::from_str(&t).ok());
     if report.is_none() {
@@ -428,6 +472,9 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     if controller == ControllerLaunch::External {
         args.options.startup_timeout_s = opts.external_timeout_s;
     }
+    // First, so a floor that cannot be taken (cyclictest not installed) stops the run before anything flies.
+    let realtime_floor = opts.mode == RigMode::Realtime && !opts.no_baseline;
+    let mut baseline = if realtime_floor { Some(start_baseline(&scenario, &out, opts.floor)?) } else { None };
     write_controller_env(&args, &controller, opts.bridge_listen.is_some())?;
     let conditions_start = MachineConditions::now();
     let events = EventLog::new(&out, "launcher");
@@ -436,8 +483,6 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         None => None,
     };
     let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone())?;
-    let mut baseline =
-        if opts.mode == RigMode::Realtime && !opts.no_baseline { Some(start_baseline(&scenario, &out)?) } else { None };
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
     let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
     let supervised = supervise(&mut sup, &mut faults, &scenario, &mut bridge, live.as_mut());
@@ -454,7 +499,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     }
     sup.note_final_reports();
     let timer_baseline = match baseline.as_mut() {
-        Some(b) => finish_baseline(b, &scenario, &out, !sup.failures.is_empty())?,
+        Some(b) => finish_baseline(b, opts.floor, &scenario, &out, !sup.failures.is_empty())?,
         None => None,
     };
     let conditions_end = MachineConditions::now();
