@@ -52,14 +52,15 @@ pub fn parse(text: &str, period_ns: u64, duration_s: f64, priority: i32) -> Resu
             late_by_a_period += count;
         }
     }
+    // cyclictest's total counts the histogram's buckets; the overflows come on top of it.
+    let total = header_value(text, "# Total:").ok_or("cyclictest printed no histogram (no `# Total:` line)")?;
+    if hist.count() != total {
+        return Err(format!("cyclictest's histogram holds {} wake-ups, its total says {total}", hist.count()));
+    }
     let overflows = header_value(text, "# Histogram Overflows:").unwrap_or(0);
     let max_us = header_value(text, "# Max Latencies:").unwrap_or(HISTOGRAM_US);
     for _ in 0..overflows {
         hist.record_ns((max_us * 1000) as i64);
-    }
-    let total = header_value(text, "# Total:").ok_or("cyclictest printed no histogram (no `# Total:` line)")?;
-    if hist.count() != total {
-        return Err(format!("cyclictest's histogram holds {} wake-ups, its total says {total}", hist.count()));
     }
     Ok(BaselineReport {
         source: TickSource::Cyclictest,
@@ -82,7 +83,7 @@ mod tests {
     use super::*;
 
     const OUTPUT: &str = "# /dev/cpu_dma_latency set to 0us\n# Histogram\n000040 000002\n000041 000001\n\
-                          000073 000001\n# Total: 000000005\n# Min Latencies: 00040\n# Avg Latencies: 00039\n\
+                          000073 000001\n# Total: 000000004\n# Min Latencies: 00040\n# Avg Latencies: 00039\n\
                           # Max Latencies: 25000\n# Histogram Overflows: 00001\n# Histogram Overflow at cycle number:\n\
                           # Thread 0: 00017\n";
 
