@@ -157,7 +157,8 @@ impl ReplayOutcome {
             );
         }
         let verdict = if self.passed() { "PASSED" } else { "FAILED" };
-        let _ = writeln!(t, "{verdict} (tolerance {}); details: {}", self.tolerance, self.out_dir.join(REPORT).display());
+        let _ =
+            writeln!(t, "{verdict} (tolerance {}); details: {}", self.tolerance, self.out_dir.join(REPORT).display());
         t
     }
 }
@@ -232,8 +233,7 @@ impl Comparison {
             if differs {
                 f.ticks_differing += 1;
                 if self.first.is_none() {
-                    self.first =
-                        Some(Divergence {
+                    self.first = Some(Divergence {
                         tick,
                         t_s: sample.t_sim_s,
                         field: self.names[i].clone(),
@@ -260,8 +260,17 @@ struct ReplayRig {
 }
 
 impl ReplayRig {
+    /// Open a fresh run as its plant and start the controller on it; on failure nothing of the run is left.
     fn start(opts: &ReplayOptions, scenario_path: &Path, out_dir: &Path) -> anyhow::Result<Self> {
         let run_id = fresh_run_id();
+        let started = Self::open(run_id.clone(), opts, scenario_path, out_dir);
+        if started.is_err() {
+            let _ = ipc::cleanup_run(&run_id);
+        }
+        started
+    }
+
+    fn open(run_id: RunId, opts: &ReplayOptions, scenario_path: &Path, out_dir: &Path) -> anyhow::Result<Self> {
         let args = ProcessArgs {
             config: Some(scenario_path.to_path_buf()),
             run_id: run_id.clone(),
@@ -277,18 +286,16 @@ impl ReplayRig {
         let publisher = plant_stream.publisher().context("the plant stream")?;
         let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Plant))?;
         let launch = opts.controller_cmd.clone().map_or(ControllerLaunch::Ours, ControllerLaunch::Command);
-        let log_path = out_dir.join("controller.stderr.log");
+        let log_path = out_dir.join(format!("{}.stderr.log", Role::Controller));
         let log = std::fs::File::create(&log_path).with_context(|| format!("creating {}", log_path.display()))?;
-        let child = start_process(Role::Controller, &launch, &args, &binary_dir()?, log.try_clone()?.into(), log.into())?;
+        let child =
+            start_process(Role::Controller, &launch, &args, &binary_dir()?, log.try_clone()?.into(), log.into())?;
         Ok(Self { run_id, child, publisher, commands, command_stream, out_dir: out_dir.to_path_buf(), _node: node })
     }
 
     /// What the controller wrote to its log, for an error message.
     fn controller_said(&self) -> String {
-        let text = std::fs::read_to_string(self.out_dir.join("controller.stderr.log")).unwrap_or_default();
-        let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
-        let tail = lines[lines.len().saturating_sub(3)..].join(" | ");
-        if tail.is_empty() { String::new() } else { format!("; it said: {tail}") }
+        crate::rig::supervision::stderr_tail(&self.out_dir, Role::Controller)
     }
 
     fn ensure_alive(&mut self, waiting_for: &str) -> anyhow::Result<()> {

@@ -103,7 +103,10 @@ fn the_os_floor_can_be_taken_by_cyclictest_itself() {
     // Without cyclictest on PATH the run is refused before anything flies.
     let (code, text, out) = run_with_cyclictest_floor("no-cyclictest", Some("/nonexistent"));
     assert_eq!(code, Some(2), "{text}");
-    assert!(text.contains("--floor cyclictest: cyclictest is not installed (Debian: apt-get install rt-tests)"), "{text}");
+    assert!(
+        text.contains("--floor cyclictest: cyclictest is not installed (Debian: apt-get install rt-tests)"),
+        "{text}"
+    );
     assert!(!out.join("plant.report.json").exists(), "nothing flew");
     let _ = std::fs::remove_dir_all(&out);
 }

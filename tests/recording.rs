@@ -297,7 +297,8 @@ fn replay_refuses_what_is_not_a_whole_recording_of_this_layout() {
     write_recording_of_layout(&dir.join("recording.mcap"), "2");
     let (code, text) = replay(&dir, &[], &[]);
     assert_eq!(code, Some(2), "{text}");
-    let expected = format!("recorded with wire layout version 2, this silrig reads version {}", silrig::wire::WIRE_LAYOUT_VERSION);
+    let expected =
+        format!("recorded with wire layout version 2, this silrig reads version {}", silrig::wire::WIRE_LAYOUT_VERSION);
     assert!(text.contains(&expected), "{text}");
 
     // A whole recording cut in half, as a copy interrupted.

@@ -489,7 +489,8 @@ fn a_full_disk_is_named_with_the_file_and_the_process_and_leaves_every_file_whol
     assert!(!text.contains("panicked"), "{text}");
     // The logger's error reaches the launcher's own stderr, naming the file (whichever of its files the disk
     // refused first), though its log is on the full disk.
-    let logger_error = text.lines().find(|l| l.contains("silrig-logger: error: writing")).unwrap_or_else(|| panic!("{text}"));
+    let logger_error =
+        text.lines().find(|l| l.contains("silrig-logger: error: writing")).unwrap_or_else(|| panic!("{text}"));
     assert!(
         ["trace.csv", "timing.csv", "recording.mcap"].iter().any(|f| logger_error.contains(f))
             && logger_error.contains("No space left on device"),

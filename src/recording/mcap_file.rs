@@ -106,7 +106,9 @@ impl McapSink {
             (meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string()),
             ("file".to_string(), path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
         ]);
-        writer.write_metadata(&mcap::records::Metadata { name: meta_keys::RUN.into(), metadata: run }).map_err(named)?;
+        writer
+            .write_metadata(&mcap::records::Metadata { name: meta_keys::RUN.into(), metadata: run })
+            .map_err(named)?;
         let scenario = BTreeMap::from([(meta_keys::TOML.to_string(), meta.scenario_toml.clone())]);
         writer
             .write_metadata(&mcap::records::Metadata { name: meta_keys::SCENARIO.into(), metadata: scenario })
@@ -170,10 +172,8 @@ impl McapSink {
 }
 
 fn timing_schema() -> Value {
-    let properties: serde_json::Map<String, Value> = TIMING_COLUMNS
-        .iter()
-        .map(|c| (c.to_string(), json!({"type": ["integer", "null"]})))
-        .collect();
+    let properties: serde_json::Map<String, Value> =
+        TIMING_COLUMNS.iter().map(|c| (c.to_string(), json!({"type": ["integer", "null"]}))).collect();
     json!({"title": "silrig timing.csv row", "type": "object", "properties": properties,
            "description": "timing.csv's columns; the command's are null when no command answered the tick"})
 }

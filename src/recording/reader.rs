@@ -130,7 +130,9 @@ impl RecordedRun {
                         self.run = m.metadata;
                     }
                 }
-                mcap::records::Record::Metadata(m) if m.name == meta_keys::SCENARIO && self.scenario_toml.is_empty() => {
+                mcap::records::Record::Metadata(m)
+                    if m.name == meta_keys::SCENARIO && self.scenario_toml.is_empty() =>
+                {
                     self.scenario_toml = m.metadata.get(meta_keys::TOML).cloned().unwrap_or_default();
                 }
                 mcap::records::Record::Channel(c) => {

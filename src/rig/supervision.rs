@@ -78,7 +78,7 @@ impl ChildProcess {
         }
     }
 
-    pub(crate) fn pid(&self) -> u32 {
+    pub(super) fn pid(&self) -> u32 {
         self.child.id()
     }
 
@@ -93,7 +93,7 @@ impl ChildProcess {
         Ok(self.status)
     }
 
-    pub(crate) fn has_ended(&self) -> bool {
+    pub(super) fn has_ended(&self) -> bool {
         self.status.is_some()
     }
 
@@ -360,7 +360,7 @@ pub fn find_program(program: &str) -> Option<PathBuf> {
 }
 
 /// The last lines a process wrote to its stderr log, for the message that reports its death.
-fn stderr_tail(out: &Path, role: Role) -> String {
+pub(crate) fn stderr_tail(out: &Path, role: Role) -> String {
     let text = std::fs::read_to_string(out.join(format!("{role}.stderr.log"))).unwrap_or_default();
     let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
     let tail = lines[lines.len().saturating_sub(3)..].join(" | ");
