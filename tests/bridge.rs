@@ -120,7 +120,8 @@ impl Drop for Proc {
     }
 }
 
-/// A folder for one side of a test, outside /tmp, which the controller's host replaces with its own.
+/// A folder for one side of a test, in the target folder, which stays visible on the controller's host (see
+/// [`PRIVATE_TMP`]).
 fn folder(test: &str, side: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("bridge-{}-{test}-{side}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -148,14 +149,26 @@ fn plant_host(hosts: &Hosts, run: &str, out: &Path, duration_s: &str) -> Proc {
     ]))
 }
 
+/// Mounts a private /dev/shm and /tmp, then execs its arguments. A checkout under /tmp (a CI clone) is bound back
+/// into the new /tmp through a mount point in the new /dev/shm, so the binaries and the test's folders stay
+/// visible while the run's iceoryx2 files are the controller host's own.
+const PRIVATE_TMP: &str = r#"keep="$1"; shift
+mount -t tmpfs tmpfs /dev/shm || exit 1
+case "$keep" in /tmp/*) mkdir /dev/shm/keep && mount --bind "$keep" /dev/shm/keep || exit 1;; *) keep="";; esac
+mount -t tmpfs tmpfs /tmp || exit 1
+if [ -n "$keep" ]; then
+  mkdir -p "$keep" && mount --bind /dev/shm/keep "$keep" && umount /dev/shm/keep && rmdir /dev/shm/keep || exit 1
+fi
+exec "$@""#;
+
 /// `silrig-bridge --connect` on the controller's host, in a mount namespace of its own with a private /dev/shm and
 /// /tmp (the exec chain keeps the pid: it is the bridge's).
 fn controller_bridge(hosts: &Hosts, run: &str, out: &Path) -> Proc {
     Proc::spawn(
         Command::new("ip")
-            .args(["netns", "exec", &hosts.controller, "unshare", "--mount", "sh", "-c"])
-            .arg(r#"mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /tmp && exec "$@""#)
-            .args(["sh", BRIDGE, "--connect", PLANT_ADDR, "--run-id", run, "--out", out.to_str().unwrap()]),
+            .args(["netns", "exec", &hosts.controller, "unshare", "--mount", "sh", "-c", PRIVATE_TMP, "sh"])
+            .arg(env!("CARGO_MANIFEST_DIR"))
+            .args([BRIDGE, "--connect", PLANT_ADDR, "--run-id", run, "--out", out.to_str().unwrap()]),
     )
 }
 
