@@ -545,7 +545,16 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         at_s: flown_s,
         exit_status: signals::exit_status_for(signal),
     });
-    let cleanup = ipc::cleanup_run(&run_id)?;
+    let mut cleanup = ipc::cleanup_run(&run_id)?;
+    if controller == ControllerLaunch::External {
+        // A controller we did not start writes its report before it closes its ports and exits: give it a moment
+        // to leave, or cleaning up finds it alive and removes nothing.
+        let deadline = std::time::Instant::now() + Duration::from_secs(5);
+        while !cleanup.is_clean() && std::time::Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(20));
+            cleanup = ipc::cleanup_run(&run_id)?;
+        }
+    }
     // Processes of this run still alive after every child was reaped: something else joined the run.
     let leftovers = cleanup
         .alive
