@@ -39,6 +39,7 @@ pub struct McapSink {
     sequence: BTreeMap<u16, u32>,
     trace_columns: Vec<String>,
     events_path: PathBuf,
+    events_file: Option<File>,
     /// Bytes of `events.jsonl` already recorded.
     events_read: u64,
     /// Wall clock minus monotonic clock, ns.
@@ -116,6 +117,7 @@ impl McapSink {
         let wall_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
         Ok(Self {
             events_path: out_dir.join("events.jsonl"),
+            events_file: None,
             path,
             writer,
             channels,
@@ -154,8 +156,14 @@ impl McapSink {
 
     /// Record the lines other processes appended to `events.jsonl` since the last call (whole lines only).
     fn record_new_events(&mut self) -> std::io::Result<()> {
-        let Ok(mut file) = File::open(&self.events_path) else { return Ok(()) };
+        // Opened once it exists and kept: a lockstep logger flushes thousands of times a second.
+        if self.events_file.is_none() {
+            self.events_file = File::open(&self.events_path).ok();
+        }
+        let Some(file) = self.events_file.as_mut() else { return Ok(()) };
         let mut text = Vec::new();
+        // From the end of the last whole line read: a line being written (or cut back on a full disk) is read
+        // again whole next time.
         file.seek(SeekFrom::Start(self.events_read))?;
         file.read_to_end(&mut text)?;
         let Some(end) = text.iter().rposition(|&b| b == b'\n') else { return Ok(()) };
