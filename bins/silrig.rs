@@ -2,7 +2,8 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use silrig::plant::{F16Model, derivative_csv, trim::trim_level_flight};
+use silrig::derivative_csv;
+use silrig::plant::{F16Model, trim::trim_level_flight};
 use silrig::rig::load_scenario;
 use silrig::units::m_to_ft;
 use std::path::{Path, PathBuf};
@@ -64,7 +65,7 @@ enum Command {
         out: Option<PathBuf>,
     },
     /// Run the three-process rig (plant, controller, logger over iceoryx2) and report control quality and timing.
-    Run(silrig::rig::launcher::LaunchOptions),
+    Run(silrig::launch::launcher::LaunchOptions),
     /// Watch a running rig of this machine: each process's tick, counters and p99s so far, refreshed every second
     /// until the run ends. Read-only: it changes nothing the rig does.
     Top {
@@ -99,8 +100,8 @@ enum Command {
         what: Option<BenchCommand>,
     },
     /// Measure the OS timer floor: a bare absolute-deadline loop, wake-up lateness as cyclictest reports it.
-    #[command(name = silrig::bench::timer_baseline::SUBCOMMAND)]
-    TimerBaseline(silrig::bench::timer_baseline::BaselineArgs),
+    #[command(name = silrig::launch::floor::timer_baseline::SUBCOMMAND)]
+    TimerBaseline(silrig::launch::floor::timer_baseline::BaselineArgs),
 }
 
 #[derive(Subcommand)]
@@ -244,7 +245,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             }
         }
         Command::Run(opts) => {
-            let report = silrig::rig::launcher::run(&opts)?;
+            let report = silrig::launch::launcher::run(&opts)?;
             print!("{}", report.to_text());
             if !report.failures.is_empty() {
                 return Ok(ExitCode::FAILURE);
@@ -300,7 +301,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 1e9 / closed_loop.median_ns / 100.0
             );
         }
-        Command::TimerBaseline(args) => print!("{}", silrig::bench::timer_baseline::run(&args)?),
+        Command::TimerBaseline(args) => print!("{}", silrig::launch::floor::timer_baseline::run(&args)?),
     }
     Ok(ExitCode::SUCCESS)
 }

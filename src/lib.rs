@@ -1,46 +1,28 @@
-//! silrig: a real-time software-in-the-loop rig for flight control.
+//! silrig: a real-time software-in-the-loop rig for flight control. This crate is the facade over the workspace's
+//! library crates (in `src/`, one per layer), so the binaries in `bins/` and the tests use one name,
+//! `silrig::<module>`, while the compiler keeps the layers apart:
 //!
-//! The library holds all the math (F-16 plant, integrator, actuators), and the binaries in `bins/` are thin shells
-//! over it. Pure modules ([`plant`], [`integrator`], [`actuator`], [`control`]) do no I/O, IPC or clock reads.
-//! The closed loop: [`scenario`] (TOML scenarios), [`sim`] (the single-process loop), [`summary`] (control-quality
-//! figures), [`f_true`] (the true lumped function the RBF networks estimate), [`trace`] and [`outputs`] (files).
-//!
-//! Transport and timing: [`wire`] (the sample types on the wire), [`ipc`] (iceoryx2 streams, per-run namespaces,
-//! WaitSet loop, timerfd ticks, cleanup), [`clock`] (monotonic clock, absolute sleeps, SCHED_FIFO, tick schedule),
-//! [`timing`] (latency histograms and the timer baseline).
+//! - `silrig-model` ([`plant`], [`control`], [`actuator`], [`integrator`], [`units`], [`rng`]): the math, no I/O.
+//! - `silrig-flight` ([`scenario`], [`fault`], [`role`], [`dispersion`], [`sim`], [`trace`], [`summary`],
+//!   [`f_true`], [`criteria`], [`judge`], [`files`]): a flight as data and as one deterministic process.
+//! - `silrig-wire` ([`wire`], [`topology`], [`ipc`], [`clock`], [`timing`], [`recording`]): the contract and the
+//!   transport.
+//! - `silrig-plot` ([`plot`]): every figure.
+//! - `silrig-rig` ([`rig`]): the plant, controller and logger processes and the controller session.
+//! - `silrig-launch` ([`launch`]): `silrig run`, supervision, faults, the run's report.
+//! - `silrig-tools` ([`check`], [`campaign`], [`replay`], [`bench`], [`contract`], [`outputs`],
+//!   [`derivative_csv`]): the tools on top.
+//! - [`bridge`] (feature `bridge`): the rig's streams between two hosts over Zenoh.
 
 #![warn(missing_docs)]
-// `!(x > 0.0)` is how we reject NaN along with the out-of-range values; keep it.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod actuator;
-pub mod bench;
 #[cfg(feature = "bridge")]
 pub mod bridge;
-pub mod campaign;
-pub mod check;
-pub mod clock;
-pub mod contract;
-pub mod control;
-pub mod criteria;
-pub mod dispersion;
-pub mod f_true;
-pub mod fault;
-pub mod integrator;
-pub mod ipc;
-pub mod judge;
-pub mod outputs;
-pub mod plant;
-pub mod plot;
-pub mod recording;
-pub mod replay;
-pub mod rig;
-pub mod rng;
-pub mod scenario;
-pub mod sim;
-pub mod summary;
-pub mod timing;
-pub mod topology;
-pub mod trace;
-pub mod units;
-pub mod wire;
+
+pub use silrig_flight::{criteria, dispersion, f_true, fault, files, judge, role, scenario, sim, summary, trace};
+pub use silrig_launch as launch;
+pub use silrig_model::{actuator, control, integrator, plant, rng, units};
+pub use silrig_plot as plot;
+pub use silrig_rig as rig;
+pub use silrig_tools::{bench, campaign, check, contract, derivative_csv, outputs, replay};
+pub use silrig_wire::{clock, ipc, recording, timing, topology, wire};

@@ -3,8 +3,8 @@
 //! and the bridges' own messages ([`Hello`], [`RunInfo`], [`CommandTrailer`]). Pure, so the checks are
 //! unit-tested without a network.
 
-use crate::wire::{SampleHeader, WIRE_LAYOUT_VERSION, WireError, WireSample};
 use serde::{Deserialize, Serialize};
+use silrig_wire::wire::{SampleHeader, WIRE_LAYOUT_VERSION, WireError, WireSample};
 
 /// Why bytes from the network are not a sample this build can use.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -133,7 +133,7 @@ impl Hello {
 pub struct RunInfo {
     /// The scenario file's text.
     pub scenario_toml: String,
-    /// The run's arguments as environment variables ([`crate::rig::ProcessArgs::to_env`]).
+    /// The run's arguments as environment variables ([`silrig_rig::ProcessArgs::to_env`]).
     pub env: Vec<(String, String)>,
 }
 
@@ -170,7 +170,7 @@ impl CommandTrailer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wire::{CommandSample, ControllerInfo, PlantSample};
+    use silrig_wire::wire::{CommandSample, ControllerInfo, PlantSample};
 
     #[test]
     fn samples_cross_as_their_contract_bytes() {

@@ -5,7 +5,7 @@
 //! in the run's namespace on its own host, where any controller of the contract runs unchanged.
 //!
 //! Samples cross as the contract's bytes, header included, checked on arrival ([`frame`]); the bridge keeps their
-//! `seq`, `tick` and `epoch` ([`crate::ipc::StreamPublisher::forward`]), so readers on either host see the original
+//! `seq`, `tick` and `epoch` ([`silrig_wire::ipc::StreamPublisher::forward`]), so readers on either host see the original
 //! publisher's losses and restarts, and only `t_send_ns` is stamped anew (the other host's clock means nothing
 //! here). Each bridge says hello every [`HELLO_PERIOD`]; a peer silent for `--peer-timeout-ms` is lost, said at
 //! once on stderr and in the events ([`peer`]). The plant side serves one controller-side bridge at a time: a
@@ -21,16 +21,19 @@ pub mod frame;
 pub mod net;
 pub mod peer;
 
-use crate::clock::monotonic_ns;
-use crate::ipc::{self, IpcError, StreamPublisher, StreamSubscriber};
-use crate::rig::events::EventLog;
-use crate::rig::report::{ProcessReport, Recorder, ReportMeta};
-use crate::rig::{ProcessArgs, RigMode, SCENARIO_ENV, signals};
-use crate::topology::{CONSUMER_BUFFER, LOGGER_BUFFER, Role, Stream};
-use crate::wire::{CommandSample, ControllerInfo, PlantSample, WIRE_LAYOUT_VERSION, WireSample};
 use frame::{CommandTrailer, Hello, RunInfo, Side};
 use net::{Arrival, Inbox, Keys};
 use peer::{PeerChange, PeerWatch};
+use silrig_flight::role::Role;
+use silrig_rig::events::EventLog;
+use silrig_rig::report::{ProcessReport, Recorder, ReportMeta};
+use silrig_rig::{ProcessArgs, RigMode, SCENARIO_ENV, signals};
+use silrig_wire::clock::monotonic_ns;
+use silrig_wire::topology::CONSUMER_BUFFER;
+use silrig_wire::topology::LOGGER_BUFFER;
+use silrig_wire::topology::Stream;
+use silrig_wire::wire::{CommandSample, ControllerInfo, PlantSample, WIRE_LAYOUT_VERSION, WireSample};
+use silrig_wire::{ipc, ipc::IpcError, ipc::StreamPublisher, ipc::StreamSubscriber};
 use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::Duration;
@@ -142,8 +145,8 @@ fn zenoh_err(what: &str) -> impl Fn(zenoh::Error) -> BridgeError + '_ {
 impl BridgeOptions {
     /// The side and the Zenoh endpoint, checked.
     pub fn side(&self) -> Result<(Side, String), BridgeError> {
-        crate::rig::flag_in_range("connect-timeout-s", self.connect_timeout_s, 0.1, 3600.0, "s")
-            .and_then(|()| crate::rig::flag_in_range("peer-timeout-ms", self.peer_timeout_ms, 150.0, 60_000.0, "ms"))
+        silrig_rig::flag_in_range("connect-timeout-s", self.connect_timeout_s, 0.1, 3600.0, "s")
+            .and_then(|()| silrig_rig::flag_in_range("peer-timeout-ms", self.peer_timeout_ms, 150.0, 60_000.0, "ms"))
             .and_then(|()| self.process.options.validate())
             .map_err(BridgeError::Usage)?;
         let (side, text) = match (&self.listen, &self.connect) {
@@ -164,12 +167,12 @@ pub fn run_bridge(opts: &BridgeOptions) -> anyhow::Result<ProcessReport> {
     let args = &opts.process;
     if args.mode == RigMode::Realtime {
         // Before Zenoh starts its threads, so they inherit it: the network leg is on the loop's critical path.
-        let status = crate::clock::try_realtime(Role::Controller.fifo_priority().unwrap_or(1));
+        let status = silrig_wire::clock::try_realtime(Role::Controller.fifo_priority().unwrap_or(1));
         if let Some(w) = status.warning {
             eprintln!("silrig-bridge: warning: {w}");
         }
     }
-    let scheduling = crate::clock::current_policy().to_string();
+    let scheduling = silrig_wire::clock::current_policy().to_string();
     let (mut rec, scenario, ended) = match side {
         Side::Plant => PlantSide::start(opts, &endpoint)?.run()?,
         Side::Controller => ControllerSide::start(opts, &endpoint)?.run()?,
@@ -655,7 +658,7 @@ impl ControllerSide {
         let sample = reply.result().map_err(|e| anyhow::anyhow!("the run's scenario: {:?}", e.payload().to_bytes()))?;
         let info: RunInfo = serde_json::from_slice(&sample.payload().to_bytes())?;
         let scenario_path = args.out.join("scenario.toml");
-        crate::rig::write_atomically(&scenario_path, &info.scenario_toml)?;
+        silrig_flight::files::write_atomically(&scenario_path, &info.scenario_toml)?;
         let mut env: Vec<(String, String)> = info
             .env
             .into_iter()
@@ -668,7 +671,7 @@ impl ControllerSide {
         let lines: String =
             local.to_env().iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
         let env_path = args.out.join("controller.env");
-        crate::rig::write_atomically(&env_path, &lines)?;
+        silrig_flight::files::write_atomically(&env_path, &lines)?;
         let scenario = local.scenario()?;
         eprintln!(
             "silrig-bridge: connected to run {} at {}; start the controller on this host, e.g.\n  silrig-controller \

@@ -148,8 +148,8 @@ impl Inbox {
 
 /// Block until one of `fds` is readable or the monotonic clock reaches `deadline_ns` (a signal ends it early).
 pub fn wait_readable(fds: &[i32], deadline_ns: u64) {
-    let remaining_ns = deadline_ns.saturating_sub(crate::clock::monotonic_ns());
-    let timeout = crate::clock::timespec_from_ns(remaining_ns);
+    let remaining_ns = deadline_ns.saturating_sub(silrig_wire::clock::monotonic_ns());
+    let timeout = silrig_wire::clock::timespec_from_ns(remaining_ns);
     let mut polls: Vec<libc::pollfd> =
         fds.iter().map(|&fd| libc::pollfd { fd, events: libc::POLLIN, revents: 0 }).collect();
     // SAFETY: valid pollfds and timespec for the duration of the call, no signal mask change.
@@ -176,7 +176,7 @@ mod tests {
         let inbox = Inbox::new().unwrap();
         inbox.push(Arrival::Finished);
         inbox.push(Arrival::Hello { key: "k".into(), bytes: vec![1] });
-        let t0 = crate::clock::monotonic_ns();
+        let t0 = silrig_wire::clock::monotonic_ns();
         wait_readable(&[inbox.fd()], t0 + 5_000_000_000);
         let got: Vec<Arrival> = inbox.take().into();
         assert_eq!(got, [Arrival::Finished, Arrival::Hello { key: "k".into(), bytes: vec![1] }]);

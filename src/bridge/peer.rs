@@ -95,7 +95,7 @@ mod tests {
         Hello {
             side: Side::Controller,
             run_id: "r".into(),
-            layout_version: crate::wire::WIRE_LAYOUT_VERSION,
+            layout_version: silrig_wire::wire::WIRE_LAYOUT_VERSION,
             epoch,
             serving: None,
             controller_connected: true,

@@ -1,4 +1,4 @@
-//! `libsilrig_client.so`: silrig's controller session ([`silrig::rig::session::ControllerSession`]) behind a C ABI,
+//! `libsilrig_client.so`: silrig's controller session ([`silrig_rig::session::ControllerSession`]) behind a C ABI,
 //! so that a controller in C, C++, Python (ctypes), MATLAB or anything with a C FFI flies in the rig exactly as
 //! `silrig-controller` does. The functions and their rules are declared, with ownership and threading, in
 //! `examples/c/silrig_client.h`; the status codes and sample structs come from `silrig contract --c-header`.
@@ -6,11 +6,11 @@
 //! Every entry point returns a status code (never unwinds into C: a panic becomes `SILRIG_ERR_INTERNAL`), and an
 //! error's text is kept per thread for `silrig_last_error`.
 
-use silrig::rig::ProcessArgs;
-use silrig::rig::session::{
+use silrig_rig::ProcessArgs;
+use silrig_rig::session::{
     ControlCommand, ControllerSession, Next, SessionError, Status, StopReason, check_client_layout,
 };
-use silrig::wire::PlantSample;
+use silrig_wire::wire::PlantSample;
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char, c_int};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -63,7 +63,7 @@ unsafe fn session_mut<'a>(session: *mut SilrigSession) -> Result<&'a mut SilrigS
 /// The wire layout version this library speaks.
 #[unsafe(no_mangle)]
 pub extern "C" fn silrig_layout_version() -> u32 {
-    silrig::wire::WIRE_LAYOUT_VERSION
+    silrig_wire::wire::WIRE_LAYOUT_VERSION
 }
 
 /// The text of the last error on this thread ("" if none); valid until the next call on this thread.

@@ -9,7 +9,7 @@ use super::columns::{Columns, zip};
 use super::figure::{Figure, Panel, Series, palette};
 use super::render::write_figure;
 use super::smc_rbf;
-use crate::trace::Trace;
+use silrig_flight::trace::Trace;
 
 const STATES: &str = "fig1_states";
 
@@ -79,7 +79,7 @@ mod tests {
     #[test]
     fn the_surface_panel_is_scaled_to_the_deflections_not_to_a_command_beyond_the_stops() {
         // paper-ideal asks for a 62.8 deg rudder the 30 deg stop cuts: the deflections must keep the panel's scale.
-        let columns: Vec<String> = crate::trace::LOOP_COLUMNS.iter().map(|c| c.to_string()).collect();
+        let columns: Vec<String> = silrig_flight::trace::LOOP_COLUMNS.iter().map(|c| c.to_string()).collect();
         let mut trace = Trace::new(columns.clone());
         for k in 0..100 {
             let t = k as f64 * 0.01;

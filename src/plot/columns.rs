@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::PlotError;
-use crate::trace::Trace;
+use silrig_flight::trace::Trace;
 
 /// Column access that turns a missing column into an error naming it.
 pub(super) struct Columns<'a> {

@@ -6,7 +6,7 @@ use super::PlotError;
 use super::columns::{Columns, zip};
 use super::figure::{Figure, FigureLegend, LegendEntry, Panel, Series};
 use super::render::write_figure;
-use crate::trace::Trace;
+use silrig_flight::trace::Trace;
 
 /// Draw one figure `<stem>.{png,svg}` in `out_dir` comparing several runs (name, trace): panels for theta, phi,
 /// psi, alpha, elevator, aileron and rudder (deg) against `t_s`, in a 4x2 grid, one colour per run, the legend of run

@@ -1,5 +1,5 @@
 //! The figures of the paper's adaptive SMC/RBF controller: fig2 (the sliding surface `s_<ch>` of each channel, and
-//! its RBF estimate `fhat_<ch>` beside the true lumped function f of [`crate::f_true`], as the paper's Fig. 2 sets
+//! its RBF estimate `fhat_<ch>` beside the true lumped function f of [`silrig_flight::f_true`], as the paper's Fig. 2 sets
 //! "the estimated and true RBFNN functions" side by side) and fig3 (the RBF weights `w_<ch>_<k>` of each channel).
 
 use std::path::Path;
@@ -7,8 +7,8 @@ use std::path::Path;
 use super::PlotError;
 use super::columns::{Columns, zip};
 use super::figure::{Figure, FigureLegend, LegendEntry, Panel, Series, palette};
-use crate::trace::{CHANNELS, Trace};
 use plotters::style::RGBColor;
+use silrig_flight::trace::{CHANNELS, Trace};
 
 const SLIDING: &str = "fig2_sliding";
 const WEIGHTS: &str = "fig3_weights";

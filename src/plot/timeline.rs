@@ -6,7 +6,7 @@ use super::columns::{Columns, zip};
 use super::figure::{Figure, Panel, Series, palette};
 use super::render::write_figure;
 use super::{PlotError, TimelineEvent};
-use crate::trace::Trace;
+use silrig_flight::trace::Trace;
 
 /// Draw `<stem>.{png,svg}` in `out_dir`: Euler angles above, actual surface deflections below, against `t_s`, with a
 /// dashed vertical line at every event (both panels) and its label above the upper panel. Events outside the trace's

@@ -3,7 +3,7 @@
 //! [`serve`] flies it in a [`ControllerSession`] (`super::session`), which owns everything around it: the streams,
 //! the announcement, the in-loop faults, the bumpless blend after a restart, checkpoint files and the report. A
 //! controller in another language gets the same session through the C ABI of `libsilrig_client.so`. Our controller
-//! is [`AttitudeLaw`], the same [`crate::control::AttitudeController`] as `silrig sim`, served by
+//! is [`AttitudeLaw`], the same [`silrig_model::control::AttitudeController`] as `silrig sim`, served by
 //! [`run_controller`].
 //!
 //! With a fault plan the session asks for the controller's checkpoint every few ticks; restarted with `--resume`,
@@ -14,17 +14,17 @@ use super::plant::snapshot;
 use super::report::ProcessReport;
 pub use super::session::ControlCommand;
 use super::session::{ControllerSession, Next, SessionError};
-use crate::control::AttitudeController;
-use crate::scenario::Scenario;
-use crate::sim::{measurement, setpoint_rad, write_attitude_diagnostics};
-use crate::wire::PlantSample;
+use silrig_flight::scenario::Scenario;
+use silrig_flight::sim::{measurement, setpoint_rad, write_attitude_diagnostics};
+use silrig_model::control::AttitudeController;
+use silrig_wire::wire::PlantSample;
 
 /// A controller the rig can fly. The session around it ([`serve`], over [`ControllerSession`]) owns everything
 /// else: the transport, the clock, the in-loop faults, the bumpless blend when it joins a flying plant, checkpoint
 /// files, and the report.
 pub trait Controller {
     /// Names of the diagnostics [`Controller::step`] reports, in order (announced once per epoch; at most
-    /// [`crate::wire::MAX_DIAGNOSTICS`], see [`crate::wire::ControllerInfo::new`] for the characters allowed).
+    /// [`silrig_wire::wire::MAX_DIAGNOSTICS`], see [`silrig_wire::wire::ControllerInfo::new`] for the characters allowed).
     fn diagnostic_names(&self) -> Vec<String>;
 
     /// The command for one plant sample; write the diagnostics of this step into `diagnostics` (one per name).
@@ -51,7 +51,7 @@ pub struct AttitudeLaw {
 impl AttitudeLaw {
     /// The scenario's controller, with zero weights.
     pub fn new(scenario: &Scenario) -> Self {
-        let tables = crate::plant::F16Model::new(scenario.plant.xcg).tables();
+        let tables = silrig_model::plant::F16Model::new(scenario.plant.xcg).tables();
         Self {
             controller: AttitudeController::new(scenario.controller.clone(), tables),
             setpoint: setpoint_rad(scenario),
@@ -61,7 +61,7 @@ impl AttitudeLaw {
 
 impl Controller for AttitudeLaw {
     fn diagnostic_names(&self) -> Vec<String> {
-        crate::trace::attitude_diagnostic_names(self.controller.gains().rbf.nodes())
+        silrig_flight::trace::attitude_diagnostic_names(self.controller.gains().rbf.nodes())
     }
 
     fn step(&mut self, sample: &PlantSample, dt_s: f64, diagnostics: &mut [f64]) -> ControlCommand {

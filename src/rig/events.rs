@@ -39,7 +39,7 @@ impl EventLog {
     /// Append an event now. Failing to log is reported on stderr, never fatal: the loop matters more.
     pub fn emit(&self, tick: Option<u64>, kind: &str, detail: impl Into<String>) {
         let event = Event {
-            t_ns: crate::clock::monotonic_ns(),
+            t_ns: silrig_wire::clock::monotonic_ns(),
             tick,
             process: self.process.into(),
             kind: kind.into(),

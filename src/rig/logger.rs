@@ -1,6 +1,6 @@
 //! `silrig-logger`: subscribes to the plant and command streams with queues deep enough to absorb a 1 s stall,
 //! pairs each plant sample with the command answering it, and writes each row, as it goes, to its sinks
-//! ([`crate::recording`]): `trace.csv` (the same columns and values as `silrig sim`), `timing.csv` (per-tick stamps,
+//! ([`silrig_wire::recording`]): `trace.csv` (the same columns and values as `silrig sim`), `timing.csv` (per-tick stamps,
 //! flags and gaps) and the MCAP recording (the samples as received, for viewers and replay). Sinks are flushed every
 //! few rows, so a kill loses at most the last unflushed batch and never corrupts earlier rows.
 //!
@@ -19,18 +19,19 @@ use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::plant::snapshot;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
-use crate::clock::{TickSchedule, monotonic_ns};
-use crate::control::SurfaceCommand;
-use crate::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
-use crate::recording::csv::CsvSink;
-use crate::recording::mcap_file::McapSink;
-use crate::recording::{LoggedRow, RecordingMeta, RowSink};
-use crate::scenario::Scenario;
-use crate::sim::{HeldActuators, trace_row};
-use crate::topology::{Role, Stream};
-use crate::trace::{self, Trace};
-use crate::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantSample};
 use iceoryx2::prelude::CallbackProgression;
+use silrig_flight::role::Role;
+use silrig_flight::scenario::Scenario;
+use silrig_flight::sim::{HeldActuators, trace_row};
+use silrig_flight::{trace, trace::Trace};
+use silrig_model::control::SurfaceCommand;
+use silrig_wire::clock::{TickSchedule, monotonic_ns};
+use silrig_wire::recording::csv::CsvSink;
+use silrig_wire::recording::mcap_file::McapSink;
+use silrig_wire::recording::{LoggedRow, RecordingMeta, RowSink};
+use silrig_wire::topology::Stream;
+use silrig_wire::{ipc, ipc::LoopEnd, ipc::Received, ipc::StreamPublisher, ipc::StreamSubscriber};
+use silrig_wire::{wire, wire::CommandSample, wire::ControllerInfo, wire::LogAckSample, wire::PlantSample};
 use std::collections::BTreeMap;
 
 /// A plant sample waits this many newer samples for its command before it is written without one.

@@ -2,10 +2,10 @@
 //! once or every k ticks), `jitter` (a random extra sleep each tick) and `drop` (skip publishing for N ticks, or
 //! with a probability). Judged on simulated time `tick * dt`; announced in the event log when they first act.
 
-use crate::fault::{Fault, FaultAction};
-use crate::rig::events::EventLog;
-use crate::rng::SplitMix64;
-use crate::topology::Role;
+use crate::events::EventLog;
+use silrig_flight::fault::{Fault, FaultAction};
+use silrig_flight::role::Role;
+use silrig_model::rng::SplitMix64;
 
 /// What the loop must do at one tick.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

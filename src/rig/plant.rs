@@ -1,7 +1,7 @@
 //! `silrig-plant`: the time master. Each tick it publishes the plant sample, gathers the controller's command
 //! (same-tick: waits for the answer to this tick up to a budget; next-tick: takes the answer to the previous tick),
 //! holds the last command when none is in time (a miss), moves the actuators and integrates one step with the
-//! same [`crate::sim::PlantRunner`] as `silrig sim`. It flies the scenario's N + 1 samples (t = 0 to the duration;
+//! same [`silrig_flight::sim::PlantRunner`] as `silrig sim`. It flies the scenario's N + 1 samples (t = 0 to the duration;
 //! the last one only moves the actuators) and ends with an end-of-run sample ([`wire::FLAG_END_OF_RUN`]) that
 //! carries the deflections of the last tick, which the logger's last row shows. A state that leaves the model's
 //! envelope ends the flight the same way, one tick early, and the process with an error.
@@ -19,14 +19,15 @@ use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, signals};
-use crate::clock::{self, TickSchedule, monotonic_ns};
-use crate::control::SurfaceCommand;
-use crate::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
-use crate::scenario::Scenario;
-use crate::sim::{ActuatorCommand, LeftEnvelope, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
-use crate::topology::{Role, Stream};
-use crate::wire::{self, CommandSample, LogAckSample, PlantSample};
 use anyhow::Context;
+use silrig_flight::role::Role;
+use silrig_flight::scenario::Scenario;
+use silrig_flight::sim::{ActuatorCommand, LeftEnvelope, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
+use silrig_model::control::SurfaceCommand;
+use silrig_wire::topology::Stream;
+use silrig_wire::{clock, clock::TickSchedule, clock::monotonic_ns};
+use silrig_wire::{ipc, ipc::StreamPublisher, ipc::StreamService, ipc::StreamSubscriber};
+use silrig_wire::{wire, wire::CommandSample, wire::LogAckSample, wire::PlantSample};
 use std::collections::VecDeque;
 use std::time::Duration;
 
@@ -34,7 +35,7 @@ use std::time::Duration;
 pub const CHECKPOINT_EVERY_TICKS: u64 = 10;
 
 /// In lockstep the plant stays at most this many ticks ahead of the rows the logger has written (its queue holds
-/// [`crate::topology::LOGGER_BUFFER`]).
+/// [`silrig_wire::topology::LOGGER_BUFFER`]).
 pub const LOCKSTEP_LOGGER_WINDOW: u64 = 64;
 /// In lockstep, a peer silent for this long is an error rather than a slow peer.
 pub const LOCKSTEP_PEER_TIMEOUT: Duration = Duration::from_secs(5);
@@ -67,7 +68,7 @@ pub fn snapshot(s: &PlantSample) -> PlantSnapshot {
     PlantSnapshot {
         tick: s.header.tick,
         t_s: s.t_sim_s,
-        state: crate::plant::F16State::from_array(&s.state),
+        state: silrig_model::plant::F16State::from_array(&s.state),
         surfaces_deg: s.surfaces_deg,
         throttle: s.throttle,
         nz_g: s.nz_g,
@@ -107,8 +108,8 @@ fn actuator_command(c: &CommandSample, throttle: f64) -> ActuatorCommand {
 /// there.
 fn failsafe_command(scenario: &Scenario, hold: ActuatorCommand) -> ActuatorCommand {
     let model = scenario.plant.model();
-    let vt_fps = crate::units::m_to_ft(scenario.initial.airspeed_mps);
-    match crate::plant::trim::trim_level_flight(&model, vt_fps, scenario.initial.altitude_ft) {
+    let vt_fps = silrig_model::units::m_to_ft(scenario.initial.airspeed_mps);
+    match silrig_model::plant::trim::trim_level_flight(&model, vt_fps, scenario.initial.altitude_ft) {
         Ok(trim) => ActuatorCommand {
             surfaces: SurfaceCommand { aileron_deg: 0.0, elevator_deg: trim.elevator_deg, rudder_deg: 0.0 },
             throttle: hold.throttle,

@@ -1,9 +1,9 @@
 //! What each rig process reports at its end (`<process>.report.json` plus one `.hgrm` file per distribution), and
 //! the conditions a timing figure needs to be read honestly: scheduling policy, CPU count, load average.
 
-use crate::timing::{LatencyHistogram, LatencySummary};
-use crate::topology::Role;
 use serde::{Deserialize, Serialize};
+use silrig_flight::role::Role;
+use silrig_wire::timing::{LatencyHistogram, LatencySummary};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -91,7 +91,7 @@ impl Recorder {
     }
 
     /// Publish this process's live status for `run` from now on ([`super::status`]).
-    pub fn start_status(&mut self, run: &crate::ipc::RunId) {
+    pub fn start_status(&mut self, run: &silrig_wire::ipc::RunId) {
         let prefix = format!("{}.", self.process);
         let names = self.histograms.iter().map(|(n, _, _)| n.trim_start_matches(&prefix).to_string()).collect();
         self.status = Some(super::status::StatusFeed::start(run, &self.process, names));
@@ -112,7 +112,7 @@ impl Recorder {
             p99_us: BTreeMap::new(),
             counters,
             failsafe,
-            taken_ns: crate::clock::monotonic_ns(),
+            taken_ns: silrig_wire::clock::monotonic_ns(),
         });
     }
 
@@ -147,7 +147,7 @@ impl Recorder {
         std::fs::create_dir_all(out_dir)?;
         let mut latencies = Vec::new();
         for (name, description, h) in &self.histograms {
-            super::write_atomically(&out_dir.join(format!("{name}.hgrm")), &h.hgrm())?;
+            silrig_flight::files::write_atomically(&out_dir.join(format!("{name}.hgrm")), &h.hgrm())?;
             latencies.push(NamedLatency {
                 name: name.clone(),
                 description: description.clone(),
@@ -168,7 +168,7 @@ impl Recorder {
             command_age_ticks: self.command_age_ticks,
             cpu_s: process_cpu_s(),
         };
-        super::write_atomically(
+        silrig_flight::files::write_atomically(
             &report_path(out_dir, &self.process),
             &(serde_json::to_string_pretty(&report)? + "\n"),
         )?;
@@ -256,9 +256,9 @@ impl MachineConditions {
 /// other rather than on a clock; FIFO there would only starve their peers on a small machine.
 pub fn request_scheduling(role: Role, realtime: bool) -> String {
     let Some(priority) = role.fifo_priority().filter(|_| realtime) else {
-        return crate::clock::current_policy().to_string();
+        return silrig_wire::clock::current_policy().to_string();
     };
-    let status = crate::clock::try_realtime(priority);
+    let status = silrig_wire::clock::try_realtime(priority);
     if let Some(w) = &status.warning {
         eprintln!("silrig-{role}: warning: {w}");
     }

@@ -15,11 +15,16 @@ use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, signals};
-use crate::clock::monotonic_ns;
-use crate::ipc::{self, IpcError, StreamPublisher, StreamService, StreamSubscriber, WaitOutcome};
-use crate::scenario::Scenario;
-use crate::topology::{Role, Stream};
-use crate::wire::{self, CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, PlantSample, WireSample};
+use silrig_flight::role::Role;
+use silrig_flight::scenario::Scenario;
+use silrig_wire::clock::monotonic_ns;
+use silrig_wire::topology::Stream;
+use silrig_wire::{
+    ipc, ipc::IpcError, ipc::StreamPublisher, ipc::StreamService, ipc::StreamSubscriber, ipc::WaitOutcome,
+};
+use silrig_wire::{
+    wire, wire::CommandSample, wire::ControllerInfo, wire::FLAG_COMMAND_REFUSED, wire::PlantSample, wire::WireSample,
+};
 use std::time::Duration;
 
 /// How long a controller joining a running plant blends from the current surface positions to its command, s.
@@ -640,7 +645,7 @@ impl ControllerSession {
 /// Refuse a client built against another contract than this library: another layout version (named both ways)
 /// or samples of other sizes (a header edited by hand, or packed by another compiler setting).
 pub fn check_client_layout(layout_version: u32, plant_size: usize, command_size: usize) -> Result<(), SessionError> {
-    let ours = crate::wire::WIRE_LAYOUT_VERSION;
+    let ours = silrig_wire::wire::WIRE_LAYOUT_VERSION;
     if layout_version != ours {
         return Err(SessionError::Layout(format!(
             "the client was built against wire layout version {layout_version}, this library speaks version {ours}: \

@@ -5,10 +5,10 @@
 //! the loop nothing. The folder is inside the run's iceoryx2 root, so the run's cleanup removes it with the rest;
 //! `silrig run`'s live line and `silrig top` only read it.
 
-use crate::clock::monotonic_ns;
-use crate::ipc::RunId;
-use crate::timing::LatencyHistogram;
 use serde::{Deserialize, Serialize};
+use silrig_wire::clock::monotonic_ns;
+use silrig_wire::ipc::RunId;
+use silrig_wire::timing::LatencyHistogram;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, SyncSender, TryRecvError};
@@ -74,7 +74,7 @@ impl StatusFeed {
             .name("status".into())
             .stack_size(256 * 1024)
             .spawn(move || {
-                crate::clock::leave_realtime_scheduling();
+                silrig_wire::clock::leave_realtime_scheduling();
                 write_statuses(rx, &dir, &path, distributions);
             })
             .ok();
@@ -144,7 +144,7 @@ fn write_statuses(rx: Receiver<Update>, dir: &Path, path: &Path, distributions: 
             if dir.parent().is_some_and(Path::is_dir) {
                 let _ = std::fs::create_dir(dir);
                 if let Ok(text) = serde_json::to_string(&status) {
-                    let _ = super::write_atomically(path, &text);
+                    let _ = silrig_flight::files::write_atomically(path, &text);
                 }
             }
         }
@@ -164,7 +164,7 @@ pub fn read_statuses(run: &RunId) -> Vec<ProcessStatus> {
         .filter(|e| e.path().extension().is_some_and(|x| x == "json"))
         .filter_map(|e| serde_json::from_str(&std::fs::read_to_string(e.path()).ok()?).ok())
         .collect();
-    let order = |p: &ProcessStatus| crate::topology::Role::ALL.iter().position(|r| r.label() == p.process);
+    let order = |p: &ProcessStatus| silrig_flight::role::Role::ALL.iter().position(|r| r.label() == p.process);
     statuses.sort_by_key(order);
     statuses
 }
@@ -267,7 +267,7 @@ pub fn top(run: &RunId, iterations: Option<u64>) -> anyhow::Result<()> {
         stdout.flush()?;
         lines_drawn = text.lines().count();
         shown += 1;
-        if iterations.is_some_and(|n| shown >= n) || crate::rig::signals::termination_requested() {
+        if iterations.is_some_and(|n| shown >= n) || crate::signals::termination_requested() {
             return Ok(());
         }
         std::thread::sleep(Duration::from_secs(1));

@@ -1,0 +1,203 @@
+//! Pass/fail criteria of a closed-loop run as data: what a suite case or a sweep may ask for, their ranges, and the
+//! judgement of one. Shared by `silrig check` and the sweeps; judging a flight is [`crate::judge`], the rig's own
+//! criteria [`silrig_tools::check::criteria`].
+
+use serde::{Deserialize, Serialize};
+
+/// What a run must meet (`[cases.criteria]` of a check suite, `[criteria]` of a sweep). Every key is optional;
+/// only what is named is judged. The rig's timing and fault criteria need `silrig check`; a sweep judges the
+/// flight ones ([`Criteria::judge_flight`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Criteria {
+    /// The plant found an answer (a command, or a refusal) from the controller for every tick it flew.
+    #[serde(default)]
+    pub every_tick_answered: bool,
+    /// No command was NaN, infinite or out of range (refused by the controller's session or by the plant).
+    #[serde(default)]
+    pub no_invalid_command: bool,
+    /// The controller's compute time per tick, p99.
+    pub compute_p99: Option<Budget>,
+    /// From the plant publishing a sample to the answering command arriving at the plant, p99.
+    pub sense_to_actuate_p99: Option<Budget>,
+    /// Ticks whose command did not reach the plant by the time it needed it (refusals not counted), at most.
+    pub deadline_misses_max: Option<u64>,
+    /// phi, theta and psi each stay within `band_deg` of the set point from `within_s` on.
+    pub settled: Option<Settled>,
+    /// Largest overshoot of phi, theta or psi past its set point (in the direction of its step), deg.
+    pub overshoot_max_deg: Option<f64>,
+    /// Largest |angle - set point| of phi, theta, psi at the end of the run, deg.
+    pub final_error_max_deg: Option<f64>,
+    /// Largest angle of attack over the run, deg.
+    pub alpha_max_deg: Option<f64>,
+    /// Largest |p|, |q|, |r| from `after_s` on.
+    pub body_rate_max_dps: Option<BodyRateLimit>,
+    /// Ticks in which a surface's rate limit cut its motion, as a fraction of the ticks flown (worst surface).
+    pub rate_limit_fraction_max: Option<f64>,
+    /// Ticks in which a surface sat at a position limit, as a fraction of the ticks flown (worst surface).
+    pub position_limit_fraction_max: Option<f64>,
+    /// No sustained oscillation of an angle or surface in the last 3 s (the summary's limit-cycle detector).
+    #[serde(default)]
+    pub no_sustained_oscillation: bool,
+    /// After each restarted or resumed process (kill/term with `restart_after`, stop), the loop flies again within
+    /// this many seconds of the process coming back.
+    pub recovered_within_s: Option<f64>,
+    /// The plant's failsafe engaged during a fault and released when the controller came back.
+    #[serde(default)]
+    pub failsafe_engaged_and_released: bool,
+    /// Bumpless resume: after each controller fault it comes back from, how far its first command is from where
+    /// the surface actually was, deg (worst surface).
+    pub resume_jump_max_deg: Option<f64>,
+    /// Two runs of the case give bit-identical commands (lockstep only).
+    #[serde(default)]
+    pub deterministic: bool,
+}
+
+/// A time budget: an absolute time, or a multiple of the OS floor (the p99 wake-up lateness of a bare timer loop
+/// measured beside the same run).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Budget {
+    /// At most this many µs.
+    pub max_us: Option<f64>,
+    /// At most this multiple of the OS floor's p99.
+    pub max_os_floor_ratio: Option<f64>,
+}
+
+/// `settled = { within_s = T, band_deg = B }`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Settled {
+    /// From this time on, s.
+    pub within_s: f64,
+    /// Half-width of the band around the set point, deg.
+    pub band_deg: f64,
+}
+
+/// `body_rate_max_dps = { after_s = T, max = X }`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyRateLimit {
+    /// From this time on, s.
+    pub after_s: f64,
+    /// Largest |p|, |q|, |r|, deg/s.
+    pub max: f64,
+}
+
+/// One criterion judged.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Judgement {
+    /// The criterion's key.
+    pub criterion: String,
+    /// What was measured, with its unit.
+    pub measured: String,
+    /// The limit, with its unit.
+    pub limit: String,
+    /// Whether the run met it.
+    pub passed: bool,
+    /// On failure: what went wrong, in words, and where to look.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why_failed: Option<String>,
+    /// The measured figure as a number in the limit's unit, larger being worse (for ranking cases); None where
+    /// nothing was measured, or the figure never settled (infinite).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<f64>,
+}
+
+impl Judgement {
+    /// With the measured figure as a number (non-finite values are kept out: JSON has no infinity).
+    pub(crate) fn with_value(mut self, value: f64) -> Self {
+        self.value = value.is_finite().then_some(value);
+        self
+    }
+}
+
+/// `Err` naming the criterion when `v` is not a positive finite number.
+pub fn positive(key: &str, v: f64) -> Result<(), String> {
+    if v > 0.0 && v.is_finite() { Ok(()) } else { Err(format!("`criteria.{key}` must be a positive number, got {v}")) }
+}
+
+/// Criteria only the three-process rig can measure (timing, the contract, process faults, two runs).
+const RIG_CRITERIA: [&str; 9] = [
+    "every_tick_answered",
+    "no_invalid_command",
+    "compute_p99",
+    "sense_to_actuate_p99",
+    "deadline_misses_max",
+    "recovered_within_s",
+    "failsafe_engaged_and_released",
+    "resume_jump_max_deg",
+    "deterministic",
+];
+
+impl Criteria {
+    /// The keys set that only the rig can judge.
+    pub fn rig_criteria_set(&self) -> Vec<&'static str> {
+        let set = [
+            self.every_tick_answered,
+            self.no_invalid_command,
+            self.compute_p99.is_some(),
+            self.sense_to_actuate_p99.is_some(),
+            self.deadline_misses_max.is_some(),
+            self.recovered_within_s.is_some(),
+            self.failsafe_engaged_and_released,
+            self.resume_jump_max_deg.is_some(),
+            self.deterministic,
+        ];
+        RIG_CRITERIA.iter().zip(set).filter(|(_, on)| *on).map(|(k, _)| *k).collect()
+    }
+
+    /// Refuse flight criteria that cannot be judged over a run of `duration_s`.
+    pub fn validate_flight(&self, duration_s: f64) -> Result<(), String> {
+        if let Some(s) = self.settled {
+            positive("settled.band_deg", s.band_deg)?;
+            if !(s.within_s >= 0.0 && s.within_s < duration_s) {
+                return Err(format!(
+                    "`criteria.settled.within_s` must be within 0..{duration_s} s, got {}",
+                    s.within_s
+                ));
+            }
+        }
+        for (key, v) in [
+            ("alpha_max_deg", self.alpha_max_deg),
+            ("overshoot_max_deg", self.overshoot_max_deg),
+            ("final_error_max_deg", self.final_error_max_deg),
+        ] {
+            if let Some(v) = v {
+                positive(key, v)?;
+            }
+        }
+        if let Some(b) = self.body_rate_max_dps {
+            positive("body_rate_max_dps.max", b.max)?;
+            if !(b.after_s >= 0.0 && b.after_s < duration_s) {
+                return Err(format!(
+                    "`criteria.body_rate_max_dps.after_s` must be within 0..{duration_s} s, got {}",
+                    b.after_s
+                ));
+            }
+        }
+        for (key, v) in [
+            ("rate_limit_fraction_max", self.rate_limit_fraction_max),
+            ("position_limit_fraction_max", self.position_limit_fraction_max),
+        ] {
+            if let Some(f) = v
+                && !(0.0..=1.0).contains(&f)
+            {
+                return Err(format!("`criteria.{key}` must be a fraction in 0..1, got {f}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether any flight criterion is set.
+    pub fn has_flight_criteria(&self) -> bool {
+        self.settled.is_some()
+            || self.alpha_max_deg.is_some()
+            || self.overshoot_max_deg.is_some()
+            || self.final_error_max_deg.is_some()
+            || self.body_rate_max_dps.is_some()
+            || self.rate_limit_fraction_max.is_some()
+            || self.position_limit_fraction_max.is_some()
+            || self.no_sustained_oscillation
+    }
+}

@@ -1,0 +1,300 @@
+//! Judging a flight: what each flight criterion of [`crate::criteria`] measures in a trace and its summary, the
+//! limit it is held to, and the sentence that explains a failure to someone who has not read the code. Pure: the
+//! same code judges `silrig check` runs and sweep cases.
+
+use crate::criteria::{BodyRateLimit, Criteria, Judgement, Settled};
+use crate::scenario::Scenario;
+use crate::summary::{Summary, settle_time};
+use crate::trace::Trace;
+
+/// A judgement of `criterion`: what was measured against what limit, failed when `failure` says why.
+pub fn judgement(criterion: &str, measured: String, limit: String, failure: Option<String>) -> Judgement {
+    Judgement {
+        criterion: criterion.into(),
+        measured,
+        limit,
+        passed: failure.is_none(),
+        why_failed: failure,
+        value: None,
+    }
+}
+
+/// A judgement that could not be made because the run left no evidence for it: a failure, saying why.
+pub fn no_evidence(criterion: &str, limit: String, what: &str) -> Judgement {
+    judgement(criterion, "-".into(), limit, Some(format!("nothing to judge: {what}")))
+}
+
+/// A figure for people: two decimals, or three significant digits in powers of ten once it is absurdly large (a
+/// flight that left the model's data).
+fn figure(v: f64) -> String {
+    if v.abs() < 1e5 { format!("{v:.2}") } else { format!("{v:.2e}") }
+}
+
+/// Judge the flight criteria of `criteria` that are set, in a fixed order, from a trace and its summary.
+pub fn judge_flight(
+    criteria: &Criteria,
+    scenario: &Scenario,
+    trace: Option<&Trace>,
+    summary: Option<&Summary>,
+) -> Vec<Judgement> {
+    let mut out = Vec::new();
+    if let Some(s) = criteria.settled {
+        out.push(settled(scenario, trace, s));
+    }
+    if let Some(o) = criteria.overshoot_max_deg {
+        out.push(overshoot_max(scenario, trace, o));
+    }
+    if let Some(e) = criteria.final_error_max_deg {
+        out.push(final_error_max(scenario, trace, e));
+    }
+    if let Some(a) = criteria.alpha_max_deg {
+        out.push(alpha_max(trace, a));
+    }
+    if let Some(b) = criteria.body_rate_max_dps {
+        out.push(body_rate_max(trace, b));
+    }
+    if let Some(f) = criteria.rate_limit_fraction_max {
+        out.push(saturation_fraction(summary, f, Saturation::Rate));
+    }
+    if let Some(f) = criteria.position_limit_fraction_max {
+        out.push(saturation_fraction(summary, f, Saturation::Position));
+    }
+    if criteria.no_sustained_oscillation {
+        out.push(no_sustained_oscillation(summary));
+    }
+    out
+}
+
+fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement {
+    let limit = format!("within {} deg from {} s", s.band_deg, s.within_s);
+    let Some(trace) = trace else { return no_evidence("settled", limit, "no trace was logged") };
+    let t = trace.column("t_s").unwrap_or_default();
+    let sp = &scenario.setpoint;
+    let settle_times: Vec<(&str, Option<f64>)> = [("phi", sp.phi_deg), ("theta", sp.theta_deg), ("psi", sp.psi_deg)]
+        .into_iter()
+        .map(|(name, setpoint)| {
+            (name, settle_time(&t, &trace.column(&format!("{name}_deg")).unwrap_or_default(), setpoint, s.band_deg))
+        })
+        .collect();
+    // The axis that settled last, or one that never did.
+    let (axis, at) = settle_times
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.unwrap_or(f64::INFINITY).total_cmp(&b.1.unwrap_or(f64::INFINITY)))
+        .expect("three axes");
+    let measured = match at {
+        Some(a) => format!("{axis} settled at {a:.2} s"),
+        None => format!("{axis} never settled"),
+    };
+    let failure = match at {
+        Some(a) if a <= s.within_s => None,
+        Some(a) => Some(format!(
+            "{axis} only stayed within {} deg of its set point from {a:.2} s on, later than the {} s allowed; \
+             fig1_states.png in the run folder shows the response",
+            s.band_deg, s.within_s
+        )),
+        None => Some(format!(
+            "{axis} was still more than {} deg from its set point at the end of the run; fig1_states.png in the run \
+             folder shows the response",
+            s.band_deg
+        )),
+    };
+    judgement("settled", measured, limit, failure).with_value(at.unwrap_or(f64::INFINITY))
+}
+
+/// Largest |column| over rows with t >= from_s (NaN-free), with the time it happened.
+fn peak_abs(trace: &Trace, column: &str, from_s: f64) -> Option<(f64, f64)> {
+    let t = trace.column("t_s")?;
+    let x = trace.column(column)?;
+    t.iter()
+        .zip(&x)
+        .filter(|(ti, v)| **ti >= from_s && v.is_finite())
+        .map(|(ti, v)| (v.abs(), *ti))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+/// (axis, set point, values) of phi, theta, psi.
+fn angles(scenario: &Scenario, trace: &Trace) -> Vec<(&'static str, f64, Vec<f64>)> {
+    let sp = &scenario.setpoint;
+    [("phi", sp.phi_deg), ("theta", sp.theta_deg), ("psi", sp.psi_deg)]
+        .into_iter()
+        .map(|(name, setpoint)| (name, setpoint, trace.column(&format!("{name}_deg")).unwrap_or_default()))
+        .collect()
+}
+
+fn overshoot_max(scenario: &Scenario, trace: Option<&Trace>, max: f64) -> Judgement {
+    let limit = format!("{max} deg");
+    let Some(trace) = trace else { return no_evidence("overshoot_max_deg", limit, "no trace was logged") };
+    // Past the set point in the direction of the step; an axis already at its set point has no step to overshoot.
+    let worst = angles(scenario, trace)
+        .into_iter()
+        .filter_map(|(name, setpoint, x)| {
+            let step = setpoint - x.first()?;
+            // f64::signum gives 1 for 0: an axis without a step is left out explicitly.
+            let direction = if step > 0.0 { 1.0 } else { -1.0 };
+            (step != 0.0).then(|| {
+                let over = x
+                    .iter()
+                    .map(|v| (v - setpoint) * direction)
+                    .fold(0.0_f64, |m, v| if v.is_nan() { f64::INFINITY } else { m.max(v) });
+                (name, over)
+            })
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    let (axis, over) = worst.unwrap_or(("-", 0.0));
+    let failure = (over > max).then(|| {
+        format!("{axis} went {} deg past its set point on the way there, more than the {max} deg allowed", figure(over))
+    });
+    judgement("overshoot_max_deg", format!("{axis} {} deg", figure(over)), limit, failure).with_value(over)
+}
+
+fn final_error_max(scenario: &Scenario, trace: Option<&Trace>, max: f64) -> Judgement {
+    let limit = format!("{max} deg");
+    let Some(trace) = trace else { return no_evidence("final_error_max_deg", limit, "no trace was logged") };
+    let (axis, error) = angles(scenario, trace)
+        .into_iter()
+        .map(|(name, setpoint, x)| {
+            let e = x.last().map_or(f64::INFINITY, |v| (v - setpoint).abs());
+            (name, if e.is_nan() { f64::INFINITY } else { e })
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .expect("three axes");
+    let failure = (error > max)
+        .then(|| format!("{axis} ended {} deg from its set point, more than the {max} deg allowed", figure(error)));
+    judgement("final_error_max_deg", format!("{axis} {} deg", figure(error)), limit, failure).with_value(error)
+}
+
+fn alpha_max(trace: Option<&Trace>, max: f64) -> Judgement {
+    let limit = format!("{max} deg");
+    let Some((alpha, at)) = trace.and_then(|t| peak_abs(t, "alpha_deg", f64::NEG_INFINITY)) else {
+        return no_evidence("alpha_max_deg", limit, "no trace was logged");
+    };
+    let failure = (alpha > max).then(|| {
+        format!("the angle of attack reached {} deg at {at:.2} s, beyond the {max} deg allowed", figure(alpha))
+    });
+    judgement("alpha_max_deg", format!("{} deg", figure(alpha)), limit, failure).with_value(alpha)
+}
+
+fn body_rate_max(trace: Option<&Trace>, b: BodyRateLimit) -> Judgement {
+    let limit = format!("{} deg/s after {} s", b.max, b.after_s);
+    let Some(trace) = trace else { return no_evidence("body_rate_max_dps", limit, "no trace was logged") };
+    let peaks: Vec<(&str, f64, f64)> = ["p", "q", "r"]
+        .iter()
+        .filter_map(|n| peak_abs(trace, &format!("{n}_dps"), b.after_s).map(|(v, t)| (*n, v, t)))
+        .collect();
+    let Some(&(name, rate, at)) = peaks.iter().max_by(|a, c| a.1.total_cmp(&c.1)) else {
+        return no_evidence("body_rate_max_dps", limit, "the trace ends before `after_s`");
+    };
+    let failure = (rate > b.max).then(|| {
+        format!(
+            "|{name}| reached {} deg/s at {at:.2} s, after the {} s by which rates should be below {} deg/s",
+            figure(rate),
+            b.after_s,
+            b.max
+        )
+    });
+    judgement("body_rate_max_dps", format!("|{name}| {} deg/s", figure(rate)), limit, failure).with_value(rate)
+}
+
+/// Which limit a saturation criterion counts.
+#[derive(Clone, Copy)]
+enum Saturation {
+    Rate,
+    Position,
+}
+
+fn saturation_fraction(summary: Option<&Summary>, max: f64, kind: Saturation) -> Judgement {
+    let (criterion, what, why) = match kind {
+        Saturation::Rate => (
+            "rate_limit_fraction_max",
+            "rate limit",
+            "the controller asks for more than the actuator can give, which costs phase margin and can drive a limit \
+             cycle",
+        ),
+        Saturation::Position => (
+            "position_limit_fraction_max",
+            "position limit",
+            "the controller asks for more deflection than the surface has: no authority left for a disturbance",
+        ),
+    };
+    let limit = format!("{:.1} % of ticks", max * 100.0);
+    let Some(s) = summary else { return no_evidence(criterion, limit, "no trace was logged") };
+    let ticks_at = |f: &crate::summary::SurfaceFigures| match kind {
+        Saturation::Rate => f.ticks_at_rate_limit,
+        Saturation::Position => f.ticks_at_position_limit,
+    };
+    let Some(worst) = s.surfaces.iter().max_by_key(|f| ticks_at(f)) else {
+        return no_evidence(criterion, limit, "no surfaces in the summary");
+    };
+    let fraction = ticks_at(worst) as f64 / s.ticks.max(1) as f64;
+    let failure = (fraction > max).then(|| {
+        format!(
+            "the {} spent {} of {} ticks ({:.1} %) at its {what}: {why}",
+            worst.name,
+            ticks_at(worst),
+            s.ticks,
+            fraction * 100.0
+        )
+    });
+    judgement(criterion, format!("{} {:.1} %", worst.name, fraction * 100.0), limit, failure).with_value(fraction)
+}
+
+fn no_sustained_oscillation(summary: Option<&Summary>) -> Judgement {
+    let limit = "none in the last 3 s".to_string();
+    let Some(s) = summary else {
+        return no_evidence("no_sustained_oscillation", limit, "no trace was logged");
+    };
+    let mut oscillating: Vec<&crate::summary::Oscillation> = s.oscillations.iter().filter(|o| o.sustained).collect();
+    // The strongest first, relative to what counts for its kind of signal.
+    oscillating.sort_by(|a, b| {
+        let strength = |o: &crate::summary::Oscillation| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal);
+        strength(b).total_cmp(&strength(a))
+    });
+    let sustained: Vec<String> =
+        oscillating.iter().map(|o| format!("{} +-{:.2} every {:.2} s", o.signal, o.amplitude, o.period_s)).collect();
+    let measured = match sustained.len() {
+        0 => "none".to_string(),
+        1 => sustained[0].clone(),
+        n => format!("{} (+{} more)", sustained[0], n - 1),
+    };
+    let failure = (!sustained.is_empty()).then(|| {
+        format!(
+            "the loop did not come to rest: {} in the last 3 s of the run, not decaying (a limit cycle, typically \
+             from too much gain against the actuators' rate limits or the loop's delay)",
+            sustained.join(", ")
+        )
+    });
+    // How far past what counts the strongest sustained oscillation is (0 without one).
+    let strength = oscillating.first().map_or(0.0, |o| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal));
+    judgement("no_sustained_oscillation", measured, limit, failure).with_value(strength)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A trace of phi, theta, psi (deg) at 0.01 s steps.
+    fn trace(rows: &[[f64; 3]]) -> Trace {
+        let mut t = Trace::new(["t_s", "phi_deg", "theta_deg", "psi_deg"].map(String::from).to_vec());
+        t.rows = rows.iter().enumerate().map(|(k, r)| vec![k as f64 * 0.01, r[0], r[1], r[2]]).collect();
+        t
+    }
+
+    #[test]
+    fn overshoot_is_measured_past_the_set_point_in_the_direction_of_the_step() {
+        // Set points 0, 10, 0 (the default scenario). theta steps up from 5 and peaks at 12.5: 2.5 deg over;
+        // phi steps down from 5 and dips to -1: 1 deg over; psi starts at its set point: no step, no overshoot.
+        let s = Scenario::embedded_default();
+        let t = trace(&[[5.0, 5.0, 0.0], [-1.0, 12.5, 3.0], [0.2, 10.1, -0.4]]);
+        let j = overshoot_max(&s, Some(&t), 2.0);
+        assert_eq!((j.measured.as_str(), j.passed, j.value), ("theta 2.50 deg", false, Some(2.5)));
+        assert!(overshoot_max(&s, Some(&t), 3.0).passed);
+        let e = final_error_max(&s, Some(&t), 0.3);
+        assert_eq!((e.measured.as_str(), e.passed), ("psi 0.40 deg", false));
+        assert!((e.value.unwrap() - 0.4).abs() < 1e-12);
+        assert!(final_error_max(&s, Some(&t), 0.5).passed);
+        // A flight that is no longer a number fails both.
+        let lost = trace(&[[5.0, 5.0, 5.0], [f64::NAN, f64::NAN, f64::NAN]]);
+        assert!(!overshoot_max(&s, Some(&lost), 100.0).passed && !final_error_max(&s, Some(&lost), 100.0).passed);
+    }
+}

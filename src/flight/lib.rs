@@ -1,0 +1,25 @@
+//! silrig-flight: a closed-loop flight as data and as one deterministic process: what to fly, what may go wrong,
+//! how it went and whether that was good enough. Files yes, IPC and clocks no.
+//!
+//! - [`scenario`]: TOML scenarios (initial condition, set points, disturbance, plant and controller options,
+//!   actuator limits, timing) with `validate`; [`fault`]: the fault plan as data, targeting a [`role`] (a rig
+//!   process); [`dispersion`]: seeded per-key distributions for sweeps.
+//! - [`sim`]: the single-process loop (plant, actuators, controller in lockstep), whose pieces the rig's processes
+//!   reuse so both give the same trace; [`trace`]: the trace rows and `trace.csv`.
+//! - [`summary`]: control-quality figures; [`f_true`]: the true lumped function the RBF networks estimate;
+//!   [`criteria`] and [`judge`]: pass/fail criteria and how a flight is judged against them.
+//! - [`files`]: writing a run's files without ever leaving a torn one.
+//!
+//! Layers: uses `silrig-model` only.
+
+pub mod criteria;
+pub mod dispersion;
+pub mod f_true;
+pub mod fault;
+pub mod files;
+pub mod judge;
+pub mod role;
+pub mod scenario;
+pub mod sim;
+pub mod summary;
+pub mod trace;

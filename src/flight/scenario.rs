@@ -1,0 +1,557 @@
+//! Scenario files: everything a closed-loop run needs (initial condition, set points, disturbance, plant options,
+//! controller gains, actuator limits, timing), as TOML with unit-suffixed keys. Unknown keys are errors; `validate`
+//! names the key and the problem of any out-of-range value.
+
+use crate::criteria::Criteria;
+use crate::dispersion::Distribution;
+use serde::{Deserialize, Serialize};
+use silrig_model::actuator::ActuatorSetLimits;
+use silrig_model::control::ControllerGains;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The embedded default scenario (what `silrig sim` and `silrig run` use without a file).
+pub const DEFAULT_SCENARIO_TOML: &str = include_str!("../../configs/robust.toml");
+
+/// A whole scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name, used for output folders and plot titles.
+    pub name: String,
+    /// What the scenario shows.
+    #[serde(default)]
+    pub description: String,
+    /// Seed for every random source of the run.
+    #[serde(default)]
+    pub seed: u64,
+    /// Initial condition.
+    pub initial: InitialCondition,
+    /// Attitude set points.
+    pub setpoint: Setpoint,
+    /// Disturbance on the Euler-angle accelerations.
+    #[serde(default)]
+    pub disturbance: Disturbance,
+    /// Plant options.
+    #[serde(default)]
+    pub plant: PlantOptions,
+    /// Controller gains.
+    #[serde(default)]
+    pub controller: ControllerGains,
+    /// Actuator limits and lags (default: the book's).
+    #[serde(default)]
+    pub actuators: ActuatorSetLimits,
+    /// Step, duration and command timing.
+    pub timing: Timing,
+    /// The fault plan (`[[faults]]`), in any order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faults: Vec<crate::fault::Fault>,
+    /// Monte Carlo dispersions (`silrig sweep`): a distribution per dotted scenario key. A single run flies the
+    /// nominal values.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub dispersions: BTreeMap<String, Distribution>,
+    /// What each case of a sweep must meet (the flight criteria of `silrig check`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub criteria: Option<Criteria>,
+}
+
+/// How the run starts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialCondition {
+    /// `explicit`: every angle below is used as given; `trim`: alpha, theta, throttle and elevator come from the
+    /// level-flight trim at this airspeed and altitude (phi, psi and the rates still from below).
+    #[serde(default)]
+    pub mode: InitialMode,
+    /// True airspeed, m/s.
+    pub airspeed_mps: f64,
+    /// Altitude, ft.
+    pub altitude_ft: f64,
+    /// Angle of attack, deg (explicit mode).
+    #[serde(default)]
+    pub alpha_deg: f64,
+    /// Sideslip, deg.
+    #[serde(default)]
+    pub beta_deg: f64,
+    /// Roll angle, deg.
+    #[serde(default)]
+    pub phi_deg: f64,
+    /// Pitch angle, deg (explicit mode).
+    #[serde(default)]
+    pub theta_deg: f64,
+    /// Heading, deg.
+    #[serde(default)]
+    pub psi_deg: f64,
+    /// Body roll rate, deg/s.
+    #[serde(default)]
+    pub p_dps: f64,
+    /// Body pitch rate, deg/s.
+    #[serde(default)]
+    pub q_dps: f64,
+    /// Body yaw rate, deg/s.
+    #[serde(default)]
+    pub r_dps: f64,
+    /// Throttle 0..1; omitted: the value that gives VT_dot = 0 at the initial state with the engine at its
+    /// equilibrium power (explicit mode), or the trim throttle.
+    #[serde(default)]
+    pub throttle: Option<f64>,
+}
+
+/// Initial-condition mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum InitialMode {
+    /// Angles and rates as given.
+    #[default]
+    Explicit,
+    /// Level-flight trim.
+    Trim,
+}
+
+/// Constant attitude set points, deg.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Setpoint {
+    /// Roll, deg.
+    pub phi_deg: f64,
+    /// Pitch, deg.
+    pub theta_deg: f64,
+    /// Heading, deg.
+    pub psi_deg: f64,
+}
+
+/// d(t) = amplitude * sin(frequency * t) on the chosen Euler-angle accelerations.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Disturbance {
+    /// Amplitude, rad/s^2.
+    #[serde(default)]
+    pub amplitude_radps2: f64,
+    /// Angular frequency, rad/s.
+    #[serde(default)]
+    pub frequency_radps: f64,
+    /// Channels it acts on: any of "phi", "theta", "psi".
+    #[serde(default = "all_channels")]
+    pub channels: Vec<String>,
+}
+
+fn all_channels() -> Vec<String> {
+    silrig_model::control::CHANNEL_NAMES.iter().map(|s| s.to_string()).collect()
+}
+
+impl Default for Disturbance {
+    fn default() -> Self {
+        Self { amplitude_radps2: 0.0, frequency_radps: 0.0, channels: all_channels() }
+    }
+}
+
+impl Disturbance {
+    /// The disturbance at time `t_s`, per channel, rad/s^2.
+    #[inline]
+    pub fn at(&self, t_s: f64, mask: &[bool; 3]) -> [f64; 3] {
+        if self.amplitude_radps2 == 0.0 {
+            return [0.0; 3];
+        }
+        let d = self.amplitude_radps2 * (self.frequency_radps * t_s).sin();
+        mask.map(|on| if on { d } else { 0.0 })
+    }
+
+    /// Which channels are disturbed.
+    pub fn channel_mask(&self) -> [bool; 3] {
+        silrig_model::control::CHANNEL_NAMES.map(|n| self.channels.iter().any(|c| c == n))
+    }
+}
+
+/// Plant options.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlantOptions {
+    /// Freeze the airspeed (VT_dot = 0), as the paper assumes.
+    #[serde(default)]
+    pub speed_hold: bool,
+    /// Freeze the sideslip (beta_dot = 0), as the paper's derivation assumes: for reproducing its figures only (see
+    /// [`silrig_model::plant::ExternalForcing::sideslip_hold`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub sideslip_hold: bool,
+    /// CG position, fraction of the mean chord.
+    #[serde(default = "default_xcg")]
+    pub xcg: f64,
+    /// Multipliers on the total aerodynamic coefficients (uncertainty; 1: the book's data).
+    #[serde(default)]
+    pub aero_scale: AeroScale,
+    /// Multiplier on the mass and the inertias together (uncertainty; 1: the book's aircraft).
+    #[serde(default = "one")]
+    pub mass_scale: f64,
+}
+
+fn default_xcg() -> f64 {
+    silrig_model::plant::aero::XCG_REF
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Default for PlantOptions {
+    fn default() -> Self {
+        Self {
+            speed_hold: false,
+            sideslip_hold: false,
+            xcg: default_xcg(),
+            aero_scale: AeroScale::default(),
+            mass_scale: 1.0,
+        }
+    }
+}
+
+/// Multipliers on the total body-axis aerodynamic coefficients, each within 0..3 (1: the book's data).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AeroScale {
+    /// Axial force.
+    #[serde(default = "one")]
+    pub cx: f64,
+    /// Side force.
+    #[serde(default = "one")]
+    pub cy: f64,
+    /// Normal force.
+    #[serde(default = "one")]
+    pub cz: f64,
+    /// Rolling moment.
+    #[serde(default = "one")]
+    pub cl: f64,
+    /// Pitching moment.
+    #[serde(default = "one")]
+    pub cm: f64,
+    /// Yawing moment.
+    #[serde(default = "one")]
+    pub cn: f64,
+}
+
+impl Default for AeroScale {
+    fn default() -> Self {
+        Self { cx: 1.0, cy: 1.0, cz: 1.0, cl: 1.0, cm: 1.0, cn: 1.0 }
+    }
+}
+
+impl PlantOptions {
+    /// The F-16 model these options describe (CG and uncertainty scales): the one place a model is built from a
+    /// scenario.
+    pub fn model(&self) -> silrig_model::plant::F16Model {
+        let a = &self.aero_scale;
+        silrig_model::plant::F16Model::new(self.xcg).with_scales(silrig_model::plant::ModelScales {
+            aero: [a.cx, a.cy, a.cz, a.cl, a.cm, a.cn],
+            mass: self.mass_scale,
+        })
+    }
+}
+
+/// Most ticks in one run: a trace row of 39 numbers per tick stays in memory (about 300 MB at this many).
+pub const MAX_TICKS: u64 = 1_000_000;
+
+/// Largest extra transport delay, ticks (the rig's plant keeps the last 8 commands).
+pub const MAX_TRANSPORT_DELAY_TICKS: u64 = 5;
+
+/// When a command computed from the sample of tick k acts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum CommandTiming {
+    /// From tick k: no transport delay (the paper's simulation).
+    SameTick,
+    /// From tick k+1: one sample of transport delay, as in a multi-process loop.
+    NextTick,
+}
+
+/// Step, duration and command timing.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Timing {
+    /// Loop period, s.
+    pub dt_s: f64,
+    /// Run length, s.
+    pub duration_s: f64,
+    /// Command timing.
+    pub command_timing: CommandTiming,
+    /// Extra transport delay, whole ticks on top of `command_timing` (0..=5): the command computed from the sample
+    /// of tick k acts from tick k + d (same-tick) or k + 1 + d (next-tick).
+    #[serde(default)]
+    pub transport_delay_ticks: u64,
+}
+
+impl Timing {
+    /// Ticks between the sample a command answers and the first tick it acts on.
+    pub fn command_delay_ticks(&self) -> u64 {
+        let offset = match self.command_timing {
+            CommandTiming::SameTick => 0,
+            CommandTiming::NextTick => 1,
+        };
+        offset + self.transport_delay_ticks
+    }
+
+    /// Number of ticks in the run.
+    pub fn ticks(&self) -> u64 {
+        (self.duration_s / self.dt_s).round() as u64
+    }
+
+    /// The loop period, ns: the one figure every clock of the rig (the plant's ticks, the consumers' staleness
+    /// deadlines, the OS-floor baseline beside a run) takes its period from.
+    pub fn period_ns(&self) -> u64 {
+        (self.dt_s * 1e9).round() as u64
+    }
+}
+
+/// Find the value at a dotted key (`initial.phi_deg`, `actuators.elevator_deg.rate_limit_per_s`,
+/// `controller.adaptation_gain.0`, `faults.1.std`) in a scenario's TOML tree.
+/// (see [`Scenario::with_values`])
+fn lookup<'a>(root: &'a mut toml::Table, key: &str) -> Result<&'a mut toml::Value, String> {
+    let mut parts = key.split('.');
+    let first = parts.next().unwrap_or_default();
+    let mut node = root.get_mut(first).ok_or_else(|| format!("`{key}`: the scenario has no `{first}`"))?;
+    for part in parts {
+        node = match node {
+            toml::Value::Table(t) => {
+                t.get_mut(part).ok_or_else(|| format!("`{key}`: the scenario has no `{part}` there"))?
+            }
+            toml::Value::Array(a) => {
+                let i: usize = part.parse().map_err(|_| format!("`{key}`: `{part}` must be an index into a list"))?;
+                let len = a.len();
+                a.get_mut(i).ok_or_else(|| format!("`{key}`: index {i} is beyond the list's {len} entries"))?
+            }
+            _ => return Err(format!("`{key}`: `{part}` is below a value, not a table or list")),
+        };
+    }
+    Ok(node)
+}
+
+impl Scenario {
+    /// The scenario with each dotted key set to a value (a dispersion sample), without dispersions of its own,
+    /// validated; an error names the key.
+    pub fn with_values(&self, values: &[(String, f64)]) -> Result<Scenario, String> {
+        let mut tree: toml::Table = toml::from_str(&self.to_toml()).map_err(|e| e.to_string())?;
+        for (key, value) in values {
+            let node = lookup(&mut tree, key)?;
+            match node {
+                toml::Value::Float(_) => *node = toml::Value::Float(*value),
+                // A count (ticks) takes the sampled value rounded to the nearest whole number.
+                toml::Value::Integer(_) => *node = toml::Value::Integer(value.round() as i64),
+                other => return Err(format!("`{key}` is a {}, not a number", other.type_str())),
+            }
+        }
+        let mut scenario: Scenario = toml::Table::try_into(tree).map_err(|e: toml::de::Error| e.to_string())?;
+        // A sampled scenario is one case: it carries no dispersions of its own.
+        scenario.dispersions.clear();
+        scenario.validate().map_err(|(key, problem)| format!("`{key}`: {problem}"))?;
+        Ok(scenario)
+    }
+
+    /// Check every dispersion: its distribution, and that its key names a number in the scenario.
+    fn validate_dispersions(&self) -> Result<(), (String, String)> {
+        if self.dispersions.is_empty() {
+            return Ok(());
+        }
+        let mut tree: toml::Table = toml::from_str(&self.to_toml()).map_err(|e| (String::new(), e.to_string()))?;
+        for (key, dist) in &self.dispersions {
+            let at = format!("dispersions.\"{key}\"");
+            dist.validate().map_err(|e| (at.clone(), e))?;
+            let node =
+                lookup(&mut tree, key).map_err(|e| (at.clone(), format!("no such key in the scenario ({e})")))?;
+            if !matches!(node, toml::Value::Float(_) | toml::Value::Integer(_)) {
+                return Err((at, format!("is a {}, not a number", node.type_str())));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A scenario that cannot be used, with where the problem is.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// Malformed TOML or an unknown or mistyped key.
+    #[error("{origin}: {message}")]
+    Parse {
+        /// File name or "embedded default".
+        origin: String,
+        /// The parser's message, which names the key and position.
+        message: String,
+    },
+    /// A value out of range.
+    #[error("{origin}: `{key}`: {problem}")]
+    Invalid {
+        /// File name or "embedded default".
+        origin: String,
+        /// The key, dotted.
+        key: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+impl Scenario {
+    /// Parse and validate TOML text; `origin` names the source in errors.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, ScenarioError> {
+        let scenario: Scenario = toml::from_str(text)
+            .map_err(|e| ScenarioError::Parse { origin: origin.into(), message: e.to_string().trim_end().into() })?;
+        scenario.validate().map_err(|(key, problem)| ScenarioError::Invalid { origin: origin.into(), key, problem })?;
+        Ok(scenario)
+    }
+
+    /// Read, parse and validate a scenario file.
+    pub fn load(path: &Path) -> Result<Self, ScenarioError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| ScenarioError::Io { path: path.display().to_string(), source })?;
+        Self::from_toml(&text, &path.display().to_string())
+    }
+
+    /// The embedded default scenario.
+    pub fn embedded_default() -> Self {
+        Self::from_toml(DEFAULT_SCENARIO_TOML, "embedded default").expect("the embedded default scenario is valid")
+    }
+
+    /// The scenario as TOML (what a run records next to its outputs).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a scenario serialises")
+    }
+
+    /// Check every value; on error return (dotted key, problem).
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let err = |key: &str, problem: String| Err((key.to_string(), problem));
+        let finite = |key: &str, v: f64| {
+            if v.is_finite() { Ok(()) } else { err(key, format!("must be a finite number, got {v}")) }
+        };
+        if self.name.trim().is_empty() || !self.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+        {
+            return err("name", format!("must be non-empty letters, digits, '-' or '_', got {:?}", self.name));
+        }
+        let i = &self.initial;
+        if !(i.airspeed_mps > 0.0 && i.airspeed_mps <= 400.0) {
+            return err("initial.airspeed_mps", format!("must be within (0, 400], got {}", i.airspeed_mps));
+        }
+        if !(0.0..=50_000.0).contains(&i.altitude_ft) {
+            return err("initial.altitude_ft", format!("must be within 0..50000, got {}", i.altitude_ft));
+        }
+        for (key, v, limit) in [
+            ("initial.alpha_deg", i.alpha_deg, 45.0),
+            ("initial.beta_deg", i.beta_deg, 30.0),
+            ("initial.phi_deg", i.phi_deg, 180.0),
+            ("initial.theta_deg", i.theta_deg, 80.0),
+            ("initial.psi_deg", i.psi_deg, 180.0),
+            ("initial.p_dps", i.p_dps, 360.0),
+            ("initial.q_dps", i.q_dps, 360.0),
+            ("initial.r_dps", i.r_dps, 360.0),
+        ] {
+            finite(key, v)?;
+            if v.abs() > limit {
+                return err(key, format!("must be within -{limit}..{limit}, got {v}"));
+            }
+        }
+        if let Some(t) = i.throttle
+            && !(0.0..=1.0).contains(&t)
+        {
+            return err("initial.throttle", format!("must be within 0..1, got {t}"));
+        }
+        for (key, v, limit) in [
+            ("setpoint.phi_deg", self.setpoint.phi_deg, 90.0),
+            ("setpoint.theta_deg", self.setpoint.theta_deg, 60.0),
+            ("setpoint.psi_deg", self.setpoint.psi_deg, 180.0),
+        ] {
+            finite(key, v)?;
+            if v.abs() > limit {
+                return err(key, format!("must be within -{limit}..{limit} deg, got {v}"));
+            }
+        }
+        let d = &self.disturbance;
+        if !(d.amplitude_radps2.abs() <= 100.0) {
+            return err(
+                "disturbance.amplitude_radps2",
+                format!("must be within -100..100 rad/s^2, got {}", d.amplitude_radps2),
+            );
+        }
+        if d.frequency_radps > 1000.0 {
+            return err(
+                "disturbance.frequency_radps",
+                format!("must be at most 1000 rad/s, got {}", d.frequency_radps),
+            );
+        }
+        if !(d.frequency_radps >= 0.0 && d.frequency_radps.is_finite()) {
+            return err("disturbance.frequency_radps", format!("must be >= 0, got {}", d.frequency_radps));
+        }
+        if let Some(c) = d.channels.iter().find(|c| !silrig_model::control::CHANNEL_NAMES.contains(&c.as_str())) {
+            return err("disturbance.channels", format!("unknown channel {c:?}; use \"phi\", \"theta\" or \"psi\""));
+        }
+        if !(0.0..=1.0).contains(&self.plant.xcg) {
+            return err("plant.xcg", format!("must be a fraction of the chord in 0..1, got {}", self.plant.xcg));
+        }
+        let a = &self.plant.aero_scale;
+        for (key, v) in [("cx", a.cx), ("cy", a.cy), ("cz", a.cz), ("cl", a.cl), ("cm", a.cm), ("cn", a.cn)] {
+            if !(0.0..=3.0).contains(&v) {
+                return err(&format!("plant.aero_scale.{key}"), format!("must be within 0..3, got {v}"));
+            }
+        }
+        if !(self.plant.mass_scale >= 0.5 && self.plant.mass_scale <= 2.0) {
+            return err("plant.mass_scale", format!("must be within 0.5..2, got {}", self.plant.mass_scale));
+        }
+        self.controller.validate().map_err(|e| {
+            let key = e.split([' ', '[', ':']).next().unwrap_or("").to_string();
+            (format!("controller.{key}"), e)
+        })?;
+        let surface = (-silrig_model::actuator::SURFACE_CMD_LIMIT_DEG, silrig_model::actuator::SURFACE_CMD_LIMIT_DEG);
+        for (name, a, travel) in [
+            ("elevator_deg", &self.actuators.elevator_deg, surface),
+            ("aileron_deg", &self.actuators.aileron_deg, surface),
+            ("rudder_deg", &self.actuators.rudder_deg, surface),
+            ("throttle", &self.actuators.throttle, (0.0, 1.0)),
+        ] {
+            a.validate(travel).map_err(|e| (format!("actuators.{name}"), e))?;
+        }
+        let t = &self.timing;
+        if !(t.dt_s >= 1e-4 && t.dt_s <= 0.1) {
+            return err("timing.dt_s", format!("must be within 0.0001..0.1 s (10 kHz to 10 Hz), got {}", t.dt_s));
+        }
+        if !(t.duration_s > 0.0 && t.duration_s <= 3600.0) {
+            return err("timing.duration_s", format!("must be within (0, 3600] s, got {}", t.duration_s));
+        }
+        if t.duration_s < t.dt_s {
+            return err("timing.duration_s", format!("is shorter than one step ({} s)", t.dt_s));
+        }
+        if t.ticks() > MAX_TICKS {
+            return err(
+                "timing.duration_s",
+                format!(
+                    "is {} ticks of {} s; a run has at most {MAX_TICKS} (its trace is kept in memory)",
+                    t.ticks(),
+                    t.dt_s
+                ),
+            );
+        }
+        if t.transport_delay_ticks > MAX_TRANSPORT_DELAY_TICKS {
+            return err(
+                "timing.transport_delay_ticks",
+                format!("must be within 0..={MAX_TRANSPORT_DELAY_TICKS}, got {}", t.transport_delay_ticks),
+            );
+        }
+        for (i, f) in self.faults.iter().enumerate() {
+            f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
+        }
+        if let Some(c) = &self.criteria {
+            if let Some(rig) = c.rig_criteria_set().first() {
+                return err(
+                    &format!("criteria.{rig}"),
+                    "is judged by `silrig check` on the rig; a scenario's [criteria] (for sweeps) takes the flight \
+                     criteria only"
+                        .into(),
+                );
+            }
+            c.validate_flight(t.duration_s).map_err(|e| ("criteria".to_string(), e))?;
+        }
+        self.validate_dispersions()?;
+        Ok(())
+    }
+}

@@ -1,0 +1,172 @@
+//! The fault report: for every fault of the plan, when it was injected, when and by whom it was detected, when the
+//! failsafe engaged, when the loop recovered, and what was lost on each stream, from the run's event log and the
+//! logger's `timing.csv`. Times are seconds from the plant's tick 0.
+
+use serde::{Deserialize, Serialize};
+use silrig_flight::fault::Fault;
+use silrig_flight::role::Role;
+use silrig_rig::events::{Event, read_events};
+use std::path::Path;
+
+/// What became of one fault.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FaultRecord {
+    /// The fault, as planned.
+    pub fault: String,
+    /// When it was injected, s (None: never, e.g. its target was not running).
+    pub injected_at_s: Option<f64>,
+    /// First detection after injection: when, s.
+    pub detected_at_s: Option<f64>,
+    /// ... by which process, and how.
+    pub detected_by: Option<String>,
+    /// When the plant's failsafe engaged, s.
+    pub failsafe_at_s: Option<f64>,
+    /// When the loop recovered (commands or samples resumed, or the fault ended), s.
+    pub recovered_at_s: Option<f64>,
+    /// Plant ticks absent from the log between injection and recovery.
+    pub plant_samples_lost: u64,
+    /// Logged ticks without a command between injection and recovery.
+    pub command_samples_lost: u64,
+    /// Where the logged flight joins a re-flown one after this fault (a restarted plant), and by how much.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discontinuity: Option<Discontinuity>,
+}
+
+/// A place where the logged flight joins a re-flown one: a restarted plant flew again from a tick older than the
+/// last one written.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Discontinuity {
+    /// Simulated time of the first row of the re-flown flight, s.
+    pub at_s: f64,
+    /// Which ticks were flown twice, and the jump between the two flights.
+    pub detail: String,
+}
+
+/// Every flight discontinuity of the run (`flight-discontinuity` events of the logger), planned or not.
+pub fn discontinuities(out_dir: &Path, dt_s: f64) -> Vec<Discontinuity> {
+    read_events(out_dir).iter().filter(|e| e.kind == "flight-discontinuity").map(|e| discontinuity(e, dt_s)).collect()
+}
+
+fn discontinuity(e: &Event, dt_s: f64) -> Discontinuity {
+    Discontinuity { at_s: e.tick.unwrap_or(0) as f64 * dt_s, detail: e.detail.clone() }
+}
+
+/// CLOCK_MONOTONIC time of the plant's first tick 0, from its `ticking` event.
+pub fn plant_t0_ns(out_dir: &Path) -> Option<u64> {
+    read_events(out_dir)
+        .iter()
+        .find(|e| e.process == Role::Plant.label() && e.kind == "ticking")
+        .and_then(|e| e.detail.strip_prefix("t0_ns=")?.parse().ok())
+}
+
+const DETECTIONS: [&str; 7] = [
+    "controller-stale",
+    "plant-stale",
+    "failsafe-engaged",
+    "plant-gap",
+    "commands-missing",
+    "overrun",
+    "process-ended",
+];
+const RECOVERIES: [&str; 6] = [
+    "controller-recovered",
+    "plant-recovered",
+    "commands-resumed",
+    "logger-resumed",
+    "controller-joined",
+    "fault-ended",
+];
+
+/// Records for every fault of `plan`.
+pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultRecord> {
+    let events = read_events(out_dir);
+    let Some(t0) = plant_t0_ns(out_dir) else {
+        return plan.iter().map(empty).collect();
+    };
+    let rel = |t_ns: u64| (t_ns as f64 - t0 as f64) / 1e9;
+    let timing = read_timing(out_dir);
+    let mut order: Vec<&Fault> = plan.iter().collect();
+    order.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+    order
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let desc = f.describe();
+            // Injection: the launcher's or the process's own `fault-injected`; plant-model faults act at `at_s`.
+            let injected_ns = events
+                .iter()
+                .find(|e| e.kind == "fault-injected" && e.detail.starts_with(&desc))
+                .map(|e| e.t_ns)
+                .or_else(|| f.action().is_plant_model_fault().then(|| t0 + (f.at_s * 1e9) as u64));
+            let Some(inj) = injected_ns else { return empty(f) };
+            // Only events before the next fault's injection belong to this one.
+            let next_ns = order.get(i + 1).map_or(u64::MAX, |n| t0 + (n.at_s * 1e9) as u64).max(inj);
+            let window: Vec<&Event> = events.iter().filter(|e| e.t_ns >= inj && e.t_ns < next_ns).collect();
+            let detection = window
+                .iter()
+                .filter(|e| DETECTIONS.contains(&e.kind.as_str()))
+                .min_by_key(|e| (e.process == "launcher", e.t_ns));
+            let failsafe = window.iter().find(|e| e.kind == "failsafe-engaged");
+            // A restarted logger says it resumed before it sees (and reports) the gap its absence left.
+            let recovery = window.iter().find(|e| {
+                RECOVERIES.contains(&e.kind.as_str())
+                    && (e.kind == "logger-resumed" || detection.is_none_or(|d| e.t_ns >= d.t_ns))
+            });
+            let end_ns = recovery.map_or(next_ns.min(inj + 2_000_000_000), |e| e.t_ns);
+            let (plant_lost, command_lost) = losses(&timing, inj, end_ns);
+            FaultRecord {
+                fault: desc,
+                injected_at_s: Some(rel(inj)),
+                detected_at_s: detection.map(|e| rel(e.t_ns)),
+                detected_by: detection.map(|e| format!("{} ({})", e.process, e.kind)),
+                failsafe_at_s: failsafe.map(|e| rel(e.t_ns)),
+                recovered_at_s: recovery.map(|e| rel(e.t_ns)),
+                plant_samples_lost: plant_lost,
+                command_samples_lost: command_lost,
+                discontinuity: window.iter().find(|e| e.kind == "flight-discontinuity").map(|e| discontinuity(e, dt_s)),
+            }
+        })
+        .collect()
+}
+
+fn empty(f: &Fault) -> FaultRecord {
+    FaultRecord {
+        fault: f.describe(),
+        injected_at_s: None,
+        detected_at_s: None,
+        detected_by: None,
+        failsafe_at_s: None,
+        recovered_at_s: None,
+        plant_samples_lost: 0,
+        command_samples_lost: 0,
+        discontinuity: None,
+    }
+}
+
+/// (tick, plant send time ns, command missing) per logged row.
+fn read_timing(out_dir: &Path) -> Vec<(u64, u64, bool)> {
+    let text = std::fs::read_to_string(out_dir.join("timing.csv")).unwrap_or_default();
+    text.lines()
+        .skip(1)
+        .filter_map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            Some((c.first()?.parse().ok()?, c.get(3)?.parse().ok()?, *c.get(11)? == "1"))
+        })
+        .collect()
+}
+
+/// Plant ticks missing and rows without a command among the rows published in [from_ns, to_ns].
+fn losses(timing: &[(u64, u64, bool)], from_ns: u64, to_ns: u64) -> (u64, u64) {
+    let rows: Vec<&(u64, u64, bool)> = timing.iter().filter(|r| r.1 >= from_ns && r.1 <= to_ns).collect();
+    let command_lost = rows.iter().filter(|r| r.2).count() as u64;
+    // Gaps in the tick sequence from the last row before the window to the first row after it.
+    let before = timing.iter().filter(|r| r.1 < from_ns).map(|r| r.0).max();
+    let after = timing.iter().filter(|r| r.1 > to_ns).map(|r| r.0).min();
+    let mut ticks: Vec<u64> = rows.iter().map(|r| r.0).collect();
+    ticks.extend(before);
+    ticks.extend(after);
+    ticks.sort_unstable();
+    ticks.dedup();
+    let plant_lost = ticks.windows(2).map(|w| w[1] - w[0] - 1).sum();
+    (plant_lost, command_lost)
+}

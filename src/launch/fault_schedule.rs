@@ -1,0 +1,100 @@
+//! The process faults of a run's plan (kill, term, stop), carried out by `silrig run` with signals at their time on
+//! the plant's clock (seconds from its tick 0, read from its `ticking` event), with their follow-ups: SIGCONT after
+//! a stop, a restart after a kill or term. Loop and plant-model faults are the processes' own business.
+
+use super::supervision::Supervisor;
+use silrig_flight::fault::{Fault, FaultAction};
+use silrig_rig::events::EventLog;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// A process fault of the plan and its progress.
+struct PlannedFault {
+    fault: Fault,
+    injected: bool,
+    /// When to send SIGCONT (stop faults).
+    follow_up: Option<Instant>,
+}
+
+/// The plan's process faults, in plan order.
+pub(crate) struct FaultSchedule {
+    plan: Vec<PlannedFault>,
+    out: PathBuf,
+    events: EventLog,
+    /// CLOCK_MONOTONIC of the plant's tick 0, once it has started ticking.
+    t0_ns: Option<u64>,
+}
+
+impl FaultSchedule {
+    pub(crate) fn new(faults: &[Fault], out: &Path, events: EventLog) -> Self {
+        let plan = faults
+            .iter()
+            .filter(|f| f.action().is_process_fault())
+            .map(|f| PlannedFault { fault: f.clone(), injected: false, follow_up: None })
+            .collect();
+        Self { plan, out: out.to_path_buf(), events, t0_ns: None }
+    }
+
+    /// Inject the faults that are due and send the SIGCONTs that are due.
+    pub(crate) fn poll(&mut self, sup: &mut Supervisor) -> std::io::Result<()> {
+        if self.plan.is_empty() {
+            return Ok(());
+        }
+        if self.t0_ns.is_none() {
+            self.t0_ns = super::fault_report::plant_t0_ns(&self.out);
+        }
+        let Some(t0) = self.t0_ns else { return Ok(()) };
+        let now_ns = silrig_wire::clock::monotonic_ns();
+        for pf in self.plan.iter_mut() {
+            if !pf.injected && now_ns >= t0 + (pf.fault.at_s * 1e9) as u64 {
+                pf.injected = true;
+                inject(pf, sup, &self.events)?;
+            }
+            if let Some(at) = pf.follow_up
+                && Instant::now() >= at
+            {
+                pf.follow_up = None;
+                let p = &mut sup.process_mut(pf.fault.target()).process;
+                p.signal(libc::SIGCONT);
+                let detail = format!("SIGCONT to {} (pid {})", pf.fault.target(), p.pid());
+                self.events.emit(None, "fault-ended", detail);
+            }
+        }
+        Ok(())
+    }
+
+    /// A process left stopped by an interrupted plan must be continued to hear SIGTERM.
+    pub(crate) fn release_stopped(&self, sup: &mut Supervisor) {
+        for pf in self.plan.iter().filter(|pf| pf.follow_up.is_some()) {
+            sup.process_mut(pf.fault.target()).process.signal(libc::SIGCONT);
+        }
+    }
+}
+
+/// Send the fault's signal to its target, or skip it (with a warning and an event) when the target is not running.
+fn inject(pf: &mut PlannedFault, sup: &mut Supervisor, events: &EventLog) -> std::io::Result<()> {
+    let f = &pf.fault;
+    let target = f.target();
+    let p = sup.process_mut(target);
+    if p.process.poll()?.is_some() {
+        eprintln!("silrig run: warning: {} skipped: {target} is not running", f.describe());
+        events.emit(None, "fault-skipped", format!("{}: {target} is not running", f.describe()));
+        return Ok(());
+    }
+    let (signal, name) = match f.action() {
+        FaultAction::Kill => (libc::SIGKILL, "SIGKILL"),
+        FaultAction::Term => (libc::SIGTERM, "SIGTERM"),
+        _ => (libc::SIGSTOP, "SIGSTOP"),
+    };
+    events.emit(None, "fault-injected", format!("{} ({name} to pid {})", f.describe(), p.process.pid()));
+    p.process.signal(signal);
+    if f.action() == FaultAction::Stop {
+        pf.follow_up = Some(Instant::now() + Duration::from_secs_f64(f.duration_s.unwrap_or(0.0)));
+    } else {
+        p.planned_exit = true;
+        if let Some(r) = f.restart_after_s {
+            p.restart_at = Some(Instant::now() + Duration::from_secs_f64(r));
+        }
+    }
+    Ok(())
+}

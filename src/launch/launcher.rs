@@ -1,0 +1,595 @@
+//! `silrig run`: starts the plant, controller and logger as separate processes of one run id, supervises them
+//! ([`super::supervision`]), injects the plan's process faults ([`super::fault_schedule`]), stops them with SIGTERM
+//! at the end, merges their reports with the control-quality summary of the logged trace ([`super::run_report`]),
+//! and removes the run's iceoryx2 resources. In realtime mode it also runs a bare absolute-deadline timer loop
+//! beside the rig, so the plant's wake-up lateness can be read against the OS floor measured under the same
+//! conditions.
+
+use super::fault_schedule::FaultSchedule;
+use super::run_report::{ProcessLife, RigReport, write_plots};
+use crate::floor::{timer_baseline, timer_baseline::BaselineArgs, timer_baseline::BaselineReport};
+use crate::program::{find_program, split_command};
+use crate::supervision::{ChildProcess, ControllerLaunch, SupervisionOptions, Supervisor};
+use anyhow::Context;
+use silrig_flight::fault::Fault;
+use silrig_flight::role::Role;
+use silrig_flight::scenario::Scenario;
+use silrig_flight::summary::summarize;
+use silrig_flight::trace::Trace;
+use silrig_rig::events::EventLog;
+use silrig_rig::report::{MachineConditions, ProcessReport, read_report};
+use silrig_rig::status::LiveLine;
+use silrig_rig::{ProcessArgs, ProcessOptions, RigMode, load_scenario, signals};
+use silrig_wire::{ipc, ipc::RunId};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+/// What `silrig run` is asked to do.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LaunchOptions {
+    /// Scenario file (TOML); without it, the embedded default scenario.
+    pub config: Option<PathBuf>,
+    /// realtime (the scenario's rate on the wall clock) or lockstep (as fast as possible, deterministic).
+    #[arg(long, value_enum, default_value = "realtime")]
+    pub mode: RigMode,
+    /// Override the scenario's duration, s.
+    #[arg(long)]
+    pub duration_s: Option<f64>,
+    /// Output folder (default: out/run-<run id>); must not hold a run already.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Run id (default: a fresh one).
+    #[arg(long)]
+    pub run_id: Option<RunId>,
+    /// Do not run the OS-floor timer loop beside a realtime rig.
+    #[arg(long)]
+    pub no_baseline: bool,
+    /// Who takes the OS floor beside a realtime rig: builtin (`silrig timer-baseline`) or cyclictest (rt-tests,
+    /// which must be installed); the report names which.
+    #[arg(long, value_enum, default_value = "builtin")]
+    pub floor: FloorSource,
+    /// No live status line while the run goes.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Loop and watchdog tuning, passed on to every process.
+    #[command(flatten)]
+    pub process: ProcessOptions,
+    /// A fault to inject, added to the scenario's [[faults]]: TARGET:ACTION@TIME[,KEY=VALUE...], e.g.
+    /// `controller:kill@3s,restart_after=0.5s`, `logger:stop@2s,for=500ms`, `plant:delay@2s,delay=15ms`.
+    /// Repeatable.
+    #[arg(long = "fault", value_parser = silrig_flight::fault::parse_fault_flag)]
+    pub faults: Vec<Fault>,
+    /// What to do when a process dies.
+    #[command(flatten)]
+    pub supervision: SupervisionOptions,
+    /// Fly your own controller: run this command in place of silrig-controller, with the run's SILRIG_* variables
+    /// in its environment (`silrig contract` lists them). Split into words like a shell does, but run directly
+    /// (wrap it in `sh -c '...'` yourself for shell syntax). Supervised, restarted and faulted like ours; its stdout
+    /// and stderr go to <out>/controller.stderr.log.
+    #[arg(long, value_name = "CMD")]
+    pub controller_cmd: Option<String>,
+    /// builtin (silrig-controller, or --controller-cmd) or external: wait for a controller started by hand (in a
+    /// debugger, in MATLAB) with the variables printed and written to <out>/controller.env.
+    #[arg(long, value_enum, default_value = "builtin", conflicts_with = "controller_cmd")]
+    pub controller: ControllerKind,
+    /// --controller external: how long the plant waits for the controller to connect, s.
+    #[arg(long, default_value_t = 120.0)]
+    pub external_timeout_s: f64,
+    /// The controller runs on another host: start the plant-side bridge listening here (IP:PORT, tcp/IP:PORT or
+    /// udp/IP:PORT) instead of a controller, and wait up to --external-timeout-s for `silrig-bridge --connect` and a
+    /// controller on the other host. Next-tick timing unless --command-timing says otherwise. Needs silrig-bridge
+    /// (`cargo build --release --features bridge`).
+    #[arg(long, value_name = "ENDPOINT", conflicts_with_all = ["controller_cmd", "controller"])]
+    pub bridge_listen: Option<String>,
+    /// Override the scenario's command timing: same-tick (the plant waits up to --command-budget-ms for the answer
+    /// to the tick it just published) or next-tick.
+    #[arg(long, value_enum)]
+    pub command_timing: Option<silrig_flight::scenario::CommandTiming>,
+}
+
+/// Who measures the OS floor beside a realtime run (`--floor`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FloorSource {
+    /// `silrig timer-baseline`: a bare clock_nanosleep loop with the rig's skip-on-overrun rule, which also gives
+    /// the floor's steady state apart from warm-up.
+    Builtin,
+    /// cyclictest itself (`cyclictest -q -m -t1 -p80 -i<period> -h`), the reference engineers already trust.
+    Cyclictest,
+}
+
+/// Where the run's controller comes from (`--controller`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ControllerKind {
+    /// The launcher starts it: silrig-controller, or the `--controller-cmd` command.
+    Builtin,
+    /// Somebody else starts it; the launcher waits for it.
+    External,
+}
+
+impl LaunchOptions {
+    fn controller_launch(&self) -> ControllerLaunch {
+        match (&self.controller_cmd, self.controller) {
+            _ if self.bridge_listen.is_some() => ControllerLaunch::External,
+            (_, ControllerKind::External) => ControllerLaunch::External,
+            (Some(cmd), _) => ControllerLaunch::Command(cmd.clone()),
+            (None, _) => ControllerLaunch::Ours,
+        }
+    }
+}
+
+/// `<out>/controller.env`: the variables a controller of this run reads (`export NAME='value'` lines, for `.` in a
+/// shell); for `--controller external` also printed with how to start it.
+fn write_controller_env(args: &ProcessArgs, controller: &ControllerLaunch, remote: bool) -> anyhow::Result<()> {
+    let env = args.to_env();
+    let lines: String = env.iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
+    let path = args.out.join("controller.env");
+    std::fs::write(&path, lines).with_context(|| format!("writing {}", path.display()))?;
+    if *controller == ControllerLaunch::External && !remote {
+        eprintln!(
+            "silrig run: waiting up to {} s for a controller on run {}; start yours with the run's variables, e.g.\n  \
+             . {} && python3 examples/python/pid_attitude.py",
+            args.options.startup_timeout_s,
+            args.run_id,
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// A controller the launcher did not start writes its report when it sees the run end; give it a moment.
+fn wait_for_external_report(out: &Path) {
+    let path = silrig_rig::report::report_path(out, Role::Controller.label());
+    let deadline = std::time::Instant::now() + Duration::from_secs(5);
+    while !path.exists() && std::time::Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// A fresh run id: short, lowercase, unique per launcher process and start time.
+pub fn fresh_run_id() -> RunId {
+    let t = silrig_wire::clock::monotonic_ns();
+    let id = format!("r{:x}-{:x}", std::process::id(), (t / 1_000) & 0xff_ffff);
+    RunId::new(&id).expect("generated run ids are valid")
+}
+
+/// A run ready to start: its scenario with the plan's faults, its id and its folder.
+struct Prepared {
+    scenario: Scenario,
+    run_id: RunId,
+    out: PathBuf,
+    /// The scenario as the processes load it (`<out>/scenario.toml`).
+    scenario_path: PathBuf,
+    /// The folder and the run id, held for the run.
+    _claims: [Claim; 2],
+}
+
+/// A lock file created exclusively (check and create in one step), holding the launcher's pid, removed when the
+/// run ends: two launchers never share a folder or a run id. A claim whose launcher died is taken over.
+struct Claim(PathBuf);
+
+impl Claim {
+    fn take(path: PathBuf, what: &str) -> anyhow::Result<Self> {
+        for _ in 0..2 {
+            match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+                Ok(mut f) => {
+                    use std::io::Write;
+                    write!(f, "{}", std::process::id()).with_context(|| format!("writing {}", path.display()))?;
+                    return Ok(Self(path));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    if let Some(holder) = live_holder(&path) {
+                        anyhow::bail!(
+                            "{what} is taken by another silrig run (pid {holder}): wait for it, or choose another"
+                        );
+                    }
+                    // Its launcher died without removing it.
+                    let _ = std::fs::remove_file(&path);
+                }
+                Err(e) => return Err(e).with_context(|| format!("creating {}", path.display())),
+            }
+        }
+        anyhow::bail!("{what}: cannot claim {} (another run keeps taking it)", path.display())
+    }
+}
+
+/// The pid holding a claim file, if that process is alive. A file too fresh to hold a pid yet (its launcher is
+/// between creating and writing it) counts as held.
+fn live_holder(path: &Path) -> Option<i32> {
+    let holder: Option<i32> = std::fs::read_to_string(path).ok().and_then(|t| t.trim().parse().ok());
+    match holder {
+        // SAFETY: kill with signal 0 only asks whether the process exists.
+        Some(pid) => (pid > 0 && unsafe { libc::kill(pid, 0) } == 0).then_some(pid),
+        None => {
+            let age = std::fs::metadata(path).and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
+            age.is_none_or(|a| a < Duration::from_secs(5)).then_some(0)
+        }
+    }
+}
+
+/// Remove run-id claims (`/tmp/silrig_<run>.lock`) whose launcher died (a `kill -9`); returns how many.
+fn remove_stale_claims() -> usize {
+    let mut removed = 0;
+    for entry in std::fs::read_dir("/tmp").into_iter().flatten().flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with("silrig_") && name.ends_with(".lock") && live_holder(&entry.path()).is_none() {
+            removed += usize::from(std::fs::remove_file(entry.path()).is_ok());
+        }
+    }
+    removed
+}
+
+impl Drop for Claim {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// Phase 1: the scenario with `--fault` flags added and validated, a folder that holds no run yet, the effective
+/// scenario written there, and the run id's namespace free of a crashed run's leftovers.
+fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
+    opts.process.validate().map_err(|e| anyhow::anyhow!(e))?;
+    opts.supervision.validate().map_err(|e| anyhow::anyhow!(e))?;
+    silrig_rig::flag_in_range("external-timeout-s", opts.external_timeout_s, 0.1, 86_400.0, "s")
+        .map_err(|e| anyhow::anyhow!(e))?;
+    let mut scenario = load_scenario(opts.config.as_deref(), opts.duration_s)?;
+    // Across hosts a network leg sits in every answer: next-tick unless the user asks for same-tick.
+    let across_hosts = opts.bridge_listen.is_some().then_some(silrig_flight::scenario::CommandTiming::NextTick);
+    if let Some(timing) = opts.command_timing.or(across_hosts) {
+        scenario.timing.command_timing = timing;
+    }
+    scenario.faults.extend(opts.faults.iter().cloned());
+    scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("fault plan: `{key}`: {problem}"))?;
+    if opts.mode == RigMode::Lockstep
+        && let Some(f) = scenario.faults.iter().find(|f| !f.action().is_plant_model_fault())
+    {
+        anyhow::bail!("fault plan: {} needs realtime mode (lockstep has no clock to fault)", f.describe());
+    }
+    if (opts.controller == ControllerKind::External || opts.bridge_listen.is_some())
+        && let Some(f) =
+            scenario.faults.iter().find(|f| f.target() == Role::Controller && f.action().is_process_fault())
+    {
+        anyhow::bail!("fault plan: {} needs a controller the launcher starts, not --controller external", f.describe());
+    }
+    if let Some(cmd) = &opts.controller_cmd {
+        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
+        anyhow::ensure!(
+            find_program(&words[0]).is_some(),
+            "--controller-cmd: cannot find `{}` (not an executable file, and not on PATH)",
+            words[0]
+        );
+    }
+    let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
+    let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));
+    anyhow::ensure!(
+        !out.join("trace.csv").exists(),
+        "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
+        out.display()
+    );
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let claims = [
+        Claim::take(out.join(".silrig-run.lock"), &format!("the folder {}", out.display()))?,
+        Claim::take(PathBuf::from(format!("/tmp/silrig_{run_id}.lock")), &format!("run id {run_id}"))?,
+    ];
+    // Checked again now that the folder is ours: a run that finished between the first check and the claim.
+    anyhow::ensure!(
+        !out.join("trace.csv").exists(),
+        "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
+        out.display()
+    );
+    let scenario_path = out.join("scenario.toml");
+    std::fs::write(&scenario_path, scenario.to_toml())?;
+    let root = run_id.root_dir();
+    anyhow::ensure!(
+        // Without its trailing slash, so that a file there is seen as one.
+        std::fs::symlink_metadata(root.components().as_path()).ok().is_none_or(|m| m.is_dir()),
+        "run id {run_id}: {} exists and is not a folder (iceoryx2 keeps the run's state there): remove it, or \
+         choose another --run-id",
+        root.components().as_path().display()
+    );
+    // A crashed run with this id may have left resources behind; they must not poison this one.
+    let pre = ipc::cleanup_run(&run_id)?;
+    if !pre.is_clean() {
+        let who: Vec<String> = pre.alive.iter().map(|n| format!("{} (pid {})", n.name, n.pid)).collect();
+        anyhow::bail!("run id {run_id} is in use by live processes: {}; choose another --run-id", who.join(", "));
+    }
+    let dead = ipc::cleanup_dead_runs(&run_id);
+    let claims_removed = remove_stale_claims();
+    if !dead.is_empty() || claims_removed > 0 {
+        let runs: Vec<&str> = dead.iter().map(|r| r.run.as_str()).collect();
+        let files: usize = dead.iter().map(|r| r.removed_shm_files.len()).sum();
+        eprintln!(
+            "silrig run: removed what {} dead run(s) left on this machine ({files} shared-memory files, \
+             {claims_removed} run-id locks): {}",
+            dead.len(),
+            runs.join(", ")
+        );
+    }
+    Ok(Prepared { scenario, run_id, out, scenario_path, _claims: claims })
+}
+
+/// The OS-floor timer loop beside a realtime rig, for the scenario's duration at the scenario's period.
+fn start_baseline(scenario: &Scenario, out: &Path, floor: FloorSource) -> anyhow::Result<ChildProcess> {
+    let priority = Role::Plant.fifo_priority().unwrap_or(0);
+    if floor == FloorSource::Cyclictest {
+        let mut command =
+            crate::floor::cyclictest::command(scenario.timing.duration_s, scenario.timing.period_ns(), priority)
+                .map_err(anyhow::Error::msg)?;
+        super::supervision::end_with_launcher(&mut command, libc::SIGKILL);
+        let child = command
+            .stdin(Stdio::null())
+            .stdout(std::fs::File::create(out.join(CYCLICTEST_OUTPUT))?)
+            .stderr(Stdio::null())
+            .spawn()
+            .context("starting cyclictest")?;
+        return Ok(ChildProcess::new(child));
+    }
+    let args = BaselineArgs {
+        duration_s: scenario.timing.duration_s,
+        period_ms: scenario.timing.period_ns() as f64 / 1e6,
+        fifo_priority: priority,
+        timerfd: false,
+        hgrm: Some(out.join("baseline.wake_lateness.hgrm")),
+        json: true,
+    };
+    let mut command = Command::new(std::env::current_exe()?);
+    super::supervision::end_with_launcher(&mut command, libc::SIGKILL);
+    let child = command
+        .arg(timer_baseline::SUBCOMMAND)
+        .args(args.to_argv())
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(out.join("timer-baseline.json"))?)
+        .stderr(Stdio::null())
+        .spawn()
+        .context("starting the timer baseline")?;
+    Ok(ChildProcess::new(child))
+}
+
+/// Phase 3: supervise until the plant has flown the scenario (and the logger has written it), SIGTERM or the
+/// watchdog on the whole run.
+fn supervise(
+    sup: &mut Supervisor,
+    faults: &mut FaultSchedule,
+    scenario: &Scenario,
+    bridge: &mut Option<super::remote::RemoteBridge>,
+    mut live: Option<&mut LiveLine>,
+) -> anyhow::Result<()> {
+    let timeout = Duration::from_secs_f64(scenario.timing.duration_s * 3.0 + 30.0);
+    loop {
+        faults.poll(sup)?;
+        if let Some(b) = bridge.as_mut() {
+            b.poll()?;
+        }
+        sup.handle_exits()?;
+        sup.restart_due()?;
+        if let Some(live) = live.as_deref_mut() {
+            live.update(sup.lives.iter().filter(|l| l.life > 1).count() as u32);
+        }
+        if sup.run_is_over() {
+            return Ok(());
+        }
+        if signals::termination_requested() {
+            // Stopped by the user: not a failure of the run; the report says when (`stopped_by`).
+            return Ok(());
+        }
+        if sup.elapsed() > timeout {
+            sup.failures.push(format!("silrig run: no end after {timeout:?}"));
+            return Ok(());
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// cyclictest's output in the run's folder, as it printed it.
+const CYCLICTEST_OUTPUT: &str = "cyclictest.txt";
+
+/// The baseline's report (None if it wrote none); after a failed run it is not waited for.
+fn finish_baseline(
+    baseline: &mut ChildProcess,
+    floor: FloorSource,
+    scenario: &Scenario,
+    out: &Path,
+    failed: bool,
+) -> std::io::Result<Option<BaselineReport>> {
+    if failed {
+        baseline.signal(libc::SIGKILL);
+    }
+    baseline.finish(Duration::from_secs_f64(scenario.timing.duration_s + 10.0))?;
+    if floor == FloorSource::Cyclictest {
+        let text = std::fs::read_to_string(out.join(CYCLICTEST_OUTPUT)).unwrap_or_default();
+        let timing = &scenario.timing;
+        let priority = Role::Plant.fifo_priority().unwrap_or(0);
+        return Ok(match crate::floor::cyclictest::parse(&text, timing.period_ns(), timing.duration_s, priority) {
+            Ok(report) => Some(report),
+            Err(e) => {
+                eprintln!("silrig run: warning: no OS floor: {e} (see {})", out.join(CYCLICTEST_OUTPUT).display());
+                None
+            }
+        });
+    }
+    let path = out.join("timer-baseline.json");
+    let report = std::fs::read_to_string(&path).ok().and_then(|t| serde_json::from_str(&t).ok());
+    if report.is_none() {
+        // Killed, or its output did not fit on the disk: no file rather than a torn one.
+        let _ = std::fs::remove_file(&path);
+    }
+    Ok(report)
+}
+
+/// A figure the disk could not take is left empty by the plotting library: remove it rather than leave a file
+/// that is not a figure.
+fn remove_empty_figures(out: &Path) {
+    for entry in std::fs::read_dir(out).into_iter().flatten().flatten() {
+        let path = entry.path();
+        let figure = path.extension().is_some_and(|e| e == "png" || e == "svg");
+        if figure && entry.metadata().is_ok_and(|m| m.len() == 0) {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+/// What a process the launcher stopped at the normal end of a run reports as "terminated by signal" (its SIGTERM)
+/// is shown as "stopped at end": the plant completed, nobody else sent a signal, and it exited cleanly when told.
+fn mark_stopped_at_end(processes: &mut [ProcessReport], lives: &[ProcessLife]) {
+    let plant_completed = processes.iter().any(|p| p.process == Role::Plant.label() && p.ended == "completed");
+    if !plant_completed || signals::termination_signal().is_some() {
+        return;
+    }
+    for p in processes.iter_mut().filter(|p| p.ended == "terminated by signal") {
+        let life = lives.iter().rev().find(|l| l.pid == p.pid);
+        if life.is_some_and(|l| l.exit == "exit status 0 at the end of the run") {
+            p.ended = "stopped at end".into();
+        }
+    }
+}
+
+/// Run the three processes to the end of the scenario and return the merged report (also written as
+/// `report.json`). An `Err` means the run could not be set up; a run whose processes failed returns `Ok` with
+/// `failures` filled in.
+pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
+    signals::install_termination_flag();
+    let Prepared { scenario, run_id, out, scenario_path, _claims } = prepare(opts)?;
+    let controller = opts.controller_launch();
+    let mut args = ProcessArgs {
+        config: Some(scenario_path),
+        run_id: run_id.clone(),
+        mode: opts.mode,
+        duration_s: None,
+        out: out.clone(),
+        resume: false,
+        options: opts.process.clone(),
+    };
+    if controller == ControllerLaunch::External {
+        args.options.startup_timeout_s = opts.external_timeout_s;
+    }
+    // First, so a floor that cannot be taken (cyclictest not installed) stops the run before anything flies.
+    let realtime_floor = opts.mode == RigMode::Realtime && !opts.no_baseline;
+    let mut baseline = if realtime_floor { Some(start_baseline(&scenario, &out, opts.floor)?) } else { None };
+    write_controller_env(&args, &controller, opts.bridge_listen.is_some())?;
+    let conditions_start = MachineConditions::now();
+    let events = EventLog::new(&out, "launcher");
+    let mut bridge = match &opts.bridge_listen {
+        Some(listen) => Some(super::remote::RemoteBridge::start(listen, &args, events.clone())?),
+        None => None,
+    };
+    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone())?;
+    let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
+    let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
+    let supervised = supervise(&mut sup, &mut faults, &scenario, &mut bridge, live.as_mut());
+    if let Some(live) = live {
+        live.finish();
+    }
+    supervised?;
+    let ended_by_plan = sup.ended_by_plan();
+    faults.release_stopped(&mut sup);
+    sup.stop_all()?;
+    if let Some(b) = bridge.as_mut() {
+        b.stop()?;
+        sup.failures.extend(b.failure.take());
+    }
+    sup.note_final_reports();
+    let timer_baseline = match baseline.as_mut() {
+        Some(b) => finish_baseline(b, opts.floor, &scenario, &out, !sup.failures.is_empty())?,
+        None => None,
+    };
+    let conditions_end = MachineConditions::now();
+
+    if controller == ControllerLaunch::External && bridge.is_none() {
+        wait_for_external_report(&out);
+    }
+    let mut failures = std::mem::take(&mut sup.failures);
+    let mut processes = Vec::new();
+    for role in Role::ALL {
+        match read_report(&out, role.label()) {
+            Ok(r) => processes.push(r),
+            // It reports on its own host.
+            Err(_) if role == Role::Controller && bridge.is_some() => {}
+            // A process a planned fault killed for good has no report to give; anything else should have one.
+            Err(_) if ended_by_plan.contains(&role) => {}
+            Err(e) => failures.push(format!("{role}: no report ({e})")),
+        }
+    }
+    if bridge.is_some() {
+        match read_report(&out, "bridge") {
+            Ok(r) => processes.push(r),
+            Err(e) => failures.push(format!("bridge: no report ({e})")),
+        }
+    }
+    mark_stopped_at_end(&mut processes, &sup.lives);
+    let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
+    let control = trace.as_ref().map(|t| summarize(t, &scenario));
+    let flown_s = trace
+        .as_ref()
+        .and_then(|t| t.column("t_s"))
+        .and_then(|t| t.last().copied())
+        .map_or(0.0, |t| t + scenario.timing.dt_s);
+    if ended_by_plan.contains(&Role::Plant) {
+        // Nothing flies without a plant: the plan ended the flight early, which is not the run the scenario asks.
+        failures.push(format!(
+            "plant: ended by the fault plan and not restarted: the flight ended at t = {flown_s:.2} s of {:.2} s",
+            scenario.timing.duration_s
+        ));
+    }
+    let stopped_by = signals::termination_signal().map(|signal| super::run_report::StoppedBy {
+        signal: signals::name(signal).into(),
+        at_s: flown_s,
+        exit_status: signals::exit_status_for(signal),
+    });
+    let mut cleanup = ipc::cleanup_run(&run_id)?;
+    if controller == ControllerLaunch::External {
+        // A controller we did not start writes its report before it closes its ports and exits: give it a moment
+        // to leave, or cleaning up finds it alive and removes nothing.
+        let deadline = std::time::Instant::now() + Duration::from_secs(5);
+        while !cleanup.is_clean() && std::time::Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(20));
+            cleanup = ipc::cleanup_run(&run_id)?;
+        }
+    }
+    // Processes of this run still alive after every child was reaped: something else joined the run.
+    let leftovers = cleanup
+        .alive
+        .iter()
+        .map(|n| {
+            format!("node `{}` of pid {} is still alive, so the run's shared memory was left in place", n.name, n.pid)
+        })
+        .collect();
+    // A plant that left no report (killed), or whose report covers only its last life, flew at least what the
+    // logger wrote.
+    let plant_ticks =
+        processes.iter().find(|p| p.process == Role::Plant.label()).and_then(|p| p.counters.get("ticks").copied());
+    let ticks = plant_ticks.unwrap_or(0).max((flown_s / scenario.timing.dt_s).round() as u64);
+    let wall_s = sup.wall_s;
+    let mut report = RigReport {
+        run_id: run_id.to_string(),
+        scenario: scenario.name.clone(),
+        mode: opts.mode.label().into(),
+        out_dir: out.display().to_string(),
+        conditions_start,
+        conditions_end,
+        wall_s,
+        cycles_per_s: if wall_s > 0.0 { ticks as f64 / wall_s } else { 0.0 },
+        processes,
+        lives: sup.lives,
+        timer_baseline,
+        control,
+        faults: super::fault_report::fault_records(&scenario.faults, &out, scenario.timing.dt_s),
+        discontinuities: super::fault_report::discontinuities(&out, scenario.timing.dt_s),
+        duration_s: scenario.timing.duration_s,
+        stopped_by,
+        failures,
+        leftovers,
+        phases: super::run_report::phase_splits(&out, scenario.timing.dt_s, opts.mode == RigMode::Realtime),
+    };
+    // A full disk must not cost the user the report: it is printed whatever happens to the files.
+    if let Err(e) = write_plots(&report, &out, &scenario) {
+        report.failures.push(format!("silrig run: the figures: {e:#}"));
+        remove_empty_figures(&out);
+    }
+    if let Err(e) = silrig_flight::files::write_atomically(
+        &out.join("report.json"),
+        &(serde_json::to_string_pretty(&report)? + "\n"),
+    ) {
+        report.failures.push(format!("silrig run: {e}"));
+    }
+    Ok(report)
+}

@@ -1,0 +1,20 @@
+//! silrig-launch: `silrig run`, the launcher that starts the rig's processes, supervises and restarts them, applies
+//! the fault plan and writes the run's report.
+//!
+//! - [`launcher`]: `silrig run` from options to report; [`supervision`]: the processes, their lives and restarts;
+//!   [`program`]: finding the binaries and splitting a user's command.
+//! - [`fault_schedule`]: carrying out process faults (signals) on time; [`fault_report`]: what each fault did.
+//! - [`run_report`]: `report.json`, the timing tables and the run's figures; [`floor`]: the OS timer floor measured
+//!   beside a run (ours and cyclictest's).
+//! - [`remote`]: the plant-side bridge for a controller on another host.
+//!
+//! Layers: uses `silrig-rig` (the processes it starts), `silrig-plot`, `silrig-wire` and `silrig-flight`.
+
+pub mod fault_report;
+pub mod fault_schedule;
+pub mod floor;
+pub mod launcher;
+pub mod program;
+pub mod remote;
+pub mod run_report;
+pub mod supervision;

@@ -1,0 +1,127 @@
+//! A controller on another host (`silrig run --bridge-listen`): the launcher starts the plant-side bridge
+//! (`silrig-bridge`, see [`silrig::bridge`] when built with the `bridge` feature) instead of a controller, starts it
+//! again if it dies, and stops it at the end. The controller, and the bridge beside it, run on the other host.
+
+use crate::program::binary_dir;
+use crate::supervision::{ChildProcess, end_with_launcher};
+use anyhow::Context;
+use silrig_rig::ProcessArgs;
+use silrig_rig::events::EventLog;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The bridge's binary, built only with `cargo build --release --features bridge`.
+pub const BRIDGE_BINARY: &str = "silrig-bridge";
+
+/// The plant-side bridge of a run, supervised by the launcher.
+pub(crate) struct RemoteBridge {
+    exe: PathBuf,
+    argv: Vec<String>,
+    log: PathBuf,
+    events: EventLog,
+    child: ChildProcess,
+    restarts: u32,
+    started: Instant,
+    /// Deaths in a row, each soon after its start: a bridge that cannot run at all is not restarted for ever.
+    quick_deaths: u32,
+    restart_at: Option<Instant>,
+    /// Why the bridge was given up on, for the run's failures.
+    pub(crate) failure: Option<String>,
+}
+
+/// A bridge that dies within this long of its start died of something a restart does not cure, after
+/// [`MAX_QUICK_DEATHS`] of them in a row.
+const QUICK_DEATH: Duration = Duration::from_secs(5);
+/// See [`QUICK_DEATH`].
+const MAX_QUICK_DEATHS: u32 = 3;
+
+impl RemoteBridge {
+    /// Start the plant-side bridge listening on `listen` for the run `args` describes.
+    pub(crate) fn start(listen: &str, args: &ProcessArgs, events: EventLog) -> anyhow::Result<Self> {
+        let exe = binary_dir()?.join(BRIDGE_BINARY);
+        anyhow::ensure!(
+            exe.is_file(),
+            "--bridge-listen needs {}, which this build does not have: build it with `cargo build --release \
+             --features bridge`",
+            exe.display()
+        );
+        let mut argv = vec!["--listen".to_string(), listen.to_string()];
+        argv.extend(args.to_argv());
+        let log = args.out.join("bridge.stderr.log");
+        let child = spawn(&exe, &argv, &log)?;
+        events.emit(None, "process-started", format!("bridge as pid {}, listening on {listen}", child.pid()));
+        let started = Instant::now();
+        Ok(Self {
+            exe,
+            argv,
+            log,
+            events,
+            child,
+            restarts: 0,
+            started,
+            quick_deaths: 0,
+            restart_at: None,
+            failure: None,
+        })
+    }
+
+    /// A bridge that died is started again after a pause that doubles while it keeps dying young: the plant flies
+    /// on in failsafe meanwhile, and the controller side reconnects to the new one. One that dies young
+    /// [`MAX_QUICK_DEATHS`] times in a row is given up on (its log says why).
+    pub(crate) fn poll(&mut self) -> anyhow::Result<()> {
+        if self.failure.is_some() || silrig_rig::signals::termination_requested() {
+            return Ok(());
+        }
+        if let Some(at) = self.restart_at {
+            if Instant::now() >= at {
+                self.restart_at = None;
+                self.restarts += 1;
+                self.child = spawn(&self.exe, &self.argv, &self.log)?;
+                self.started = Instant::now();
+                let detail = format!("bridge as pid {} (restart {})", self.child.pid(), self.restarts);
+                self.events.emit(None, "process-restarted", detail);
+            }
+            return Ok(());
+        }
+        let Some(status) = self.child.poll()? else { return Ok(()) };
+        let young = self.started.elapsed() < QUICK_DEATH;
+        self.quick_deaths = if young { self.quick_deaths + 1 } else { 0 };
+        let died = format!("bridge {}", super::supervision::describe(status));
+        self.events.emit(None, "process-died", died.clone());
+        if self.quick_deaths >= MAX_QUICK_DEATHS {
+            let failure = format!(
+                "{died} {MAX_QUICK_DEATHS} times within {QUICK_DEATH:?} of its start; not restarted again (see {}); \
+                 the plant flew on in failsafe",
+                self.log.display()
+            );
+            eprintln!("silrig run: {failure}");
+            self.failure = Some(failure);
+            return Ok(());
+        }
+        let pause = Duration::from_millis(200) * 2u32.pow(self.quick_deaths);
+        eprintln!("silrig run: {died}; the controller's commands stop until it is back; restarting it in {pause:?}");
+        self.restart_at = Some(Instant::now() + pause);
+        Ok(())
+    }
+
+    /// SIGTERM, and reap (SIGKILL after 5 s).
+    pub(crate) fn stop(&mut self) -> std::io::Result<()> {
+        self.child.signal(libc::SIGTERM);
+        self.child.finish(Duration::from_secs(5)).map(|_| ())
+    }
+}
+
+fn spawn(exe: &PathBuf, argv: &[String], log: &PathBuf) -> anyhow::Result<ChildProcess> {
+    let file = std::fs::OpenOptions::new().create(true).append(true).open(log)?;
+    let mut command = Command::new(exe);
+    end_with_launcher(&mut command, libc::SIGTERM);
+    let child = command
+        .args(argv)
+        .stdin(Stdio::null())
+        .stdout(file.try_clone()?)
+        .stderr(file)
+        .spawn()
+        .with_context(|| format!("starting {}", exe.display()))?;
+    Ok(ChildProcess::new(child))
+}

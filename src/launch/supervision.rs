@@ -1,0 +1,602 @@
+//! Supervision of a run's processes by `silrig run`: starting them, reaping every exit exactly once, telling a
+//! planned end from a death, restarting by policy, and stopping them all at the end. It sends signals only to
+//! children it started and has not reaped, so a pid is never reused under it.
+
+use crate::program::{binary_dir, split_command};
+use crate::run_report::ProcessLife;
+use anyhow::Context;
+use silrig_flight::role::Role;
+use silrig_rig::ProcessArgs;
+use silrig_rig::events::EventLog;
+use silrig_rig::report::{read_report, report_path};
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+/// What to do when a process dies without a planned fault (`--restart`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum RestartMode {
+    /// The run continues without it and fails at the end.
+    Never,
+    /// Start it again, with a doubling pause, up to `--max-restarts` times.
+    OnFailure,
+}
+
+/// How `silrig run` supervises its processes.
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+pub struct SupervisionOptions {
+    /// What to do when a process dies without a planned fault: never (the run fails) or on-failure.
+    #[arg(long, value_enum, default_value = "never")]
+    pub restart: RestartMode,
+    /// on-failure: restarts allowed per process.
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
+    pub max_restarts: u32,
+    /// on-failure: pause before the first restart, ms (doubling each time).
+    #[arg(long, default_value_t = 200.0, allow_negative_numbers = true)]
+    pub restart_backoff_ms: f64,
+}
+
+impl SupervisionOptions {
+    /// Every flag within its documented range.
+    pub fn validate(&self) -> Result<(), String> {
+        silrig_rig::flag_in_range("max-restarts", f64::from(self.max_restarts), 0.0, 100.0, "restarts")?;
+        silrig_rig::flag_in_range("restart-backoff-ms", self.restart_backoff_ms, 0.0, 60_000.0, "ms")
+    }
+}
+
+/// A child process the launcher started: reaped once, signalled only while not reaped.
+pub struct ChildProcess {
+    child: std::process::Child,
+    status: Option<ExitStatus>,
+    /// It leads a process group of its own (a user's shell command): signals go to the whole group.
+    group: bool,
+    /// The thread copying its output to its log ([`forward_output`]).
+    output: Option<std::thread::JoinHandle<()>>,
+}
+
+impl ChildProcess {
+    pub(crate) fn new(child: std::process::Child) -> Self {
+        Self { child, status: None, group: false, output: None }
+    }
+
+    /// A child started with `process_group(0)`: signalled as a group, so it and what it started stop together.
+    pub(crate) fn group_leader(child: std::process::Child) -> Self {
+        Self { child, status: None, group: true, output: None }
+    }
+
+    fn with_output(mut self, output: std::thread::JoinHandle<()>) -> Self {
+        self.output = Some(output);
+        self
+    }
+
+    /// Once it has ended, give the copy of its output a moment to reach the log, so what it said last is there
+    /// when its exit is judged (a grandchild still holding the pipe is not waited for).
+    fn let_output_catch_up(&mut self) {
+        let deadline = Instant::now() + Duration::from_millis(500);
+        while self.output.as_ref().is_some_and(|t| !t.is_finished()) && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    pub(crate) fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// The exit status, reaping the child if it has ended.
+    pub fn poll(&mut self) -> std::io::Result<Option<ExitStatus>> {
+        if self.status.is_none() {
+            self.status = self.child.try_wait()?;
+            if self.status.is_some() {
+                self.let_output_catch_up();
+            }
+        }
+        Ok(self.status)
+    }
+
+    pub(crate) fn has_ended(&self) -> bool {
+        self.status.is_some()
+    }
+
+    /// Send `signal` to the process, unless it has ended (its pid may be reused by then).
+    pub fn signal(&mut self, signal: libc::c_int) {
+        if self.status.is_none() {
+            let pid = self.child.id() as libc::pid_t;
+            // SAFETY: kill(2) on the pid of a child we have not reaped yet (or the group it leads), so the pid
+            // cannot have been reused.
+            unsafe {
+                libc::kill(if self.group { -pid } else { pid }, signal);
+            }
+        }
+    }
+
+    /// Wait up to `timeout` for the process to end; then SIGKILL it. Always reaps.
+    pub fn finish(&mut self, timeout: Duration) -> std::io::Result<ExitStatus> {
+        let deadline = Instant::now() + timeout;
+        while self.poll()?.is_none() && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        if self.status.is_none() {
+            self.signal(libc::SIGKILL);
+            self.status = Some(self.child.wait()?);
+            self.let_output_catch_up();
+        }
+        Ok(self.status.expect("reaped"))
+    }
+}
+
+/// The child gets `signal` when the launcher dies, however it dies (`kill -9` included), so nothing outlives its
+/// run. Linux ties the signal to the thread that forked the child: the launcher starts and restarts every process
+/// from its main thread, which lives as long as the launcher.
+pub(crate) fn end_with_launcher(command: &mut Command, signal: libc::c_int) {
+    use std::os::unix::process::CommandExt;
+    let launcher = std::process::id() as libc::pid_t;
+    // SAFETY: the closure runs in the child between fork and exec and calls only async-signal-safe functions
+    // (prctl, getppid, raise).
+    unsafe {
+        command.pre_exec(move || {
+            libc::prctl(libc::PR_SET_PDEATHSIG, signal as libc::c_ulong, 0, 0, 0);
+            // The launcher may have died between fork and prctl: then the signal never comes, so send it now.
+            if libc::getppid() != launcher {
+                libc::raise(signal);
+            }
+            Ok(())
+        });
+    }
+}
+
+/// Start `role`'s process of the run `args` describes, tied to this process's life ([`end_with_launcher`]): the
+/// rig binary from `bin_dir`, or for the controller a user's command ([`ControllerLaunch::Command`]) with the run's
+/// `SILRIG_*` variables, in a process group of its own so a stop or kill fault reaches whatever it started.
+pub fn start_process(
+    role: Role,
+    controller: &ControllerLaunch,
+    args: &ProcessArgs,
+    bin_dir: &Path,
+    stdout: Stdio,
+    stderr: Stdio,
+) -> anyhow::Result<ChildProcess> {
+    if let (Role::Controller, ControllerLaunch::Command(cmd)) = (role, controller) {
+        use std::os::unix::process::CommandExt;
+        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
+        let mut command = Command::new(&words[0]);
+        end_with_launcher(&mut command, libc::SIGTERM);
+        let child = command
+            .args(&words[1..])
+            .envs(args.to_env())
+            .env("SILRIG_CLIENT_LIB", bin_dir.join("libsilrig_client.so"))
+            .process_group(0)
+            .stdin(Stdio::null())
+            .stdout(stdout)
+            .stderr(stderr)
+            .spawn()
+            .with_context(|| format!("starting the controller command `{cmd}`"))?;
+        return Ok(ChildProcess::group_leader(child));
+    }
+    let exe = bin_dir.join(role.binary());
+    let mut command = Command::new(&exe);
+    // A stopped plant cannot act on SIGTERM until continued, and nobody is left to continue it: it gets SIGKILL
+    // (the next run removes what it leaves); the others end cleanly on SIGTERM, writing what they hold.
+    end_with_launcher(&mut command, if role == Role::Plant { libc::SIGKILL } else { libc::SIGTERM });
+    let child = command
+        .args(args.to_argv())
+        .stdin(Stdio::null())
+        .stdout(stdout)
+        .stderr(stderr)
+        .spawn()
+        .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
+    Ok(ChildProcess::new(child))
+}
+
+/// Copy a child's output (stdout and stderr, one pipe) into `log_path` line by line. When the log cannot be
+/// written (a full disk), the rest goes to the launcher's own stderr after one line saying why, so nothing the
+/// process said is lost; the child itself never sees the failure, and never dies writing its error to a full disk.
+fn forward_output(
+    reader: std::io::PipeReader,
+    log_path: PathBuf,
+    role: Role,
+    marker: Option<String>,
+) -> std::thread::JoinHandle<()> {
+    use std::io::{BufRead, Write};
+    std::thread::spawn(move || {
+        let mut log = std::fs::OpenOptions::new().create(true).append(true).open(&log_path);
+        let mut to_log = |line: &[u8]| -> std::io::Result<()> {
+            let file = log.as_mut().map_err(|e| std::io::Error::new(e.kind(), e.to_string()))?;
+            let before = file.metadata()?.len();
+            let mut whole = line.to_vec();
+            whole.push(b'\n');
+            // A line the disk takes only in part is cut back out.
+            file.write_all(&whole).inspect_err(|_| {
+                let _ = file.set_len(before);
+            })
+        };
+        let mut failed = false;
+        for line in
+            marker.into_iter().map(String::into_bytes).map(Ok).chain(std::io::BufReader::new(reader).split(b'\n'))
+        {
+            let Ok(line) = line else { break };
+            if !failed && let Err(e) = to_log(&line) {
+                failed = true;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "silrig run: cannot write {}: {e}; what the {role} says follows here",
+                    log_path.display()
+                );
+            }
+            if failed {
+                let _ = writeln!(std::io::stderr(), "silrig run: {role}: {}", String::from_utf8_lossy(&line));
+            }
+        }
+    })
+}
+
+/// An exit status as a person reads it.
+pub fn describe(status: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(c), _) => format!("exit status {c}"),
+        (None, Some(s)) => format!("killed by signal {s}"),
+        _ => "ended".into(),
+    }
+}
+
+/// One role's process, across its restarts.
+pub(crate) struct RoleProcess {
+    pub(crate) role: Role,
+    pub(crate) process: ChildProcess,
+    /// A planned kill or term was sent and its exit not yet seen.
+    pub(crate) planned_exit: bool,
+    /// This instance ended by a planned kill or term.
+    killed_by_plan: bool,
+    /// Its exit has been dealt with (each exit is handled once).
+    exit_handled: bool,
+    /// When a clean exit before the plant's end was first seen.
+    clean_exit_seen: Option<Instant>,
+    restarts: u32,
+    /// When to start it again.
+    pub(crate) restart_at: Option<Instant>,
+}
+
+impl RoleProcess {
+    /// A process just started, after `restarts` restarts of its role.
+    fn started(role: Role, process: ChildProcess, restarts: u32) -> Self {
+        Self {
+            role,
+            process,
+            planned_exit: false,
+            killed_by_plan: false,
+            exit_handled: false,
+            clean_exit_seen: None,
+            restarts,
+            restart_at: None,
+        }
+    }
+
+    /// Ended for good: exited and no restart pending.
+    fn ended_for_good(&self) -> bool {
+        self.process.has_ended() && self.restart_at.is_none()
+    }
+}
+
+/// How long a process that exited cleanly before the plant's end waits for that end before it counts as a death.
+const CLEAN_EXIT_GRACE: Duration = Duration::from_secs(2);
+
+/// A rig binary much older than the launcher was probably not rebuilt with it (`cargo run` builds only `silrig`).
+/// Cargo links the binaries of one build within seconds of each other, hence the tolerance.
+fn warn_if_stale(bin_dir: &Path) {
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    let Some(launcher) = std::env::current_exe().ok().and_then(|p| modified(&p)) else { return };
+    for role in Role::ALL {
+        let stale = |t: std::time::SystemTime| launcher.duration_since(t).is_ok_and(|d| d > Duration::from_secs(30));
+        if modified(&bin_dir.join(role.binary())).is_some_and(stale) {
+            eprintln!(
+                "silrig run: warning: {} is older than silrig; rebuild all binaries with `cargo build --release`",
+                role.binary()
+            );
+        }
+    }
+}
+
+/// The controller the supervisor starts, if any.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ControllerLaunch {
+    /// silrig-controller.
+    Ours,
+    /// A user's shell command, with the run's SILRIG_* variables.
+    Command(String),
+    /// Started by hand; not supervised.
+    External,
+}
+
+/// The last lines a process wrote to its stderr log, for the message that reports its death.
+pub fn stderr_tail(out: &Path, role: Role) -> String {
+    let text = std::fs::read_to_string(out.join(format!("{role}.stderr.log"))).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    let tail = lines[lines.len().saturating_sub(3)..].join(" | ");
+    if tail.is_empty() { String::new() } else { format!("; its stderr ends: {}", last_chars(&tail, 400)) }
+}
+
+/// The last `max_chars` characters of `text`.
+fn last_chars(text: &str, max_chars: usize) -> &str {
+    let skip = text.chars().count().saturating_sub(max_chars);
+    text.char_indices().nth(skip).map_or("", |(at, _)| &text[at..])
+}
+
+/// The run's processes and what became of them.
+pub(crate) struct Supervisor {
+    bin_dir: PathBuf,
+    controller: ControllerLaunch,
+    args: ProcessArgs,
+    events: EventLog,
+    restart: SupervisionOptions,
+    started: Instant,
+    processes: Vec<RoleProcess>,
+    /// When the plant ended for good (its last tick, or its death without a restart).
+    plant_done_at: Option<Instant>,
+    /// Wall time from the start to the plant's end, s.
+    pub(crate) wall_s: f64,
+    /// Processes that failed, and how.
+    pub(crate) failures: Vec<String>,
+    /// Every process started, one entry per life (a restart starts a new life).
+    pub(crate) lives: Vec<ProcessLife>,
+}
+
+impl Supervisor {
+    /// Start the three processes with `args`: the logger first and the plant last, staggered, because concurrent
+    /// node creation with dead-node cleanup is where iceoryx2 has had races (#1880).
+    pub(crate) fn start(
+        args: ProcessArgs,
+        events: EventLog,
+        restart: SupervisionOptions,
+        controller: ControllerLaunch,
+    ) -> anyhow::Result<Self> {
+        let bin_dir = binary_dir()?;
+        warn_if_stale(&bin_dir);
+        let mut sup = Self {
+            bin_dir,
+            controller,
+            args,
+            events,
+            restart,
+            started: Instant::now(),
+            processes: Vec::new(),
+            plant_done_at: None,
+            wall_s: 0.0,
+            failures: Vec::new(),
+            lives: Vec::new(),
+        };
+        for role in [Role::Logger, Role::Controller, Role::Plant] {
+            if role == Role::Controller && sup.controller == ControllerLaunch::External {
+                continue;
+            }
+            let process = sup.spawn(role, false)?;
+            sup.begin_life(role, 1, process.pid());
+            sup.processes.push(RoleProcess::started(role, process, 0));
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        Ok(sup)
+    }
+
+    /// Start `role`'s process; its stderr is appended to `<out>/<role>.stderr.log` (a restart adds a marker line,
+    /// so what the dead one said stays readable).
+    fn spawn(&self, role: Role, resume: bool) -> anyhow::Result<ChildProcess> {
+        let log_path = self.args.out.join(format!("{role}.stderr.log"));
+        let (reader, writer) = std::io::pipe().context("creating a pipe for a process's output")?;
+        let log = writer.try_clone()?;
+        let marker = resume.then(|| format!("--- silrig run: {role} restarted ---"));
+        let output = forward_output(reader, log_path, role, marker);
+        let args = ProcessArgs { resume, ..self.args.clone() };
+        let process = start_process(role, &self.controller, &args, &self.bin_dir, log.into(), writer.into())?;
+        Ok(process.with_output(output))
+    }
+
+    fn begin_life(&mut self, role: Role, life: u32, pid: u32) {
+        self.lives.push(ProcessLife {
+            process: role.label().into(),
+            life,
+            pid,
+            started_at_s: self.started.elapsed().as_secs_f64(),
+            ended_at_s: None,
+            exit: "running".into(),
+            report: None,
+        });
+    }
+
+    /// Note how the life of process `pid` ended; a death by a signal leaves an iceoryx2 node behind, which the
+    /// launcher removes here, off every process's loop.
+    fn end_life(&mut self, pid: u32, status: ExitStatus, how: &str) {
+        let at_s = self.started.elapsed().as_secs_f64();
+        if let Some(life) = self.lives.iter_mut().rev().find(|l| l.pid == pid && l.ended_at_s.is_none()) {
+            life.ended_at_s = Some(at_s);
+            life.exit = format!("{}{how}", describe(status));
+        }
+        if status.code().is_none()
+            && let Ok(removed) = silrig_wire::ipc::cleanup_dead_nodes(&self.args.run_id)
+            && !removed.is_empty()
+        {
+            let who: Vec<String> = removed.iter().map(|n| format!("`{}` (pid {})", n.name, n.pid)).collect();
+            self.events.emit(None, "dead-nodes-removed", format!("by the launcher: {}", who.join(", ")));
+        }
+    }
+
+    /// Time since the processes were started.
+    pub(crate) fn elapsed(&self) -> Duration {
+        self.started.elapsed()
+    }
+
+    pub(crate) fn process_mut(&mut self, role: Role) -> &mut RoleProcess {
+        self.processes.iter_mut().find(|p| p.role == role).expect("every role is supervised")
+    }
+
+    fn plant_done(&mut self) {
+        if self.plant_done_at.is_none() {
+            self.plant_done_at = Some(Instant::now());
+            self.wall_s = self.started.elapsed().as_secs_f64();
+        }
+    }
+
+    /// Reap what ended and decide, once per exit, what it was: a planned end, the plant's or the logger's normal
+    /// end, or a death (restarted by policy, or a failure of the run while the survivors carry on).
+    pub(crate) fn handle_exits(&mut self) -> std::io::Result<()> {
+        for i in 0..self.processes.len() {
+            let p = &mut self.processes[i];
+            let Some(status) = p.process.poll()? else { continue };
+            if p.exit_handled {
+                continue;
+            }
+            // A process that ends cleanly by itself mid-run has usually seen the plant's last tick a moment before
+            // the plant's own exit reaches us: judge it once the plant has had time to end.
+            if status.success() && p.role != Role::Plant && self.plant_done_at.is_none() {
+                let seen = *p.clean_exit_seen.get_or_insert_with(Instant::now);
+                if seen.elapsed() < CLEAN_EXIT_GRACE {
+                    continue;
+                }
+            }
+            p.exit_handled = true;
+            let (role, pid, planned) = (p.role, p.process.pid(), p.planned_exit);
+            self.end_life(pid, status, if planned { " (the fault plan)" } else { "" });
+            let p = &mut self.processes[i];
+            if std::mem::take(&mut p.planned_exit) {
+                p.killed_by_plan = true;
+                let restarting = p.restart_at.is_some();
+                self.events.emit(None, "process-ended", format!("{role} {} (planned)", describe(status)));
+                if !restarting && role == Role::Plant {
+                    self.plant_done();
+                }
+                continue;
+            }
+            if p.restart_at.is_some() {
+                continue;
+            }
+            // Ctrl-C reaches the whole process group: whatever ends now, the user stopped the run.
+            if silrig_rig::signals::termination_requested() {
+                if role == Role::Plant {
+                    self.plant_done();
+                }
+                continue;
+            }
+            // Only a flight flown to its end is the run's end: a clean exit on somebody else's SIGTERM is not.
+            let ended = read_report(&self.args.out, role.label()).map(|r| r.ended).unwrap_or_default();
+            let completed = status.success() && ended == "completed";
+            if role == Role::Plant && completed && self.plant_done_at.is_none() {
+                self.plant_done();
+                continue;
+            }
+            // The logger ends by itself once it has written the last tick; the others end when told to.
+            if (role == Role::Logger && completed)
+                || self.plant_done_at.is_some()
+                || self.failures.iter().any(|f| f.starts_with(role.label()))
+            {
+                continue;
+            }
+            let how = if status.success() && !ended.is_empty() {
+                format!("ended ({ended}; the launcher sent no signal)")
+            } else {
+                describe(status)
+            };
+            let tail = stderr_tail(&self.args.out, role);
+            self.on_death(i, format!("{role}: {how} before the end of the run{tail}"));
+        }
+        Ok(())
+    }
+
+    fn on_death(&mut self, index: usize, death: String) {
+        self.events.emit(None, "process-died", death.clone());
+        let p = &mut self.processes[index];
+        let role = p.role;
+        match self.restart {
+            SupervisionOptions { restart: RestartMode::OnFailure, max_restarts, restart_backoff_ms }
+                if p.restarts < max_restarts =>
+            {
+                let pause_s = restart_backoff_ms / 1e3 * 2f64.powi(p.restarts as i32);
+                eprintln!("silrig run: {death}; restarting in {pause_s:.2} s");
+                p.restart_at = Some(Instant::now() + Duration::from_secs_f64(pause_s));
+            }
+            _ => {
+                // The survivors carry on (the plant in failsafe, the logger marking the gap): the run goes to its
+                // end and reports the failure. Without a plant there is nothing left to run.
+                if role == Role::Plant {
+                    self.plant_done();
+                }
+                self.failures.push(death);
+            }
+        }
+    }
+
+    /// Start again every process whose restart is due; a restarted plant or controller resumes what its
+    /// predecessor saved.
+    pub(crate) fn restart_due(&mut self) -> anyhow::Result<()> {
+        for i in 0..self.processes.len() {
+            let p = &self.processes[i];
+            if !(p.process.has_ended() && p.restart_at.is_some_and(|t| Instant::now() >= t)) {
+                continue;
+            }
+            let (role, restarts) = (p.role, p.restarts + 1);
+            self.keep_report_of_life(role, restarts);
+            let process = self.spawn(role, role.resumes())?;
+            let pid = process.pid();
+            self.begin_life(role, restarts + 1, pid);
+            self.processes[i] = RoleProcess::started(role, process, restarts);
+            self.events.emit(None, "process-restarted", format!("{role} as pid {pid} (restart {restarts})"));
+        }
+        Ok(())
+    }
+
+    /// A process that is restarted keeps the report of the life that ended (one it wrote on SIGTERM, say) as
+    /// `<role>.life<N>.report.json`, so the next life's report does not overwrite it.
+    fn keep_report_of_life(&mut self, role: Role, life: u32) {
+        let current = report_path(&self.args.out, role.label());
+        let kept = self.args.out.join(format!("{}.life{life}.report.json", role.label()));
+        if std::fs::rename(&current, &kept).is_ok()
+            && let Some(l) = self.lives.iter_mut().find(|l| l.process == role.label() && l.life == life)
+        {
+            l.report = Some(kept.file_name().expect("a file name").to_string_lossy().into_owned());
+        }
+    }
+
+    /// After the run, the last life of each role gets the report it wrote, if any.
+    pub(crate) fn note_final_reports(&mut self) {
+        for role in Role::ALL {
+            let path = report_path(&self.args.out, role.label());
+            if let Some(l) = self.lives.iter_mut().rev().find(|l| l.process == role.label())
+                && path.exists()
+            {
+                l.report = Some(path.file_name().expect("a file name").to_string_lossy().into_owned());
+            }
+        }
+    }
+
+    /// The plant has ended for good and the logger has too (or had 2 s to write its last rows).
+    pub(crate) fn run_is_over(&self) -> bool {
+        let logger_done = self.processes.iter().any(|p| p.role == Role::Logger && p.ended_for_good());
+        self.plant_done_at.is_some_and(|t| logger_done || t.elapsed() > Duration::from_secs(2))
+    }
+
+    /// Roles a planned kill or term ended for good (they have no report to give).
+    pub(crate) fn ended_by_plan(&self) -> Vec<Role> {
+        self.processes.iter().filter(|p| p.ended_for_good() && p.killed_by_plan).map(|p| p.role).collect()
+    }
+
+    /// SIGTERM to every process still running, reap all (SIGKILL after 5 s); an exit other than a clean one of a
+    /// process that was still running is a failure, unless one is recorded for it already.
+    pub(crate) fn stop_all(&mut self) -> std::io::Result<()> {
+        if self.plant_done_at.is_none() {
+            self.wall_s = self.started.elapsed().as_secs_f64();
+        }
+        for p in self.processes.iter_mut() {
+            p.process.signal(libc::SIGTERM);
+        }
+        for i in 0..self.processes.len() {
+            let p = &mut self.processes[i];
+            let already_ended = p.process.has_ended();
+            let status = p.process.finish(Duration::from_secs(5))?;
+            let (role, pid) = (p.role, p.process.pid());
+            // A life already noted stays as it was: only open ones are ended here.
+            self.end_life(pid, status, if already_ended { "" } else { " at the end of the run" });
+            if !already_ended && !status.success() && !self.failures.iter().any(|f| f.starts_with(role.label())) {
+                let tail = stderr_tail(&self.args.out, role);
+                self.failures.push(format!("{role}: {}{tail}", describe(status)));
+            }
+        }
+        Ok(())
+    }
+}

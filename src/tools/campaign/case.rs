@@ -1,0 +1,187 @@
+//! One case of a campaign: sample i of the scenario's dispersions flown in the single-process loop and judged by the
+//! scenario's criteria. A pure function of (scenario, seed, index), so a case flown alone (`silrig sim --sample I`)
+//! gives the numbers it gave inside any sweep, on any machine or shard.
+
+use serde::{Deserialize, Serialize};
+use silrig_flight::criteria::{Criteria, Judgement};
+use silrig_flight::dispersion;
+use silrig_flight::judge::judge_flight;
+use silrig_flight::scenario::Scenario;
+use silrig_flight::summary::{Summary, summarize};
+use silrig_flight::trace::Trace;
+
+/// How a case ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Outcome {
+    /// Flown; every criterion met.
+    Pass,
+    /// Flown; a criterion failed.
+    Fail,
+    /// Could not be flown: the sampled scenario is out of range, or its initial condition cannot be trimmed.
+    Infeasible,
+}
+
+impl Outcome {
+    /// Name as in the outputs.
+    pub fn label(self) -> &'static str {
+        match self {
+            Outcome::Pass => "pass",
+            Outcome::Fail => "fail",
+            Outcome::Infeasible => "infeasible",
+        }
+    }
+}
+
+/// Figures of a flown case (beside its criteria), from the summary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseFigures {
+    /// Settling time within 0.5 deg of phi, theta, psi, s (None: never).
+    pub settle_0p5deg_s: [Option<f64>; 3],
+    /// phi, theta, psi minus their set points at the end, deg (None: not a number, the flight left the model).
+    pub final_error_deg: [Option<f64>; 3],
+    /// Largest angle of attack, deg (None: not a number).
+    pub alpha_peak_deg: Option<f64>,
+    /// Largest |p|, |q|, |r| after the summary's late window starts, deg/s (None: not a number).
+    pub body_rate_max_late_dps: [Option<f64>; 3],
+    /// Largest fraction of ticks any surface spent at its rate limit.
+    pub rate_limit_fraction: f64,
+    /// A sustained oscillation at the end.
+    pub limit_cycle: bool,
+    /// When the aircraft left the aerodynamic data (alpha or beta beyond the tables, or a non-finite state), s.
+    pub departed_at_s: Option<f64>,
+}
+
+impl CaseFigures {
+    fn new(s: &Summary, departure: Option<(f64, String)>) -> Self {
+        let ticks = s.ticks.max(1) as f64;
+        Self {
+            settle_0p5deg_s: [0, 1, 2].map(|i| s.angles[i].settle_within_0p5deg_s),
+            final_error_deg: [0, 1, 2].map(|i| finite(s.angles[i].final_deg - s.angles[i].setpoint_deg)),
+            alpha_peak_deg: finite(s.alpha_peak_deg),
+            body_rate_max_late_dps: s.body_rate_max_late_dps.map(finite),
+            rate_limit_fraction: s.surfaces.iter().map(|f| f.ticks_at_rate_limit as f64 / ticks).fold(0.0, f64::max),
+            limit_cycle: s.limit_cycle,
+            departed_at_s: departure.map(|(t, _)| t),
+        }
+    }
+}
+
+/// A figure that is a number, or None (JSON has no NaN, and the CSV shows an empty cell).
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+/// The first tick at which the flight leaves what the model knows: alpha or |beta| beyond the aerodynamic tables
+/// (which only extrapolate there), or a state that is no longer a number. Returns when, and what.
+pub fn departure(trace: &Trace) -> Option<(f64, String)> {
+    use silrig_model::plant::aero::{ALPHA_DATA_DEG, BETA_DATA_MAX_DEG};
+    let [t, alpha, beta] = ["t_s", "alpha_deg", "beta_deg"].map(|c| trace.index(c).expect("loop columns"));
+    // The state columns run from t_s to alt_ft; the command columns after them are NaN without a command.
+    let states = trace.index("alt_ft").expect("loop columns") + 1;
+    trace.rows.iter().find_map(|r| {
+        let why = if r[..states].iter().any(|v| !v.is_finite()) {
+            "the state is no longer a number".to_string()
+        } else if !(ALPHA_DATA_DEG.0..=ALPHA_DATA_DEG.1).contains(&r[alpha]) {
+            format!(
+                "alpha {:.1} deg left the aerodynamic data ({} .. {} deg)",
+                r[alpha], ALPHA_DATA_DEG.0, ALPHA_DATA_DEG.1
+            )
+        } else if r[beta].abs() > BETA_DATA_MAX_DEG {
+            format!("beta {:.1} deg left the aerodynamic data (|beta| <= {BETA_DATA_MAX_DEG} deg)", r[beta])
+        } else {
+            return None;
+        };
+        Some((r[t], why))
+    })
+}
+
+/// Every `ENVELOPE_STEP`th tick of phi, theta, psi is kept for the envelope plot.
+pub const ENVELOPE_STEP: usize = 5;
+
+/// One case's result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    /// Sample index.
+    pub index: u64,
+    /// The sampled values, in the dispersions' key order.
+    pub values: Vec<f64>,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Infeasible: why; failed: the criteria that failed.
+    pub reason: String,
+    /// Figures of the flight (None if infeasible).
+    pub figures: Option<CaseFigures>,
+    /// The criteria, judged (empty if infeasible).
+    pub judgements: Vec<Judgement>,
+    /// (t, phi, theta, psi) every `ENVELOPE_STEP` ticks, deg (empty if infeasible); carried by shard files so a merged
+    /// sweep draws the same envelope.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub envelope: Vec<[f32; 4]>,
+}
+
+/// A flown case in full: the sampled scenario, its trace and its summary (what `silrig sim --sample` writes).
+pub struct Flight {
+    /// The scenario with the case's sampled values.
+    pub scenario: Scenario,
+    /// Its trace.
+    pub trace: Trace,
+    /// Its control-quality figures.
+    pub summary: Summary,
+}
+
+/// Fly case `index` of `scenario`'s dispersions under `seed`; returns the result and, when flown, the flight.
+pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index: u64) -> (CaseResult, Option<Flight>) {
+    let sampled = dispersion::sample(&scenario.dispersions, seed, index);
+    let values: Vec<f64> = sampled.iter().map(|(_, v)| *v).collect();
+    let infeasible = |reason: String| CaseResult {
+        index,
+        values: values.clone(),
+        outcome: Outcome::Infeasible,
+        reason,
+        figures: None,
+        judgements: Vec::new(),
+        envelope: Vec::new(),
+    };
+    let case = match scenario.with_values(&sampled) {
+        Ok(s) => s,
+        Err(e) => return (infeasible(format!("sampled scenario out of range: {e}")), None),
+    };
+    let (trace, left_envelope) = match silrig_flight::sim::fly(&case) {
+        Ok(flight) => flight,
+        Err(e) => return (infeasible(e.to_string()), None),
+    };
+    let summary = summarize(&trace, &case);
+    let judgements = judge_flight(criteria, &case, Some(&trace), Some(&summary));
+    // A flight that left the model's envelope ended there; if it had not left the data before, that is when.
+    let departed = departure(&trace).or_else(|| left_envelope.map(|e| (e.t_s, e.error.to_string())));
+    let mut failed: Vec<String> = judgements.iter().filter(|j| !j.passed).map(|j| j.criterion.clone()).collect();
+    // A departure fails the case whatever the criteria say: past it the model has no data.
+    if let Some((t, why)) = &departed {
+        failed.insert(0, format!("departed at {t:.2} s: {why};"));
+    }
+    let columns = ["t_s", "phi_deg", "theta_deg", "psi_deg"].map(|c| trace.index(c).expect("loop columns"));
+    // Up to the first row that is no longer a number (a departed flight): nothing past it can be drawn.
+    let envelope = trace
+        .rows
+        .iter()
+        .step_by(ENVELOPE_STEP)
+        .map(|r| columns.map(|c| r[c] as f32))
+        .take_while(|r| r.iter().all(|v| v.is_finite()))
+        .collect();
+    let result = CaseResult {
+        index,
+        values,
+        outcome: if failed.is_empty() { Outcome::Pass } else { Outcome::Fail },
+        reason: failed.join(" "),
+        figures: Some(CaseFigures::new(&summary, departed)),
+        judgements,
+        envelope,
+    };
+    (result, Some(Flight { scenario: case, trace, summary }))
+}
+
+/// Fly case `index` (the result only).
+pub fn fly(scenario: &Scenario, criteria: &Criteria, seed: u64, index: u64) -> CaseResult {
+    fly_with_trace(scenario, criteria, seed, index).0
+}

@@ -1,0 +1,326 @@
+//! A sweep beyond one machine: `plan` writes a manifest (the scenario's text, seed, cases, shards) into a folder
+//! every worker can read; `run` flies one shard, its index from the command line or the batch system's variable
+//! (Slurm's `SLURM_ARRAY_TASK_ID`, a Kubernetes Indexed Job's `JOB_COMPLETION_INDEX`); `merge` checks that every
+//! shard of this plan is there and builds the outputs a single-machine sweep writes, byte for byte. `slurm` writes
+//! the `sbatch` array script.
+
+use super::Campaign;
+use super::case::CaseResult;
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The plan's file in the sweep folder.
+pub const MANIFEST: &str = "manifest.json";
+/// Where the shards' results go.
+pub const SHARDS_DIR: &str = "shards";
+/// Largest number of shards.
+pub const MAX_SHARDS: u64 = 100_000;
+/// The batch systems' variables that carry a task's index, in the order they are read.
+pub const INDEX_VARIABLES: [&str; 2] = ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"];
+
+/// `manifest.json`: everything a worker needs, so no worker reads the scenario file itself.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// The scenario file as the user named it (what the outputs and printed commands say).
+    pub config: String,
+    /// The scenario file's text when the sweep was planned.
+    pub scenario_toml: String,
+    /// Seed of the dispersions.
+    pub seed: u64,
+    /// Cases in the sweep.
+    pub runs: u64,
+    /// Shards the cases are split into.
+    pub shards: u64,
+    /// FNV-1a of all of the above: shard files carry it, so slices of different plans never merge.
+    pub fingerprint: String,
+}
+
+/// One shard's results (`shards/shard-K-of-N.json`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ShardResult {
+    /// The plan's fingerprint.
+    pub fingerprint: String,
+    /// Shard index.
+    pub shard: u64,
+    /// First case, and one past the last.
+    pub cases_range: (u64, u64),
+    /// The cases, in index order.
+    pub cases: Vec<CaseResult>,
+}
+
+fn fnv1a(parts: &[&str]) -> String {
+    let h = parts
+        .iter()
+        .flat_map(|p| p.bytes().chain([0u8]))
+        .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3));
+    format!("{h:016x}")
+}
+
+impl Manifest {
+    fn new(config: String, scenario_toml: String, seed: u64, runs: u64, shards: u64) -> Self {
+        let fingerprint = fnv1a(&[&config, &scenario_toml, &seed.to_string(), &runs.to_string(), &shards.to_string()]);
+        Self { config, scenario_toml, seed, runs, shards, fingerprint }
+    }
+
+    /// The cases of shard `k`: an even split, the first shards one case longer when it does not divide.
+    pub fn range(&self, k: u64) -> std::ops::Range<u64> {
+        let (base, extra) = (self.runs / self.shards, self.runs % self.shards);
+        let start = k * base + k.min(extra);
+        start..start + base + u64::from(k < extra)
+    }
+
+    fn shard_path(&self, dir: &Path, k: u64) -> PathBuf {
+        dir.join(SHARDS_DIR).join(format!("shard-{k}-of-{}.json", self.shards))
+    }
+
+    fn campaign(&self) -> anyhow::Result<Campaign> {
+        Campaign::from_text(&self.scenario_toml, &self.config)
+    }
+
+    /// Read `dir/manifest.json`.
+    pub fn load(dir: &Path) -> anyhow::Result<Self> {
+        let path = dir.join(MANIFEST);
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("reading {} (write it with `silrig sweep plan`)", path.display()))?;
+        let m: Manifest =
+            serde_json::from_str(&text).with_context(|| format!("{}: not a sweep manifest", path.display()))?;
+        let expected = Manifest::new(m.config.clone(), m.scenario_toml.clone(), m.seed, m.runs, m.shards);
+        anyhow::ensure!(
+            expected.fingerprint == m.fingerprint,
+            "{}: edited after planning (its fingerprint does not match)",
+            path.display()
+        );
+        Ok(m)
+    }
+}
+
+/// What `silrig sweep plan` is asked to do.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PlanOptions {
+    /// Scenario file (TOML) with `[dispersions]` and `[criteria]`.
+    pub config: PathBuf,
+    /// Number of cases.
+    #[arg(long)]
+    pub runs: u64,
+    /// Seed of the dispersions (default: the scenario's `seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Number of shards (array tasks).
+    #[arg(long)]
+    pub shards: u64,
+    /// The sweep folder, readable and writable by every worker (a shared file system on a cluster).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `silrig sweep plan`: check the scenario, write the manifest.
+pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
+    super::check_runs(opts.runs)?;
+    anyhow::ensure!(
+        (1..=MAX_SHARDS.min(opts.runs)).contains(&opts.shards),
+        "--shards must be within 1..={} (at most one per case), got {}",
+        MAX_SHARDS.min(opts.runs),
+        opts.shards
+    );
+    let text = std::fs::read_to_string(&opts.config).with_context(|| format!("reading {}", opts.config.display()))?;
+    let config = opts.config.display().to_string();
+    let campaign = Campaign::from_text(&text, &config)?;
+    anyhow::ensure!(
+        !opts.out.join(MANIFEST).exists(),
+        "{} already holds a sweep plan ({MANIFEST}); choose another --out or move it away: nothing is overwritten",
+        opts.out.display()
+    );
+    let manifest = Manifest::new(config, text, opts.seed.unwrap_or(campaign.scenario.seed), opts.runs, opts.shards);
+    std::fs::create_dir_all(opts.out.join(SHARDS_DIR)).with_context(|| format!("creating {}", opts.out.display()))?;
+    silrig_flight::files::write_atomically(
+        &opts.out.join(MANIFEST),
+        &(serde_json::to_string_pretty(&manifest)? + "\n"),
+    )?;
+    Ok(manifest)
+}
+
+/// What `silrig sweep run` is asked to do.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RunOptions {
+    /// The sweep folder (with `manifest.json`).
+    pub dir: PathBuf,
+    /// The shard to fly, 0-based (default: $SLURM_ARRAY_TASK_ID, then $JOB_COMPLETION_INDEX).
+    #[arg(long, conflicts_with = "shard")]
+    pub index: Option<u64>,
+    /// The shard as K/N (N must be the plan's number of shards).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+}
+
+/// The shard index from the flags or the batch system's variable.
+fn shard_index(opts: &RunOptions, manifest: &Manifest) -> anyhow::Result<u64> {
+    let k = if let Some(k) = opts.index {
+        k
+    } else if let Some(text) = &opts.shard {
+        let (k, n) = text.split_once('/').ok_or_else(|| anyhow::anyhow!("--shard {text}: expected K/N, e.g. 3/8"))?;
+        let (k, n): (u64, u64) = (
+            k.trim().parse().map_err(|_| anyhow::anyhow!("--shard {text}: K is not a whole number"))?,
+            n.trim().parse().map_err(|_| anyhow::anyhow!("--shard {text}: N is not a whole number"))?,
+        );
+        anyhow::ensure!(n == manifest.shards, "--shard {text}: the plan has {} shards, not {n}", manifest.shards);
+        k
+    } else {
+        let (name, value) =
+            INDEX_VARIABLES.iter().find_map(|v| std::env::var(v).ok().map(|value| (*v, value))).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "no shard given: pass --index K or --shard K/N, or set {}",
+                    INDEX_VARIABLES.join(" or ")
+                )
+            })?;
+        value.trim().parse().map_err(|_| anyhow::anyhow!("${name} = {value:?} is not a shard index"))?
+    };
+    anyhow::ensure!(k < manifest.shards, "shard {k} is out of range: the plan has shards 0..={}", manifest.shards - 1);
+    Ok(k)
+}
+
+/// `silrig sweep run`: fly one shard and write its results atomically (a killed worker leaves no half file).
+pub fn run(opts: &RunOptions) -> anyhow::Result<(PathBuf, ShardResult)> {
+    let manifest = Manifest::load(&opts.dir)?;
+    let k = shard_index(opts, &manifest)?;
+    let campaign = manifest.campaign()?;
+    let jobs = super::jobs(opts.jobs)?;
+    let range = manifest.range(k);
+    let cases = campaign.fly(manifest.seed, range.clone(), jobs)?;
+    let result = ShardResult {
+        fingerprint: manifest.fingerprint.clone(),
+        shard: k,
+        cases_range: (range.start, range.end),
+        cases,
+    };
+    let path = manifest.shard_path(&opts.dir, k);
+    std::fs::create_dir_all(path.parent().expect("in the shards folder"))?;
+    silrig_flight::files::write_atomically(&path, &serde_json::to_string(&result)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok((path, result))
+}
+
+/// `silrig sweep merge`: every shard of the plan, checked, into the single-machine outputs.
+pub fn merge(dir: &Path) -> anyhow::Result<super::SweepRun> {
+    let manifest = Manifest::load(dir)?;
+    let campaign = manifest.campaign()?;
+    anyhow::ensure!(
+        !dir.join("sweep.json").exists(),
+        "{} already holds merged results (sweep.json); move them away to merge again: nothing is overwritten",
+        dir.display()
+    );
+    let mut cases = Vec::with_capacity(manifest.runs as usize);
+    let mut missing = Vec::new();
+    for k in 0..manifest.shards {
+        let path = manifest.shard_path(dir, k);
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            missing.push(k);
+            continue;
+        };
+        let shard: ShardResult =
+            serde_json::from_str(&text).with_context(|| format!("{}: not a shard's results", path.display()))?;
+        anyhow::ensure!(
+            shard.fingerprint == manifest.fingerprint && shard.shard == k,
+            "{} belongs to another plan (fingerprint {}, this plan's {}): shards of different plans never merge",
+            path.display(),
+            shard.fingerprint,
+            manifest.fingerprint
+        );
+        let range = manifest.range(k);
+        let indices: Vec<u64> = shard.cases.iter().map(|c| c.index).collect();
+        anyhow::ensure!(
+            indices == range.clone().collect::<Vec<_>>(),
+            "{}: does not hold exactly cases {range:?}",
+            path.display()
+        );
+        cases.extend(shard.cases);
+    }
+    if !missing.is_empty() {
+        let list: Vec<String> = missing.iter().map(u64::to_string).collect();
+        anyhow::bail!(
+            "{} of {} shards have no results yet (shard {}); fly each with `silrig sweep run {} --index K`",
+            missing.len(),
+            manifest.shards,
+            list.join(", "),
+            dir.display()
+        );
+    }
+    let (summary, mut files) = super::write_outputs(&campaign, manifest.seed, &cases, dir)?;
+    files.extend(super::write_plots(&campaign, &summary, &cases, dir)?);
+    Ok(super::SweepRun { summary, files, fly_s: f64::NAN, jobs: 0 })
+}
+
+/// What `silrig sweep slurm` is asked to do.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SlurmOptions {
+    /// The sweep folder (with `manifest.json`).
+    pub dir: PathBuf,
+    /// Cores per array task.
+    #[arg(long, default_value_t = 1)]
+    pub cpus_per_task: u32,
+    /// Partition to submit to (default: the cluster's default).
+    #[arg(long)]
+    pub partition: Option<String>,
+    /// Time limit per task, minutes.
+    #[arg(long, default_value_t = 30)]
+    pub time_min: u32,
+}
+
+/// `silrig sweep slurm`: the `sbatch` array script (one task per shard), written to `<dir>/sweep.sbatch`.
+pub fn slurm_script(opts: &SlurmOptions) -> anyhow::Result<(PathBuf, String)> {
+    let manifest = Manifest::load(&opts.dir)?;
+    anyhow::ensure!((1..=1024).contains(&opts.cpus_per_task), "--cpus-per-task must be within 1..=1024");
+    anyhow::ensure!((1..=10_080).contains(&opts.time_min), "--time-min must be within 1..=10080 (a week)");
+    let dir = std::fs::canonicalize(&opts.dir)?;
+    let exe = std::env::current_exe()?;
+    let name = manifest.campaign()?.scenario.name;
+    let partition = opts.partition.as_ref().map(|p| format!("#SBATCH --partition={p}\n")).unwrap_or_default();
+    let quote = |p: &Path| format!("'{}'", p.display().to_string().replace('\'', "'\\''"));
+    let script = format!(
+        "#!/bin/sh\n\
+         # silrig sweep of {config}: {runs} cases in {shards} shards, seed {seed}. Submit, then merge when all are done:\n\
+         #   jobid=$(sbatch --parsable {script})\n\
+         #   sbatch --dependency=afterok:$jobid --wrap \"{exe} sweep merge {dir}\"\n\
+         #SBATCH --job-name=silrig-{name}\n\
+         #SBATCH --array=0-{last}\n\
+         #SBATCH --cpus-per-task={cpus}\n\
+         #SBATCH --time={time}\n\
+         {partition}\
+         #SBATCH --output={logs}/shard-%a.log\n\
+         exec {exe} sweep run {dir} --jobs \"${{SLURM_CPUS_PER_TASK:-1}}\"\n",
+        config = manifest.config,
+        runs = manifest.runs,
+        shards = manifest.shards,
+        seed = manifest.seed,
+        script = quote(&dir.join("sweep.sbatch")),
+        exe = quote(&exe),
+        dir = quote(&dir),
+        last = manifest.shards - 1,
+        cpus = opts.cpus_per_task,
+        time = opts.time_min,
+        logs = dir.join("logs").display(),
+    );
+    std::fs::create_dir_all(dir.join("logs"))?;
+    let path = dir.join("sweep.sbatch");
+    std::fs::write(&path, &script).with_context(|| format!("writing {}", path.display()))?;
+    Ok((path, script))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_cover_every_case_once_in_order() {
+        for (runs, shards) in [(10, 3), (7, 7), (1000, 8), (5, 1)] {
+            let m = Manifest::new("c".into(), "t".into(), 1, runs, shards);
+            let all: Vec<u64> = (0..shards).flat_map(|k| m.range(k)).collect();
+            assert_eq!(all, (0..runs).collect::<Vec<_>>(), "{runs} in {shards}");
+            let sizes: Vec<u64> = (0..shards).map(|k| m.range(k).end - m.range(k).start).collect();
+            assert!(sizes.iter().max().unwrap() - sizes.iter().min().unwrap() <= 1);
+        }
+    }
+}

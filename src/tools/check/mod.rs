@@ -1,0 +1,244 @@
+//! `silrig check`: flies a suite of cases with one controller (ours, or a user's through `--controller-cmd`) on the
+//! three-process rig, judges each run by its criteria and gives one verdict: a table, `check.json` and a JUnit XML
+//! file a CI pipeline can gate on. The suite format is in [`suite`], the criteria in [`criteria`], the files in
+//! [`verdict`].
+
+pub mod criteria;
+pub mod suite;
+pub mod verdict;
+
+use anyhow::Context;
+use criteria::{RigCriteria, RunEvidence};
+use silrig_flight::trace::Trace;
+use silrig_launch::program::{find_program, split_command};
+use silrig_launch::supervision::{RestartMode, SupervisionOptions};
+use silrig_launch::{launcher, launcher::ControllerKind, launcher::LaunchOptions};
+use silrig_rig::{ProcessOptions, signals};
+use std::path::{Path, PathBuf};
+use suite::{Case, Suite};
+use verdict::{CaseVerdict, Verdict};
+
+/// What `silrig check` is asked to do.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CheckOptions {
+    /// Suite file (TOML); without it, the embedded default suite (configs/check-default.toml).
+    pub suite: Option<PathBuf>,
+    /// Run only this case of the suite.
+    #[arg(long, value_name = "NAME")]
+    pub case: Option<String>,
+    /// Judge your own controller: this command runs in place of silrig-controller in every case (as with
+    /// `silrig run --controller-cmd`).
+    #[arg(long, value_name = "CMD")]
+    pub controller_cmd: Option<String>,
+    /// Output folder (default: out/check-<suite>-<UTC time>); must not hold a check already.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Loop and watchdog tuning, passed on to every run.
+    #[command(flatten)]
+    pub process: ProcessOptions,
+}
+
+/// Why a check could not judge anything (exit status 2).
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    /// The suite is malformed, or a case's scenario does not load.
+    #[error("{0}")]
+    Suite(#[from] suite::SuiteError),
+    /// A bad command-line argument.
+    #[error("{0}")]
+    Usage(String),
+    /// A case could not be set up (not a verdict on the controller).
+    #[error("case `{case}`: {problem:#}")]
+    Setup {
+        /// The case.
+        case: String,
+        /// What failed (named so that it is not also printed as the error's source).
+        problem: anyhow::Error,
+    },
+}
+
+impl CheckOptions {
+    /// The suite to run, narrowed to `--case`.
+    fn load_suite(&self) -> Result<Suite, CheckError> {
+        let mut suite = match &self.suite {
+            Some(path) => Suite::load(path)?,
+            None => Suite::embedded_default(),
+        };
+        if let Some(name) = &self.case {
+            suite.only(name).map_err(CheckError::Usage)?;
+        }
+        Ok(suite)
+    }
+
+    /// The command that runs just `case` again, as a user types it.
+    fn reproduce(&self, case: &str) -> String {
+        let mut cmd = "silrig check".to_string();
+        if let Some(s) = &self.suite {
+            cmd += &format!(" {}", shell_quote(&s.display().to_string()));
+        }
+        cmd += &format!(" --case {case}");
+        if let Some(c) = &self.controller_cmd {
+            cmd += &format!(" --controller-cmd {}", shell_quote(c));
+        }
+        // Only the tuning flags that differ from their defaults, so the command stays short.
+        let defaults = default_process_options().to_argv();
+        for (flag, value) in self
+            .process
+            .to_argv()
+            .chunks(2)
+            .zip(defaults.chunks(2))
+            .filter(|(a, b)| a != b)
+            .map(|(a, _)| (&a[0], &a[1]))
+        {
+            cmd += &format!(" {flag} {value}");
+        }
+        cmd
+    }
+}
+
+/// The process options with every flag at its default.
+fn default_process_options() -> ProcessOptions {
+    #[derive(clap::Parser)]
+    struct Defaults {
+        #[command(flatten)]
+        process: ProcessOptions,
+    }
+    <Defaults as clap::Parser>::parse_from(["silrig"]).process
+}
+
+fn shell_quote(text: &str) -> String {
+    if !text.is_empty() && text.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:@".contains(c)) {
+        text.to_string()
+    } else {
+        format!("'{}'", text.replace('\'', "'\\''"))
+    }
+}
+
+/// The options of one `silrig run` of a case.
+fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: PathBuf) -> LaunchOptions {
+    LaunchOptions {
+        config: Some(scenario_path.to_path_buf()),
+        mode: case.mode,
+        duration_s: None,
+        out: Some(out),
+        run_id: None,
+        no_baseline: false,
+        floor: silrig_launch::launcher::FloorSource::Builtin,
+        // The verdict table is what a CI log should show, not each case's live line.
+        quiet: true,
+        process: opts.process.clone(),
+        faults: Vec::new(),
+        supervision: SupervisionOptions { restart: RestartMode::Never, max_restarts: 0, restart_backoff_ms: 200.0 },
+        controller_cmd: opts.controller_cmd.clone(),
+        controller: ControllerKind::Builtin,
+        // Not used: the controller is always one the launcher starts.
+        external_timeout_s: 120.0,
+        bridge_listen: None,
+        // The case's scenario says.
+        command_timing: None,
+    }
+}
+
+/// Fly one case (twice for determinism) and judge it.
+fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict, CheckError> {
+    let setup = |problem: anyhow::Error| CheckError::Setup { case: case.name.clone(), problem };
+    let started = std::time::Instant::now();
+    let case_dir = out.join(&case.name);
+    std::fs::create_dir_all(&case_dir).with_context(|| format!("creating {}", case_dir.display())).map_err(setup)?;
+    let scenario_path = case_dir.join("case-scenario.toml");
+    std::fs::write(&scenario_path, case.scenario.to_toml())
+        .with_context(|| format!("writing {}", scenario_path.display()))
+        .map_err(setup)?;
+    let runs = case.criteria.runs();
+    let mut evidence = Vec::new();
+    let mut run_dirs = Vec::new();
+    for i in 1..=runs {
+        let dir = if runs == 1 { case_dir.clone() } else { case_dir.join(format!("run-{i}")) };
+        let report = launcher::run(&launch_options(opts, case, &scenario_path, dir.clone())).map_err(setup)?;
+        let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
+        run_dirs.push(dir.display().to_string());
+        evidence.push(RunEvidence { report, trace });
+        if signals::termination_requested() {
+            break;
+        }
+    }
+    let judgements = case.criteria.judge(&case.scenario, &evidence);
+    Ok(CaseVerdict {
+        name: case.name.clone(),
+        why: case.why.clone(),
+        mode: case.mode.label().into(),
+        faults: case.fault_flags.clone(),
+        passed: judgements.iter().all(|j| j.passed),
+        wall_s: started.elapsed().as_secs_f64(),
+        run_dirs,
+        reproduce: opts.reproduce(&case.name),
+        judgements,
+    })
+}
+
+/// Run the suite and write the verdict's files. An `Err` means nothing could be judged (exit status 2); a verdict
+/// with failed cases is `Ok` (exit status 1).
+pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
+    signals::install_termination_flag();
+    let suite = opts.load_suite()?;
+    if let Some(cmd) = &opts.controller_cmd {
+        let words = split_command(cmd).map_err(|e| CheckError::Usage(format!("--controller-cmd: {e}")))?;
+        if find_program(&words[0]).is_none() {
+            return Err(CheckError::Usage(format!(
+                "--controller-cmd: cannot find `{}` (not an executable file, and not on PATH)",
+                words[0]
+            )));
+        }
+    }
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("check-{}-{}", suite.name, verdict::utc_stamp(None))));
+    if out.join(verdict::JSON_FILE).exists() {
+        return Err(CheckError::Usage(format!(
+            "{} already holds a check ({}); choose another --out or move it away: nothing is overwritten",
+            out.display(),
+            verdict::JSON_FILE
+        )));
+    }
+    let started = std::time::Instant::now();
+    let started_unix_s = verdict::unix_now_s();
+    let mut cases = Vec::new();
+    for (i, case) in suite.cases.iter().enumerate() {
+        eprintln!(
+            "silrig check: case {}/{} {} ({}{}) ...",
+            i + 1,
+            suite.cases.len(),
+            case.name,
+            case.mode.label(),
+            if case.criteria.runs() > 1 { ", flown twice" } else { "" }
+        );
+        let verdict = run_case(opts, case, &out)?;
+        eprintln!(
+            "silrig check: case {} {} in {:.1} s",
+            case.name,
+            if verdict.passed { "passed" } else { "FAILED" },
+            verdict.wall_s
+        );
+        cases.push(verdict);
+        if signals::termination_requested() {
+            break;
+        }
+    }
+    let verdict = Verdict {
+        suite: suite.name.clone(),
+        suite_file: suite.path.as_ref().map(|p| p.display().to_string()),
+        description: suite.description.clone(),
+        controller: opts.controller_cmd.clone().unwrap_or_else(|| "silrig-controller".into()),
+        out_dir: out.display().to_string(),
+        started_unix_s,
+        wall_s: started.elapsed().as_secs_f64(),
+        interrupted: signals::termination_requested(),
+        cases_in_suite: suite.cases.len(),
+        passed: false,
+        cases,
+    }
+    .concluded();
+    verdict.write(&out).map_err(|problem| CheckError::Setup { case: "(verdict files)".into(), problem })?;
+    Ok(verdict)
+}

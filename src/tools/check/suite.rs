@@ -1,0 +1,291 @@
+//! Check suites: the TOML a `silrig check` runs (cases, each a scenario, a mode, faults and criteria), the embedded
+//! default suite, and the validation that refuses a malformed suite before anything flies, naming the case and key.
+
+use super::criteria::{Criteria, RigCriteria};
+use serde::Deserialize;
+use silrig_flight::fault::{Fault, parse_fault_flag};
+use silrig_flight::scenario::Scenario;
+use silrig_rig::RigMode;
+use std::path::{Path, PathBuf};
+
+/// The embedded default suite (what `silrig check` runs without a suite file).
+pub const DEFAULT_SUITE_TOML: &str = include_str!("../../../configs/check-default.toml");
+
+/// A suite file as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SuiteFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    /// Scenario file every case starts from unless it names its own (relative to the suite file); default: the
+    /// embedded default scenario.
+    #[serde(default)]
+    scenario: Option<PathBuf>,
+    #[serde(default)]
+    cases: Vec<CaseFile>,
+}
+
+/// One case as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CaseFile {
+    name: String,
+    #[serde(default)]
+    why: String,
+    #[serde(default)]
+    scenario: Option<PathBuf>,
+    /// Inline overrides of the scenario: a table merged key by key (e.g. `set.setpoint.phi_deg = 20`).
+    #[serde(default)]
+    set: Option<toml::Table>,
+    #[serde(default = "realtime")]
+    mode: RigMode,
+    #[serde(default)]
+    duration_s: Option<f64>,
+    /// Faults in the `--fault` syntax of `silrig run`.
+    #[serde(default)]
+    faults: Vec<String>,
+    criteria: Criteria,
+}
+
+fn realtime() -> RigMode {
+    RigMode::Realtime
+}
+
+/// A suite ready to run: every case's scenario loaded and validated, its faults parsed.
+#[derive(Debug, Clone)]
+pub struct Suite {
+    /// Short name (JUnit suite name, default output folder).
+    pub name: String,
+    /// What the suite is for.
+    pub description: String,
+    /// Where it came from: a path, or `None` for the embedded default.
+    pub path: Option<PathBuf>,
+    /// The cases, in order.
+    pub cases: Vec<Case>,
+}
+
+/// One case: a run (or two, for determinism) and the criteria it is judged by.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Name (letters, digits, '-', '_'); `--case NAME` runs just this one.
+    pub name: String,
+    /// Why the case is in the suite, in one line.
+    pub why: String,
+    /// The scenario to fly, overrides, duration and faults applied.
+    pub scenario: Scenario,
+    /// realtime or lockstep.
+    pub mode: RigMode,
+    /// The fault flags as written (for the reproducing command and the report).
+    pub fault_flags: Vec<String>,
+    /// What the run must meet.
+    pub criteria: Criteria,
+}
+
+/// A suite that cannot be run, with where the problem is.
+#[derive(Debug, thiserror::Error)]
+pub enum SuiteError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// Malformed TOML, or an unknown or mistyped key (the parser's message names it).
+    #[error("{origin}: {message}")]
+    Parse {
+        /// File name or "embedded default suite".
+        origin: String,
+        /// What the parser said.
+        message: String,
+    },
+    /// A case that cannot be run as written.
+    #[error("{origin}: case `{case}`: {problem}")]
+    Case {
+        /// File name or "embedded default suite".
+        origin: String,
+        /// The case's name.
+        case: String,
+        /// What is wrong, naming the key.
+        problem: String,
+    },
+    /// A problem with the suite as a whole.
+    #[error("{origin}: {problem}")]
+    Suite {
+        /// File name or "embedded default suite".
+        origin: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+/// Merge `overrides` into `base` key by key: tables merge, anything else replaces.
+fn merge(base: &mut toml::Table, overrides: &toml::Table) {
+    for (key, value) in overrides {
+        match (base.get_mut(key), value) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+            _ => {
+                base.insert(key.clone(), value.clone());
+            }
+        }
+    }
+}
+
+impl Suite {
+    /// The embedded default suite.
+    pub fn embedded_default() -> Self {
+        Self::from_toml(DEFAULT_SUITE_TOML, None).expect("the embedded default suite is valid")
+    }
+
+    /// Read a suite file; scenario paths in it are relative to its folder.
+    pub fn load(path: &Path) -> Result<Self, SuiteError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| SuiteError::Io { path: path.display().to_string(), source })?;
+        Self::from_toml(&text, Some(path))
+    }
+
+    /// Parse and validate suite text; `path` (None: embedded) names it in errors and anchors relative paths.
+    pub fn from_toml(text: &str, path: Option<&Path>) -> Result<Self, SuiteError> {
+        let origin = path.map_or("embedded default suite".to_string(), |p| p.display().to_string());
+        let file: SuiteFile = toml::from_str(text)
+            .map_err(|e| SuiteError::Parse { origin: origin.clone(), message: e.to_string().trim_end().into() })?;
+        let suite_err = |problem: String| SuiteError::Suite { origin: origin.clone(), problem };
+        if !valid_name(&file.name) {
+            return Err(suite_err(format!("`name` must be letters, digits, '-' or '_', got {:?}", file.name)));
+        }
+        if file.cases.is_empty() {
+            return Err(suite_err("no [[cases]]".into()));
+        }
+        let dir = path.and_then(Path::parent).unwrap_or(Path::new("."));
+        let mut cases: Vec<Case> = Vec::new();
+        for c in &file.cases {
+            let case_err = |problem: String| SuiteError::Case { origin: origin.clone(), case: c.name.clone(), problem };
+            if !valid_name(&c.name) {
+                return Err(case_err("`name` must be letters, digits, '-' or '_'".into()));
+            }
+            if cases.iter().any(|other| other.name == c.name) {
+                return Err(case_err("a second case of this name".into()));
+            }
+            let scenario_path = c.scenario.as_ref().or(file.scenario.as_ref()).map(|p| dir.join(p));
+            let scenario = case_scenario(c, scenario_path.as_deref()).map_err(case_err)?;
+            c.criteria.validate(c.mode, &scenario).map_err(case_err)?;
+            cases.push(Case {
+                name: c.name.clone(),
+                why: c.why.clone(),
+                scenario,
+                mode: c.mode,
+                fault_flags: c.faults.clone(),
+                criteria: c.criteria.clone(),
+            });
+        }
+        Ok(Suite { name: file.name, description: file.description, path: path.map(Path::to_path_buf), cases })
+    }
+
+    /// Keep only the case named `name`.
+    pub fn only(&mut self, name: &str) -> Result<(), String> {
+        let names: Vec<&str> = self.cases.iter().map(|c| c.name.as_str()).collect();
+        if !names.contains(&name) {
+            return Err(format!("--case {name}: no such case; the suite has {}", names.join(", ")));
+        }
+        self.cases.retain(|c| c.name == name);
+        Ok(())
+    }
+}
+
+fn valid_name(name: &str) -> bool {
+    !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+}
+
+/// The case's scenario: the file (or the embedded default), the `set` overrides, the duration, the faults; validated
+/// as `silrig run` would validate it. Errors name the key.
+fn case_scenario(c: &CaseFile, path: Option<&Path>) -> Result<Scenario, String> {
+    let (text, origin) = match path {
+        Some(p) => (
+            std::fs::read_to_string(p).map_err(|e| format!("`scenario`: {}: {e}", p.display()))?,
+            p.display().to_string(),
+        ),
+        None => (silrig_flight::scenario::DEFAULT_SCENARIO_TOML.to_string(), "embedded default scenario".to_string()),
+    };
+    let mut table: toml::Table =
+        toml::from_str(&text).map_err(|e| format!("`scenario`: {origin}: {}", e.to_string().trim_end()))?;
+    if let Some(set) = &c.set {
+        merge(&mut table, set);
+    }
+    if let Some(d) = c.duration_s {
+        let timing = table.entry("timing").or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        if let toml::Value::Table(t) = timing {
+            t.insert("duration_s".into(), toml::Value::Float(d));
+        }
+    }
+    let mut scenario = Scenario::from_toml(&table.to_string(), &format!("{origin} with the case's `set`"))
+        .map_err(|e| e.to_string())?;
+    for (i, flag) in c.faults.iter().enumerate() {
+        scenario.faults.push(parse_fault_flag(flag).map_err(|e| format!("`faults[{i}]`: {e}"))?);
+    }
+    scenario.validate().map_err(|(key, problem)| format!("`faults`: `{key}`: {problem}"))?;
+    if c.mode == RigMode::Lockstep
+        && let Some(f) = scenario.faults.iter().find(|f: &&Fault| !f.action().is_plant_model_fault())
+    {
+        return Err(format!("`faults`: {} needs `mode = \"realtime\"` (lockstep has no clock to fault)", f.describe()));
+    }
+    Ok(scenario)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_embedded_suite_and_the_shipped_suites_load() {
+        let default = Suite::embedded_default();
+        assert_eq!(default.cases.len(), 6);
+        assert!(default.cases.iter().all(|c| !c.why.is_empty()), "every default case says why it is there");
+        let paper =
+            Suite::load(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/check-paper-gains.toml")))
+                .expect("the paper-gains suite loads");
+        assert_eq!(paper.cases[0].scenario.name, "paper");
+        assert_eq!(paper.cases[1].scenario.name, "paper-next-tick");
+    }
+
+    #[test]
+    fn set_overrides_merge_key_by_key_and_faults_parse() {
+        let suite = Suite::from_toml(
+            "name = \"s\"\n[[cases]]\nname = \"c\"\nduration_s = 4.0\nfaults = [\"plant:delay@1s,delay=15ms\"]\n\
+             set.setpoint.phi_deg = 20.0\n[cases.criteria]\n",
+            None,
+        )
+        .unwrap();
+        let s = &suite.cases[0].scenario;
+        assert_eq!((s.setpoint.phi_deg, s.setpoint.theta_deg), (20.0, 10.0), "only the key set changes");
+        assert_eq!(s.timing.duration_s, 4.0);
+        assert_eq!(s.faults.len(), 1);
+        assert_eq!(suite.cases[0].mode, RigMode::Realtime, "realtime unless the case says otherwise");
+    }
+
+    #[test]
+    fn bad_suites_name_the_case_and_the_key() {
+        let err = |text: &str| Suite::from_toml(text, None).unwrap_err().to_string();
+        let case = |body: &str| format!("name = \"s\"\n[[cases]]\nname = \"c\"\n{body}");
+        assert!(err("name = \"s\"\n").contains("no [[cases]]"));
+        assert!(err(&case("[cases.criteria]\nfoo = 1\n")).contains("unknown field `foo`"));
+        assert!(
+            err(&case("[cases.criteria]\nsettled = { within_s = 12.0, band_deg = 1.0 }\n"))
+                .contains("case `c`: `criteria.settled.within_s` must be within 0..10 s")
+        );
+        assert!(err(&case("[cases.criteria]\ndeterministic = true\n")).contains("needs `mode = \"lockstep\"`"));
+        assert!(
+            err(&case("[cases.criteria]\nrecovered_within_s = 1.0\n"))
+                .contains("needs a fault a process comes back from")
+        );
+        assert!(
+            err(&case("[cases.criteria]\ncompute_p99 = {}\n")).contains("needs `max_us`, `max_os_floor_ratio` or both")
+        );
+        assert!(err(&case("faults = [\"plant:explode@1s\"]\n[cases.criteria]\n")).contains("case `c`: `faults[0]`"));
+        assert!(
+            err(&format!("{}[[cases]]\nname = \"c\"\n[cases.criteria]\n", case("[cases.criteria]\n")))
+                .contains("a second case of this name")
+        );
+    }
+}

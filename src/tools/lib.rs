@@ -1,0 +1,19 @@
+//! silrig-tools: the tools built on the rig, each a subcommand of `silrig`.
+//!
+//! - [`check`]: a verdict a CI pipeline can gate on (suites, criteria, JUnit); [`campaign`]: sweeps of dispersed
+//!   cases (plan, run, shard, merge, Slurm).
+//! - [`replay`]: a recorded flight fed to a controller, commands compared; [`bench`]: model micro-benchmarks and the
+//!   transport's ceiling.
+//! - [`contract`]: the wire contract rendered as text, a C header and a Python module.
+//! - [`outputs`]: `silrig sim` and `silrig compare` and the files they write; [`derivative_csv`]:
+//!   `silrig plant derivative`.
+//!
+//! Layers: the top; uses every crate below.
+
+pub mod bench;
+pub mod campaign;
+pub mod check;
+pub mod contract;
+pub mod derivative_csv;
+pub mod outputs;
+pub mod replay;

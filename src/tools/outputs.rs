@@ -1,0 +1,133 @@
+//! Files a run leaves behind: `trace.csv`, `summary.json`, the effective `scenario.toml`, the figures; and the two
+//! single-process workflows built on them, `silrig sim` ([`simulate`]) and `silrig compare` ([`compare`], with its
+//! side-by-side table).
+
+use anyhow::Context;
+use silrig_flight::scenario::Scenario;
+use silrig_flight::sim::LeftEnvelope;
+use silrig_flight::summary::Summary;
+use silrig_flight::trace::Trace;
+use silrig_plot::plot_title;
+use std::path::{Path, PathBuf};
+
+/// Write trace, summary, scenario and figures into `out_dir` (created if needed); returns the paths written.
+pub fn write_run(
+    out_dir: &Path,
+    scenario: &Scenario,
+    trace: &Trace,
+    summary: &Summary,
+) -> anyhow::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
+    let trace_path = out_dir.join("trace.csv");
+    trace.save(&trace_path).with_context(|| format!("writing {}", trace_path.display()))?;
+    let summary_path = out_dir.join("summary.json");
+    std::fs::write(&summary_path, serde_json::to_string_pretty(summary)? + "\n")
+        .with_context(|| format!("writing {}", summary_path.display()))?;
+    let scenario_path = out_dir.join("scenario.toml");
+    std::fs::write(&scenario_path, scenario.to_toml())
+        .with_context(|| format!("writing {}", scenario_path.display()))?;
+    let mut files = vec![trace_path, summary_path, scenario_path];
+    let f_true = silrig_flight::f_true::from_trace(trace, scenario);
+    files.extend(silrig_plot::plot_closed_loop(trace, f_true.as_ref(), out_dir, &plot_title(scenario))?);
+    Ok(files)
+}
+
+/// What [`simulate`] flew and wrote.
+#[derive(Debug)]
+pub struct Simulated {
+    /// The control-quality figures.
+    pub summary: Summary,
+    /// The files written.
+    pub files: Vec<PathBuf>,
+    /// Set when the flight left the model's envelope: the files hold it up to there.
+    pub left_envelope: Option<LeftEnvelope>,
+}
+
+/// `silrig sim`: fly the scenario's closed loop in one process and write its run into `out_dir` (as far as it
+/// flew, if it left the model's envelope).
+pub fn simulate(scenario: &Scenario, out_dir: &Path) -> anyhow::Result<Simulated> {
+    let (trace, left_envelope) = silrig_flight::sim::fly(scenario)?;
+    let summary = silrig_flight::summary::summarize(&trace, scenario);
+    let files = write_run(out_dir, scenario, &trace, &summary)?;
+    Ok(Simulated { summary, files, left_envelope })
+}
+
+/// What [`compare`] produced.
+#[derive(Debug)]
+pub struct Comparison {
+    /// One summary per scenario, in order.
+    pub summaries: Vec<Summary>,
+    /// The overlay figure's files.
+    pub overlay: Vec<PathBuf>,
+    /// The runs that left the model's envelope (scenario name, when and why); each is compared as far as it flew.
+    pub left_envelope: Vec<(String, LeftEnvelope)>,
+}
+
+/// `silrig compare`: fly each scenario in one process, write each run under `out_dir/<scenario name>`, and draw
+/// the runs over each other in `out_dir/overlay.{png,svg}`.
+pub fn compare(scenarios: &[Scenario], out_dir: &Path) -> anyhow::Result<Comparison> {
+    let mut summaries = Vec::new();
+    let mut traces = Vec::new();
+    let mut left_envelope = Vec::new();
+    for scenario in scenarios {
+        let (trace, left) = silrig_flight::sim::fly(scenario)?;
+        left_envelope.extend(left.map(|exit| (scenario.name.clone(), exit)));
+        let summary = silrig_flight::summary::summarize(&trace, scenario);
+        write_run(&out_dir.join(&scenario.name), scenario, &trace, &summary)?;
+        summaries.push(summary);
+        traces.push((scenario.name.clone(), trace));
+    }
+    let overlay = silrig_plot::plot_overlay(&traces, out_dir, "overlay")?;
+    Ok(Comparison { summaries, overlay, left_envelope })
+}
+
+/// Summaries side by side, one column per run, with the RMS-rate ratio of each run against the first.
+pub fn compare_table(summaries: &[Summary]) -> String {
+    let width = summaries.iter().map(|s| s.scenario.len()).max().unwrap_or(8).max(12) + 2;
+    let mut out = format!("{:<34}", "");
+    for s in summaries {
+        out += &format!("{:>width$}", s.scenario);
+    }
+    out.push('\n');
+    let mut line = |label: &str, f: &dyn Fn(&Summary) -> String| {
+        out += &format!("{label:<34}");
+        for s in summaries {
+            out += &format!("{:>width$}", f(s));
+        }
+        out.push('\n');
+    };
+    let opt = |v: Option<f64>| v.map_or("never".into(), |x| format!("{x:.2}"));
+    for (i, name) in ["phi", "theta", "psi"].iter().enumerate() {
+        line(&format!("{name} settle 0.5 deg (s)"), &|s| opt(s.angles[i].settle_within_0p5deg_s));
+        line(&format!("{name} settle 2 % (s)"), &|s| opt(s.angles[i].settle_within_2pct_s));
+        line(&format!("{name} final (deg)"), &|s| format!("{:.3}", s.angles[i].final_deg));
+    }
+    line("alpha final / peak (deg)", &|s| format!("{:.2}/{:.2}", s.alpha_final_deg, s.alpha_peak_deg));
+    for (i, name) in ["aileron", "elevator", "rudder"].iter().enumerate() {
+        line(&format!("{name} peak (deg)"), &|s| format!("{:.2}", s.surfaces[i].peak_deg));
+        line(&format!("{name} ticks rate/pos limit"), &|s| {
+            format!("{}/{}", s.surfaces[i].ticks_at_rate_limit, s.surfaces[i].ticks_at_position_limit)
+        });
+        line(&format!("{name} rms rate (dps)"), &|s| format!("{:.3}", s.surfaces[i].rms_rate_dps));
+        line(&format!("{name} rms rate after 5 s (dps)"), &|s| format!("{:.3}", s.surfaces[i].rms_rate_late_dps));
+    }
+    let total_rms = |s: &Summary, late: bool| {
+        s.surfaces.iter().map(|x| if late { x.rms_rate_late_dps } else { x.rms_rate_dps }.powi(2)).sum::<f64>().sqrt()
+    };
+    let total_cmd = |s: &Summary| s.surfaces.iter().map(|x| x.rms_command_rate_dps.powi(2)).sum::<f64>().sqrt();
+    let first = summaries.first().cloned();
+    line("all surfaces rms rate (dps)", &|s| format!("{:.3}", total_rms(s, false)));
+    if let Some(first) = first {
+        line("  ratio to first run", &|s| format!("{:.2}x", total_rms(s, false) / total_rms(&first, false)));
+        line("  after 5 s, ratio to first run", &|s| format!("{:.2}x", total_rms(s, true) / total_rms(&first, true)));
+        line("  commanded, ratio to first run", &|s| format!("{:.2}x", total_cmd(s) / total_cmd(&first)));
+    }
+    line("limit cycle", &|s| {
+        let found: Vec<&str> = s.oscillations.iter().filter(|o| o.sustained).map(|o| o.signal.as_str()).collect();
+        if found.is_empty() { "none".into() } else { format!("YES({})", found.len()) }
+    });
+    line("final |S| phi/theta/psi", &|s| {
+        format!("{:.0e}/{:.0e}/{:.0e}", s.channels[0].final_abs_s, s.channels[1].final_abs_s, s.channels[2].final_abs_s)
+    });
+    out
+}

@@ -1,0 +1,116 @@
+//! The CSV sink: `trace.csv` (the same columns and values as `silrig sim`) and `timing.csv` (per-tick stamps,
+//! flags and gaps), appended in whole rows, so a kill loses at most the last unflushed batch and a restarted logger
+//! continues the same files.
+
+use super::{LoggedRow, RowSink, TIMING_COLUMNS, timing_values};
+use silrig_flight::trace::Trace;
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// A CSV file the logger appends whole rows to, in batches. A batch the disk does not take whole (a full disk) is
+/// cut back out, so the file only ever holds whole rows; the error names the file.
+struct RowFile {
+    path: PathBuf,
+    file: File,
+    /// Rows not written yet.
+    pending: String,
+    /// The file's length at its last whole row, bytes.
+    whole_len: u64,
+}
+
+impl RowFile {
+    /// Open `name` in `dir` for appending; a new file gets `header` first. Appending is what lets a restarted
+    /// logger continue a run's log without overwriting anything.
+    fn open(dir: &Path, name: &str, header: &str) -> std::io::Result<Self> {
+        let path = dir.join(name);
+        let named = |e: std::io::Error| std::io::Error::new(e.kind(), format!("{}: {e}", path.display()));
+        let fresh = std::fs::metadata(&path).map_or(true, |m| m.len() == 0);
+        let mut file = OpenOptions::new().create(true).append(true).open(&path).map_err(named)?;
+        if fresh {
+            writeln!(file, "{header}").map_err(named)?;
+        } else {
+            // A writer killed mid-line leaves a torn last line; start ours on a new line so it stays the only damage.
+            let text = std::fs::read(&path).map_err(named)?;
+            if text.last() != Some(&b'\n') {
+                writeln!(file).map_err(named)?;
+            }
+        }
+        let whole_len = file.metadata().map_err(named)?.len();
+        Ok(Self { path, file, pending: String::new(), whole_len })
+    }
+
+    fn push(&mut self, row: std::fmt::Arguments) {
+        use std::fmt::Write as _;
+        let _ = self.pending.write_fmt(row);
+        self.pending.push('\n');
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        let written = self.file.write_all(self.pending.as_bytes());
+        let batch = std::mem::take(&mut self.pending);
+        match written {
+            Ok(()) => {
+                self.whole_len += batch.len() as u64;
+                Ok(())
+            }
+            Err(e) => {
+                let _ = self.file.set_len(self.whole_len);
+                Err(std::io::Error::new(e.kind(), format!("writing {}: {e}", self.path.display())))
+            }
+        }
+    }
+}
+
+/// `trace.csv` and `timing.csv` in the run's folder.
+pub struct CsvSink {
+    out_dir: PathBuf,
+    /// Opened by [`RowSink::start`], whose columns name the diagnostics; a file a previous logger of the run
+    /// started keeps its header.
+    trace: Option<RowFile>,
+    timing: RowFile,
+}
+
+impl CsvSink {
+    /// Open `timing.csv` in `out_dir` for appending (`trace.csv` opens with the trace's columns).
+    pub fn open(out_dir: &Path) -> std::io::Result<Self> {
+        let timing = RowFile::open(out_dir, "timing.csv", &TIMING_COLUMNS.join(","))?;
+        Ok(Self { out_dir: out_dir.to_path_buf(), trace: None, timing })
+    }
+}
+
+impl RowSink for CsvSink {
+    fn start(&mut self, trace_columns: &[String]) -> std::io::Result<()> {
+        if self.trace.is_none() {
+            self.trace = Some(RowFile::open(&self.out_dir, "trace.csv", &trace_columns.join(","))?);
+        }
+        Ok(())
+    }
+
+    fn row(&mut self, row: &LoggedRow) -> std::io::Result<()> {
+        let trace = self.trace.as_mut().ok_or_else(|| std::io::Error::other("trace.csv written before its header"))?;
+        trace.push(format_args!("{}", Trace::format_row(row.trace)));
+        let values = timing_values(row);
+        let mut line = String::with_capacity(16 * values.len());
+        for (i, v) in values.iter().enumerate() {
+            if i > 0 {
+                line.push(',');
+            }
+            if let Some(v) = v {
+                line.push_str(&v.to_string());
+            }
+        }
+        self.timing.push(format_args!("{line}"));
+        Ok(())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        if let Some(trace) = self.trace.as_mut() {
+            trace.flush()?;
+        }
+        self.timing.flush()
+    }
+}

@@ -1,0 +1,192 @@
+//! Reading a run's recording back: every `recording*.mcap` of a run folder, in the order their loggers wrote them,
+//! as wire samples again (bit for bit, see [`super::json`]), with the run's metadata and the trace's columns. A
+//! folder without a recording, a file that is not MCAP, one cut short (its logger was killed), one of another wire
+//! layout, or a message that does not fit its type is an error naming the file.
+
+use super::json::sample_from_json;
+use super::{TRACE_COLUMNS_KEY, meta_keys, recording_files, topics};
+use crate::wire::{CommandSample, PlantSample, WIRE_LAYOUT_VERSION};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Why a recording cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordingError {
+    /// No `recording.mcap` in the folder.
+    #[error(
+        "no recording in {}: a run's logger writes recording.mcap beside trace.csv (is this a run folder of \
+         `silrig run`?)",
+        .0.display()
+    )]
+    NoRecording(PathBuf),
+    /// The file cannot be read at all.
+    #[error("{}: {why}", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        why: String,
+    },
+    /// The file ends before its MCAP footer: the logger that wrote it was killed (or the copy is partial).
+    #[error(
+        "{} is cut short ({why}): {messages} messages can be read up to its last flushed chunk, but the flight \
+         after that is missing; replay needs whole recordings",
+        path.display()
+    )]
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// Messages readable before the cut.
+        messages: u64,
+        /// What the reader found where the file ends.
+        why: String,
+    },
+    /// Samples of another wire layout.
+    #[error(
+        "{}: recorded with wire layout version {found}, this silrig reads version {WIRE_LAYOUT_VERSION}: use the \
+         silrig that recorded it",
+        path.display()
+    )]
+    OtherLayout {
+        /// The file.
+        path: PathBuf,
+        /// Its layout version (or what stood in its place).
+        found: String,
+    },
+    /// A message that is not what its topic holds.
+    #[error("{}: message {index} on {topic}: {why}", path.display())]
+    BadMessage {
+        /// The file.
+        path: PathBuf,
+        /// Its topic.
+        topic: String,
+        /// Its position among the topic's messages, from 1.
+        index: u64,
+        /// What is wrong with it.
+        why: String,
+    },
+}
+
+/// A run's recording, read whole.
+#[derive(Debug, Clone, Default)]
+pub struct RecordedRun {
+    /// The files read, in order.
+    pub files: Vec<PathBuf>,
+    /// The `silrig` metadata of the first file (run id, scenario, mode, ticks, versions).
+    pub run: BTreeMap<String, String>,
+    /// The scenario the run flew, as TOML.
+    pub scenario_toml: String,
+    /// trace.csv's columns.
+    pub trace_columns: Vec<String>,
+    /// The plant sample of every row, in tick order.
+    pub plant: Vec<PlantSample>,
+    /// The command of every row that had one, by the tick it answers.
+    pub commands: BTreeMap<u64, CommandSample>,
+    /// Messages per topic, over all files.
+    pub counts: BTreeMap<String, u64>,
+}
+
+impl RecordedRun {
+    /// Read every recording file of the run in `run_dir`.
+    pub fn read(run_dir: &Path) -> Result<Self, RecordingError> {
+        let files = recording_files(run_dir);
+        if files.is_empty() {
+            return Err(RecordingError::NoRecording(run_dir.to_path_buf()));
+        }
+        let mut run = RecordedRun { files: files.clone(), ..Self::default() };
+        for path in &files {
+            run.read_file(path)?;
+        }
+        Ok(run)
+    }
+
+    fn read_file(&mut self, path: &Path) -> Result<(), RecordingError> {
+        let unreadable = |why: String| RecordingError::Unreadable { path: path.to_path_buf(), why };
+        let bytes = std::fs::read(path).map_err(|e| unreadable(e.to_string()))?;
+        if !bytes.starts_with(mcap::MAGIC) {
+            return Err(unreadable("not an MCAP file (no MCAP magic at its start)".into()));
+        }
+        let mut topics_by_id: HashMap<u16, (String, BTreeMap<String, String>)> = HashMap::new();
+        let mut messages = 0u64;
+        let mut layout_checked = false;
+        let reader = mcap::read::ChunkFlattener::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
+            .map_err(|e| unreadable(e.to_string()))?;
+        for record in reader {
+            let record = match record {
+                Ok(r) => r,
+                Err(e) => {
+                    let why = e.to_string();
+                    return Err(RecordingError::Truncated { path: path.to_path_buf(), messages, why });
+                }
+            };
+            match record {
+                mcap::records::Record::Metadata(m) if m.name == meta_keys::RUN => {
+                    let found = m.metadata.get(meta_keys::LAYOUT_VERSION).cloned().unwrap_or_else(|| "none".into());
+                    if found != WIRE_LAYOUT_VERSION.to_string() {
+                        return Err(RecordingError::OtherLayout { path: path.to_path_buf(), found });
+                    }
+                    layout_checked = true;
+                    if self.run.is_empty() {
+                        self.run = m.metadata;
+                    }
+                }
+                mcap::records::Record::Metadata(m)
+                    if m.name == meta_keys::SCENARIO && self.scenario_toml.is_empty() =>
+                {
+                    self.scenario_toml = m.metadata.get(meta_keys::TOML).cloned().unwrap_or_default();
+                }
+                mcap::records::Record::Channel(c) => {
+                    topics_by_id.insert(c.id, (c.topic, c.metadata));
+                }
+                mcap::records::Record::Message { header, data } => {
+                    messages += 1;
+                    if !layout_checked {
+                        let found = "no silrig metadata before the first message".to_string();
+                        return Err(RecordingError::OtherLayout { path: path.to_path_buf(), found });
+                    }
+                    let Some((topic, channel_meta)) = topics_by_id.get(&header.channel_id) else {
+                        return Err(unreadable(format!("a message on unknown channel {}", header.channel_id)));
+                    };
+                    let index = {
+                        let n = self.counts.entry(topic.clone()).or_insert(0);
+                        *n += 1;
+                        *n
+                    };
+                    let bad = |why: String| RecordingError::BadMessage {
+                        path: path.to_path_buf(),
+                        topic: topic.clone(),
+                        index,
+                        why,
+                    };
+                    match topic.as_str() {
+                        topics::PLANT => {
+                            let value = serde_json::from_slice(&data).map_err(|e| bad(e.to_string()))?;
+                            self.plant.push(sample_from_json(&value).map_err(|e| bad(e.to_string()))?);
+                        }
+                        topics::COMMAND => {
+                            let value = serde_json::from_slice(&data).map_err(|e| bad(e.to_string()))?;
+                            let command: CommandSample = sample_from_json(&value).map_err(|e| bad(e.to_string()))?;
+                            self.commands.insert(command.answers_tick, command);
+                        }
+                        topics::TRACE if self.trace_columns.is_empty() => {
+                            let columns = channel_meta.get(TRACE_COLUMNS_KEY).map(String::as_str).unwrap_or("");
+                            self.trace_columns = columns.split(',').map(str::to_string).collect();
+                        }
+                        _ => {}
+                    }
+                }
+                _ => {}
+            }
+        }
+        if !bytes.ends_with(mcap::MAGIC) {
+            let why = "no MCAP footer at its end".to_string();
+            return Err(RecordingError::Truncated { path: path.to_path_buf(), messages, why });
+        }
+        Ok(())
+    }
+
+    /// The names of the command's diagnostics, as the trace columns name them.
+    pub fn diagnostic_names(&self) -> Vec<String> {
+        self.trace_columns.iter().skip(silrig_flight::trace::LOOP_COLUMNS.len()).cloned().collect()
+    }
+}
