@@ -45,7 +45,7 @@ fn textbook_check_case_matches_all_13_derivatives() {
 
 #[test]
 fn check_case_at_the_default_cg_moves_only_the_moment_equations() {
-    // src/plant/data/README.md: with xcg 0.35, q_dot even changes sign (-0.1457558572); the ten others are
+    // src/model/plant/data/README.md: with xcg 0.35, q_dot even changes sign (-0.1457558572); the ten others are
     // unchanged.
     let (x, u) = check_case();
     let at_040 = F16Model::new(0.4).derivative(&x, &u, &ExternalForcing::default());
@@ -59,7 +59,7 @@ fn check_case_at_the_default_cg_moves_only_the_moment_equations() {
 }
 
 fn independent_csv(name: &str) -> ParsedCsv {
-    let path = format!("{}/src/plant/data/{name}.csv", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{}/src/model/plant/data/{name}.csv", env!("CARGO_MANIFEST_DIR"));
     ParsedCsv::parse(&std::fs::read_to_string(&path).unwrap()).unwrap()
 }
 
@@ -127,7 +127,7 @@ fn lookups_interpolate_and_extrapolate_linearly_from_the_end_segment() {
 #[test]
 fn sea_level_trim_at_502_fps_gives_the_textbook_throttle_and_elevator() {
     let trim = trim_level_flight(&F16Model::new(0.35), 502.0, 0.0).unwrap();
-    // The book prints throttle 0.1385 and elevator -0.7588 deg (src/plant/data/README.md: 0.13853, -0.75878,
+    // The book prints throttle 0.1385 and elevator -0.7588 deg (src/model/plant/data/README.md: 0.13853, -0.75878,
     // alpha 2.1148).
     assert_eq!(format!("{:.4}", trim.throttle), "0.1385");
     assert_eq!(format!("{:.4}", trim.elevator_deg), "-0.7588");

@@ -1,6 +1,6 @@
 //! Pass/fail criteria of a closed-loop run as data: what a suite case or a sweep may ask for, their ranges, and the
 //! judgement of one. Shared by `silrig check` and the sweeps; judging a flight is [`crate::judge`], the rig's own
-//! criteria [`silrig_tools::check::criteria`].
+//! criteria `silrig_tools::check::criteria`.
 
 use serde::{Deserialize, Serialize};
 

@@ -147,7 +147,7 @@ impl Actuator {
     }
 }
 
-/// A failure mode of one actuator, as the plant applies it for a fault window (see [`silrig_flight::fault`]).
+/// A failure mode of one actuator, as the plant applies it for a fault window (see `silrig_flight::fault`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ActuatorFault {
     /// Healthy: lag, rate limit and position limit as configured.

@@ -1,6 +1,6 @@
 //! The figures of the paper's adaptive SMC/RBF controller: fig2 (the sliding surface `s_<ch>` of each channel, and
-//! its RBF estimate `fhat_<ch>` beside the true lumped function f of [`silrig_flight::f_true`], as the paper's Fig. 2 sets
-//! "the estimated and true RBFNN functions" side by side) and fig3 (the RBF weights `w_<ch>_<k>` of each channel).
+//! its RBF estimate `fhat_<ch>` beside the true lumped function f of [`silrig_flight::f_true`], as the paper's Fig. 2
+//! sets "the estimated and true RBFNN functions" side by side) and fig3 (the RBF weights `w_<ch>_<k>` of each channel).
 
 use std::path::Path;
 

@@ -24,7 +24,8 @@ use silrig_wire::wire::PlantSample;
 /// files, and the report.
 pub trait Controller {
     /// Names of the diagnostics [`Controller::step`] reports, in order (announced once per epoch; at most
-    /// [`silrig_wire::wire::MAX_DIAGNOSTICS`], see [`silrig_wire::wire::ControllerInfo::new`] for the characters allowed).
+    /// [`silrig_wire::wire::MAX_DIAGNOSTICS`], see [`silrig_wire::wire::ControllerInfo::new`] for the characters
+    /// allowed).
     fn diagnostic_names(&self) -> Vec<String>;
 
     /// The command for one plant sample; write the diagnostics of this step into `diagnostics` (one per name).

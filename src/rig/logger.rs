@@ -1,8 +1,8 @@
 //! `silrig-logger`: subscribes to the plant and command streams with queues deep enough to absorb a 1 s stall,
 //! pairs each plant sample with the command answering it, and writes each row, as it goes, to its sinks
-//! ([`silrig_wire::recording`]): `trace.csv` (the same columns and values as `silrig sim`), `timing.csv` (per-tick stamps,
-//! flags and gaps) and the MCAP recording (the samples as received, for viewers and replay). Sinks are flushed every
-//! few rows, so a kill loses at most the last unflushed batch and never corrupts earlier rows.
+//! ([`silrig_wire::recording`]): `trace.csv` (the same columns and values as `silrig sim`), `timing.csv` (per-tick
+//! stamps, flags and gaps) and the MCAP recording (the samples as received, for viewers and replay). Sinks are flushed
+//! every few rows, so a kill loses at most the last unflushed batch and never corrupts earlier rows.
 //!
 //! Row k's deflections are those held over [t_k, t_k+1): the plant reports them with its next sample (or, for the
 //! last tick, with its end-of-run sample), so a row is written once its command and that next sample are in. A

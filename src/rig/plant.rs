@@ -1,19 +1,20 @@
 //! `silrig-plant`: the time master. Each tick it publishes the plant sample, gathers the controller's command
 //! (same-tick: waits for the answer to this tick up to a budget; next-tick: takes the answer to the previous tick),
 //! holds the last command when none is in time (a miss), moves the actuators and integrates one step with the
-//! same [`silrig_flight::sim::PlantRunner`] as `silrig sim`. It flies the scenario's N + 1 samples (t = 0 to the duration;
-//! the last one only moves the actuators) and ends with an end-of-run sample ([`wire::FLAG_END_OF_RUN`]) that
+//! same [`silrig_flight::sim::PlantRunner`] as `silrig sim`. It flies the scenario's N + 1 samples (t = 0 to the
+//! duration; the last one only moves the actuators) and ends with an end-of-run sample ([`wire::FLAG_END_OF_RUN`]) that
 //! carries the deflections of the last tick, which the logger's last row shows. A state that leaves the model's
 //! envelope ends the flight the same way, one tick early, and the process with an error.
 //!
 //! Realtime: absolute-deadline ticks with `clock_nanosleep(TIMER_ABSTIME)`; a tick that starts a whole period late
 //! is an overrun: the periods that passed without a tick are counted and never caught up in a burst. No tick number
-//! is skipped: simulated time pauses while the plant cannot run (stopped, delayed) and then falls behind wall time. Lockstep: no sleeping; the
-//! plant waits for every command, and never runs further ahead of the logger than its queue holds.
+//! is skipped: simulated time pauses while the plant cannot run (stopped, delayed) and then falls behind wall time.
+//! Lockstep: no sleeping; the plant waits for every command, and never runs further ahead of the logger than its queue
+//! holds.
 //!
 //! The process runs in four phases: [`PlantLoop::setup`] (scenario, model, recorder, watchdog settings),
-//! [`PlantPorts::connect`] (streams, then waiting for the peers), the tick loop ([`PlantLoop::fly`], one tick at a time in
-//! named steps), and [`PlantLoop::finish`] (the report).
+//! [`PlantPorts::connect`] (streams, then waiting for the peers), the tick loop ([`PlantLoop::fly`], one tick at a time
+//! in named steps), and [`PlantLoop::finish`] (the report).
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;

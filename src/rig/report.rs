@@ -251,8 +251,8 @@ impl MachineConditions {
     }
 }
 
-/// Ask for SCHED_FIFO at the role's priority and mlockall when `realtime` (one warning line on stderr when refused), and
-/// return the scheduling obtained as report text ("SCHED_FIFO 80, memory locked"). Lockstep processes block on each
+/// Ask for SCHED_FIFO at the role's priority and mlockall when `realtime` (one warning line on stderr when refused),
+/// and return the scheduling obtained as report text ("SCHED_FIFO 80, memory locked"). Lockstep processes block on each
 /// other rather than on a clock; FIFO there would only starve their peers on a small machine.
 pub fn request_scheduling(role: Role, realtime: bool) -> String {
     let Some(priority) = role.fifo_priority().filter(|_| realtime) else {

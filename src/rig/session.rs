@@ -409,7 +409,8 @@ impl ControllerSession {
 
     /// Block until the next plant sample to answer (the newest one waiting: after a stall, older ones are skipped
     /// and counted), or until the session should stop. While the plant is silent the session idles and says so
-    /// once; with no sample at all within twice `--startup-timeout-s` of opening, it gives up ([`SessionError::NoRig`]).
+    /// once; with no sample at all within twice `--startup-timeout-s` of opening, it gives up
+    /// ([`SessionError::NoRig`]).
     pub fn next_sample(&mut self) -> Result<Next, SessionError> {
         if self.pending.take().is_some() {
             self.rec.count("samples_unanswered", 1);

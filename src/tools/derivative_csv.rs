@@ -1,7 +1,7 @@
 //! `silrig plant derivative`: state and control rows in, state-derivative rows out, for engineers who cross-check
 //! their own F-16 implementation against this one. Every value is printed so that it parses back to the same f64;
-//! a row the model cannot take (outside [`silrig_model::plant::envelope`]) stops the run naming its line and column, so no NaN is
-//! ever printed.
+//! a row the model cannot take (outside [`silrig_model::plant::envelope`]) stops the run naming its line and column, so
+//! no NaN is ever printed.
 
 use silrig_model::plant::{
     ControlInputs, ExternalForcing, F16Model, F16State, STATE_DOT_NAMES, STATE_LEN, STATE_NAMES, aero, envelope,

@@ -376,7 +376,8 @@ impl ReplayRig {
 }
 
 /// Replay the recording in `opts.run_dir` against the controller, and compare. A recording that cannot be read is
-/// an error ([`silrig_wire::recording::reader::RecordingError`]); a controller that dies or stops answering is an error naming the tick.
+/// an error ([`silrig_wire::recording::reader::RecordingError`]); a controller that dies or stops answering is an error
+/// naming the tick.
 pub fn replay(opts: &ReplayOptions) -> anyhow::Result<ReplayOutcome> {
     silrig_rig::flag_in_range("tolerance", opts.tolerance, 0.0, f64::MAX, "").map_err(anyhow::Error::msg)?;
     silrig_rig::flag_in_range("answer-timeout-s", opts.answer_timeout_s, 0.1, 3600.0, "s")

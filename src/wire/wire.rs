@@ -4,7 +4,8 @@
 //! iceoryx2 matches a service's payload by type *name*, size and alignment only; field order and meaning are not
 //! checked. The type names therefore carry [`WIRE_LAYOUT_VERSION`] (each is built from it by the `wire_type!` macro):
 //! whenever a field is added, removed, reordered or changes meaning, bump the version, so that a peer built from the
-//! old layout gets `IncompatibleTypes` on open (turned into [`crate::ipc::IpcError::OtherWireLayout`]) instead of misreading bytes.
+//! old layout gets `IncompatibleTypes` on open (turned into [`crate::ipc::IpcError::OtherWireLayout`]) instead of
+//! misreading bytes.
 
 use iceoryx2::prelude::ZeroCopySend;
 

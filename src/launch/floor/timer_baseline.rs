@@ -148,8 +148,8 @@ impl BaselineReport {
 pub enum TickSource {
     /// `clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)`: the floor for a loop that waits on nothing else.
     Nanosleep,
-    /// A [`silrig_wire::ipc::TickTimer`] (absolute timerfd) attached to an iceoryx2 WaitSet: what a loop that also waits
-    /// on listeners gets.
+    /// A [`silrig_wire::ipc::TickTimer`] (absolute timerfd) attached to an iceoryx2 WaitSet: what a loop that also
+    /// waits on listeners gets.
     TimerfdWaitSet,
     /// cyclictest (rt-tests) itself, run beside the rig by `silrig run --floor cyclictest`.
     Cyclictest,

@@ -1,7 +1,7 @@
 //! The model's envelope: the states at which the equations of motion give numbers at all. Outside it the
 //! Stevens & Lewis equations divide by zero (VT = 0; |beta| = 90 deg, where u^2 + w^2 = 0) or the atmosphere takes
 //! a fractional power of a negative number (above [`ATMOSPHERE_CEILING_FT`]), and the derivatives come out NaN.
-//! One check, used by `silrig plant derivative` on every input row and by [`silrig_flight::sim::PlantRunner`] (so by
+//! One check, used by `silrig plant derivative` on every input row and by `silrig_flight::sim::PlantRunner` (so by
 //! `silrig sim` and the plant process alike) on every state it integrates. Pure: no I/O.
 //!
 //! This is not the aerodynamic data's reach (alpha -10..45 deg, |beta| <= 30 deg): the tables extrapolate beyond it

@@ -3,8 +3,9 @@
 //!
 //! Module map: [`tables`] (data and lookup rule), [`atmosphere`], [`aero`] (coefficient build-up), [`engine`]
 //! (gearing, power lag, thrust), [`envelope`] (the states the equations are defined at), [`trim`] (steady
-//! wings-level flight); the CSV cross-check tool built on them is `silrig_tools::derivative_csv`. The equations themselves are in
-//! [`F16Model::derivative`], with the load factors Nz, Ny beside them ([`F16Model::derivative_with_outputs`]).
+//! wings-level flight). The equations themselves are in [`F16Model::derivative`], with the load factors Nz, Ny
+//! beside them ([`F16Model::derivative_with_outputs`]). The CSV cross-check tool built on them is
+//! `silrig_tools::derivative_csv`.
 
 pub mod aero;
 pub mod atmosphere;

@@ -1,5 +1,5 @@
 //! The F-16 aerodynamic and engine tables (Stevens & Lewis, Appendix A), embedded at compile time from
-//! `src/plant/data/*.csv`, and the book's lookup rule: linear interpolation on uniform axes, linear extrapolation
+//! `src/model/plant/data/*.csv`, and the book's lookup rule: linear interpolation on uniform axes, linear extrapolation
 //! from the end segment outside them (no clamping), bilinear for two-axis tables (along the row axis first).
 
 use std::sync::LazyLock;
@@ -192,7 +192,7 @@ pub struct ParsedCsv {
 }
 
 impl ParsedCsv {
-    /// Parse the data folder's CSV format (see `src/plant/data/README.md`).
+    /// Parse the data folder's CSV format (see `src/model/plant/data/README.md`).
     pub fn parse(text: &str) -> Result<Self, String> {
         let mut lines = text.lines().filter(|l| !l.trim().is_empty());
         let header: Vec<String> =

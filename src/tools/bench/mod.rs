@@ -1,7 +1,8 @@
 //! Benchmarks run by `silrig bench`: the cost of one plant derivative, one RK4 step, and closed-loop steps per
 //! second in one process. Each figure is the median (and spread) of many batches, so one descheduled batch on a
-//! shared machine does not move it. Beside them, the transport's ping-pong ceiling with the lockstep rig against it ([`ipc`]); the OS timer
-//! floor, ours and cyclictest's, is `silrig_launch::floor`, since `silrig run --floor` takes it beside a run.
+//! shared machine does not move it. Beside them, the transport's ping-pong ceiling with the lockstep rig against it
+//! ([`ipc`]); the OS timer floor, ours and cyclictest's, is `silrig_launch::floor`, since `silrig run --floor` takes it
+//! beside a run.
 
 pub mod ipc;
 

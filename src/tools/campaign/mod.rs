@@ -1,7 +1,7 @@
-//! Monte Carlo campaigns (`silrig sweep`): the scenario's dispersions sampled case by case ([`silrig_flight::dispersion`]),
-//! each case flown in the single-process loop and judged by the scenario's `[criteria]` ([`case`]), in parallel over
-//! the cores with a progress line, and summarised with the pass rate, its interval and the worst cases
-//! ([`report`]).
+//! Monte Carlo campaigns (`silrig sweep`): the scenario's dispersions sampled case by case
+//! ([`silrig_flight::dispersion`]), each case flown in the single-process loop and judged by the scenario's
+//! `[criteria]` ([`case`]), in parallel over the cores with a progress line, and summarised with the pass rate, its
+//! interval and the worst cases ([`report`]).
 
 pub mod case;
 pub mod report;

@@ -1,6 +1,6 @@
 //! The rig's side of a check case's criteria (`[cases.criteria]`): the timing, contract and fault criteria judged
-//! from the run's report (`report.json`) and trace, beside the flight criteria of [`silrig_flight::criteria`], so the rig's
-//! controller and a user's are judged by the same code.
+//! from the run's report (`report.json`) and trace, beside the flight criteria of [`silrig_flight::criteria`], so the
+//! rig's controller and a user's are judged by the same code.
 
 use silrig_flight::criteria::Budget;
 use silrig_flight::criteria::positive;
