@@ -40,7 +40,10 @@ fn dependencies(krate: &str) -> BTreeSet<String> {
 fn every_crate_depends_only_on_the_layers_below_it() {
     for (krate, allowed) in LAYERS {
         for dep in dependencies(krate).iter().filter_map(|d| d.strip_prefix("silrig-")) {
-            assert!(allowed.contains(&dep), "silrig-{krate} depends on silrig-{dep}, which is not below it: {allowed:?}");
+            assert!(
+                allowed.contains(&dep),
+                "silrig-{krate} depends on silrig-{dep}, which is not below it: {allowed:?}"
+            );
         }
     }
     for krate in ["model", "flight"] {
@@ -124,7 +127,8 @@ fn named_paths(code: &str, module: &str) -> Vec<Vec<String>> {
             } else if !word.is_empty() {
                 segments.push(word.to_string());
             }
-            let group = if code[i..].starts_with("::{") { Some(i + 3) } else { code[i..].starts_with('{').then_some(i + 1) };
+            let group =
+                if code[i..].starts_with("::{") { Some(i + 3) } else { code[i..].starts_with('{').then_some(i + 1) };
             if let Some(open) = group {
                 let close = code[open..].find('}').map_or(code.len(), |c| open + c);
                 for member in code[open..close].split(',') {

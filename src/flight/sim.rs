@@ -22,7 +22,7 @@
 
 use crate::fault::{Fault, FaultAction, SENSOR_CHANNELS, SURFACES};
 use crate::scenario::{InitialMode, Scenario};
-use crate::{trace, trace::Trace};
+use crate::trace::{self, Trace};
 use silrig_model::actuator::{Actuator, ActuatorFault, LimitHits};
 use silrig_model::control::{AttitudeController, ControllerDiagnostics, Measurement, SurfaceCommand};
 use silrig_model::integrator::rk4_step;

@@ -20,7 +20,7 @@ use silrig_rig::events::EventLog;
 use silrig_rig::report::{MachineConditions, ProcessReport, read_report};
 use silrig_rig::status::LiveLine;
 use silrig_rig::{ProcessArgs, ProcessOptions, RigMode, load_scenario, signals};
-use silrig_wire::{ipc, ipc::RunId};
+use silrig_wire::ipc::{self, RunId};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;

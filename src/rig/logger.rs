@@ -23,15 +23,15 @@ use iceoryx2::prelude::CallbackProgression;
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::sim::{HeldActuators, trace_row};
-use silrig_flight::{trace, trace::Trace};
+use silrig_flight::trace::{self, Trace};
 use silrig_model::control::SurfaceCommand;
 use silrig_wire::clock::{TickSchedule, monotonic_ns};
+use silrig_wire::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
 use silrig_wire::recording::csv::CsvSink;
 use silrig_wire::recording::mcap_file::McapSink;
 use silrig_wire::recording::{LoggedRow, RecordingMeta, RowSink};
 use silrig_wire::topology::Stream;
-use silrig_wire::{ipc, ipc::LoopEnd, ipc::Received, ipc::StreamPublisher, ipc::StreamSubscriber};
-use silrig_wire::{wire, wire::CommandSample, wire::ControllerInfo, wire::LogAckSample, wire::PlantSample};
+use silrig_wire::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantSample};
 use std::collections::BTreeMap;
 
 /// A plant sample waits this many newer samples for its command before it is written without one.

@@ -25,10 +25,10 @@ use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::sim::{ActuatorCommand, LeftEnvelope, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
 use silrig_model::control::SurfaceCommand;
+use silrig_wire::clock::{self, TickSchedule, monotonic_ns};
+use silrig_wire::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
 use silrig_wire::topology::Stream;
-use silrig_wire::{clock, clock::TickSchedule, clock::monotonic_ns};
-use silrig_wire::{ipc, ipc::StreamPublisher, ipc::StreamService, ipc::StreamSubscriber};
-use silrig_wire::{wire, wire::CommandSample, wire::LogAckSample, wire::PlantSample};
+use silrig_wire::wire::{self, CommandSample, LogAckSample, PlantSample};
 use std::collections::VecDeque;
 use std::time::Duration;
 

@@ -18,13 +18,9 @@ use super::{ProcessArgs, RigMode, signals};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_wire::clock::monotonic_ns;
+use silrig_wire::ipc::{self, IpcError, StreamPublisher, StreamService, StreamSubscriber, WaitOutcome};
 use silrig_wire::topology::Stream;
-use silrig_wire::{
-    ipc, ipc::IpcError, ipc::StreamPublisher, ipc::StreamService, ipc::StreamSubscriber, ipc::WaitOutcome,
-};
-use silrig_wire::{
-    wire, wire::CommandSample, wire::ControllerInfo, wire::FLAG_COMMAND_REFUSED, wire::PlantSample, wire::WireSample,
-};
+use silrig_wire::wire::{self, CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, PlantSample, WireSample};
 use std::time::Duration;
 
 /// How long a controller joining a running plant blends from the current surface positions to its command, s.

@@ -9,7 +9,7 @@ use silrig_rig::ProcessArgs;
 use silrig_rig::session::Status;
 use silrig_wire::ipc::StreamEvent;
 use silrig_wire::topology::{STREAM_SETTINGS, Stream};
-use silrig_wire::{wire, wire::WIRE_LAYOUT_VERSION, wire::WireField, wire::WireType};
+use silrig_wire::wire::{self, WIRE_LAYOUT_VERSION, WireField, WireType};
 use std::fmt::Write as _;
 
 /// One wire type as the contract lists it.

@@ -14,10 +14,10 @@ use silrig_launch::program::binary_dir;
 use silrig_launch::supervision::start_process;
 use silrig_launch::{launcher::fresh_run_id, supervision::ControllerLaunch};
 use silrig_rig::{ProcessArgs, ProcessOptions, RigMode};
+use silrig_wire::ipc::{self, RunId};
 use silrig_wire::recording::reader::RecordedRun;
 use silrig_wire::topology::Stream;
-use silrig_wire::{ipc, ipc::RunId};
-use silrig_wire::{wire, wire::CommandSample, wire::PlantSample, wire::SURFACE_NAMES};
+use silrig_wire::wire::{self, CommandSample, PlantSample, SURFACE_NAMES};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 

@@ -4,8 +4,8 @@
 //! same conditions.
 
 use serde::{Deserialize, Serialize};
+use silrig_wire::clock::{self, SchedPolicy, TickSchedule};
 use silrig_wire::timing::{LatencyHistogram, LatencySummary, summary_line, summary_table_header};
-use silrig_wire::{clock, clock::SchedPolicy, clock::TickSchedule};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 

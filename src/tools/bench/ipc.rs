@@ -7,10 +7,10 @@
 use serde::Serialize;
 use silrig_flight::role::Role;
 use silrig_wire::clock::monotonic_ns;
+use silrig_wire::ipc::{self, RunId, StreamSubscriber, WaitOutcome};
 use silrig_wire::timing::{LatencyHistogram, LatencySummary, summary_line, summary_table_header};
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{CommandSample, PlantSample};
-use silrig_wire::{ipc, ipc::RunId, ipc::StreamSubscriber, ipc::WaitOutcome};
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
