@@ -98,8 +98,9 @@ fn named_paths(code: &str, module: &str) -> Vec<Vec<String>> {
     let mut out = Vec::new();
     let mut at = 0;
     while at < code.len() {
-        let rest = &code[at..];
-        let Some(base) = ["crate::", "super::"].into_iter().find(|b| rest.starts_with(b)) else {
+        // Bytes, not `&code[at..]`: `at` steps through multi-byte characters such as `±`.
+        let rest = &bytes[at..];
+        let Some(base) = ["crate::", "super::"].into_iter().find(|b| rest.starts_with(b.as_bytes())) else {
             at += 1;
             continue;
         };
