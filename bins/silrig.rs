@@ -2,6 +2,7 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
+use silrig::campaign::{SweepAction, SweepCommand};
 use silrig::derivative_csv;
 use silrig::plant::{F16Model, trim::trim_level_flight};
 use silrig::rig::load_scenario;
@@ -129,179 +130,220 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
-        Command::Trim { airspeed_mps, altitude_ft, xcg, json } => {
-            anyhow::ensure!((0.0..=1.0).contains(&xcg), "--xcg must be a fraction of the chord in 0..1, got {xcg}");
-            let trim = trim_level_flight(&F16Model::new(xcg), m_to_ft(airspeed_mps), altitude_ft)?;
-            if json {
-                println!("{}", serde_json::to_string_pretty(&trim)?);
-            } else {
-                print!("{}", trim.to_text());
-            }
-        }
-        Command::Plant { command: PlantCommand::Derivative } => {
-            let rows =
-                derivative_csv::run(std::io::stdin().lock(), std::io::stdout().lock()).context("plant derivative")?;
-            eprintln!("{rows} rows");
-        }
-        Command::Sim { config, out, sample: Some(index), seed } => {
-            let path = config.ok_or_else(|| anyhow::anyhow!("--sample needs the sweep's scenario file"))?;
-            let campaign = silrig::campaign::Campaign::load(&path)?;
-            let seed = seed.unwrap_or(campaign.scenario.seed);
-            let out =
-                out.unwrap_or_else(|| Path::new("out").join(format!("{}-sample-{index}", campaign.scenario.name)));
-            let (text, files) = silrig::campaign::fly_one(&campaign, seed, index, &out)?;
-            print!("{text}");
-            for f in files {
-                println!("wrote {}", f.display());
-            }
-        }
-        Command::Sweep(silrig::campaign::SweepCommand { action: None, local }) => {
-            let run = silrig::campaign::sweep(&local)?;
-            print!("{}", run.summary.to_text());
-            println!(
-                "flew {} cases in {:.2} s on {} thread(s): {:.0} cases/s",
-                run.summary.runs,
-                run.fly_s,
-                run.jobs,
-                run.summary.runs as f64 / run.fly_s.max(1e-9)
-            );
-            for f in run.files {
-                println!("wrote {}", f.display());
-            }
-        }
-        Command::Sweep(silrig::campaign::SweepCommand { action: Some(action), .. }) => {
-            use silrig::campaign::{SweepAction, shard};
-            match action {
-                SweepAction::Plan(opts) => {
-                    let m = shard::plan(&opts)?;
-                    println!(
-                        "planned {} cases of {} in {} shards (seed {}) in {}",
-                        m.runs,
-                        m.config,
-                        m.shards,
-                        m.seed,
-                        opts.out.display()
-                    );
-                    println!(
-                        "fly each shard with `silrig sweep run {} --index K` (K = 0..{})",
-                        opts.out.display(),
-                        m.shards - 1
-                    );
-                }
-                SweepAction::Run(opts) => {
-                    let (path, result) = shard::run(&opts)?;
-                    println!(
-                        "shard {}: cases {}..{} flown; wrote {}",
-                        result.shard,
-                        result.cases_range.0,
-                        result.cases_range.1,
-                        path.display()
-                    );
-                }
-                SweepAction::Merge { dir } => {
-                    let run = shard::merge(&dir)?;
-                    print!("{}", run.summary.to_text());
-                    for f in run.files {
-                        println!("wrote {}", f.display());
-                    }
-                }
-                SweepAction::Slurm(opts) => {
-                    let (path, _) = shard::slurm_script(&opts)?;
-                    println!(
-                        "wrote {}; submit it with `sbatch {}`, then merge (the script's header says how)",
-                        path.display(),
-                        path.display()
-                    );
-                }
-            }
-        }
-        Command::Sim { config, out, .. } => {
-            let scenario = load_scenario(config.as_deref(), None)?;
-            let out = out.unwrap_or_else(|| Path::new("out").join(&scenario.name));
-            let run = silrig::outputs::simulate(&scenario, &out)?;
-            print!("{}", run.summary.to_text());
-            for f in run.files {
-                println!("wrote {}", f.display());
-            }
-            if let Some(exit) = run.left_envelope {
-                eprintln!("error: {exit}; the files above hold the flight up to the sample before");
-                return Ok(ExitCode::FAILURE);
-            }
-        }
-        Command::Compare { configs, out } => {
-            let out = out.unwrap_or_else(|| Path::new("out").join("compare"));
-            let scenarios = configs.iter().map(|p| load_scenario(Some(p), None)).collect::<anyhow::Result<Vec<_>>>()?;
-            let comparison = silrig::outputs::compare(&scenarios, &out)?;
-            print!("{}", silrig::outputs::compare_table(&comparison.summaries));
-            for f in comparison.overlay {
-                println!("wrote {}", f.display());
-            }
-            println!("runs written under {}", out.display());
-            for (name, exit) in &comparison.left_envelope {
-                eprintln!("error: {name}: {exit}; compared as far as it flew");
-            }
-            if !comparison.left_envelope.is_empty() {
-                return Ok(ExitCode::FAILURE);
-            }
-        }
-        Command::Run(opts) => {
-            let report = silrig::launch::launcher::run(&opts)?;
-            print!("{}", report.to_text());
-            if !report.failures.is_empty() {
-                return Ok(ExitCode::FAILURE);
-            }
-            if let Some(stopped) = &report.stopped_by {
-                return Ok(ExitCode::from(stopped.exit_status));
-            }
-        }
-        Command::Top { run_id, count } => {
-            silrig::rig::signals::install_termination_flag();
-            silrig::rig::status::top(&run_id, count)?;
-        }
-        Command::Check(opts) => {
-            let verdict = silrig::check::run(&opts)?;
-            print!("{}", verdict.to_text());
-            if verdict.interrupted {
-                return Ok(ExitCode::from(130));
-            }
-            if !verdict.passed {
-                return Ok(ExitCode::FAILURE);
-            }
-        }
-        Command::Replay(opts) => {
-            let outcome = silrig::replay::replay(&opts)?;
-            print!("{}", outcome.to_text());
-            if !outcome.passed() {
-                return Ok(ExitCode::FAILURE);
-            }
-        }
-        Command::Contract { c_header, python } => {
-            let files =
-                [(c_header, silrig::contract::c_header as fn() -> String), (python, silrig::contract::python_module)];
-            if files.iter().all(|(path, _)| path.is_none()) {
-                print!("{}", silrig::contract::text());
-            }
-            for (path, render) in files {
-                if let Some(path) = path {
-                    std::fs::write(&path, render()).with_context(|| format!("writing {}", path.display()))?;
-                    println!("wrote {}", path.display());
-                }
-            }
-        }
-        Command::Bench { what: Some(BenchCommand::Ipc(args)) } => print!("{}", silrig::bench::ipc::run(&args)?),
-        Command::Bench { what: None } => {
-            for figure in silrig::bench::plant_figures() {
-                println!("{figure}");
-            }
-            let closed_loop = silrig::bench::closed_loop_figure(20);
-            println!("{closed_loop}");
-            println!(
-                "closed loop: {:.0} steps/s median ({:.0}x real time at 100 Hz)",
-                1e9 / closed_loop.median_ns,
-                1e9 / closed_loop.median_ns / 100.0
-            );
-        }
-        Command::TimerBaseline(args) => print!("{}", silrig::launch::floor::timer_baseline::run(&args)?),
+        Command::Trim { airspeed_mps, altitude_ft, xcg, json } => trim(airspeed_mps, altitude_ft, xcg, json),
+        Command::Plant { command: PlantCommand::Derivative } => plant_derivative(),
+        Command::Sim { config, out, sample: Some(index), seed } => sim_sample(config.as_deref(), out, index, seed),
+        Command::Sim { config, out, .. } => sim(config.as_deref(), out),
+        Command::Sweep(SweepCommand { action: None, local }) => sweep(&local),
+        Command::Sweep(SweepCommand { action: Some(SweepAction::Plan(opts)), .. }) => plan_sweep(&opts),
+        Command::Sweep(SweepCommand { action: Some(SweepAction::Run(opts)), .. }) => fly_shard(&opts),
+        Command::Sweep(SweepCommand { action: Some(SweepAction::Merge { dir }), .. }) => merge_shards(&dir),
+        Command::Sweep(SweepCommand { action: Some(SweepAction::Slurm(opts)), .. }) => write_slurm_script(&opts),
+        Command::Compare { configs, out } => compare(&configs, out),
+        Command::Run(opts) => run_rig(&opts),
+        Command::Top { run_id, count } => top(&run_id, count),
+        Command::Check(opts) => check(&opts),
+        Command::Replay(opts) => replay(&opts),
+        Command::Contract { c_header, python } => contract(c_header, python),
+        Command::Bench { what: None } => bench(),
+        Command::Bench { what: Some(BenchCommand::Ipc(args)) } => bench_ipc(&args),
+        Command::TimerBaseline(args) => timer_baseline(&args),
+    }
+}
+
+fn trim(airspeed_mps: f64, altitude_ft: f64, xcg: f64, json: bool) -> anyhow::Result<ExitCode> {
+    anyhow::ensure!((0.0..=1.0).contains(&xcg), "--xcg must be a fraction of the chord in 0..1, got {xcg}");
+    let trim = trim_level_flight(&F16Model::new(xcg), m_to_ft(airspeed_mps), altitude_ft)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&trim)?);
+    } else {
+        print!("{}", trim.to_text());
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn plant_derivative() -> anyhow::Result<ExitCode> {
+    let rows = derivative_csv::run(std::io::stdin().lock(), std::io::stdout().lock()).context("plant derivative")?;
+    eprintln!("{rows} rows");
+    Ok(ExitCode::SUCCESS)
+}
+
+fn sim(config: Option<&Path>, out: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+    let scenario = load_scenario(config, None)?;
+    let out = out.unwrap_or_else(|| Path::new("out").join(&scenario.name));
+    let run = silrig::outputs::simulate(&scenario, &out)?;
+    print!("{}", run.summary.to_text());
+    print_written(run.files);
+    if let Some(exit) = run.left_envelope {
+        eprintln!("error: {exit}; the files above hold the flight up to the sample before");
+        return Ok(ExitCode::FAILURE);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn sim_sample(config: Option<&Path>, out: Option<PathBuf>, index: u64, seed: Option<u64>) -> anyhow::Result<ExitCode> {
+    let path = config.ok_or_else(|| anyhow::anyhow!("--sample needs the sweep's scenario file"))?;
+    let campaign = silrig::campaign::Campaign::load(path)?;
+    let seed = seed.unwrap_or(campaign.scenario.seed);
+    let out = out.unwrap_or_else(|| Path::new("out").join(format!("{}-sample-{index}", campaign.scenario.name)));
+    let (text, files) = silrig::campaign::fly_one(&campaign, seed, index, &out)?;
+    print!("{text}");
+    print_written(files);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn sweep(opts: &silrig::campaign::SweepOptions) -> anyhow::Result<ExitCode> {
+    let run = silrig::campaign::sweep(opts)?;
+    print!("{}", run.summary.to_text());
+    println!(
+        "flew {} cases in {:.2} s on {} thread(s): {:.0} cases/s",
+        run.summary.runs,
+        run.fly_s,
+        run.jobs,
+        run.summary.runs as f64 / run.fly_s.max(1e-9)
+    );
+    print_written(run.files);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn plan_sweep(opts: &silrig::campaign::shard::PlanOptions) -> anyhow::Result<ExitCode> {
+    let m = silrig::campaign::shard::plan(opts)?;
+    println!(
+        "planned {} cases of {} in {} shards (seed {}) in {}",
+        m.runs,
+        m.config,
+        m.shards,
+        m.seed,
+        opts.out.display()
+    );
+    println!("fly each shard with `silrig sweep run {} --index K` (K = 0..{})", opts.out.display(), m.shards - 1);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn fly_shard(opts: &silrig::campaign::shard::RunOptions) -> anyhow::Result<ExitCode> {
+    let (path, result) = silrig::campaign::shard::run(opts)?;
+    println!(
+        "shard {}: cases {}..{} flown; wrote {}",
+        result.shard,
+        result.cases_range.0,
+        result.cases_range.1,
+        path.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn merge_shards(dir: &Path) -> anyhow::Result<ExitCode> {
+    let run = silrig::campaign::shard::merge(dir)?;
+    print!("{}", run.summary.to_text());
+    print_written(run.files);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn write_slurm_script(opts: &silrig::campaign::shard::SlurmOptions) -> anyhow::Result<ExitCode> {
+    let (path, _) = silrig::campaign::shard::slurm_script(opts)?;
+    println!(
+        "wrote {}; submit it with `sbatch {}`, then merge (the script's header says how)",
+        path.display(),
+        path.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn compare(configs: &[PathBuf], out: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+    let out = out.unwrap_or_else(|| Path::new("out").join("compare"));
+    let scenarios = configs.iter().map(|p| load_scenario(Some(p), None)).collect::<anyhow::Result<Vec<_>>>()?;
+    let comparison = silrig::outputs::compare(&scenarios, &out)?;
+    print!("{}", silrig::outputs::compare_table(&comparison.summaries));
+    print_written(comparison.overlay);
+    println!("runs written under {}", out.display());
+    for (name, exit) in &comparison.left_envelope {
+        eprintln!("error: {name}: {exit}; compared as far as it flew");
+    }
+    if !comparison.left_envelope.is_empty() {
+        return Ok(ExitCode::FAILURE);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_rig(opts: &silrig::launch::launcher::LaunchOptions) -> anyhow::Result<ExitCode> {
+    let report = silrig::launch::launcher::run(opts)?;
+    print!("{}", report.to_text());
+    if !report.failures.is_empty() {
+        return Ok(ExitCode::FAILURE);
+    }
+    if let Some(stopped) = &report.stopped_by {
+        return Ok(ExitCode::from(stopped.exit_status));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn top(run_id: &silrig::ipc::RunId, count: Option<u64>) -> anyhow::Result<ExitCode> {
+    silrig::rig::signals::install_termination_flag();
+    silrig::rig::status::top(run_id, count)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn check(opts: &silrig::check::CheckOptions) -> anyhow::Result<ExitCode> {
+    let verdict = silrig::check::run(opts)?;
+    print!("{}", verdict.to_text());
+    if verdict.interrupted {
+        return Ok(ExitCode::from(130));
+    }
+    if !verdict.passed {
+        return Ok(ExitCode::FAILURE);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn replay(opts: &silrig::replay::ReplayOptions) -> anyhow::Result<ExitCode> {
+    let outcome = silrig::replay::replay(opts)?;
+    print!("{}", outcome.to_text());
+    if !outcome.passed() {
+        return Ok(ExitCode::FAILURE);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn contract(c_header: Option<PathBuf>, python: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+    let files = [(c_header, silrig::contract::c_header as fn() -> String), (python, silrig::contract::python_module)];
+    if files.iter().all(|(path, _)| path.is_none()) {
+        print!("{}", silrig::contract::text());
+    }
+    for (path, render) in files {
+        if let Some(path) = path {
+            std::fs::write(&path, render()).with_context(|| format!("writing {}", path.display()))?;
+            println!("wrote {}", path.display());
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn bench() -> anyhow::Result<ExitCode> {
+    for figure in silrig::bench::plant_figures() {
+        println!("{figure}");
+    }
+    let closed_loop = silrig::bench::closed_loop_figure(20);
+    println!("{closed_loop}");
+    println!(
+        "closed loop: {:.0} steps/s median ({:.0}x real time at 100 Hz)",
+        1e9 / closed_loop.median_ns,
+        1e9 / closed_loop.median_ns / 100.0
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn bench_ipc(args: &silrig::bench::ipc::IpcBenchArgs) -> anyhow::Result<ExitCode> {
+    print!("{}", silrig::bench::ipc::run(args)?);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn timer_baseline(args: &silrig::launch::floor::timer_baseline::BaselineArgs) -> anyhow::Result<ExitCode> {
+    print!("{}", silrig::launch::floor::timer_baseline::run(args)?);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_written(files: impl IntoIterator<Item = PathBuf>) {
+    for f in files {
+        println!("wrote {}", f.display());
+    }
 }
