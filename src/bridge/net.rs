@@ -3,7 +3,7 @@
 //! the bridge's loop through an eventfd. iceoryx2 ports are `!Send`: only the loop touches them, never a Zenoh
 //! callback.
 
-use super::BridgeError;
+use super::error::BridgeError;
 use super::frame::Side;
 use std::collections::VecDeque;
 use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
