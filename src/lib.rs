@@ -12,12 +12,12 @@
 //! - `silrig-launch` ([`launch`]): `silrig run`, supervision, faults, the run's report.
 //! - `silrig-tools` ([`check`], [`campaign`], [`replay`], [`bench`], [`contract`], [`outputs`],
 //!   [`derivative_csv`]): the tools on top.
-//! - [`bridge`] (feature `bridge`): the rig's streams between two hosts over Zenoh.
+//! - `silrig-bridge` ([`bridge`], feature `bridge`): the rig's streams between two hosts over Zenoh.
 
 #![warn(missing_docs)]
 
 #[cfg(feature = "bridge")]
-pub mod bridge;
+pub use silrig_bridge as bridge;
 
 pub use silrig_flight::{criteria, dispersion, f_true, fault, files, judge, role, scenario, sim, summary, trace};
 pub use silrig_launch as launch;

@@ -89,7 +89,7 @@ impl PeerWatch {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bridge::frame::Side;
+    use crate::frame::Side;
 
     fn hello(epoch: u64) -> Hello {
         Hello {

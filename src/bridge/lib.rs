@@ -19,7 +19,7 @@
 //!
 //! The folder, each file with what it owns (none imports a file that imports it back):
 //!
-//! - `mod.rs`: [`run_bridge`], which picks the side and writes the report, and this map.
+//! - `lib.rs`: [`run_bridge`], which picks the side and writes the report, and this map.
 //! - `options.rs`: [`BridgeOptions`] (the flags, checked into a side and an endpoint) and the fixed timings
 //!   ([`HELLO_PERIOD`], [`REFUSED_AFTER`], [`RUN_INFO_TIMEOUT`], [`FINISHED_GRACE`]).
 //! - `error.rs`: [`BridgeError`], each failure phrased for the person running the bridge.
