@@ -54,7 +54,8 @@ fn the_header_compiles_as_c_and_cpp_with_every_assertion_holding() {
         &src,
         "#include \"silrig_contract.h\"\nint main(void) {\n  static silrig_plant_sample_t p;\n  \
          static silrig_command_sample_t c;\n  static silrig_log_ack_sample_t a;\n  \
-         return (int)(p.header.seq + c.header.seq + a.rows_written) + (SILRIG_WIRE_LAYOUT_VERSION > 0u ? 0 : 1);\n}\n",
+         static silrig_plant_info_t i;\n  \
+         return (int)(p.header.seq + c.header.seq + a.rows_written + i.outputs_len) + (SILRIG_WIRE_LAYOUT_VERSION > 0u ? 0 : 1);\n}\n",
     )
     .unwrap();
     let include = root().join("examples/c");

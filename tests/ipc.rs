@@ -43,8 +43,7 @@ impl Drop for TestRun {
 }
 
 fn plant_sample(x: f64) -> PlantSample {
-    let mut s = PlantSample::zeroed();
-    s.state[0] = x;
+    let mut s = PlantSample::with_outputs(&[x; 5]);
     s.t_sim_s = x;
     s
 }
@@ -96,7 +95,7 @@ fn two_threads_exchange_200_samples_without_loss() {
         assert_eq!((h.seq, h.tick), (k as u64, 1000 + k as u64));
         assert_eq!(h.epoch, publisher.epoch());
         assert_eq!(h.layout_version, silrig::wire::WIRE_LAYOUT_VERSION);
-        assert_eq!(r.sample.state[0], k as f64);
+        assert_eq!(r.sample.outputs[0], k as f64);
         assert!(r.invalid.is_none());
         assert_eq!(r.seq.lost_before, 0);
         assert!(h.t_send_ns >= t_start_ns && r.t_recv_ns >= h.t_send_ns);
@@ -127,17 +126,18 @@ fn a_second_publisher_is_refused_with_a_clear_error_and_a_restart_is_not() {
     assert_ne!(second.epoch(), old_epoch);
 }
 
-/// The layout of an older build: same fields, older version in the type name.
+/// The plant sample of layout 4, the F-16's fixed fields (13 states, 3 surfaces, throttle, Nz, Ny, time, wake-up
+/// lateness, step time, flags), as a peer built before named signals has it.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("silrig::PlantSample::v0")]
+#[type_name("silrig::PlantSample::v4")]
 struct OldPlantSample {
     header: SampleHeader,
-    state: [f64; 13],
+    fields: [f64; 23],
 }
 
 impl WireSample for OldPlantSample {
-    const TYPE_NAME: &'static str = "silrig::PlantSample::v0";
+    const TYPE_NAME: &'static str = "silrig::PlantSample::v4";
     fn header(&self) -> &SampleHeader {
         &self.header
     }
@@ -159,8 +159,8 @@ fn a_peer_with_another_wire_layout_gets_a_clear_error() {
     let err = open_stream::<OldPlantSample>(&old, Stream::Plant).unwrap_err();
     assert!(matches!(err, IpcError::OtherWireLayout { stream: "plant", .. }), "{err:?}");
     let msg = err.to_string();
-    assert!(msg.starts_with("peer built with another wire layout: expected silrig::PlantSample::v0"), "{msg}");
-    assert!(msg.contains(&format!("the service carries {} (224 B, align 8)", PlantSample::TYPE_NAME)), "{msg}");
+    assert!(msg.starts_with("peer built with another wire layout: expected silrig::PlantSample::v4"), "{msg}");
+    assert!(msg.contains(&format!("the service carries {} (328 B, align 8)", PlantSample::TYPE_NAME)), "{msg}");
 }
 
 #[test]
@@ -171,9 +171,9 @@ fn invalid_samples_are_refused_before_they_reach_the_wire() {
     let sub = svc.subscriber(CONSUMER_BUFFER).unwrap();
     let mut publisher = svc.publisher().unwrap();
     let mut bad = plant_sample(1.0);
-    bad.state[4] = f64::NAN;
+    bad.outputs[4] = f64::NAN;
     let msg = publisher.send(0, &bad).unwrap_err().to_string();
-    assert!(msg.contains("stream `plant`") && msg.contains("state[4] theta_rad") && msg.contains("NaN"), "{msg}");
+    assert!(msg.contains("stream `plant`") && msg.contains("`outputs[4]`") && msg.contains("NaN"), "{msg}");
     assert_eq!(publisher.next_seq(), 0);
     assert_eq!(sub.drain(|_| {}).unwrap(), 0);
     publisher.send(1, &plant_sample(1.0)).unwrap();
@@ -236,8 +236,8 @@ fn two_runs_do_not_see_each_other() {
     pub_b.send(0, &plant_sample(2.0)).unwrap();
     let mut got_a = Vec::new();
     let mut got_b = Vec::new();
-    sub_a.drain(|r| got_a.push(r.sample.state[0])).unwrap();
-    sub_b.drain(|r| got_b.push(r.sample.state[0])).unwrap();
+    sub_a.drain(|r| got_a.push(r.sample.outputs[0])).unwrap();
+    sub_b.drain(|r| got_b.push(r.sample.outputs[0])).unwrap();
     assert_eq!(got_a, vec![1.0; 5]);
     assert_eq!(got_b, vec![2.0]);
     assert_eq!((svc_a.number_of_subscribers(), svc_b.number_of_subscribers()), (1, 1));

@@ -139,16 +139,23 @@ fn a_realtime_run_records_what_the_csv_files_hold() {
     let total: u64 = counts.as_object().unwrap().values().map(|v| v.as_u64().unwrap()).sum();
     assert_eq!(file["summary_message_count"], total, "the summary counts what the file holds");
 
-    // Plant samples: the state the trace shows, as received (radians on the wire, degrees in the trace).
+    // The plant's announcement names the outputs and inputs; samples carry them in that order.
+    let info = &file["plant_info"];
+    assert_eq!(info["plant_name"], "f16");
+    let position = |list: &str, name: &str| {
+        info[list].as_array().unwrap().iter().position(|n| n == name).unwrap_or_else(|| panic!("{name} in {info}"))
+    };
+    let (theta_out, aileron_in) = (position("output_names", "theta_deg"), position("input_names", "aileron"));
+    // Plant samples: the outputs the trace shows, as received.
     let theta = trace.index("theta_deg").unwrap();
     for (i, p) in file["plant"].as_array().unwrap().iter().enumerate() {
         assert_eq!(p["tick"], i as u64);
-        assert!(same(number(&p["state"][4]).to_degrees(), trace.rows[i][theta]), "tick {i}: theta");
+        assert!(same(number(&p["outputs"][theta_out]), trace.rows[i][theta]), "tick {i}: theta");
     }
     // Commands: the surfaces the trace shows as commanded.
     for c in file["command"].as_array().unwrap() {
         let tick = c["answers_tick"].as_u64().unwrap() as usize;
-        assert!(same(number(&c["surface_cmd_deg"][0]), trace.rows[tick][aileron_cmd]), "tick {tick}: aileron");
+        assert!(same(number(&c["inputs"][aileron_in]), trace.rows[tick][aileron_cmd]), "tick {tick}: aileron");
     }
     // Timing: timing.csv's rows, with empty cells as null.
     let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();

@@ -2,7 +2,8 @@
  * examples/python/pid_attitude.py. Roll (phi) on the aileron, pitch (theta) on the elevator, yaw (psi) on the
  * rudder; the body rate is the derivative; the integrators start from the surfaces' positions when the controller
  * connects (a bumpless start) and carry the trim. Stevens & Lewis signs: a positive deflection makes a negative
- * moment.
+ * moment. It finds what it reads and commands by name in the plant's announcement; the throttle, which it does
+ * not command, stays where it is.
  *
  *   cc -std=c11 -O2 -I examples/c examples/c/pid_attitude.c -L target/release -lsilrig_client \
  *      -Wl,-rpath,"$PWD/target/release" -lm -o pid_attitude
@@ -18,11 +19,11 @@ static const double KP[3] = {2.0, 4.0, 8.0};       /* deg per deg: aileron, elev
 static const double KD[3] = {0.6, 1.5, 3.0};       /* deg per deg/s */
 static const double KI[3] = {1.5, 3.0, 8.0};       /* deg per deg*s */
 static const double TRAVEL[3] = {21.5, 25.0, 30.0}; /* the F-16's surface travel, deg */
-static const int ANGLE[3] = {3, 4, 5};      /* phi, theta, psi in the plant sample's state */
-static const int RATE[3] = {6, 7, 8};       /* p, q, r */
+static const char *const ANGLE[3] = {"phi_deg", "theta_deg", "psi_deg"};
+static const char *const RATE[3] = {"p_dps", "q_dps", "r_dps"};
+static const char *const SURFACE[3] = {"aileron_deg", "elevator_deg", "rudder_deg"}; /* their positions now */
+static const char *const INPUT[3] = {"aileron", "elevator", "rudder"};
 static const char *const DIAGNOSTICS[3] = {"err_phi_deg", "err_theta_deg", "err_psi_deg"};
-
-#define DEG_PER_RAD (180.0 / 3.14159265358979323846)
 
 static int fail(const char *what, int code) {
     fprintf(stderr, "pid_attitude: %s: %s (status %d)\n", what, silrig_last_error(), code);
@@ -38,6 +39,24 @@ int main(void) {
     double setpoint_deg[3];
     silrig_session_setpoint_deg(session, setpoint_deg);
     const double dt_s = silrig_session_dt_s(session);
+
+    size_t angle[3], rate[3], surface[3], input[3];
+    silrig_plant_info_t plant;
+    for (int c = 0; c < 3 && rc == SILRIG_OK; c++) {
+        if ((rc = silrig_session_signal_index(session, ANGLE[c], 0, &angle[c])) == SILRIG_OK &&
+            (rc = silrig_session_signal_index(session, RATE[c], 0, &rate[c])) == SILRIG_OK &&
+            (rc = silrig_session_signal_index(session, SURFACE[c], 0, &surface[c])) == SILRIG_OK) {
+            rc = silrig_session_signal_index(session, INPUT[c], 1, &input[c]);
+        }
+    }
+    if (rc == SILRIG_OK) {
+        rc = silrig_session_plant_info(session, &plant);
+    }
+    if (rc != SILRIG_OK) {
+        int failed = fail("finding the plant's signals", rc);
+        silrig_session_close(session, silrig_last_error());
+        return failed;
+    }
 
     double integral[3];
     int started = 0;
@@ -60,23 +79,24 @@ int main(void) {
         }
         if (!started) {
             for (int c = 0; c < 3; c++) {
-                integral[c] = sample.surfaces_deg[c];
+                integral[c] = sample.outputs[surface[c]];
             }
             started = 1;
         }
-        double surfaces[3], errors[3];
+        double inputs[SILRIG_MAX_INPUTS], errors[3];
+        silrig_session_held_command(session, inputs, plant.inputs_len);
         for (int c = 0; c < 3; c++) {
-            errors[c] = setpoint_deg[c] - sample.state[ANGLE[c]] * DEG_PER_RAD;
-            double rate_term = KD[c] * sample.state[RATE[c]] * DEG_PER_RAD;
+            errors[c] = setpoint_deg[c] - sample.outputs[angle[c]];
+            double rate_term = KD[c] * sample.outputs[rate[c]];
             double next = integral[c] - KI[c] * errors[c] * dt_s;
             /* Anti-windup: an integrator pushing a surface past its travel stops integrating, and the command
                stays within the travel. */
             if (fabs(next - KP[c] * errors[c] + rate_term) <= TRAVEL[c] || fabs(next) < fabs(integral[c])) {
                 integral[c] = next;
             }
-            surfaces[c] = fmax(-TRAVEL[c], fmin(TRAVEL[c], integral[c] - KP[c] * errors[c] + rate_term));
+            inputs[input[c]] = fmax(-TRAVEL[c], fmin(TRAVEL[c], integral[c] - KP[c] * errors[c] + rate_term));
         }
-        rc = silrig_session_send_command(session, surfaces, sample.throttle, errors, 3);
+        rc = silrig_session_send_command(session, inputs, plant.inputs_len, errors, 3);
         if (rc < 0 && rc != SILRIG_ERR_COMMAND_REFUSED) {
             break;
         }

@@ -2,7 +2,8 @@
  *
  * The library is silrig's own controller session (the one silrig-controller uses) behind a C ABI. It opens the
  * run named by the SILRIG_* environment variables (silrig run --controller-cmd sets them; for --controller
- * external, `. <out>/controller.env`), hands out one plant sample at a time and sends one command in answer to
+ * external, `. <out>/controller.env`), tells which signals the plant announced (find yours by name, never by
+ * position: silrig_session_signal_index), hands out one plant sample at a time and sends one command in answer to
  * each. It stamps and validates every command, applies the run's in-loop faults (delay, jitter, drop), blends
  * bumplessly after a restart, watches the plant, writes the controller's timing report and turns SIGTERM/SIGINT
  * and the end of the run into return codes.
@@ -55,18 +56,33 @@ int silrig_session_open(uint32_t layout_version, size_t plant_sample_size, size_
     silrig_session_open(SILRIG_WIRE_LAYOUT_VERSION, sizeof(silrig_plant_sample_t),                               \
                         sizeof(silrig_command_sample_t), (names), (count), (session_out))
 
+/* The plant's signals. Each waits for the plant's announcement if it has not come yet (SILRIG_ERR_NO_RIG when none
+ * comes within twice SILRIG_STARTUP_TIMEOUT_S of opening).
+ * silrig_session_signal_index: where the output `name` sits in every sample's outputs[] (input 0), or the input
+ * `name` in the command's inputs (input 1): SILRIG_ERR_PLANT, naming the plant's signals, when it has none of that
+ * name. Look them up once, after opening: the F-16's outputs are phi_deg, theta_deg, psi_deg, alpha_deg, beta_deg,
+ * p_dps, q_dps, r_dps, vt_mps, alt_ft, nz_g, ny_g, aileron_deg, elevator_deg, rudder_deg, throttle and its 13
+ * states in book units (vt_fps, alpha_rad, ...); its inputs aileron, elevator, rudder (deg) and throttle (0..1).
+ * silrig_session_plant_info: the whole announcement (names, units, input ranges and hold values).
+ * silrig_session_held_command: fill inputs_out (the plant's input count) with a command that leaves every input
+ * where its actuator is now; set the inputs you command and send the rest as they are. */
+int silrig_session_signal_index(silrig_session *session, const char *name, int input, size_t *index_out);
+int silrig_session_plant_info(silrig_session *session, silrig_plant_info_t *info_out);
+int silrig_session_held_command(silrig_session *session, double *inputs_out, size_t input_count);
+
 /* Block until the next plant sample to answer and copy it to *sample_out (SILRIG_OK). After a stall only the
  * newest waiting sample is handed out. Returns SILRIG_STOPPED (SIGTERM/SIGINT) or SILRIG_RUN_ENDED (the plant
- * has flown the whole scenario) when it is time to close; SILRIG_ERR_NO_RIG if no plant sample came within twice
- * SILRIG_STARTUP_TIMEOUT_S of opening. While the plant is silent after that (a plant restart), it waits. */
+ * has flown the whole scenario) when it is time to close; SILRIG_ERR_NO_RIG if no plant came within twice
+ * SILRIG_STARTUP_TIMEOUT_S of opening. While the plant is silent after that (a plant restart), it waits;
+ * SILRIG_ERR_PLANT if the restarted plant announces other signals. */
 int silrig_session_next_sample(silrig_session *session, silrig_plant_sample_t *sample_out);
 
-/* Answer the sample just handed out: surfaces (deg: aileron, elevator, rudder), throttle (0..1) and one value
- * per announced diagnostic. The library measures the compute time (sample handed out to this call), stamps the
- * header and validates: NaN, infinity, |surface| > SILRIG_SURFACE_CMD_LIMIT_DEG or a throttle outside 0..1 is
- * refused and not sent (SILRIG_ERR_COMMAND_REFUSED; the plant holds the last valid command, the run's events
- * say why). SILRIG_ERR_USAGE: no sample to answer, or a diagnostic count other than announced. */
-int silrig_session_send_command(silrig_session *session, const double surface_cmd_deg[3], double throttle_cmd,
+/* Answer the sample just handed out: one value per plant input, in the plant's order, and one value per announced
+ * diagnostic. The library measures the compute time (sample handed out to this call), stamps the header and
+ * validates: NaN, infinity or a value outside its input's range is refused and not sent
+ * (SILRIG_ERR_COMMAND_REFUSED; the plant holds the last valid command, the run's events say why).
+ * SILRIG_ERR_USAGE: no sample to answer, or an input or diagnostic count other than the plant's or announced. */
+int silrig_session_send_command(silrig_session *session, const double *inputs, size_t input_count,
                                 const double *diagnostics, size_t diagnostic_count);
 
 /* The controller's step, s (the scenario's dt). */

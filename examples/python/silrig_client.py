@@ -2,13 +2,14 @@
 
 A thin ctypes wrapper over libsilrig_client.so (silrig's own controller session behind a C ABI; see
 examples/c/silrig_client.h for the rules) with no third-party dependency. Write a `Controller` with one method,
-`step(sample, dt_s)`, and hand it to `serve()`:
+`step(sample, dt_s)`, and hand it to `serve()`. Signals go by the names the plant announced: read an output as
+`sample["theta_deg"]`, command inputs with a dict; an input you leave out stays where its actuator is:
 
     from silrig_client import Controller, serve
 
     class Hold(Controller):
         def step(self, sample, dt_s):
-            return (0.0, -2.0, 0.0), sample.throttle   # surfaces deg (aileron, elevator, rudder), throttle 0..1
+            return {"elevator": -2.0 - 0.5 * sample["q_dps"]}
 
     raise SystemExit(serve(Hold()))
 
@@ -24,11 +25,13 @@ import sys
 
 from silrig_contract import (
     ERR_COMMAND_REFUSED,
+    MAX_INPUTS,
     OK,
     RUN_ENDED,
     STOPPED,
     WIRE_LAYOUT_VERSION,
     CommandSample,
+    PlantInfo,
     PlantSample,
 )
 
@@ -64,9 +67,15 @@ def _load():
         ),
         "silrig_session_next_sample": ([session_p, ctypes.POINTER(PlantSample)], ctypes.c_int),
         "silrig_session_send_command": (
-            [session_p, c_double_p, ctypes.c_double, c_double_p, ctypes.c_size_t],
+            [session_p, c_double_p, ctypes.c_size_t, c_double_p, ctypes.c_size_t],
             ctypes.c_int,
         ),
+        "silrig_session_plant_info": ([session_p, ctypes.POINTER(PlantInfo)], ctypes.c_int),
+        "silrig_session_signal_index": (
+            [session_p, ctypes.c_char_p, ctypes.c_int, ctypes.POINTER(ctypes.c_size_t)],
+            ctypes.c_int,
+        ),
+        "silrig_session_held_command": ([session_p, c_double_p, ctypes.c_size_t], ctypes.c_int),
         "silrig_session_dt_s": ([session_p], ctypes.c_double),
         "silrig_session_setpoint_deg": ([session_p, c_double_p], ctypes.c_int),
         "silrig_session_restored_checkpoint": ([session_p], ctypes.c_char_p),
@@ -99,6 +108,46 @@ def _check(code):
     return code
 
 
+def _text(raw):
+    return bytes(raw).split(b"\0", 1)[0].decode()
+
+
+class Plant:
+    """What the plant announced: `name`, `outputs` [(name, unit)], `inputs` [(name, unit, min, max, hold)]."""
+
+    def __init__(self, info):
+        self.name = _text(info.plant_name)
+        self.outputs = [(_text(info.output_names[k]), _text(info.output_units[k])) for k in range(info.outputs_len)]
+        self.inputs = [
+            (_text(info.input_names[k]), _text(info.input_units[k]), info.input_min[k], info.input_max[k],
+             info.input_hold[k])
+            for k in range(info.inputs_len)
+        ]
+        self.output_index = {name: k for k, (name, _) in enumerate(self.outputs)}
+        self.input_index = {i[0]: k for k, i in enumerate(self.inputs)}
+
+
+class Sample:
+    """A plant sample read by name: `sample["theta_deg"]`; `tick`, `t_s` and `raw` (the wire struct) beside."""
+
+    __slots__ = ("raw", "_index")
+
+    def __init__(self, raw, index):
+        self.raw = raw
+        self._index = index
+
+    def __getitem__(self, name):
+        return self.raw.outputs[self._index[name]]
+
+    @property
+    def tick(self):
+        return self.raw.header.tick
+
+    @property
+    def t_s(self):
+        return self.raw.t_sim_s
+
+
 class Session:
     """The controller's side of one run: `next_sample()`, then one `send()` per sample, then `close()`."""
 
@@ -113,7 +162,8 @@ class Session:
             ctypes.byref(self._handle)))
         self._sample = PlantSample()
         self._sample_ref = ctypes.byref(self._sample)
-        self._surfaces = (ctypes.c_double * 3)()
+        self._plant = None
+        self._inputs = (ctypes.c_double * MAX_INPUTS)()
         self._diagnostics = (ctypes.c_double * max(len(names), 1))()
         self._diagnostic_count = len(names)
         #: Why the session stopped handing out samples: STOPPED or RUN_ENDED (None while it runs).
@@ -132,6 +182,35 @@ class Session:
         return tuple(out)
 
     @property
+    def plant(self):
+        """The plant's announcement (a `Plant`), waiting for it if it has not come yet."""
+        if self._plant is None:
+            info = PlantInfo()
+            _check(self._lib.silrig_session_plant_info(self._handle, ctypes.byref(info)))
+            self._plant = Plant(info)
+        return self._plant
+
+    def output(self, name):
+        """The index of output `name` in a sample's outputs; SilrigError (ERR_PLANT, naming the plant's outputs)
+        when the plant has none of that name."""
+        return self._signal_index(name, 0)
+
+    def input(self, name):
+        """The index of input `name` in a command; SilrigError (ERR_PLANT) when the plant has none."""
+        return self._signal_index(name, 1)
+
+    def _signal_index(self, name, is_input):
+        index = ctypes.c_size_t()
+        _check(self._lib.silrig_session_signal_index(self._handle, name.encode(), is_input, ctypes.byref(index)))
+        return index.value
+
+    def held_command(self):
+        """A command that leaves every input where its actuator is now (one value per plant input)."""
+        n = len(self.plant.inputs)
+        _check(self._lib.silrig_session_held_command(self._handle, self._inputs, n))
+        return list(self._inputs[:n])
+
+    @property
     def restored_checkpoint(self):
         """What a predecessor saved (a restarted controller), or None."""
         text = self._lib.silrig_session_restored_checkpoint(self._handle)
@@ -146,16 +225,17 @@ class Session:
         self.stop_reason = code
         return None
 
-    def send(self, surface_cmd_deg, throttle_cmd, diagnostics=()):
-        """Answer the sample: surfaces deg (aileron, elevator, rudder), throttle 0..1, one value per diagnostic
-        name. Returns False when the command was refused (NaN, out of range: the plant holds the last valid one);
-        raises SilrigError on anything else."""
-        s = self._surfaces
-        s[0], s[1], s[2] = surface_cmd_deg
+    def send(self, inputs, diagnostics=()):
+        """Answer the sample: one value per plant input, in the plant's order, and one value per diagnostic name.
+        Returns False when the command was refused (NaN, outside an input's range: the plant holds the last valid
+        one); raises SilrigError on anything else."""
+        buffer = self._inputs
+        for i, value in enumerate(inputs):
+            buffer[i] = value
         d = self._diagnostics
         for i, value in enumerate(diagnostics):
             d[i] = value
-        code = self._lib.silrig_session_send_command(self._handle, s, throttle_cmd, d, len(diagnostics))
+        code = self._lib.silrig_session_send_command(self._handle, buffer, len(inputs), d, len(diagnostics))
         if code == ERR_COMMAND_REFUSED:
             return False
         _check(code)
@@ -194,10 +274,12 @@ class Controller:
     diagnostic_names = ()
 
     def start(self, session):
-        """Called once the session is open (read `session.setpoint_deg`, `session.dt_s` here)."""
+        """Called once the session is open (read `session.setpoint_deg`, `session.dt_s`, `session.plant` here;
+        `session.output(name)` fails early, naming the plant's outputs, when a signal you need is missing)."""
 
     def step(self, sample, dt_s):
-        """One plant sample in; `(surfaces_deg, throttle)` or `(surfaces_deg, throttle, diagnostics)` out."""
+        """One plant sample in (read it by name: `sample["theta_deg"]`); out, a dict of commands by input name
+        (inputs left out stay where they are), or `(commands, diagnostics)`."""
         raise NotImplementedError
 
     def checkpoint(self):
@@ -223,13 +305,20 @@ def serve(controller):
             session.checkpoint_used(bool(controller.restore(saved)), "the controller's restore() returned False")
         controller.start(session)
         dt_s = session.dt_s
+        plant = session.plant
         while True:
-            sample = session.next_sample()
-            if sample is None:
+            raw = session.next_sample()
+            if raw is None:
                 return 0
-            out = controller.step(sample, dt_s)
+            out = controller.step(Sample(raw, plant.output_index), dt_s)
+            commands, diagnostics = out if isinstance(out, tuple) else (out, ())
+            inputs = session.held_command()
+            for name, value in commands.items():
+                index = plant.input_index.get(name)
+                # An unknown name: the library's error names the plant's inputs.
+                inputs[session.input(name) if index is None else index] = value
             # False when refused: the run's events say why and the plant holds; the next sample may do better.
-            session.send(out[0], out[1], out[2] if len(out) > 2 else ())
+            session.send(inputs, diagnostics)
             if session.checkpoint_due():
                 text = controller.checkpoint()
                 if text is not None:

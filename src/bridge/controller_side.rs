@@ -15,7 +15,7 @@ use silrig_rig::{ProcessArgs, SCENARIO_ENV, signals};
 use silrig_wire::clock::monotonic_ns;
 use silrig_wire::topology::CONSUMER_BUFFER;
 use silrig_wire::topology::Stream;
-use silrig_wire::wire::{CommandSample, ControllerInfo, PlantSample, WIRE_LAYOUT_VERSION};
+use silrig_wire::wire::{CommandSample, ControllerInfo, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use silrig_wire::{ipc, ipc::StreamPublisher, ipc::StreamSubscriber};
 use zenoh::Wait;
 use zenoh::qos::CongestionControl;
@@ -28,6 +28,9 @@ pub(super) struct ControllerSide {
     scenario: String,
     peer: PeerWatch,
     plant: StreamPublisher<PlantSample>,
+    /// The plant's announcement as it last came from the network, passed on when it changes.
+    plant_info: StreamPublisher<PlantInfo>,
+    plant_info_in: Option<PlantInfo>,
     commands: StreamSubscriber<CommandSample>,
     infos: StreamSubscriber<ControllerInfo>,
     plant_stream: ipc::StreamService<PlantSample>,
@@ -48,6 +51,7 @@ impl ControllerSide {
         let args = &opts.process;
         let mut link = Link::open(Side::Controller, endpoint, args)?;
         link.subscribe(link.keys.of("plant"), "plant")?;
+        link.subscribe(link.keys.of("plant-info"), "plant-info")?;
         link.subscribe(link.keys.of("finished"), "finished")?;
         link.subscribe(Keys::any_hello(Side::Plant), "hello")?;
         let mut peer = PeerWatch::new((opts.peer_timeout_ms * 1e6) as u64);
@@ -58,6 +62,7 @@ impl ControllerSide {
         let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
         let info_stream = ipc::open_stream::<ControllerInfo>(&node, Stream::ControllerInfo)?;
         let plant = plant_stream.publisher()?;
+        let plant_info = ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?.publisher()?;
         let commands = command_stream.subscriber(CONSUMER_BUFFER)?;
         let infos = info_stream.subscriber(CONSUMER_BUFFER)?;
         let command_out = link.stream_publisher("command", CongestionControl::Drop)?;
@@ -75,6 +80,8 @@ impl ControllerSide {
             scenario,
             peer,
             plant,
+            plant_info,
+            plant_info_in: None,
             commands,
             infos,
             plant_stream,
@@ -170,6 +177,7 @@ impl ControllerSide {
             for arrival in self.link.inbox.take() {
                 self.on_arrival(arrival)?;
             }
+            self.plant_info.deliver_history()?;
             self.forward_commands()?;
             let connected =
                 self.plant_stream.number_of_subscribers() >= 1 && self.command_stream.number_of_publishers() >= 1;
@@ -231,6 +239,18 @@ impl ControllerSide {
                     _ => {}
                 }
             }
+            Arrival::Sample { what: "plant-info", bytes, .. } => match frame::from_bytes::<PlantInfo>(&bytes) {
+                Ok(info) if self.plant_info_in != Some(info) => {
+                    self.plant_info.forward(&info)?;
+                    self.plant_info_in = Some(info);
+                }
+                Ok(_) => {}
+                Err(e) => {
+                    self.rec.count("samples_refused", 1);
+                    let text = format!("refused the plant's announcement from the network: {e}");
+                    self.link.say("bridge-sample-refused", text, true);
+                }
+            },
             Arrival::Sample { what, bytes, .. } => match frame::from_bytes::<PlantSample>(&bytes) {
                 Ok(s) if self.peer.alive().is_some() => {
                     self.plant.forward(&s)?;

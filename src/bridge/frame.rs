@@ -177,7 +177,8 @@ mod tests {
         let mut p = PlantSample::zeroed();
         p.header.seq = 7;
         p.header.tick = 42;
-        p.state[3] = 0.25;
+        p.outputs[3] = 0.25;
+        p.outputs_len = 4;
         let bytes = to_bytes(&p);
         assert_eq!(bytes.len(), size_of::<PlantSample>());
         assert_eq!(&bytes[8..16], &42u64.to_ne_bytes());
@@ -201,9 +202,10 @@ mod tests {
         assert!(matches!(e, FrameError::Size { got, expected, .. } if got == plant && expected == command), "{e}");
         assert!(matches!(from_bytes::<PlantSample>(&[0; 12]), Err(FrameError::TooShort { len: 12, .. })));
         let mut c = CommandSample::zeroed();
-        c.throttle_cmd = 2.0;
+        c.inputs_len = 2;
+        c.inputs[1] = f64::NAN;
         let e = from_bytes::<CommandSample>(&to_bytes(&c)).unwrap_err();
-        assert!(e.to_string().contains("throttle_cmd"), "{e}");
+        assert!(e.to_string().contains("inputs[1]"), "{e}");
     }
 
     #[test]

@@ -13,9 +13,9 @@ use super::stamps::TickStamps;
 use silrig_rig::report::Recorder;
 use silrig_rig::signals;
 use silrig_wire::clock::monotonic_ns;
-use silrig_wire::topology::LOGGER_BUFFER;
 use silrig_wire::topology::Stream;
-use silrig_wire::wire::{CommandSample, ControllerInfo, PlantSample, WIRE_LAYOUT_VERSION};
+use silrig_wire::topology::{CONSUMER_BUFFER, LOGGER_BUFFER};
+use silrig_wire::wire::{CommandSample, ControllerInfo, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use silrig_wire::{ipc, ipc::StreamPublisher, ipc::StreamSubscriber};
 use zenoh::Wait;
 use zenoh::qos::CongestionControl;
@@ -28,6 +28,11 @@ pub(super) struct PlantSide {
     scenario: String,
     peer: PeerWatch,
     samples: StreamSubscriber<PlantSample>,
+    plant_infos: StreamSubscriber<PlantInfo>,
+    /// The plant's announcement, sent on with every hello: a controller-side bridge that joins late or restarts
+    /// gets it within one hello period.
+    plant_info: Option<PlantInfo>,
+    plant_info_out: zenoh::pubsub::Publisher<'static>,
     command_stream: ipc::StreamService<CommandSample>,
     info_stream: ipc::StreamService<ControllerInfo>,
     /// Created once the controller side reports a controller: until then the plant waits for its peers.
@@ -56,6 +61,7 @@ impl PlantSide {
         let info_stream = ipc::open_stream::<ControllerInfo>(&node, Stream::ControllerInfo)?;
         // Every sample goes on, as to the logger.
         let samples = plant_stream.subscriber(LOGGER_BUFFER)?;
+        let plant_infos = ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?.subscriber(CONSUMER_BUFFER)?;
         let mut link = Link::open(Side::Plant, endpoint, args)?;
         link.subscribe(link.keys.of("command"), "command")?;
         link.subscribe(link.keys.of("controller-info"), "controller-info")?;
@@ -71,6 +77,7 @@ impl PlantSide {
             .wait()
             .map_err(zenoh_err("run info queryable"))?;
         let plant_out = link.stream_publisher("plant", CongestionControl::Drop)?;
+        let plant_info_out = link.stream_publisher("plant-info", CongestionControl::Block)?;
         // The end of the run must arrive.
         let finished_out = link.stream_publisher("finished", CongestionControl::Block)?;
         let rec = Recorder::new(
@@ -92,6 +99,9 @@ impl PlantSide {
             scenario: scenario.name,
             peer: PeerWatch::new((opts.peer_timeout_ms * 1e6) as u64),
             samples,
+            plant_infos,
+            plant_info: None,
+            plant_info_out,
             command_stream,
             info_stream,
             commands: None,
@@ -122,6 +132,9 @@ impl PlantSide {
             }
             let serving = self.peer.alive().map(|h| h.epoch);
             let run_id = self.link.run.clone();
+            if monotonic_ns() >= self.link.next_hello_ns {
+                self.forward_plant_info()?;
+            }
             self.link.say_hello(|epoch| Hello {
                 side: Side::Plant,
                 run_id,
@@ -142,6 +155,22 @@ impl PlantSide {
             self.open_command_ports()?;
         }
         Ok((self.rec, self.scenario, "terminated by signal".into()))
+    }
+
+    /// The plant's newest announcement, out again (it is small, and a late peer needs it before any sample).
+    fn forward_plant_info(&mut self) -> anyhow::Result<()> {
+        let latest = &mut self.plant_info;
+        self.plant_infos.drain(|r| {
+            if r.invalid.is_none() {
+                *latest = Some(r.sample);
+            }
+        })?;
+        if let Some(info) = &self.plant_info
+            && self.plant_info_out.put(frame::to_bytes(info)).wait().is_err()
+        {
+            self.rec.count("plant_infos_not_sent", 1);
+        }
+        Ok(())
     }
 
     fn forward_samples(&mut self) -> anyhow::Result<()> {

@@ -7,10 +7,8 @@
 //! error's text is kept per thread for `silrig_last_error`.
 
 use silrig_rig::ProcessArgs;
-use silrig_rig::session::{
-    ControlCommand, ControllerSession, Next, SessionError, Status, StopReason, check_client_layout,
-};
-use silrig_wire::wire::PlantSample;
+use silrig_rig::session::{ControllerSession, Next, SessionError, Status, StopReason, check_client_layout};
+use silrig_wire::wire::{PlantInfo, PlantSample};
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char, c_int};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -144,38 +142,118 @@ pub unsafe extern "C" fn silrig_session_next_sample(
     })
 }
 
-/// Answer the sample `silrig_session_next_sample` gave; see the header.
+/// A string from C, as UTF-8.
 ///
 /// # Safety
-/// `session` comes from `silrig_session_open`; `surface_cmd_deg` points to 3 doubles; `diagnostics` points to
+/// `text` is NULL or a NUL-terminated string.
+unsafe fn c_str<'a>(text: *const c_char, what: &str) -> Result<&'a str, SessionError> {
+    if text.is_null() {
+        return Err(usage(&format!("{what} is NULL")));
+    }
+    // SAFETY: the caller's contract.
+    unsafe { CStr::from_ptr(text) }.to_str().map_err(|_| usage(&format!("{what} is not UTF-8")))
+}
+
+/// Copy the plant's announcement (its name and signals, waiting for it if it has not come) to `*info_out`; see
+/// the header.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `info_out` points to a writable `silrig_plant_info_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_plant_info(session: *mut SilrigSession, info_out: *mut PlantInfo) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        if info_out.is_null() {
+            return Err(usage("info_out is NULL"));
+        }
+        let info = PlantInfo::new(s.session.plant()?).map_err(SessionError::Plant)?;
+        // SAFETY: checked non-NULL; the caller gives storage for one announcement.
+        unsafe { info_out.write(info) };
+        Ok(Status::Ok)
+    })
+}
+
+/// The index of the plant's output `name` in every sample's `outputs` (or of its input `name` in a command's
+/// inputs, `input` non-zero), waiting for the plant's announcement if it has not come; `SILRIG_ERR_PLANT` naming
+/// the plant's signals when it has none of that name.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `name` is a NUL-terminated string; `index_out` points to a
+/// writable `size_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_signal_index(
+    session: *mut SilrigSession,
+    name: *const c_char,
+    input: c_int,
+    index_out: *mut usize,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        // SAFETY: the caller's contract.
+        let name = unsafe { c_str(name, "name") }?;
+        if index_out.is_null() {
+            return Err(usage("index_out is NULL"));
+        }
+        let plant = s.session.plant()?;
+        let index = if input != 0 { plant.input(name) } else { plant.output(name) }.map_err(SessionError::Plant)?;
+        // SAFETY: checked non-NULL.
+        unsafe { index_out.write(index) };
+        Ok(Status::Ok)
+    })
+}
+
+/// Fill `inputs_out` (`input_count` doubles, the plant's input count) with a command that leaves every input where
+/// it is: each actuator's position in the sample being answered, or the plant's hold value where it reports none.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `inputs_out` points to `input_count` writable doubles.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_held_command(
+    session: *mut SilrigSession,
+    inputs_out: *mut f64,
+    input_count: usize,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        let inputs = s.session.plant()?.inputs.len();
+        if input_count != inputs || (inputs_out.is_null() && inputs > 0) {
+            return Err(usage(&format!("{input_count} inputs given; the plant takes {inputs}")));
+        }
+        let held = s.session.held_command();
+        // SAFETY: the caller gives `input_count` doubles, which equals the plant's input count.
+        unsafe { std::ptr::copy_nonoverlapping(held.as_ptr(), inputs_out, inputs) };
+        Ok(Status::Ok)
+    })
+}
+
+/// Answer the sample `silrig_session_next_sample` gave with one value per plant input; see the header.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `inputs` points to `input_count` doubles; `diagnostics` points to
 /// `diagnostic_count` doubles (or is NULL with a count of 0).
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn silrig_session_send_command(
     session: *mut SilrigSession,
-    surface_cmd_deg: *const f64,
-    throttle_cmd: f64,
+    inputs: *const f64,
+    input_count: usize,
     diagnostics: *const f64,
     diagnostic_count: usize,
 ) -> c_int {
     boundary(|| {
         // SAFETY: the caller's contract.
         let s = unsafe { session_mut(session) }?;
-        if surface_cmd_deg.is_null() {
-            return Err(usage("surface_cmd_deg is NULL"));
-        }
-        if diagnostics.is_null() && diagnostic_count > 0 {
-            return Err(usage("diagnostics is NULL but diagnostic_count is not 0"));
-        }
-        // SAFETY: the caller gives 3 doubles.
-        let surfaces = unsafe { std::slice::from_raw_parts(surface_cmd_deg, 3) };
-        let diagnostics = if diagnostic_count == 0 {
-            &[][..]
-        } else {
-            // SAFETY: the caller gives `diagnostic_count` doubles.
-            unsafe { std::slice::from_raw_parts(diagnostics, diagnostic_count) }
+        // SAFETY: the caller gives `count` doubles, or NULL with a count of 0.
+        let slice = |p: *const f64, count: usize, what: &str| match (p.is_null(), count) {
+            (_, 0) => Ok(&[][..]),
+            (true, _) => Err(usage(&format!("{what} is NULL but its count is not 0"))),
+            (false, n) => Ok(unsafe { std::slice::from_raw_parts(p, n) }),
         };
-        let command = ControlCommand { surface_cmd_deg: [surfaces[0], surfaces[1], surfaces[2]], throttle_cmd };
-        s.session.send(&command, diagnostics)?;
+        let inputs = slice(inputs, input_count, "inputs")?;
+        let diagnostics = slice(diagnostics, diagnostic_count, "diagnostics")?;
+        s.session.send(inputs, diagnostics)?;
         Ok(Status::Ok)
     })
 }

@@ -1,5 +1,6 @@
-//! `silrig-controller` and the Rust face of the controller session. A [`Controller`] is the control law alone (one
-//! step per plant sample, its diagnostics' names, optional checkpoint and restore, as copper's `Freezable`);
+//! `silrig-controller` and the Rust face of the controller session. A [`Controller`] is the control law alone (the
+//! plant's signals it reads and commands, found by name once; one step per plant sample; its diagnostics' names;
+//! optional checkpoint and restore, as copper's `Freezable`);
 //! [`serve`] flies it in a [`ControllerSession`] (`super::session`), which owns everything around it: the streams,
 //! the announcement, the in-loop faults, the bumpless blend after a restart, checkpoint files and the report. A
 //! controller in another language gets the same session through the C ABI of `libsilrig_client.so`. Our controller
@@ -10,11 +11,11 @@
 //! ours restores its RBF weights, so it need not re-learn them.
 
 use super::ProcessArgs;
-use super::plant::snapshot;
 use super::report::ProcessReport;
-pub use super::session::ControlCommand;
 use super::session::{ControllerSession, Next, SessionError};
+use silrig_flight::f16_signals::F16Outputs;
 use silrig_flight::scenario::Scenario;
+use silrig_flight::signals::PlantSignals;
 use silrig_flight::sim::{measurement, setpoint_rad, write_attitude_diagnostics};
 use silrig_model::control::AttitudeController;
 use silrig_wire::wire::PlantSample;
@@ -28,8 +29,13 @@ pub trait Controller {
     /// allowed).
     fn diagnostic_names(&self) -> Vec<String>;
 
-    /// The command for one plant sample; write the diagnostics of this step into `diagnostics` (one per name).
-    fn step(&mut self, sample: &PlantSample, dt_s: f64, diagnostics: &mut [f64]) -> ControlCommand;
+    /// Find the outputs it reads and the inputs it commands in the plant's announcement, by name, before the first
+    /// step; an error (naming what is missing, [`PlantSignals::output`]) ends the session.
+    fn connect(&mut self, plant: &PlantSignals) -> Result<(), String>;
+
+    /// The command for one plant sample: `command` holds one value per plant input, each where its actuator is now
+    /// (an input left alone stays there); write the diagnostics of this step into `diagnostics` (one per name).
+    fn step(&mut self, sample: &PlantSample, dt_s: f64, command: &mut [f64], diagnostics: &mut [f64]);
 
     /// The state a restarted controller should resume from, as text (`None`: nothing worth saving).
     fn checkpoint(&self) -> Option<String> {
@@ -43,10 +49,14 @@ pub trait Controller {
     }
 }
 
-/// The paper's adaptive SMC/RBF controller behind the [`Controller`] trait; its checkpoint is its RBF weights.
+/// The paper's adaptive SMC/RBF controller behind the [`Controller`] trait; its checkpoint is its RBF weights. It
+/// reads the F-16's states by name ([`F16Outputs`]) and commands the inputs `aileron`, `elevator` and `rudder`,
+/// leaving any other input (the throttle) where it is.
 pub struct AttitudeLaw {
     controller: AttitudeController,
     setpoint: [f64; 3],
+    outputs: Option<F16Outputs>,
+    surfaces: [usize; 3],
 }
 
 impl AttitudeLaw {
@@ -56,6 +66,8 @@ impl AttitudeLaw {
         Self {
             controller: AttitudeController::new(scenario.controller.clone(), tables),
             setpoint: setpoint_rad(scenario),
+            outputs: None,
+            surfaces: [0, 1, 2],
         }
     }
 }
@@ -65,13 +77,19 @@ impl Controller for AttitudeLaw {
         silrig_flight::trace::attitude_diagnostic_names(self.controller.gains().rbf.nodes())
     }
 
-    fn step(&mut self, sample: &PlantSample, dt_s: f64, diagnostics: &mut [f64]) -> ControlCommand {
-        let (command, diag) = self.controller.step(&measurement(&snapshot(sample)), &self.setpoint, dt_s);
+    fn connect(&mut self, plant: &PlantSignals) -> Result<(), String> {
+        self.outputs = Some(F16Outputs::resolve(plant)?);
+        self.surfaces = [plant.input("aileron")?, plant.input("elevator")?, plant.input("rudder")?];
+        Ok(())
+    }
+
+    fn step(&mut self, sample: &PlantSample, dt_s: f64, command: &mut [f64], diagnostics: &mut [f64]) {
+        let outputs = self.outputs.as_ref().expect("connect comes before the first step");
+        let snap = outputs.snapshot(sample.header.tick, sample.t_sim_s, sample.outputs());
+        let (surfaces, diag) = self.controller.step(&measurement(&snap), &self.setpoint, dt_s);
         write_attitude_diagnostics(diagnostics, &diag, &self.controller);
-        ControlCommand {
-            surface_cmd_deg: [command.aileron_deg, command.elevator_deg, command.rudder_deg],
-            throttle_cmd: sample.throttle,
-        }
+        let [a, e, r] = self.surfaces;
+        (command[a], command[e], command[r]) = (surfaces.aileron_deg, surfaces.elevator_deg, surfaces.rudder_deg);
     }
 
     fn checkpoint(&self) -> Option<String> {
@@ -97,13 +115,20 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
     }
     let dt_s = session.dt_s();
     let mut diagnostics = vec![0.0; names.len()];
+    let mut connected = false;
     let error = loop {
         let sample = match session.next_sample() {
             Ok(Next::Sample(sample)) => sample,
             Ok(Next::Stop(_)) => break None,
             Err(e) => break Some(e),
         };
-        let command = law.step(&sample, dt_s, &mut diagnostics);
+        if !std::mem::replace(&mut connected, true)
+            && let Err(e) = law.connect(session.plant()?)
+        {
+            break Some(SessionError::Plant(e));
+        }
+        let mut command = session.held_command();
+        law.step(&sample, dt_s, &mut command, &mut diagnostics);
         match session.send(&command, &diagnostics) {
             // Refused: the session said why in the run's events and the plant holds; the next sample may do.
             Ok(()) | Err(SessionError::CommandRefused { .. }) => {}

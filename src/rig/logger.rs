@@ -1,6 +1,7 @@
 //! `silrig-logger`: subscribes to the plant and command streams with queues deep enough to absorb a 1 s stall,
 //! pairs each plant sample with the command answering it, and writes each row, as it goes, to its sinks
-//! ([`silrig_wire::recording`]): `trace.csv` (the same columns and values as `silrig sim`), `timing.csv` (per-tick
+//! ([`silrig_wire::recording`]): `trace.csv` (its columns from the plant's announcement,
+//! [`PlantSignals::trace_columns`]: for the F-16 the same columns and values as `silrig sim`), `timing.csv` (per-tick
 //! stamps, flags and gaps) and the MCAP recording (the samples as received, for viewers and replay). Sinks are flushed
 //! every few rows, so a kill loses at most the last unflushed batch and never corrupts earlier rows.
 //!
@@ -17,21 +18,19 @@
 use super::ProcessArgs;
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
-use super::plant::snapshot;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use iceoryx2::prelude::CallbackProgression;
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
-use silrig_flight::sim::{HeldActuators, trace_row};
+use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::{self, Trace};
-use silrig_model::control::SurfaceCommand;
 use silrig_wire::clock::{TickSchedule, monotonic_ns};
 use silrig_wire::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
 use silrig_wire::recording::csv::CsvSink;
 use silrig_wire::recording::mcap_file::McapSink;
 use silrig_wire::recording::{LoggedRow, RecordingMeta, RowSink};
 use silrig_wire::topology::Stream;
-use silrig_wire::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantSample};
+use silrig_wire::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
 use std::collections::BTreeMap;
 
 /// A plant sample waits this many newer samples for its command before it is written without one.
@@ -52,6 +51,8 @@ struct Writer {
     sinks: Vec<Box<dyn RowSink>>,
     /// Set once the sinks have the trace's columns (the first row, or a previous logger's `trace.csv` header).
     started: bool,
+    /// A previous logger's `trace.csv` header, which this one continues under.
+    previous_columns: Option<Vec<String>>,
     /// The diagnostic columns of the trace, after its loop columns.
     diagnostic_names: Vec<String>,
     rows: u64,
@@ -63,49 +64,58 @@ struct Writer {
 }
 
 impl Writer {
-    /// Give the sinks the trace's columns with these diagnostics, unless they have them.
-    fn start_trace(&mut self, diagnostic_names: &[String]) -> std::io::Result<()> {
-        if !self.started {
-            let columns: Vec<String> =
-                trace::LOOP_COLUMNS.iter().map(|c| c.to_string()).chain(diagnostic_names.iter().cloned()).collect();
-            for sink in &mut self.sinks {
-                sink.start(&columns)?;
-            }
-            self.diagnostic_names = diagnostic_names.to_vec();
-            self.started = true;
+    /// Give the sinks the trace's columns for `plant` with these diagnostics, unless they have them. A previous
+    /// logger's header is kept, its diagnostics included, if it starts with this plant's columns.
+    fn start_trace(&mut self, plant: &PlantSignals, diagnostic_names: &[String]) -> anyhow::Result<()> {
+        if self.started {
+            return Ok(());
         }
+        let mut columns = plant.trace_columns(diagnostic_names);
+        if let Some(previous) = self.previous_columns.take() {
+            let ours = plant.trace_columns(&[]);
+            anyhow::ensure!(
+                previous.starts_with(&ours),
+                "trace.csv of this run has the columns {} but plant {} writes {}: it is another plant's trace",
+                previous.join(","),
+                plant.plant,
+                ours.join(",")
+            );
+            self.diagnostic_names = previous[ours.len()..].to_vec();
+            columns = previous;
+        } else {
+            self.diagnostic_names = diagnostic_names.to_vec();
+        }
+        for sink in &mut self.sinks {
+            sink.start(&columns)?;
+        }
+        self.started = true;
         Ok(())
     }
 
     fn row(
         &mut self,
-        plant: &Received<PlantSample>,
-        held: &HeldActuators,
+        plant: &PlantSignals,
+        sample: &Received<PlantSample>,
+        next: Option<&PlantSample>,
         command: Option<&Received<CommandSample>>,
         step_exec_ns: Option<u64>,
     ) -> std::io::Result<()> {
-        let snap = snapshot(&plant.sample);
-        let nan = f64::NAN;
-        let trace = match command {
-            Some(c) => {
-                let s = &c.sample;
-                let cmd = SurfaceCommand {
-                    aileron_deg: s.surface_cmd_deg[0],
-                    elevator_deg: s.surface_cmd_deg[1],
-                    rudder_deg: s.surface_cmd_deg[2],
-                };
-                // The trace's columns are fixed by its header: missing diagnostics are empty, extra ones dropped.
-                let mut diagnostics = vec![nan; self.diagnostic_names.len()];
-                let given = s.diagnostics();
-                let n = given.len().min(diagnostics.len());
-                diagnostics[..n].copy_from_slice(&given[..n]);
-                trace_row(&snap, held, &cmd, self.flight_segment, &diagnostics)
-            }
-            None => {
-                let cmd = SurfaceCommand { aileron_deg: nan, elevator_deg: nan, rudder_deg: nan };
-                trace_row(&snap, held, &cmd, self.flight_segment, &vec![nan; self.diagnostic_names.len()])
-            }
-        };
+        // The trace's columns are fixed by its header: missing diagnostics are empty, extra ones dropped.
+        let mut diagnostics = vec![f64::NAN; self.diagnostic_names.len()];
+        if let Some(c) = command {
+            let given = c.sample.diagnostics();
+            let n = given.len().min(diagnostics.len());
+            diagnostics[..n].copy_from_slice(&given[..n]);
+        }
+        let trace = plant.trace_row(
+            sample.sample.t_sim_s,
+            sample.sample.outputs(),
+            command.map(|c| c.sample.inputs()),
+            next.map(PlantSample::outputs),
+            self.flight_segment,
+            &diagnostics,
+        );
+        let plant = sample;
         let row = LoggedRow { plant, command, step_exec_ns, trace: &trace };
         for sink in &mut self.sinks {
             sink.row(&row)?;
@@ -115,6 +125,14 @@ impl Writer {
         self.last_written = Some(plant.sample);
         if self.rows.is_multiple_of(FLUSH_EVERY_ROWS) {
             self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Hand the plant's announcement to the sinks (the recording keeps it, for viewers and replay).
+    fn announce_plant(&mut self, info: &PlantInfo) -> std::io::Result<()> {
+        for sink in &mut self.sinks {
+            sink.plant(info)?;
         }
         Ok(())
     }
@@ -147,9 +165,9 @@ struct Reflown {
     epoch: u64,
     /// The first tick it flew again.
     first_tick: u64,
-    /// Its state minus the written one at the last written tick: phi, theta, psi, alpha, deg.
-    jump_deg: Option<[f64; 4]>,
-    /// At the last written tick its sample equals the written one in every state and surface value.
+    /// Its outputs minus the written ones at the last written tick.
+    jump: Option<Vec<f64>>,
+    /// At the last written tick its sample equals the written one in every output.
     identical: bool,
 }
 
@@ -172,10 +190,12 @@ impl LoggerPorts {
         // Announcements first: the plant starts once it sees the logger's plant subscriber, and every announcement
         // made after that must reach this queue.
         let info = info_stream.subscriber(Stream::ControllerInfo.queue_depth(Role::Logger))?;
+        let plant_info = ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?
+            .subscriber(Stream::PlantInfo.queue_depth(Role::Logger))?;
         let plant = plant_stream.subscriber(Stream::Plant.queue_depth(Role::Logger))?;
         let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Logger))?;
         let acks = ack_stream.publisher()?;
-        Ok(Self { inputs: LoggerInputs { plant, commands, info }, acks, _node: node })
+        Ok(Self { inputs: LoggerInputs { plant, commands, info, plant_info }, acks, _node: node })
     }
 }
 
@@ -184,6 +204,7 @@ pub struct LoggerInputs {
     plant: StreamSubscriber<PlantSample>,
     commands: StreamSubscriber<CommandSample>,
     info: StreamSubscriber<ControllerInfo>,
+    plant_info: StreamSubscriber<PlantInfo>,
 }
 
 /// Everything the logger keeps between wake-ups: the files, the samples waiting for their partner, the counters.
@@ -205,6 +226,8 @@ pub struct LoggerLoop {
     missing_since: Option<u64>,
     /// The diagnostic names the newest controller epoch announced.
     announced: Option<Vec<String>>,
+    /// What the plant announced: the trace's columns come from it.
+    plant: Option<PlantSignals>,
     /// A restarted plant re-flying ticks already written (its checkpoint is older than its predecessor's last
     /// tick, or it had none): those samples are not written, and the first row it adds is a discontinuity.
     reflown: Option<Reflown>,
@@ -243,19 +266,16 @@ impl LoggerLoop {
             let file = recording.path().display().to_string();
             events.emit(resume_after, "recording-continued", format!("the recording continues in {file}"));
         }
-        let mut writer = Writer {
+        let writer = Writer {
             sinks: vec![Box::new(CsvSink::open(&args.out)?), Box::new(recording)],
             started: false,
+            previous_columns: previous.as_ref().map(|p| p.columns.clone()),
             diagnostic_names: Vec::new(),
             rows: 0,
             last_tick: resume_after,
             last_written: None,
             flight_segment: previous_segment,
         };
-        // A previous logger of this run started the trace: continue under its header.
-        if let Some(previous) = previous {
-            writer.start_trace(&previous.columns[trace::LOOP_COLUMNS.len().min(previous.columns.len())..])?;
-        }
         let mut rec = Recorder::new(
             Role::Logger.label(),
             &[
@@ -284,6 +304,7 @@ impl LoggerLoop {
             pending_command: BTreeMap::new(),
             missing_since: None,
             announced: None,
+            plant: None,
             reflown: None,
             lockstep: args.mode == super::RigMode::Lockstep,
             done: false,
@@ -368,7 +389,12 @@ impl LoggerLoop {
     }
 
     fn take_samples(&mut self, inputs: &LoggerInputs) -> anyhow::Result<()> {
-        // Announcements first: a controller announces before its first command.
+        // Announcements first: a plant announces before its first sample, a controller before its first command.
+        let mut announced = Vec::new();
+        inputs.plant_info.drain(|r| announced.push(*r))?;
+        for r in announced {
+            self.on_plant_announcement(&r)?;
+        }
         inputs.info.drain(|r| match &r.invalid {
             Some(e) => {
                 self.rec.count("invalid_samples", 1);
@@ -399,6 +425,27 @@ impl LoggerLoop {
         Ok(())
     }
 
+    /// A plant epoch's signals: the first gives the trace its columns and goes into the recording; a restarted
+    /// plant must announce the same, or its rows would not fit the trace.
+    fn on_plant_announcement(&mut self, r: &Received<PlantInfo>) -> anyhow::Result<()> {
+        let signals = r.sample.signals().map_err(|e| anyhow::anyhow!("the plant's announcement is refused: {e}"))?;
+        match &self.plant {
+            None => {
+                self.writer.announce_plant(&r.sample)?;
+                self.plant = Some(signals);
+            }
+            Some(known) if *known != signals => anyhow::bail!(
+                "a restarted plant (epoch {}) announces plant {} with other signals than plant {} whose rows the \
+                 trace holds",
+                r.sample.header.epoch,
+                signals.plant,
+                known.plant
+            ),
+            Some(_) => {}
+        }
+        Ok(())
+    }
+
     /// A controller epoch's diagnostic names. Once the trace has started its columns stay; a controller that names
     /// other diagnostics (another controller restarted into the run) is reported, its values written by position.
     fn on_announcement(&mut self, names: Vec<String>) {
@@ -416,7 +463,7 @@ impl LoggerLoop {
 
     /// The trace's diagnostic columns when its first row is due: those the controller announced, or, with no
     /// announcement (no controller yet), the scenario's controller's, said in an event.
-    fn start_trace(&mut self, tick: u64) -> std::io::Result<()> {
+    fn start_trace(&mut self, plant: &PlantSignals, tick: u64) -> anyhow::Result<()> {
         if self.writer.started {
             return Ok(());
         }
@@ -428,15 +475,15 @@ impl LoggerLoop {
                 trace::attitude_diagnostic_names(self.scenario.controller.rbf.nodes())
             }
         };
-        self.writer.start_trace(&names)
+        self.writer.start_trace(plant, &names)
     }
 
-    /// The deflections held over [t_tick, t_tick+1): those of the next plant sample, or of the end-of-run sample
-    /// when it closes this tick.
-    fn held_after(&self, tick: u64) -> Option<HeldActuators> {
+    /// The sample that closes this tick, with the actuator positions held over [t_tick, t_tick+1): the next plant
+    /// sample, or the end-of-run sample when it closes this tick.
+    fn closing(&self, tick: u64) -> Option<PlantSample> {
         let next = self.pending_plant.get(&(tick + 1));
         let end = self.end.as_ref().filter(|e| e.sample.header.tick == tick);
-        next.or(end).map(|r| HeldActuators { surfaces_deg: r.sample.surfaces_deg, throttle: r.sample.throttle })
+        next.or(end).map(|r| r.sample)
     }
 
     /// The execution time of this tick's step, which the sample closing the tick carries (as it carries the
@@ -451,12 +498,22 @@ impl LoggerLoop {
     /// sample reports; one whose command or next sample has not come while [`MISSING_COMMAND_WINDOW`] newer samples
     /// arrived (or at the end) is written without them.
     fn write_ready_rows(&mut self, final_flush: bool) -> anyhow::Result<()> {
+        let Some(plant) = self.plant.clone() else {
+            if final_flush && !self.pending_plant.is_empty() {
+                let detail = format!(
+                    "{} plant samples came, but no announcement of the plant's signals: no rows written",
+                    self.pending_plant.len()
+                );
+                self.events.emit(None, "plant-unannounced", detail);
+            }
+            return Ok(());
+        };
         while let Some((&tick, _)) = self.pending_plant.first_key_value() {
             let newest = *self.pending_plant.keys().next_back().expect("non-empty");
             let given_up = final_flush || newest >= tick + MISSING_COMMAND_WINDOW;
             let has_command = self.pending_command.contains_key(&tick);
-            let held = self.held_after(tick);
-            if !((has_command && held.is_some()) || given_up) {
+            let next = self.closing(tick);
+            if !((has_command && next.is_some()) || given_up) {
                 break;
             }
             let sample = self.pending_plant.remove(&tick).expect("present");
@@ -482,9 +539,9 @@ impl LoggerLoop {
                     std::thread::sleep(std::time::Duration::from_nanos(effect.sleep_ns));
                 }
             }
-            self.start_trace(tick)?;
+            self.start_trace(&plant, tick)?;
             let step_exec_ns = self.step_exec_after(tick, sample.sample.header.epoch);
-            self.writer.row(&sample, &held.unwrap_or(HeldActuators::UNKNOWN), command.as_ref(), step_exec_ns)?;
+            self.writer.row(&plant, &sample, next.as_ref(), command.as_ref(), step_exec_ns)?;
             self.rec.count("rows_written", 1);
             // Commands answering ticks already written can no longer be used.
             self.pending_command.retain(|t, _| *t > tick);
@@ -502,15 +559,13 @@ impl LoggerLoop {
         let r = self.reflown.get_or_insert(Reflown {
             epoch: sample.header.epoch,
             first_tick: sample.header.tick,
-            jump_deg: None,
+            jump: None,
             identical: false,
         });
         r.first_tick = r.first_tick.min(sample.header.tick);
         if sample.header.tick == written.header.tick {
-            // phi, theta, psi (state[3..6]) and alpha (state[1]), rad to deg.
-            let d = |i: usize| (sample.state[i] - written.state[i]).to_degrees();
-            r.jump_deg = Some([d(3), d(4), d(5), d(1)]);
-            r.identical = sample.state == written.state && sample.surfaces_deg == written.surfaces_deg;
+            r.jump = Some(sample.outputs().iter().zip(written.outputs()).map(|(a, b)| a - b).collect());
+            r.identical = sample.outputs() == written.outputs();
         }
     }
 
@@ -526,12 +581,17 @@ impl LoggerLoop {
             self.events.emit(Some(tick), "flight-continued", detail);
             return;
         }
-        let jump = match r.jump_deg {
-            Some([phi, theta, psi, alpha]) => format!(
-                "at tick {last} the two flights differed by phi {phi:+.3}, theta {theta:+.3}, psi {psi:+.3}, \
-                 alpha {alpha:+.3} deg"
-            ),
-            None => format!("the re-flown tick {last} never arrived, so the jump is unknown"),
+        let jump = match (&r.jump, &self.plant) {
+            (Some(jump), Some(plant)) => {
+                // The first four traced outputs (the F-16's: phi, theta, psi, alpha).
+                let shown: Vec<String> = (plant.outputs.iter().zip(jump))
+                    .filter(|(o, _)| o.in_trace)
+                    .take(4)
+                    .map(|(o, d)| format!("{} {d:+.3} {}", o.name, o.unit))
+                    .collect();
+                format!("at tick {last} the two flights differed by {}", shown.join(", "))
+            }
+            _ => format!("the re-flown tick {last} never arrived, so the jump is unknown"),
         };
         let detail = format!(
             "rows from tick {tick} come from a restarted plant that flew again from tick {} (ticks {}..{last} \

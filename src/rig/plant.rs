@@ -21,14 +21,16 @@ use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, signals};
 use anyhow::Context;
+use silrig_flight::f16_signals::{f16_outputs, f16_signals};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
+use silrig_flight::signals::PlantSignals;
 use silrig_flight::sim::{ActuatorCommand, LeftEnvelope, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
 use silrig_model::control::SurfaceCommand;
 use silrig_wire::clock::{self, TickSchedule, monotonic_ns};
 use silrig_wire::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
 use silrig_wire::topology::Stream;
-use silrig_wire::wire::{self, CommandSample, LogAckSample, PlantSample};
+use silrig_wire::wire::{self, CommandSample, LogAckSample, PlantInfo, PlantSample};
 use std::collections::VecDeque;
 use std::time::Duration;
 
@@ -50,31 +52,9 @@ const CHECKPOINT_WRITE: usize = 4;
 /// Publish stamps kept to measure sense-to-actuate of commands answering recent ticks.
 const PUBLISH_STAMPS: usize = 16;
 
-/// The wire sample for a snapshot.
+/// The wire sample for a snapshot: the F-16's outputs ([`f16_outputs`]) in the order it announces them.
 pub fn plant_sample(snap: &PlantSnapshot, flags: u32) -> PlantSample {
-    PlantSample {
-        state: snap.state.to_array(),
-        surfaces_deg: snap.surfaces_deg,
-        throttle: snap.throttle,
-        t_sim_s: snap.t_s,
-        nz_g: snap.nz_g,
-        ny_g: snap.ny_g,
-        flags,
-        ..PlantSample::zeroed()
-    }
-}
-
-/// The snapshot a plant sample carries (the inverse of [`plant_sample`]).
-pub fn snapshot(s: &PlantSample) -> PlantSnapshot {
-    PlantSnapshot {
-        tick: s.header.tick,
-        t_s: s.t_sim_s,
-        state: silrig_model::plant::F16State::from_array(&s.state),
-        surfaces_deg: s.surfaces_deg,
-        throttle: s.throttle,
-        nz_g: s.nz_g,
-        ny_g: s.ny_g,
-    }
+    PlantSample { t_sim_s: snap.t_s, flags, ..PlantSample::with_outputs(&f16_outputs(snap)) }
 }
 
 /// Flags describing the step that led to the next sample.
@@ -92,17 +72,18 @@ fn step_flags(hits: &StepHits, held: bool) -> u32 {
     flags
 }
 
-/// A command as the actuators take it; the attitude controller does not command throttle, so the plant holds the
-/// scenario's.
-fn actuator_command(c: &CommandSample, throttle: f64) -> ActuatorCommand {
-    ActuatorCommand {
-        surfaces: SurfaceCommand {
-            aileron_deg: c.surface_cmd_deg[0],
-            elevator_deg: c.surface_cmd_deg[1],
-            rudder_deg: c.surface_cmd_deg[2],
-        },
-        throttle,
-    }
+/// A command as the actuators take it, its inputs in the order of [`f16_signals`] (checked against them on
+/// arrival).
+fn actuator_command(c: &CommandSample) -> ActuatorCommand {
+    let [aileron_deg, elevator_deg, rudder_deg, throttle] = [0, 1, 2, 3].map(|k| c.inputs[k]);
+    ActuatorCommand { surfaces: SurfaceCommand { aileron_deg, elevator_deg, rudder_deg }, throttle }
+}
+
+/// The F-16's announcement for this flight: its failsafe holds `failsafe`.
+fn announcement(failsafe: &ActuatorCommand) -> anyhow::Result<PlantInfo> {
+    let s = &failsafe.surfaces;
+    let signals = f16_signals([s.aileron_deg, s.elevator_deg, s.rudder_deg, failsafe.throttle]);
+    PlantInfo::new(&signals).map_err(|e| anyhow::anyhow!("the plant's announcement: {e}"))
 }
 
 /// The trim surfaces of the scenario's initial airspeed and altitude, or `hold` when level flight has no trim
@@ -124,6 +105,8 @@ pub struct PlantPorts {
     plant_stream: StreamService<PlantSample>,
     command_stream: StreamService<CommandSample>,
     publisher: StreamPublisher<PlantSample>,
+    /// Held for the run, so a second plant is refused before it could announce other signals.
+    announcer: StreamPublisher<PlantInfo>,
     commands: StreamSubscriber<CommandSample>,
     acks: StreamSubscriber<LogAckSample>,
     // Dropped last: the services and ports above belong to it.
@@ -131,16 +114,22 @@ pub struct PlantPorts {
 }
 
 impl PlantPorts {
-    /// Open the plant's streams: publish plant samples, read commands and the logger's acknowledgements.
-    pub fn connect(args: &ProcessArgs) -> anyhow::Result<Self> {
+    /// Open the plant's streams: announce `info`, publish plant samples, read commands and the logger's
+    /// acknowledgements. The announcement goes out now and again with the first sample (a reader that subscribed
+    /// in between gets it then), and any reader that joins later gets it from the stream's history
+    /// ([`StreamPublisher::deliver_history`], every tick).
+    pub fn connect(args: &ProcessArgs, info: &PlantInfo) -> anyhow::Result<Self> {
         let node = ipc::create_node(&args.run_id, Role::Plant.label())?;
         let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
         let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
         let ack_stream = ipc::open_stream::<LogAckSample>(&node, Stream::LogAck)?;
+        let info_stream = ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?;
+        let mut announcer = info_stream.publisher().context("the plant-info stream")?;
+        announcer.send(0, info)?;
         let publisher = plant_stream.publisher().context("the plant stream")?;
         let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Plant))?;
         let acks = ack_stream.subscriber(Stream::LogAck.queue_depth(Role::Plant))?;
-        Ok(Self { plant_stream, command_stream, publisher, commands, acks, _node: node })
+        Ok(Self { plant_stream, command_stream, publisher, announcer, commands, acks, _node: node })
     }
 
     /// Wait until the controller and the logger are connected, or time out; SIGTERM ends the wait early (false).
@@ -196,7 +185,10 @@ pub struct PlantLoop {
     ticks: u64,
     budget_ns: u64,
     spin_ns: u64,
-    throttle: f64,
+    /// What this plant announces, and the inputs every command is checked against.
+    info: PlantInfo,
+    signals: PlantSignals,
+    announced: bool,
     /// The command the actuators follow now.
     applied: ActuatorCommand,
     /// Tick whose sample the applied command answers (None: the initial hold, before any command).
@@ -261,10 +253,12 @@ impl PlantLoop {
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
         let initial = runner.initial_command();
+        let failsafe = failsafe_command(&scenario, initial);
+        let info = announcement(&failsafe)?;
         let watchdog = Watchdog {
             stale_after_ns: period * u64::from(o.stale_after_periods.max(1)),
             hold_ns: (o.controller_hold_ms * 1e6) as u64,
-            failsafe: failsafe_command(&scenario, initial),
+            failsafe,
             last_fresh_ns: 0,
             last_fresh_tick: 0,
             stale: false,
@@ -274,7 +268,9 @@ impl PlantLoop {
             ticks: scenario.timing.ticks(),
             budget_ns: (o.command_budget_ms * 1e6) as u64,
             spin_ns: if realtime { (o.command_spin_us * 1e3) as u64 } else { 0 },
-            throttle: initial.throttle,
+            signals: info.signals().map_err(|e| anyhow::anyhow!("the plant's announcement: {e}"))?,
+            info,
+            announced: false,
             applied: initial,
             applied_answers: None,
             received: VecDeque::with_capacity(8),
@@ -461,6 +457,10 @@ impl PlantLoop {
                 previous_step_exec_ns: self.step_exec_ns,
                 ..plant_sample(&snap, self.flags)
             };
+            if !std::mem::replace(&mut self.announced, true) {
+                ports.announcer.send(self.sim_tick, &self.info)?;
+            }
+            ports.announcer.deliver_history()?;
             ports.publisher.send(self.sim_tick, &sample)?
         };
         self.publish_ns[(self.sim_tick % PUBLISH_STAMPS as u64) as usize] = receipt.t_send_ns;
@@ -500,7 +500,15 @@ impl PlantLoop {
     fn take_commands(&mut self, ports: &PlantPorts) -> anyhow::Result<()> {
         let tick = self.sim_tick;
         ports.commands.drain(|r| {
-            if r.invalid.is_some() {
+            let invalid = match &r.invalid {
+                Some(e) => Some(e.to_string()),
+                None if r.sample.flags & wire::FLAG_COMMAND_REFUSED != 0 => None,
+                None => wire::check_command(&self.signals, &r.sample).err(),
+            };
+            if let Some(why) = invalid {
+                if self.rec.counters.get("commands_invalid").is_none_or(|n| *n == 0) {
+                    self.events.emit(Some(tick), "command-invalid", format!("{why}; the plant holds its last command"));
+                }
                 self.rec.count("commands_invalid", 1);
                 return;
             }
@@ -539,7 +547,7 @@ impl PlantLoop {
             self.rec.count("commands_refused_held", 1);
             return true;
         }
-        self.applied = actuator_command(&fresh, self.throttle);
+        self.applied = actuator_command(&fresh);
         self.applied_answers = Some(target);
         let w = &mut self.watchdog;
         w.last_fresh_ns = monotonic_ns();
@@ -641,7 +649,7 @@ impl PlantLoop {
 pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     signals::install_termination_flag();
     let mut plant = PlantLoop::setup(args)?;
-    let mut ports = PlantPorts::connect(args)?;
+    let mut ports = PlantPorts::connect(args, &plant.info)?;
     let ended = if ports.wait_for_peers(args.options.startup_timeout_s)? {
         if args.resume {
             plant.resume_from_checkpoint()?;

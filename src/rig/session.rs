@@ -1,6 +1,7 @@
 //! The controller's side of a run, for any controller: [`ControllerSession`] opens the run's streams, announces the
-//! controller's diagnostics, hands out plant samples one at a time ([`ControllerSession::next_sample`]) and takes
-//! one command in answer to each ([`ControllerSession::send`]). Everything a controller should not have to write
+//! controller's diagnostics, waits for the plant's announcement of its signals ([`ControllerSession::plant`]: what
+//! the controller finds its outputs and inputs in, by name), hands out plant samples one at a time
+//! ([`ControllerSession::next_sample`]) and takes one command in answer to each ([`ControllerSession::send`]). Everything a controller should not have to write
 //! lives here: header stamps, validation (a NaN or out-of-range command is refused, never sent), the in-loop faults
 //! of the plan (delay, jitter, drop), the bumpless blend after a restart, checkpoint files, staleness of the plant,
 //! stop requests (SIGTERM/SIGINT, the end of the run) and the timing report. `silrig-controller` is one user of it
@@ -17,13 +18,16 @@ use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, signals};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
+use silrig_flight::signals::PlantSignals;
 use silrig_wire::clock::monotonic_ns;
 use silrig_wire::ipc::{self, IpcError, StreamPublisher, StreamService, StreamSubscriber, WaitOutcome};
 use silrig_wire::topology::Stream;
-use silrig_wire::wire::{self, CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, PlantSample, WireSample};
+use silrig_wire::wire::{
+    self, CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, MAX_INPUTS, PlantInfo, PlantSample, WireSample,
+};
 use std::time::Duration;
 
-/// How long a controller joining a running plant blends from the current surface positions to its command, s.
+/// How long a controller joining a running plant blends from the current actuator positions to its command, s.
 pub const BUMPLESS_BLEND_S: f64 = 0.5;
 
 /// Where a controller's state came from when it started.
@@ -44,15 +48,6 @@ const CHECKPOINT_EVERY_TICKS: u64 = 10;
 
 const IPC_PLANT_TO_CONTROLLER: usize = 0;
 const COMPUTE: usize = 1;
-
-/// What a controller commands for one plant sample.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ControlCommand {
-    /// Surfaces, deg: aileron, elevator, rudder.
-    pub surface_cmd_deg: [f64; 3],
-    /// Throttle, 0..1.
-    pub throttle_cmd: f64,
-}
 
 /// Why a session stops handing out samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -83,9 +78,9 @@ pub enum SessionError {
     /// The client was built against another contract than this library.
     #[error("{0}")]
     Layout(String),
-    /// No plant sample arrived in time after opening.
+    /// No plant announced itself, or sent a sample, in time after opening.
     #[error(
-        "no plant sample on run `{run}` within {waited_s} s: is the rig running with this run id? (start it first, \
+        "no plant on run `{run}` within {waited_s} s: is the rig running with this run id? (start it first, \
          e.g. `silrig run --controller external`, and give the controller the SILRIG_* variables it prints)"
     )]
     NoRig {
@@ -111,6 +106,10 @@ pub enum SessionError {
     /// The API was used out of order or with wrong sizes.
     #[error("{0}")]
     Usage(String),
+    /// The plant's announcement does not fit: unreadable, a signal the controller asks for is missing, or a
+    /// restarted plant announced other signals.
+    #[error("{0}")]
+    Plant(String),
     /// The transport failed.
     #[error(transparent)]
     Transport(#[from] IpcError),
@@ -144,11 +143,14 @@ pub enum Status {
     ErrTransport = -7,
     /// A bug in the library (a panic was caught at the boundary).
     ErrInternal = -8,
+    /// The plant's signals do not fit: a name the controller asks for is missing, or a restarted plant announced
+    /// other signals.
+    ErrPlant = -9,
 }
 
 impl Status {
     /// Every status, in code order of appearance.
-    pub const ALL: [Status; 11] = [
+    pub const ALL: [Status; 12] = [
         Status::Ok,
         Status::Stopped,
         Status::RunEnded,
@@ -160,6 +162,7 @@ impl Status {
         Status::ErrCommandRefused,
         Status::ErrTransport,
         Status::ErrInternal,
+        Status::ErrPlant,
     ];
 
     /// The code the C ABI returns.
@@ -181,6 +184,7 @@ impl Status {
             Status::ErrCommandRefused => "ERR_COMMAND_REFUSED",
             Status::ErrTransport => "ERR_TRANSPORT",
             Status::ErrInternal => "ERR_INTERNAL",
+            Status::ErrPlant => "ERR_PLANT",
         }
     }
 
@@ -193,11 +197,12 @@ impl Status {
             Status::ErrUsage => "API misuse: NULL pointer, command without a sample, wrong count",
             Status::ErrLayout => "built against another contract (layout version or sample sizes)",
             Status::ErrSetup => "SILRIG_* variables, scenario or diagnostics unusable",
-            Status::ErrNoRig => "no plant sample within twice the startup timeout",
+            Status::ErrNoRig => "no plant announced itself within twice the startup timeout",
             Status::ErrSecondController => "the run has a controller already",
             Status::ErrCommandRefused => "command refused (NaN, infinity, out of range), not sent; plant holds",
             Status::ErrTransport => "the transport failed",
             Status::ErrInternal => "a bug in the library (a panic caught at the boundary)",
+            Status::ErrPlant => "the plant lacks a signal asked for, or a restarted plant announced other signals",
         }
     }
 }
@@ -212,6 +217,7 @@ impl SessionError {
             SessionError::SecondController { .. } => Status::ErrSecondController,
             SessionError::CommandRefused { .. } => Status::ErrCommandRefused,
             SessionError::Usage(_) => Status::ErrUsage,
+            SessionError::Plant(_) => Status::ErrPlant,
             SessionError::Transport(_) => Status::ErrTransport,
         }
     }
@@ -221,7 +227,8 @@ impl SessionError {
 #[derive(Debug, Clone, Copy)]
 struct Pending {
     tick: u64,
-    surfaces_deg: [f64; 3],
+    /// Per input, the position its actuator holds now (its held output), or NaN where the plant reports none.
+    held: [f64; MAX_INPUTS],
     delivered_ns: u64,
 }
 
@@ -232,6 +239,9 @@ pub struct ControllerSession {
     scenario: Scenario,
     plant_stream: StreamService<PlantSample>,
     samples: StreamSubscriber<PlantSample>,
+    plant_info: StreamSubscriber<PlantInfo>,
+    /// What the plant announced, once it has ([`ControllerSession::plant`]).
+    plant: Option<PlantSignals>,
     commands: StreamPublisher<CommandSample>,
     // Held for the run, so a second controller is refused before it could announce other names.
     announcer: StreamPublisher<ControllerInfo>,
@@ -256,7 +266,7 @@ pub struct ControllerSession {
     last_tick: Option<(u64, u64)>,
     pending: Option<Pending>,
     /// The last command sent; what a refused command is replaced by.
-    last_sent: Option<ControlCommand>,
+    last_sent: Option<[f64; MAX_INPUTS]>,
     /// Consecutive refused commands (an event marks the first of each run).
     refusing: u64,
     opened_ns: u64,
@@ -286,6 +296,8 @@ impl ControllerSession {
         let info_stream = ipc::open_stream::<ControllerInfo>(&node, Stream::ControllerInfo)?;
         let mut announcer = info_stream.publisher().map_err(|_| SessionError::SecondController { run: run.clone() })?;
         let samples = plant_stream.subscriber(Stream::Plant.queue_depth(Role::Controller))?;
+        let plant_info = ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?
+            .subscriber(Stream::PlantInfo.queue_depth(Role::Controller))?;
         announcer.send(0, &info)?;
         let commands = command_stream.publisher().map_err(|_| SessionError::SecondController { run })?;
 
@@ -351,6 +363,8 @@ impl ControllerSession {
             plant_ended: false,
             plant_stream,
             samples,
+            plant_info,
+            plant: None,
             commands,
             announcer,
             info,
@@ -411,6 +425,9 @@ impl ControllerSession {
         if self.pending.take().is_some() {
             self.rec.count("samples_unanswered", 1);
         }
+        if !self.wait_for_plant()? {
+            return Ok(self.stop(StopReason::TerminationRequested));
+        }
         // Every sample waiting is taken at each wake-up, so waiting first costs nothing: a sample that came since
         // has left a wake-up behind.
         loop {
@@ -432,6 +449,71 @@ impl ControllerSession {
         }
     }
 
+    /// The plant's signals as it announced them, waiting for the announcement if it has not come yet (as long as
+    /// [`Self::next_sample`] waits for a first sample). A controller looks up the outputs it reads and the inputs it
+    /// commands here, by name ([`PlantSignals::output`], [`PlantSignals::input`]).
+    pub fn plant(&mut self) -> Result<&PlantSignals, SessionError> {
+        if !self.wait_for_plant()? {
+            return Err(SessionError::Setup("terminated by signal before the plant announced its signals".into()));
+        }
+        Ok(self.plant.as_ref().expect("announced"))
+    }
+
+    /// Wait until the plant has announced itself; false when a stop request came first.
+    fn wait_for_plant(&mut self) -> Result<bool, SessionError> {
+        loop {
+            self.take_announcements()?;
+            if self.plant.is_some() {
+                return Ok(true);
+            }
+            if signals::termination_requested() {
+                return Ok(false);
+            }
+            self.give_up_without_rig()?;
+            // The announcement reaches a late subscriber from the stream's history, which wakes no listener.
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    /// Take the plant's announcements: the first says what the plant is; a later plant epoch (a restart) must say
+    /// the same, since this controller found its signals by name in the first.
+    fn take_announcements(&mut self) -> Result<(), SessionError> {
+        let mut announced = Vec::new();
+        self.plant_info.drain(|r| announced.push(*r))?;
+        for r in announced {
+            let signals = r
+                .sample
+                .signals()
+                .map_err(|e| SessionError::Plant(format!("the plant's announcement is refused: {e}")))?;
+            if let Some(e) = r.invalid {
+                return Err(SessionError::Plant(format!("the plant's announcement is refused: {e}")));
+            }
+            match &self.plant {
+                None => self.plant = Some(signals),
+                Some(known) if *known != signals => {
+                    return Err(SessionError::Plant(format!(
+                        "a restarted plant (epoch {}) announces plant {} with other signals than plant {} this \
+                         controller started with",
+                        r.sample.header.epoch, signals.plant, known.plant
+                    )));
+                }
+                Some(_) => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Before any sample: give up after twice the startup timeout (no rig runs with this run id).
+    fn give_up_without_rig(&mut self) -> Result<(), SessionError> {
+        let waited_s = (monotonic_ns() - self.opened_ns) as f64 / 1e9;
+        let limit_s = 2.0 * self.args.options.startup_timeout_s;
+        if waited_s > limit_s {
+            self.no_rig = true;
+            return Err(SessionError::NoRig { run: self.args.run_id.to_string(), waited_s: limit_s });
+        }
+        Ok(())
+    }
+
     fn stop(&mut self, reason: StopReason) -> Next {
         let ended = match reason {
             StopReason::TerminationRequested => "terminated by signal",
@@ -443,6 +525,7 @@ impl ControllerSession {
 
     /// Take what waits; hand out the newest valid sample of a tick not handed out yet.
     fn take_newest(&mut self) -> Result<Option<PlantSample>, SessionError> {
+        self.take_announcements()?;
         let mut newest = None;
         let mut fresh = 0u64;
         let mut invalid = 0u64;
@@ -472,8 +555,12 @@ impl ControllerSession {
         }
         self.note_plant(h.epoch, h.tick);
         self.rec.record(IPC_PLANT_TO_CONTROLLER, r.age_ns() as i64);
-        self.pending =
-            Some(Pending { tick: h.tick, surfaces_deg: r.sample.surfaces_deg, delivered_ns: monotonic_ns() });
+        let mut held = [f64::NAN; MAX_INPUTS];
+        let plant = self.plant.as_ref().expect("announced before any sample is taken");
+        for (slot, input) in held.iter_mut().zip(&plant.inputs) {
+            *slot = input.held_output.and_then(|o| r.sample.outputs().get(o).copied()).unwrap_or(f64::NAN);
+        }
+        self.pending = Some(Pending { tick: h.tick, held, delivered_ns: monotonic_ns() });
         Ok(Some(r.sample))
     }
 
@@ -510,13 +597,7 @@ impl ControllerSession {
     /// the plant stale once, and clean up its node if it died so a restarted plant can take its place.
     fn on_plant_silent(&mut self) -> Result<(), SessionError> {
         let Some((_, tick)) = self.last_tick else {
-            let waited_s = (monotonic_ns() - self.opened_ns) as f64 / 1e9;
-            let limit_s = 2.0 * self.args.options.startup_timeout_s;
-            if waited_s > limit_s {
-                self.no_rig = true;
-                return Err(SessionError::NoRig { run: self.args.run_id.to_string(), waited_s: limit_s });
-            }
-            return Ok(());
+            return self.give_up_without_rig();
         };
         self.rec.count("plant_stale_deadlines", 1);
         if !self.plant_stale {
@@ -528,47 +609,71 @@ impl ControllerSession {
         Ok(())
     }
 
-    /// Answer the sample [`Self::next_sample`] handed out: blend while joining, stamp, validate, apply the plan's
-    /// in-loop faults, publish. `diagnostics` holds one value per announced name. A command with NaN, infinity or
-    /// a value out of range is refused: what goes out instead is a marker (`FLAG_COMMAND_REFUSED`) that tells the
-    /// plant to hold its last valid command for this tick, so a lockstep run goes on; it is counted, the first of
-    /// a series is an event, and the error says why.
-    pub fn send(&mut self, command: &ControlCommand, diagnostics: &[f64]) -> Result<(), SessionError> {
+    /// Where each input's actuator is now, in the sample being answered, or the plant's hold value where it reports
+    /// none: a command that leaves an input as it is. Before any sample, the hold values.
+    pub fn held_command(&self) -> Vec<f64> {
+        let Some(plant) = &self.plant else { return Vec::new() };
+        let held = self.pending.map(|p| p.held);
+        plant
+            .inputs
+            .iter()
+            .enumerate()
+            .map(|(k, input)| held.map(|h| h[k]).filter(|v| v.is_finite()).unwrap_or(input.hold))
+            .collect()
+    }
+
+    /// Answer the sample [`Self::next_sample`] handed out with one value per plant input, in the order of
+    /// [`Self::plant`]'s inputs: blend while joining, stamp, validate, apply the plan's in-loop faults, publish.
+    /// `diagnostics` holds one value per announced name. A command with NaN, infinity or a value outside its
+    /// input's range is refused: what goes out instead is a marker (`FLAG_COMMAND_REFUSED`) that tells the plant
+    /// to hold its last valid command for this tick, so a lockstep run goes on; it is counted, the first of a
+    /// series is an event, and the error says why.
+    pub fn send(&mut self, command: &[f64], diagnostics: &[f64]) -> Result<(), SessionError> {
         let Some(p) = self.pending.take() else {
             return Err(SessionError::Usage("a command answers a sample: call next_sample first".into()));
         };
-        if diagnostics.len() != self.diagnostics_len {
+        let plant = self.plant.as_ref().expect("announced before any sample is handed out");
+        let inputs = plant.inputs.len();
+        let wrong = if command.len() != inputs {
+            Some(format!("{} inputs given; plant {} takes {inputs}", command.len(), plant.plant))
+        } else if diagnostics.len() != self.diagnostics_len {
+            Some(format!("{} diagnostics given; {} were announced", diagnostics.len(), self.diagnostics_len))
+        } else {
+            None
+        };
+        if let Some(wrong) = wrong {
             self.pending = Some(p);
-            return Err(SessionError::Usage(format!(
-                "{} diagnostics given; {} were announced",
-                diagnostics.len(),
-                self.diagnostics_len
-            )));
+            return Err(SessionError::Usage(wrong));
         }
         let mut out = CommandSample { answers_tick: p.tick, ..CommandSample::zeroed() };
-        out.surface_cmd_deg = self.blended(p, command.surface_cmd_deg);
-        out.throttle_cmd = command.throttle_cmd;
+        out.inputs_len = inputs as u32;
+        self.blend_into(p, command, &mut out.inputs[..inputs]);
         out.diagnostics_len = self.diagnostics_len as u32;
         out.diagnostics[..self.diagnostics_len].copy_from_slice(diagnostics);
-        let refused = out.validate().err().map(|e| e.to_string());
+        let plant = self.plant.as_ref().expect("announced");
+        let refused = out.validate().map_err(|e| e.to_string()).and_then(|()| wire::check_command(plant, &out)).err();
         if let Some(reason) = &refused {
             self.rec.count("commands_refused", 1);
             if self.refusing == 0 {
                 self.events.emit(Some(p.tick), "command-refused", reason.clone());
             }
             self.refusing += 1;
-            let hold = self.last_sent.unwrap_or_default();
-            out = CommandSample { answers_tick: p.tick, flags: FLAG_COMMAND_REFUSED, ..CommandSample::zeroed() };
-            out.surface_cmd_deg = hold.surface_cmd_deg;
-            out.throttle_cmd = hold.throttle_cmd;
+            let mut hold = [0.0; MAX_INPUTS];
+            hold[..inputs].copy_from_slice(&plant.hold());
+            out = CommandSample {
+                answers_tick: p.tick,
+                flags: FLAG_COMMAND_REFUSED,
+                inputs_len: inputs as u32,
+                inputs: self.last_sent.unwrap_or(hold),
+                ..CommandSample::zeroed()
+            };
         } else {
             if self.refusing > 0 {
                 let detail = format!("valid commands again after {} refused", self.refusing);
                 self.events.emit(Some(p.tick), "command-accepted", detail);
             }
             self.refusing = 0;
-            self.last_sent =
-                Some(ControlCommand { surface_cmd_deg: out.surface_cmd_deg, throttle_cmd: out.throttle_cmd });
+            self.last_sent = Some(out.inputs);
         }
         out.compute_ns = monotonic_ns() - p.delivered_ns;
         self.rec.record(COMPUTE, out.compute_ns as i64);
@@ -579,14 +684,20 @@ impl ControllerSession {
         }
     }
 
-    /// While joining a flying plant: from the surfaces' current positions towards the command.
-    fn blended(&mut self, p: Pending, command_deg: [f64; 3]) -> [f64; 3] {
-        let Some(start) = self.blend else { return command_deg };
+    /// `command` into `out`, blended while joining a flying plant: from each actuator's current position towards
+    /// the command (inputs whose position the plant does not report take the command at once).
+    fn blend_into(&mut self, p: Pending, command: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(command);
+        let Some(start) = self.blend else { return };
         let k = ((p.tick - start + 1) as f64 / self.blend_ticks as f64).min(1.0);
         if k >= 1.0 {
             self.blend = None;
         }
-        std::array::from_fn(|i| p.surfaces_deg[i] + k * (command_deg[i] - p.surfaces_deg[i]))
+        for (value, held) in out.iter_mut().zip(p.held) {
+            if held.is_finite() {
+                *value = held + k * (*value - held);
+            }
+        }
     }
 
     /// Send the command, after any delay fault, unless a drop fault swallows it.

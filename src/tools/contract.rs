@@ -41,7 +41,7 @@ fn entry<T: WireType>(doc: &'static str) -> ContractType {
 }
 
 /// Every wire type, the header first (the others embed it).
-pub fn types() -> [ContractType; 5] {
+pub fn types() -> [ContractType; 6] {
     [
         entry::<wire::SampleHeader>("Bookkeeping that precedes every sample."),
         entry::<wire::PlantSample>("What the plant publishes every tick (stream `plant`)."),
@@ -51,6 +51,9 @@ pub fn types() -> [ContractType; 5] {
             "The names of a controller's diagnostics, announced once per epoch before its first command (stream \
              `controller-info`).",
         ),
+        entry::<wire::PlantInfo>(
+            "The plant's name and signals, announced once per epoch before its first sample (stream `plant-info`).",
+        ),
     ]
 }
 
@@ -59,14 +62,19 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
     vec![
         ("WIRE_LAYOUT_VERSION", u64::from(WIRE_LAYOUT_VERSION), "layout version; every header carries it"),
         ("FLAG_COMMAND_STALE", u64::from(wire::FLAG_COMMAND_STALE), "the applied command is older than allowed"),
-        ("FLAG_SATURATED", u64::from(wire::FLAG_SATURATED), "a surface or the throttle is at its position limit"),
+        ("FLAG_SATURATED", u64::from(wire::FLAG_SATURATED), "an input's actuator is at its position limit"),
         ("FLAG_FAILSAFE", u64::from(wire::FLAG_FAILSAFE), "the failsafe output is active"),
-        ("FLAG_RATE_LIMITED", u64::from(wire::FLAG_RATE_LIMITED), "a surface moved at its rate limit this tick"),
+        ("FLAG_RATE_LIMITED", u64::from(wire::FLAG_RATE_LIMITED), "an actuator moved at its rate limit this tick"),
         ("FLAG_COMMAND_REFUSED", u64::from(wire::FLAG_COMMAND_REFUSED), "command refused (NaN/out of range): hold"),
-        ("FLAG_END_OF_RUN", u64::from(wire::FLAG_END_OF_RUN), "the plant's last sample: last tick, its deflections"),
-        ("SURFACE_CMD_LIMIT_DEG", wire::SURFACE_CMD_LIMIT_DEG as u64, "|surface command| beyond this, deg: refused"),
+        ("FLAG_END_OF_RUN", u64::from(wire::FLAG_END_OF_RUN), "the plant's last sample: last tick, its positions"),
+        ("MAX_OUTPUTS", wire::MAX_OUTPUTS as u64, "outputs a plant sample carries at most"),
+        ("MAX_INPUTS", wire::MAX_INPUTS as u64, "inputs a command sample carries at most"),
         ("MAX_DIAGNOSTICS", wire::MAX_DIAGNOSTICS as u64, "diagnostics a command sample carries at most"),
-        ("DIAGNOSTIC_NAME_BYTES", wire::DIAGNOSTIC_NAME_BYTES as u64, "bytes of a diagnostic name, NUL-padded"),
+        ("NAME_BYTES", wire::NAME_BYTES as u64, "bytes of a plant, signal or diagnostic name, NUL-padded"),
+        ("UNIT_BYTES", wire::UNIT_BYTES as u64, "bytes of a unit, NUL-padded"),
+        ("OUTPUT_IN_TRACE", u64::from(wire::OUTPUT_IN_TRACE), "PlantInfo.output_flags: a trace.csv column"),
+        ("INPUT_COMMAND_IN_TRACE", u64::from(wire::INPUT_COMMAND_IN_TRACE), "PlantInfo.input_flags: command traced"),
+        ("NO_OUTPUT", u64::from(wire::NO_OUTPUT), "PlantInfo.input_held_output: no position reported"),
         ("EVENT_SAMPLE_SENT", StreamEvent::SampleSent.id() as u64, "event id to notify after every send"),
         ("EVENT_FINISHED", StreamEvent::Finished.id() as u64, "event id: the plant has published its last tick"),
         ("EVENT_PUBLISHER_DEAD", StreamEvent::PublisherDead.id() as u64, "event id of a cleaned-up dead publisher"),
@@ -74,7 +82,7 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
 }
 
 /// The rules of the sample header, for people (every rendering carries them as comments).
-pub const HEADER_RULES: [&str; 8] = [
+pub const HEADER_RULES: [&str; 9] = [
     "seq: starts at 0 for each publisher epoch and grows by 1 per sample sent; a jump means samples were lost",
     "tick: the plant tick the sample belongs to; a command carries the tick it answers (= answers_tick)",
     "t_send_ns: CLOCK_MONOTONIC at publish, ns (the one clock shared by every process of the machine)",
@@ -82,7 +90,22 @@ pub const HEADER_RULES: [&str; 8] = [
     "layout_version: WIRE_LAYOUT_VERSION; a peer of another version is refused by its type names already",
     "_pad and every other padding field: 0",
     "after each send, notify the stream's event service with EVENT_SAMPLE_SENT; never send NaN or infinity",
-    "a command's surfaces lie within +-SURFACE_CMD_LIMIT_DEG and its throttle within 0..1, or it is refused",
+    "a plant sample carries every output the plant announced (outputs_len = PlantInfo.outputs_len), in its order",
+    "a command carries one value per input the plant announced (inputs_len = PlantInfo.inputs_len), in its order, \
+     each within the input's min..max, or it is refused",
+];
+
+/// How peers find each other's signals, for people (the text rendering carries it).
+pub const SIGNAL_RULES: [&str; 4] = [
+    "the plant announces PlantInfo on stream plant-info once per epoch, before its first sample; a reader that \
+     joins later gets it from the stream's history (history 1: the plant calls update_connections every tick)",
+    "names: ASCII letters, digits and '_', unique among the outputs and among the inputs; units: printable ASCII \
+     without comma or quote",
+    "a controller reads PlantInfo before answering a sample and finds the outputs it reads and the inputs it \
+     commands by name, never by position; a restarted plant must announce the same signals",
+    "trace.csv's columns: t_s, the traced outputs that are no input's position, the traced commands \
+     (<input>_cmd_<unit>, or <input>_cmd when the unit is not a word), the traced positions, flight_segment, the \
+     controller's diagnostics",
 ];
 
 /// The contract as text for people.
@@ -121,9 +144,13 @@ pub fn text() -> String {
     for rule in HEADER_RULES {
         let _ = writeln!(out, "  - {rule}");
     }
+    out += "\nSignals:\n";
+    for rule in SIGNAL_RULES {
+        let _ = writeln!(out, "  - {rule}");
+    }
     out += "\nConstants:\n";
     for (name, value, meaning) in constants() {
-        let _ = writeln!(out, "  {name:<22} {value:>5}  {meaning}");
+        let _ = writeln!(out, "  {name:<22} {value:>10}  {meaning}");
     }
     out += "\nStatus codes of libsilrig_client.so (0 and above: no error; below 0: see silrig_last_error()):\n";
     for st in Status::ALL {
@@ -329,7 +356,7 @@ mod tests {
         assert_eq!(array_shape("[f64; 13]", 104), ("f64", vec![13]));
         assert_eq!(array_shape("[f64; 3 * N]", 384), ("f64", vec![48]));
         assert_eq!(array_shape("[[u8; 32]; 4]", 128), ("u8", vec![4, 32]));
-        assert_eq!(array_shape("[[u8; DIAGNOSTIC_NAME_BYTES]; MAX_DIAGNOSTICS]", 2048), ("u8", vec![64, 32]));
+        assert_eq!(array_shape("[[u8; NAME_BYTES]; MAX_DIAGNOSTICS]", 2048), ("u8", vec![64, 32]));
         assert_eq!(c_struct_name("LogAckSample"), "silrig_log_ack_sample_t");
     }
 

@@ -10,6 +10,7 @@
 use anyhow::Context;
 use serde::Serialize;
 use silrig_flight::role::Role;
+use silrig_flight::signals::PlantSignals;
 use silrig_launch::program::binary_dir;
 use silrig_launch::supervision::start_process;
 use silrig_launch::{launcher::fresh_run_id, supervision::ControllerLaunch};
@@ -17,7 +18,7 @@ use silrig_rig::{ProcessArgs, ProcessOptions, RigMode};
 use silrig_wire::ipc::{self, RunId};
 use silrig_wire::recording::reader::RecordedRun;
 use silrig_wire::topology::Stream;
-use silrig_wire::wire::{self, CommandSample, PlantSample, SURFACE_NAMES};
+use silrig_wire::wire::{self, CommandSample, PlantInfo, PlantSample};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -179,6 +180,7 @@ fn fresh_out_dir(run_dir: &Path) -> PathBuf {
 /// Compares replayed commands with recorded ones, field by field, in tick order.
 struct Comparison {
     names: Vec<String>,
+    inputs: usize,
     tolerance: f64,
     fields: Vec<FieldDifference>,
     first: Option<Divergence>,
@@ -187,23 +189,25 @@ struct Comparison {
 }
 
 impl Comparison {
-    fn new(diagnostic_names: &[String], tolerance: f64) -> Self {
-        let names: Vec<String> = SURFACE_NAMES
-            .iter()
-            .map(|s| format!("{s}_cmd_deg"))
-            .chain(["throttle_cmd".to_string(), "diagnostics_len".to_string()])
+    /// The fields compared: each input's command (named as its trace column), the diagnostics count, each
+    /// diagnostic.
+    fn new(plant: &PlantSignals, diagnostic_names: &[String], tolerance: f64) -> Self {
+        let names: Vec<String> = (0..plant.inputs.len())
+            .map(|k| plant.command_column(k))
+            .chain(["diagnostics_len".to_string()])
             .chain(diagnostic_names.iter().cloned())
             .collect();
+        let inputs = plant.inputs.len();
         let fields = names
             .iter()
             .map(|n| FieldDifference { field: n.clone(), max_abs_difference: 0.0, at_tick: 0, ticks_differing: 0 })
             .collect();
-        Self { names, tolerance, fields, first: None, compared: 0, identical: 0 }
+        Self { names, inputs, tolerance, fields, first: None, compared: 0, identical: 0 }
     }
 
-    fn values(c: &CommandSample, n_diagnostics: usize) -> Vec<f64> {
-        let mut v = c.surface_cmd_deg.to_vec();
-        v.push(c.throttle_cmd);
+    fn values(c: &CommandSample, inputs: usize, n_diagnostics: usize) -> Vec<f64> {
+        // An input past the ones in use is compared as NaN, as a diagnostic is.
+        let mut v: Vec<f64> = (0..inputs).map(|i| c.inputs().get(i).copied().unwrap_or(f64::NAN)).collect();
         v.push(f64::from(c.diagnostics_len));
         // A diagnostic past the ones in use is compared as NaN, so a changed count shows in each of them too.
         v.extend((0..n_diagnostics).map(|i| c.diagnostics().get(i).copied().unwrap_or(f64::NAN)));
@@ -212,8 +216,8 @@ impl Comparison {
 
     fn add(&mut self, sample: &PlantSample, recorded: &CommandSample, replayed: &CommandSample) {
         let tick = sample.header.tick;
-        let n = self.names.len() - 5;
-        let (r, p) = (Self::values(recorded, n), Self::values(replayed, n));
+        let n = self.names.len() - self.inputs - 1;
+        let (r, p) = (Self::values(recorded, self.inputs, n), Self::values(replayed, self.inputs, n));
         self.compared += 1;
         let mut identical = true;
         for (i, (r, p)) in r.iter().zip(&p).enumerate() {
@@ -254,6 +258,7 @@ struct ReplayRig {
     run_id: RunId,
     child: silrig_launch::supervision::ChildProcess,
     publisher: ipc::StreamPublisher<PlantSample>,
+    announcer: ipc::StreamPublisher<PlantInfo>,
     commands: ipc::StreamSubscriber<CommandSample>,
     command_stream: ipc::StreamService<CommandSample>,
     out_dir: PathBuf,
@@ -263,16 +268,22 @@ struct ReplayRig {
 
 impl ReplayRig {
     /// Open a fresh run as its plant and start the controller on it; on failure nothing of the run is left.
-    fn start(opts: &ReplayOptions, scenario_path: &Path, out_dir: &Path) -> anyhow::Result<Self> {
+    fn start(opts: &ReplayOptions, info: &PlantInfo, scenario_path: &Path, out_dir: &Path) -> anyhow::Result<Self> {
         let run_id = fresh_run_id();
-        let started = Self::open(run_id.clone(), opts, scenario_path, out_dir);
+        let started = Self::open(run_id.clone(), opts, info, scenario_path, out_dir);
         if started.is_err() {
             let _ = ipc::cleanup_run(&run_id);
         }
         started
     }
 
-    fn open(run_id: RunId, opts: &ReplayOptions, scenario_path: &Path, out_dir: &Path) -> anyhow::Result<Self> {
+    fn open(
+        run_id: RunId,
+        opts: &ReplayOptions,
+        info: &PlantInfo,
+        scenario_path: &Path,
+        out_dir: &Path,
+    ) -> anyhow::Result<Self> {
         let args = ProcessArgs {
             config: Some(scenario_path.to_path_buf()),
             run_id: run_id.clone(),
@@ -286,13 +297,26 @@ impl ReplayRig {
         let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
         let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
         let publisher = plant_stream.publisher().context("the plant stream")?;
+        // The recorded plant's announcement, as its plant made it: the controller finds its signals there.
+        let mut announcer =
+            ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?.publisher().context("the plant-info stream")?;
+        announcer.send(0, info)?;
         let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Plant))?;
         let launch = opts.controller_cmd.clone().map_or(ControllerLaunch::Ours, ControllerLaunch::Command);
         let log_path = out_dir.join(format!("{}.stderr.log", Role::Controller));
         let log = std::fs::File::create(&log_path).with_context(|| format!("creating {}", log_path.display()))?;
         let child =
             start_process(Role::Controller, &launch, &args, &binary_dir()?, log.try_clone()?.into(), log.into())?;
-        Ok(Self { run_id, child, publisher, commands, command_stream, out_dir: out_dir.to_path_buf(), _node: node })
+        Ok(Self {
+            run_id,
+            child,
+            publisher,
+            announcer,
+            commands,
+            command_stream,
+            out_dir: out_dir.to_path_buf(),
+            _node: node,
+        })
     }
 
     /// What the controller wrote to its log, for an error message.
@@ -314,6 +338,7 @@ impl ReplayRig {
     fn wait_connected(&mut self, timeout: Duration) -> anyhow::Result<()> {
         let deadline = std::time::Instant::now() + timeout;
         while self.command_stream.number_of_publishers() == 0 {
+            self.announcer.deliver_history()?;
             self.ensure_alive("it to connect")?;
             anyhow::ensure!(
                 std::time::Instant::now() < deadline,
@@ -329,6 +354,7 @@ impl ReplayRig {
     /// Send one recorded sample and wait for the command answering it.
     fn answer(&mut self, sample: &PlantSample, timeout: Duration) -> anyhow::Result<CommandSample> {
         let tick = sample.header.tick;
+        self.announcer.deliver_history()?;
         self.publisher.send(tick, sample)?;
         let deadline_ns = silrig_wire::clock::monotonic_ns() + timeout.as_nanos() as u64;
         loop {
@@ -396,8 +422,11 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<ReplayOutcome> {
     silrig_flight::scenario::Scenario::load(&scenario_path)
         .with_context(|| format!("the scenario in {} does not load", recorded.files[0].display()))?;
 
+    let plant = recorded.plant_signals()?;
+    let diagnostic_names = recorded.diagnostic_names()?;
+    let info = recorded.plant_info.expect("plant_signals found it");
     let timeout = Duration::from_secs_f64(opts.answer_timeout_s);
-    let mut rig = ReplayRig::start(opts, &scenario_path, &out_dir)?;
+    let mut rig = ReplayRig::start(opts, &info, &scenario_path, &out_dir)?;
     let run_id = rig.run_id.to_string();
     let mut replayed = Vec::with_capacity(recorded.plant.len());
     let flown = (|| -> anyhow::Result<()> {
@@ -411,7 +440,7 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<ReplayOutcome> {
     flown?;
     stopped?;
 
-    let mut comparison = Comparison::new(&recorded.diagnostic_names(), opts.tolerance);
+    let mut comparison = Comparison::new(&plant, &diagnostic_names, opts.tolerance);
     let mut without_command = 0;
     for (sample, answer) in recorded.plant.iter().zip(&replayed) {
         match recorded.commands.get(&sample.header.tick) {

@@ -23,7 +23,7 @@ pub const STREAM_SETTINGS: StreamSettings = StreamSettings {
     max_subscribers: 4,
     // Plant, controller, logger, supervisor, plus restarts waiting for cleanup.
     max_nodes: 8,
-    // The logger's queue; preallocated per subscriber (4 x 128 x 528 B at most, about 270 KB per stream).
+    // The logger's queue; preallocated per subscriber (4 x 128 x 3 KB at most for the plant's announcement, 1.5 MB).
     subscriber_max_buffer: LOGGER_BUFFER,
     // Readers copy each sample out and release it at once.
     subscriber_max_borrowed: 2,
@@ -44,11 +44,14 @@ pub enum Stream {
     LogAck,
     /// Controller -> logger: [`wire::ControllerInfo`], the names of its diagnostics, once per epoch.
     ControllerInfo,
+    /// Plant -> controller, logger: [`wire::PlantInfo`], its name and signals, once per epoch.
+    PlantInfo,
 }
 
 impl Stream {
     /// Every stream.
-    pub const ALL: [Stream; 4] = [Stream::Plant, Stream::Command, Stream::LogAck, Stream::ControllerInfo];
+    pub const ALL: [Stream; 5] =
+        [Stream::Plant, Stream::Command, Stream::LogAck, Stream::ControllerInfo, Stream::PlantInfo];
 
     /// Short name, as in messages.
     pub fn label(self) -> &'static str {
@@ -57,6 +60,7 @@ impl Stream {
             Stream::Command => "command",
             Stream::LogAck => "log-ack",
             Stream::ControllerInfo => "controller-info",
+            Stream::PlantInfo => "plant-info",
         }
     }
 
@@ -67,6 +71,7 @@ impl Stream {
             Stream::Command => "silrig/command",
             Stream::LogAck => "silrig/log-ack",
             Stream::ControllerInfo => "silrig/controller-info",
+            Stream::PlantInfo => "silrig/plant-info",
         }
     }
 
@@ -77,6 +82,7 @@ impl Stream {
             Stream::Command => wire::CommandSample::TYPE_NAME,
             Stream::LogAck => wire::LogAckSample::TYPE_NAME,
             Stream::ControllerInfo => wire::ControllerInfo::TYPE_NAME,
+            Stream::PlantInfo => wire::PlantInfo::TYPE_NAME,
         }
     }
 
@@ -87,6 +93,7 @@ impl Stream {
             Stream::Command => Role::Controller,
             Stream::LogAck => Role::Logger,
             Stream::ControllerInfo => Role::Controller,
+            Stream::PlantInfo => Role::Plant,
         }
     }
 
@@ -97,6 +104,7 @@ impl Stream {
             Stream::Command => &[(Role::Plant, CONSUMER_BUFFER), (Role::Logger, LOGGER_BUFFER)],
             Stream::LogAck => &[(Role::Plant, CONSUMER_BUFFER)],
             Stream::ControllerInfo => &[(Role::Logger, CONSUMER_BUFFER)],
+            Stream::PlantInfo => &[(Role::Controller, CONSUMER_BUFFER), (Role::Logger, CONSUMER_BUFFER)],
         }
     }
 

@@ -22,13 +22,13 @@ class FaultyPid(PidAttitude):
         self.fault = fault
 
     def step(self, sample, dt_s):
-        surfaces, throttle, diagnostics = super().step(sample, dt_s)
-        tick = sample.header.tick
+        commands, diagnostics = super().step(sample, dt_s)
+        tick = sample.tick
         if self.fault == "nan" and tick > 0 and tick % 100 == 0:
-            surfaces[0] = math.nan
+            commands["aileron"] = math.nan
         if self.fault == "slow":
             time.sleep(0.015)
-        return surfaces, throttle, diagnostics
+        return commands, diagnostics
 
 
 if __name__ == "__main__":

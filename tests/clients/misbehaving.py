@@ -5,7 +5,7 @@
 layout       opens with another layout version                  -> ERR_LAYOUT, exit 2
 size         opens with a plant sample size off by 8 bytes      -> ERR_LAYOUT, exit 2
 open         only opens a session (a second controller)          -> exit 2 with the error
-nan          sends NaN surfaces for ticks 100..=149, else holds the initial surfaces
+nan          sends a NaN aileron for ticks 100..=149, else holds every input where it is
 never        takes samples and never answers (no rig: ERR_NO_RIG, exit 2)
 """
 
@@ -42,10 +42,11 @@ def main(mode):
             while (sample := session.next_sample()) is not None:
                 if mode == "never":
                     continue
-                hold = hold or tuple(sample.surfaces_deg)
-                tick = sample.header.tick
-                surfaces = (math.nan, 0.0, 0.0) if 100 <= tick <= 149 else hold
-                session.send(surfaces, sample.throttle)
+                hold = hold or session.held_command()
+                command = list(hold)
+                if 100 <= sample.header.tick <= 149:
+                    command[session.input("aileron")] = math.nan
+                session.send(command)
     except silrig_client.SilrigError as e:
         print(f"status {e.code}: {e}", file=sys.stderr)
         return 2

@@ -19,7 +19,7 @@ from mcap.stream_reader import StreamReader
 
 def read(path):
     out = {"path": path, "complete": False, "error": None, "metadata": {}, "schemas": {}, "channels": {},
-           "counts": {}, "trace_columns": [], "trace": [], "plant": [], "command": [], "timing": [], "events": []}
+           "counts": {}, "trace_columns": [], "trace": [], "plant": [], "command": [], "timing": [], "events": [], "plant_info": None}
     schemas, topics = {}, {}
     with open(path, "rb") as f:
         try:
@@ -41,12 +41,19 @@ def read(path):
                     body = json.loads(record.data)
                     if topic == "/trace":
                         out["trace"].append([body[c] for c in out["trace_columns"]])
+                    elif topic == "/plant_info":
+                        out["plant_info"] = {
+                            "plant_name": body["plant_name"],
+                            "output_names": body["output_names"][:body["outputs_len"]],
+                            "input_names": body["input_names"][:body["inputs_len"]],
+                        }
                     elif topic == "/plant":
                         out["plant"].append({"tick": body["header"]["tick"], "t_sim_s": body["t_sim_s"],
-                                             "state": body["state"], "log_time": record.log_time})
+                                             "outputs": body["outputs"][:body["outputs_len"]],
+                                             "log_time": record.log_time})
                     elif topic == "/command":
                         out["command"].append({"answers_tick": body["answers_tick"],
-                                               "surface_cmd_deg": body["surface_cmd_deg"],
+                                               "inputs": body["inputs"][:body["inputs_len"]],
                                                "epoch": body["header"]["epoch"]})
                     elif topic == "/timing":
                         out["timing"].append(body)

@@ -95,6 +95,17 @@ impl<T: WireSample> StreamPublisher<T> {
         })
     }
 
+    /// Hand the last sample sent to subscribers that joined since (the stream's history), without sending: what
+    /// keeps a once-per-epoch announcement reaching a reader that started late or restarted.
+    pub fn deliver_history(&self) -> Result<(), IpcError> {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        self.publisher.update_connections().map_err(|e| IpcError::Transfer {
+            stream: self.stream,
+            op: "update connections",
+            detail: format!("{e:?}"),
+        })
+    }
+
     /// Epoch stamped into every sample.
     pub fn epoch(&self) -> u64 {
         self.epoch

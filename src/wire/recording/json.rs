@@ -1,7 +1,7 @@
 //! Wire samples as JSON and their JSON Schemas, built from each type's field table ([`crate::wire::WireField`]), so a
 //! field added to the wire appears in the recording without an edit here. Every field is written as received:
 //! numbers with the shortest text that reads back to the same bits (non-finite values as `null`), integers exactly,
-//! `SampleHeader` as a nested object, byte arrays (diagnostic names) as strings. `_pad` fields are left out.
+//! `SampleHeader` as a nested object, byte arrays (names and units) as strings. `_pad` fields are left out.
 //! [`sample_from_json`] is the inverse, which replay uses to send the recorded samples again bit for bit.
 
 use crate::wire::{SampleHeader, WireField, WireType};
@@ -65,9 +65,10 @@ fn shape(field: &WireField) -> Shape {
         Some((Element::Text, _)) => {
             let inner = inner.expect("matched");
             let per = inner.trim_start_matches('[').rsplit_once(';').map(|(_, n)| n.trim().trim_end_matches(']'));
-            // `[[u8; DIAGNOSTIC_NAME_BYTES]; MAX_DIAGNOSTICS]`: the string length is the constant's value.
+            // `[[u8; NAME_BYTES]; MAX_DIAGNOSTICS]`: the string length is the constant's value.
             let text_len = match per {
-                Some("DIAGNOSTIC_NAME_BYTES") => crate::wire::DIAGNOSTIC_NAME_BYTES,
+                Some("NAME_BYTES") => crate::wire::NAME_BYTES,
+                Some("UNIT_BYTES") => crate::wire::UNIT_BYTES,
                 Some(n) => n.parse().unwrap_or_else(|_| panic!("wire field {}: unknown length {n}", field.name)),
                 None => panic!("wire field {}: cannot read type {t}", field.name),
             };
@@ -300,14 +301,15 @@ pub fn sample_from_json<T: WireType + Copy>(value: &Value) -> Result<T, JsonFiel
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wire::{CommandSample, ControllerInfo, LogAckSample, PlantSample};
+    use crate::wire::{CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
 
     fn plant() -> PlantSample {
         let mut s = PlantSample::zeroed();
         s.header = SampleHeader { seq: 7, tick: 41, t_send_ns: u64::MAX - 3, epoch: 2, layout_version: 3, _pad: 0 };
-        s.state = std::array::from_fn(|i| 0.1 * i as f64 + 1.0 / 3.0);
-        s.state[4] = -0.0;
-        s.surfaces_deg = [-1e-300, 25.0, f64::MIN_POSITIVE];
+        s.outputs = std::array::from_fn(|i| 0.1 * i as f64 + 1.0 / 3.0);
+        s.outputs[4] = -0.0;
+        s.outputs[5..8].copy_from_slice(&[-1e-300, 25.0, f64::MIN_POSITIVE]);
+        s.outputs_len = 20;
         s.t_sim_s = 0.41;
         s.flags = 0b101;
         s.wake_lateness_ns = -12;
@@ -331,14 +333,18 @@ mod tests {
     #[test]
     fn non_finite_numbers_are_null_and_read_back_as_nan() {
         let mut c = CommandSample::zeroed();
-        c.surface_cmd_deg = [f64::NAN, f64::INFINITY, 1.5];
+        c.inputs_len = 3;
+        c.inputs[..3].copy_from_slice(&[f64::NAN, f64::INFINITY, 1.5]);
         c.diagnostics_len = 2;
         c.diagnostics[1] = -2.25;
         let value: Value = serde_json::from_str(&sample_json(&c, &[])).expect("valid JSON");
-        assert_eq!(value["surface_cmd_deg"], serde_json::json!([null, null, 1.5]));
+        assert_eq!(
+            value["inputs"].as_array().unwrap()[..3],
+            serde_json::json!([null, null, 1.5]).as_array().unwrap()[..]
+        );
         assert_eq!(value["diagnostics"].as_array().map(Vec::len), Some(crate::wire::MAX_DIAGNOSTICS));
         let back: CommandSample = sample_from_json(&value).expect("fits");
-        assert!(back.surface_cmd_deg[0].is_nan() && back.surface_cmd_deg[1].is_nan());
+        assert!(back.inputs[0].is_nan() && back.inputs[1].is_nan() && back.inputs[2] == 1.5);
         assert_eq!(back.diagnostics[1], -2.25);
     }
 
@@ -358,6 +364,7 @@ mod tests {
             (sample_schema::<PlantSample>(&[("t_recv_ns", "received")]), PlantSample::FIELDS),
             (sample_schema::<CommandSample>(&[]), CommandSample::FIELDS),
             (sample_schema::<ControllerInfo>(&[]), ControllerInfo::FIELDS),
+            (sample_schema::<PlantInfo>(&[]), PlantInfo::FIELDS),
             (sample_schema::<LogAckSample>(&[]), LogAckSample::FIELDS),
         ] {
             let properties = schema["properties"].as_object().expect("properties");
@@ -366,19 +373,19 @@ mod tests {
             }
         }
         let plant = sample_schema::<PlantSample>(&[]);
-        assert_eq!(plant["properties"]["state"]["maxItems"], 13);
+        assert_eq!(plant["properties"]["outputs"]["maxItems"], crate::wire::MAX_OUTPUTS);
         assert_eq!(plant["properties"]["header"]["properties"]["seq"]["type"], "integer");
-        assert!(plant["properties"]["state"]["description"].as_str().is_some_and(|d| d.contains("alpha_rad")));
+        assert!(plant["properties"]["outputs"]["description"].as_str().is_some_and(|d| d.contains("announced")));
     }
 
     #[test]
     fn a_field_of_the_wrong_kind_is_named() {
         let mut value: Value = serde_json::from_str(&sample_json(&plant(), &[])).expect("valid JSON");
-        value["state"][2] = Value::String("x".into());
+        value["outputs"][2] = Value::String("x".into());
         let err = sample_from_json::<PlantSample>(&value).expect_err("refused").to_string();
-        assert!(err.contains("`state`") && err.contains("expected a number"), "{err}");
+        assert!(err.contains("`outputs`") && err.contains("expected a number"), "{err}");
         value.as_object_mut().expect("object").remove("flags");
         let err = sample_from_json::<PlantSample>(&value).expect_err("refused").to_string();
-        assert!(err.contains("`flags`") || err.contains("`state`"), "{err}");
+        assert!(err.contains("`flags`"), "{err}");
     }
 }

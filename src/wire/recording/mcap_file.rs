@@ -13,7 +13,7 @@ use super::{
     LoggedRow, RecordingMeta, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, meta_keys, recording_file_name,
     timing_values, topics,
 };
-use crate::wire::{CommandSample, PlantSample, WIRE_LAYOUT_VERSION};
+use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 /// Channel ids of the topics.
 struct Channels {
     plant: u16,
+    plant_info: u16,
     command: u16,
     timing: u16,
     events: u16,
@@ -88,11 +89,13 @@ impl McapSink {
             writer.add_channel(schema_id, topic, "json", &BTreeMap::new())
         };
         let plant = add(topics::PLANT, "silrig.PlantSample", sample_schema::<PlantSample>(&[RECEIVE_STAMP]));
+        let plant_info = add(topics::PLANT_INFO, "silrig.PlantInfo", sample_schema::<PlantInfo>(&[]));
         let command = add(topics::COMMAND, "silrig.CommandSample", sample_schema::<CommandSample>(&[RECEIVE_STAMP]));
         let timing = add(topics::TIMING, "silrig.Timing", timing_schema());
         let events = add(topics::EVENTS, "silrig.Event", event_schema());
         let channels = Channels {
             plant: plant.map_err(named)?,
+            plant_info: plant_info.map_err(named)?,
             command: command.map_err(named)?,
             timing: timing.map_err(named)?,
             events: events.map_err(named)?,
@@ -203,6 +206,11 @@ fn trace_schema(columns: &[String]) -> Value {
 }
 
 impl RowSink for McapSink {
+    fn plant(&mut self, info: &PlantInfo) -> std::io::Result<()> {
+        let t_send = info.header.t_send_ns;
+        self.write(self.channels.plant_info, t_send, t_send, sample_json(info, &[]).as_bytes())
+    }
+
     fn start(&mut self, trace_columns: &[String]) -> std::io::Result<()> {
         if self.channels.trace.is_none() {
             let schema = schema_bytes(&trace_schema(trace_columns));

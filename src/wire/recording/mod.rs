@@ -11,7 +11,7 @@ pub mod mcap_file;
 pub mod reader;
 
 use crate::ipc::Received;
-use crate::wire::{CommandSample, PlantSample};
+use crate::wire::{CommandSample, PlantInfo, PlantSample};
 use std::path::{Path, PathBuf};
 
 /// One row the logger writes: a plant sample as received, the command that answered it (if one did), and the
@@ -31,6 +31,10 @@ pub struct LoggedRow<'a> {
 /// Where the logger's rows go. Rows come in tick order; `flush` is called every few rows and at the end, and what a
 /// sink has flushed must survive the logger being killed right after.
 pub trait RowSink {
+    /// The plant's announcement, once, before the first row.
+    fn plant(&mut self, _info: &PlantInfo) -> std::io::Result<()> {
+        Ok(())
+    }
     /// The trace's columns, before the first row.
     fn start(&mut self, trace_columns: &[String]) -> std::io::Result<()>;
     /// One row.
@@ -150,6 +154,8 @@ pub mod topics {
     pub const PLANT: &str = "/plant";
     /// The command answering each row's plant sample, as received.
     pub const COMMAND: &str = "/command";
+    /// The plant's announcement of its signals, once.
+    pub const PLANT_INFO: &str = "/plant_info";
     /// The trace row (`trace.csv`'s columns).
     pub const TRACE: &str = "/trace";
     /// Per-tick stamps (`timing.csv`'s columns).

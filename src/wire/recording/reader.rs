@@ -5,7 +5,8 @@
 
 use super::json::sample_from_json;
 use super::{TRACE_COLUMNS_KEY, meta_keys, recording_files, topics};
-use crate::wire::{CommandSample, PlantSample, WIRE_LAYOUT_VERSION};
+use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
+use silrig_flight::signals::PlantSignals;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -78,6 +79,8 @@ pub struct RecordedRun {
     pub scenario_toml: String,
     /// trace.csv's columns.
     pub trace_columns: Vec<String>,
+    /// The plant's announcement of its signals (the first, if a restarted logger recorded it again).
+    pub plant_info: Option<PlantInfo>,
     /// The plant sample of every row, in tick order.
     pub plant: Vec<PlantSample>,
     /// The command of every row that had one, by the tick it answers.
@@ -168,6 +171,10 @@ impl RecordedRun {
                             let command: CommandSample = sample_from_json(&value).map_err(|e| bad(e.to_string()))?;
                             self.commands.insert(command.answers_tick, command);
                         }
+                        topics::PLANT_INFO if self.plant_info.is_none() => {
+                            let value = serde_json::from_slice(&data).map_err(|e| bad(e.to_string()))?;
+                            self.plant_info = Some(sample_from_json(&value).map_err(|e| bad(e.to_string()))?);
+                        }
                         topics::TRACE if self.trace_columns.is_empty() => {
                             let columns = channel_meta.get(TRACE_COLUMNS_KEY).map(String::as_str).unwrap_or("");
                             self.trace_columns = columns.split(',').map(str::to_string).collect();
@@ -185,8 +192,20 @@ impl RecordedRun {
         Ok(())
     }
 
-    /// The names of the command's diagnostics, as the trace columns name them.
-    pub fn diagnostic_names(&self) -> Vec<String> {
-        self.trace_columns.iter().skip(silrig_flight::trace::LOOP_COLUMNS.len()).cloned().collect()
+    /// The plant's signals as it announced them; an error names the file when the recording lacks them or they
+    /// break the rules.
+    pub fn plant_signals(&self) -> Result<PlantSignals, RecordingError> {
+        let path = self.files.first().cloned().unwrap_or_default();
+        let info = self.plant_info.as_ref().ok_or_else(|| RecordingError::Unreadable {
+            path: path.clone(),
+            why: format!("no message on {}: the plant's announcement of its signals is missing", topics::PLANT_INFO),
+        })?;
+        info.signals().map_err(|why| RecordingError::Unreadable { path, why })
+    }
+
+    /// The names of the command's diagnostics: the trace's columns after the plant's.
+    pub fn diagnostic_names(&self) -> Result<Vec<String>, RecordingError> {
+        let plant_columns = self.plant_signals()?.trace_columns(&[]).len();
+        Ok(self.trace_columns.iter().skip(plant_columns).cloned().collect())
     }
 }
