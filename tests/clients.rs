@@ -296,10 +296,10 @@ fn a_client_of_another_layout_or_sample_size_is_refused_by_name() {
     let env = [("SILRIG_RUN_ID", "nobody"), ("SILRIG_OUT", out.to_str().unwrap())];
     let (code, err) = client("layout", &env);
     assert_eq!(code, Some(2));
-    assert!(err.contains("status -2") && err.contains("version 11") && err.contains("version 4"), "{err}");
+    assert!(err.contains("status -2") && err.contains("version 12") && err.contains("version 5"), "{err}");
     let (code, err) = client("size", &env);
     assert_eq!(code, Some(2));
-    assert!(err.contains("status -2") && err.contains("plant sample is 216 bytes, the contract's is 224"), "{err}");
+    assert!(err.contains("status -2") && err.contains("plant sample is 320 bytes, the contract's is 328"), "{err}");
     std::fs::remove_dir_all(&out).unwrap();
 }
 
@@ -314,10 +314,10 @@ fn bad_variables_and_a_controller_without_a_rig_get_clear_errors() {
         [("SILRIG_RUN_ID", id.as_str()), ("SILRIG_OUT", out.to_str().unwrap()), ("SILRIG_STARTUP_TIMEOUT_S", "0.3")];
     let (code, err) = client("never", &env);
     assert_eq!(code, Some(2));
-    assert!(err.contains("status -4") && err.contains(&format!("no plant sample on run `{id}`")), "{err}");
+    assert!(err.contains("status -4") && err.contains(&format!("no plant on run `{id}`")), "{err}");
     // It said why in its report too, and left nothing behind.
     let report = std::fs::read_to_string(out.join("controller.report.json")).unwrap();
-    assert!(report.contains("no plant sample"), "{report}");
+    assert!(report.contains("no plant on run"), "{report}");
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&out).unwrap();
 }
@@ -377,6 +377,20 @@ fn a_controller_that_never_answers_leaves_the_plant_in_failsafe() {
     assert!(r.counter("plant", "failsafe_ticks") > 100);
     assert!(r.counter("controller", "samples_unanswered") > 100);
     assert_eq!(r.trace().1.len(), 201);
+    r.finish();
+}
+
+#[test]
+fn a_controller_asking_for_a_signal_the_plant_lacks_is_told_what_the_plant_has() {
+    let r = run("missing", &["--duration-s", "1", "--controller-cmd", &misbehaving("missing"), &robust()]);
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    let failures = r.report["failures"].to_string();
+    assert!(
+        failures.contains("status -9: plant f16 has no output `theta`; its outputs: phi_deg, theta_deg"),
+        "{failures}"
+    );
+    // The flight itself is whole: the plant flew its failsafe without a controller, and the logger kept every tick.
+    assert_eq!(r.trace().1.len(), 101);
     r.finish();
 }
 

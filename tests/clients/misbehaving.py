@@ -7,6 +7,7 @@ size         opens with a plant sample size off by 8 bytes      -> ERR_LAYOUT, e
 open         only opens a session (a second controller)          -> exit 2 with the error
 nan          sends a NaN aileron for ticks 100..=149, else holds every input where it is
 never        takes samples and never answers (no rig: ERR_NO_RIG, exit 2)
+missing      asks for an output the F-16 does not have, `theta`  -> ERR_PLANT naming its outputs, exit 2
 """
 
 import ctypes
@@ -38,6 +39,8 @@ def main(mode):
         with silrig_client.Session() as session:
             if mode == "open":
                 return 0
+            if mode == "missing":
+                session.output("theta")
             hold = None
             while (sample := session.next_sample()) is not None:
                 if mode == "never":
