@@ -4,6 +4,7 @@
 //!
 //! - [`plant`], [`controller`], [`logger`]: the process bodies; [`session`]: the controller side of the contract as
 //!   one reusable session (open a run, wait for a sample, send a command, stamps, checks, in-loop faults).
+//! - [`f16_plant`]: the F-16 as a [`plant::PlantModel`], the vehicle the plant process flies.
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
@@ -19,6 +20,7 @@
 
 pub mod controller;
 pub mod events;
+pub mod f16_plant;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;

@@ -12,6 +12,10 @@
 //! Lockstep: no sleeping; the plant waits for every command, and never runs further ahead of the logger than its queue
 //! holds.
 //!
+//! The loop flies any [`PlantModel`] (the vehicle behind named signals; the F-16 is
+//! [`super::f16_plant::F16Plant`]) and keeps everything around it: the clock, the commands, the watchdog and the
+//! failsafe (the model's announced hold values), the checkpoints and the report.
+//!
 //! The process runs in four phases: [`PlantLoop::setup`] (scenario, model, recorder, watchdog settings),
 //! [`PlantPorts::connect`] (streams, then waiting for the peers), the tick loop ([`PlantLoop::fly`], one tick at a time
 //! in named steps), and [`PlantLoop::finish`] (the report).
@@ -21,12 +25,9 @@ use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, signals};
 use anyhow::Context;
-use silrig_flight::f16_signals::{f16_outputs, f16_signals};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
-use silrig_flight::sim::{ActuatorCommand, LeftEnvelope, PlantCheckpoint, PlantRunner, PlantSnapshot, StepHits};
-use silrig_model::control::SurfaceCommand;
 use silrig_wire::clock::{self, TickSchedule, monotonic_ns};
 use silrig_wire::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
 use silrig_wire::topology::Stream;
@@ -52,52 +53,51 @@ const CHECKPOINT_WRITE: usize = 4;
 /// Publish stamps kept to measure sense-to-actuate of commands answering recent ticks.
 const PUBLISH_STAMPS: usize = 16;
 
-/// The wire sample for a snapshot: the F-16's outputs ([`f16_outputs`]) in the order it announces them.
-pub fn plant_sample(snap: &PlantSnapshot, flags: u32) -> PlantSample {
-    PlantSample { t_sim_s: snap.t_s, flags, ..PlantSample::with_outputs(&f16_outputs(snap)) }
+/// What the plant process flies: a vehicle model behind named signals. The loop around it ([`PlantLoop`]) keeps the
+/// clock, the commands, the watchdog and failsafe, the checkpoints and the report.
+pub trait PlantModel {
+    /// Its announcement: name, outputs, inputs with their ranges and the values its failsafe holds.
+    fn signals(&self) -> &PlantSignals;
+    /// The tick its state belongs to (a restored model: its checkpoint's).
+    fn tick(&self) -> u64;
+    /// Simulated time of its state, s.
+    fn t_s(&self) -> f64;
+    /// Its outputs now, in the announced order: what this tick's sample carries.
+    fn outputs(&self) -> Vec<f64>;
+    /// The inputs its actuators hold before any command.
+    fn initial_inputs(&self) -> Vec<f64>;
+    /// Move the actuators under `inputs` (checked against the announced ranges) and integrate one step to the
+    /// next tick; `last`: only move the actuators (the scenario's last tick). An error says why the flight cannot
+    /// go on (the state left where the model is defined): the flight ends there.
+    fn step(&mut self, inputs: &[f64], last: bool) -> Result<ActuatorFlags, String>;
+    /// What a restarted plant resumes from, as text (`None`: nothing to save).
+    fn checkpoint(&self) -> Option<String>;
+    /// Resume from what [`PlantModel::checkpoint`] saved in a run of `ticks` ticks; the tick it resumes at.
+    fn restore(&mut self, saved: &str, ticks: u64) -> Result<u64, String>;
+}
+
+/// What the actuators did in one step, for the next sample's flags.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ActuatorFlags {
+    /// An actuator sits on its position limit.
+    pub saturated: bool,
+    /// An actuator moved at its rate limit.
+    pub rate_limited: bool,
 }
 
 /// Flags describing the step that led to the next sample.
-fn step_flags(hits: &StepHits, held: bool) -> u32 {
+fn step_flags(actuators: ActuatorFlags, held: bool) -> u32 {
     let mut flags = 0;
     if held {
         flags |= wire::FLAG_COMMAND_STALE;
     }
-    if hits[..3].iter().any(|h| h.position) {
+    if actuators.saturated {
         flags |= wire::FLAG_SATURATED;
     }
-    if hits[..3].iter().any(|h| h.rate) {
+    if actuators.rate_limited {
         flags |= wire::FLAG_RATE_LIMITED;
     }
     flags
-}
-
-/// A command as the actuators take it, its inputs in the order of [`f16_signals`] (checked against them on
-/// arrival).
-fn actuator_command(c: &CommandSample) -> ActuatorCommand {
-    let [aileron_deg, elevator_deg, rudder_deg, throttle] = [0, 1, 2, 3].map(|k| c.inputs[k]);
-    ActuatorCommand { surfaces: SurfaceCommand { aileron_deg, elevator_deg, rudder_deg }, throttle }
-}
-
-/// The F-16's announcement for this flight: its failsafe holds `failsafe`.
-fn announcement(failsafe: &ActuatorCommand) -> anyhow::Result<PlantInfo> {
-    let s = &failsafe.surfaces;
-    let signals = f16_signals([s.aileron_deg, s.elevator_deg, s.rudder_deg, failsafe.throttle]);
-    PlantInfo::new(&signals).map_err(|e| anyhow::anyhow!("the plant's announcement: {e}"))
-}
-
-/// The trim surfaces of the scenario's initial airspeed and altitude, or `hold` when level flight has no trim
-/// there.
-fn failsafe_command(scenario: &Scenario, hold: ActuatorCommand) -> ActuatorCommand {
-    let model = scenario.plant.model();
-    let vt_fps = silrig_model::units::m_to_ft(scenario.initial.airspeed_mps);
-    match silrig_model::plant::trim::trim_level_flight(&model, vt_fps, scenario.initial.altitude_ft) {
-        Ok(trim) => ActuatorCommand {
-            surfaces: SurfaceCommand { aileron_deg: 0.0, elevator_deg: trim.elevator_deg, rudder_deg: 0.0 },
-            throttle: hold.throttle,
-        },
-        Err(_) => hold,
-    }
 }
 
 /// The plant's side of the run's streams.
@@ -162,8 +162,8 @@ impl PlantPorts {
 struct Watchdog {
     stale_after_ns: u64,
     hold_ns: u64,
-    /// The trim surfaces of the scenario's flight condition (the initial hold if no trim exists there).
-    failsafe: ActuatorCommand,
+    /// The model's announced hold values (the F-16's: the trim surfaces of the scenario's flight condition).
+    failsafe: Vec<f64>,
     last_fresh_ns: u64,
     last_fresh_tick: u64,
     stale: bool,
@@ -175,7 +175,7 @@ pub struct PlantLoop {
     scenario: Scenario,
     realtime: bool,
     scheduling: String,
-    runner: PlantRunner,
+    model: Box<dyn PlantModel>,
     rec: Recorder,
     events: EventLog,
     loop_faults: LoopFaults,
@@ -189,8 +189,8 @@ pub struct PlantLoop {
     info: PlantInfo,
     signals: PlantSignals,
     announced: bool,
-    /// The command the actuators follow now.
-    applied: ActuatorCommand,
+    /// The inputs the actuators follow now.
+    applied: Vec<f64>,
     /// Tick whose sample the applied command answers (None: the initial hold, before any command).
     applied_answers: Option<u64>,
     /// The newest commands received, oldest first.
@@ -206,8 +206,8 @@ pub struct PlantLoop {
     sim_tick: u64,
     /// This stall was already counted as an overrun when the tick's work ran past the next due time.
     overrun_counted: bool,
-    /// The flight left the model's envelope in the last step.
-    left_envelope: Option<LeftEnvelope>,
+    /// Why the flight cannot go on, from the last step (the state left the model's envelope).
+    left_envelope: Option<String>,
     /// This tick's wake-up lateness (0 in lockstep) and the last step's execution time, ns: the samples carry
     /// them to the logger's `timing.csv`.
     wake_lateness_ns: i64,
@@ -221,7 +221,7 @@ impl PlantLoop {
         let realtime = args.mode == RigMode::Realtime;
         let checkpoint_path = args.out.join("plant.checkpoint.json");
         let scheduling = request_scheduling(Role::Plant, realtime);
-        let runner = PlantRunner::new(&scenario)?;
+        let model: Box<dyn PlantModel> = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
         let period = scenario.timing.period_ns();
         let o = &args.options;
         let mut rec = Recorder::new(
@@ -252,13 +252,11 @@ impl PlantLoop {
         let events = EventLog::new(&args.out, Role::Plant.label());
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
-        let initial = runner.initial_command();
-        let failsafe = failsafe_command(&scenario, initial);
-        let info = announcement(&failsafe)?;
+        let info = PlantInfo::new(model.signals()).map_err(|e| anyhow::anyhow!("the plant's announcement: {e}"))?;
         let watchdog = Watchdog {
             stale_after_ns: period * u64::from(o.stale_after_periods.max(1)),
             hold_ns: (o.controller_hold_ms * 1e6) as u64,
-            failsafe,
+            failsafe: model.signals().hold(),
             last_fresh_ns: 0,
             last_fresh_tick: 0,
             stale: false,
@@ -268,10 +266,10 @@ impl PlantLoop {
             ticks: scenario.timing.ticks(),
             budget_ns: (o.command_budget_ms * 1e6) as u64,
             spin_ns: if realtime { (o.command_spin_us * 1e3) as u64 } else { 0 },
-            signals: info.signals().map_err(|e| anyhow::anyhow!("the plant's announcement: {e}"))?,
+            signals: model.signals().clone(),
             info,
             announced: false,
-            applied: initial,
+            applied: model.initial_inputs(),
             applied_answers: None,
             received: VecDeque::with_capacity(8),
             publish_ns: [0; PUBLISH_STAMPS],
@@ -291,7 +289,7 @@ impl PlantLoop {
             scenario,
             realtime,
             scheduling,
-            runner,
+            model,
             rec,
             events,
             loop_faults,
@@ -314,13 +312,12 @@ impl PlantLoop {
             }
             Err(e) => anyhow::bail!("cannot resume: reading {}: {e}", path.display()),
         };
-        let checkpoint = serde_json::from_str::<PlantCheckpoint>(&text)
-            .map_err(|e| anyhow::anyhow!("cannot resume: {} is not a plant checkpoint: {e}", path.display()))?;
-        self.runner
-            .restore(&checkpoint, self.ticks)
+        let tick = self
+            .model
+            .restore(&text, self.ticks)
             .map_err(|e| anyhow::anyhow!("cannot resume: {}: {e}", path.display()))?;
-        let detail = format!("continuing from the checkpoint at tick {}", checkpoint.tick);
-        self.events.emit(Some(checkpoint.tick), "plant-resumed", detail);
+        let detail = format!("continuing from the checkpoint at tick {tick}");
+        self.events.emit(Some(tick), "plant-resumed", detail);
         Ok(())
     }
 
@@ -334,9 +331,9 @@ impl PlantLoop {
             }
             self.tick(ports)?;
             if let Some(exit) = self.left_envelope.take() {
-                self.events.emit(Some(self.sim_tick), "left-envelope", exit.to_string());
+                self.events.emit(Some(self.sim_tick), "left-envelope", exit.clone());
                 self.publish_end(ports)?;
-                let last_t = self.runner.snapshot().t_s;
+                let last_t = self.model.t_s();
                 return Ok(format!("error: {exit}; the flight is logged up to t = {last_t:.2} s"));
             }
             if self.sim_tick >= self.ticks {
@@ -347,17 +344,19 @@ impl PlantLoop {
         }
     }
 
-    /// The end-of-run sample: the last tick's snapshot once the actuators have moved under its command, so the
-    /// logger's last row shows the deflections that tick set (what every other row takes from the next sample).
+    /// The end-of-run sample: the last tick's outputs once the actuators have moved under its command, so the
+    /// logger's last row shows the positions that tick set (what every other row takes from the next sample).
     /// Never dropped by a loop fault.
     fn publish_end(&mut self, ports: &mut PlantPorts) -> anyhow::Result<()> {
-        let snap = self.runner.snapshot();
-        let sample = PlantSample {
-            previous_step_exec_ns: self.step_exec_ns,
-            ..plant_sample(&snap, self.flags | wire::FLAG_END_OF_RUN)
-        };
-        ports.publisher.send(snap.tick, &sample)?;
+        let sample =
+            PlantSample { previous_step_exec_ns: self.step_exec_ns, ..self.sample(self.flags | wire::FLAG_END_OF_RUN) };
+        ports.publisher.send(self.model.tick(), &sample)?;
         Ok(())
+    }
+
+    /// The wire sample of the model's outputs now.
+    fn sample(&self, flags: u32) -> PlantSample {
+        PlantSample { t_sim_s: self.model.t_s(), flags, ..PlantSample::with_outputs(&self.model.outputs()) }
     }
 
     /// Tick 0 is due two periods from now, giving the peers' first wake-ups a margin.
@@ -366,7 +365,7 @@ impl PlantLoop {
         self.schedule = TickSchedule::new(monotonic_ns() + 2 * period, period);
         self.events.emit(Some(0), "ticking", format!("t0_ns={}", self.schedule.t0_ns));
         self.watchdog.last_fresh_ns = self.schedule.t0_ns;
-        self.sim_tick = self.runner.snapshot().tick;
+        self.sim_tick = self.model.tick();
         self.watchdog.last_fresh_tick = self.sim_tick;
     }
 
@@ -443,7 +442,6 @@ impl PlantLoop {
 
     /// Publish this tick's sample (unless a drop fault swallows it), after any delay fault.
     fn publish(&mut self, ports: &mut PlantPorts) -> anyhow::Result<ipc::SendReceipt> {
-        let snap = self.runner.snapshot();
         let effect = if self.loop_faults.is_empty() { Default::default() } else { self.loop_faults.at(self.sim_tick) };
         if effect.sleep_ns > 0 {
             std::thread::sleep(Duration::from_nanos(effect.sleep_ns));
@@ -455,7 +453,7 @@ impl PlantLoop {
             let sample = PlantSample {
                 wake_lateness_ns: self.wake_lateness_ns,
                 previous_step_exec_ns: self.step_exec_ns,
-                ..plant_sample(&snap, self.flags)
+                ..self.sample(self.flags)
             };
             if !std::mem::replace(&mut self.announced, true) {
                 ports.announcer.send(self.sim_tick, &self.info)?;
@@ -547,7 +545,7 @@ impl PlantLoop {
             self.rec.count("commands_refused_held", 1);
             return true;
         }
-        self.applied = actuator_command(&fresh);
+        self.applied.copy_from_slice(fresh.inputs());
         self.applied_answers = Some(target);
         let w = &mut self.watchdog;
         w.last_fresh_ns = monotonic_ns();
@@ -562,7 +560,7 @@ impl PlantLoop {
     }
 
     /// A held command: the controller is stale after a few periods without a fresh command, and after the hold
-    /// the plant flies the failsafe (trim) surfaces until commands return.
+    /// the plant flies the failsafe (its announced hold values: the F-16's trim surfaces) until commands return.
     fn watch_controller(&mut self) {
         let tick = self.sim_tick;
         let w = &mut self.watchdog;
@@ -573,18 +571,15 @@ impl PlantLoop {
         }
         if !w.in_failsafe && silent_ns >= w.hold_ns {
             w.in_failsafe = true;
-            let f = &w.failsafe.surfaces;
-            let detail = format!(
-                "{} ticks after the last fresh command; trim surfaces: aileron {:.3}, elevator {:.3}, rudder {:.3} deg",
-                tick - w.last_fresh_tick,
-                f.aileron_deg,
-                f.elevator_deg,
-                f.rudder_deg
-            );
+            let hold: Vec<String> = (self.signals.inputs.iter().zip(&w.failsafe))
+                .map(|(i, v)| format!("{} {v:.3} {}", i.name, i.unit))
+                .collect();
+            let detail =
+                format!("{} ticks after the last fresh command; holding {}", tick - w.last_fresh_tick, hold.join(", "));
             self.events.emit(Some(tick), "failsafe-engaged", detail);
         }
         if w.in_failsafe {
-            self.applied = w.failsafe;
+            self.applied.copy_from_slice(&w.failsafe);
             self.rec.count("failsafe_ticks", 1);
         }
     }
@@ -593,17 +588,14 @@ impl PlantLoop {
     /// ran past the next tick's due time; save a checkpoint every few ticks (realtime).
     fn step(&mut self, held: bool) {
         let t0 = monotonic_ns();
-        let hits = if self.sim_tick < self.ticks {
-            self.runner.step(&self.applied).unwrap_or_else(|exit| {
-                self.left_envelope = Some(exit);
-                StepHits::default()
-            })
-        } else {
-            self.runner.actuate(&self.applied)
-        };
+        let last = self.sim_tick >= self.ticks;
+        let actuators = self.model.step(&self.applied, last).unwrap_or_else(|exit| {
+            self.left_envelope = Some(exit);
+            ActuatorFlags::default()
+        });
         self.step_exec_ns = monotonic_ns() - t0;
         self.rec.record(STEP_EXEC, self.step_exec_ns as i64);
-        self.flags = step_flags(&hits, held) | if self.watchdog.in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
+        self.flags = step_flags(actuators, held) | if self.watchdog.in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
         if self.realtime {
             let late_ns = monotonic_ns() as i64 - self.schedule.deadline_ns(self.expected_wall_tick) as i64;
             if late_ns > 0 {
@@ -625,13 +617,8 @@ impl PlantLoop {
     }
 
     fn save_checkpoint(&self) {
-        match serde_json::to_string(&self.runner.checkpoint()) {
-            Ok(text) => {
-                if let Some(w) = &self.checkpoints {
-                    w.save(text);
-                }
-            }
-            Err(e) => eprintln!("silrig-plant: cannot serialise the checkpoint: {e}"),
+        if let (Some(w), Some(text)) = (&self.checkpoints, self.model.checkpoint()) {
+            w.save(text);
         }
     }
 
