@@ -26,18 +26,8 @@ fn run_id(test: &str) -> String {
     format!("c{}-{test}", std::process::id())
 }
 
-/// `libsilrig_client.so` beside the binaries under test (cargo test builds the binaries, not the cdylib).
 fn client_lib() -> &'static Path {
-    static LIB: OnceLock<PathBuf> = OnceLock::new();
-    LIB.get_or_init(|| {
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let o =
-            Command::new(cargo).args(["build", "--release", "-p", "silrig-client"]).current_dir(ROOT).output().unwrap();
-        assert!(o.status.success(), "building libsilrig_client.so: {}", String::from_utf8_lossy(&o.stderr));
-        let lib = Path::new(SILRIG).parent().unwrap().join("libsilrig_client.so");
-        assert!(lib.exists(), "{} was not built", lib.display());
-        lib
-    })
+    common::client_lib(SILRIG)
 }
 
 /// The C example, compiled with the system compiler against the header and the library.

@@ -106,6 +106,40 @@ int silrig_session_save_checkpoint(silrig_session *session, const char *text);
  * controller stops on an error of its own (it goes into the report), else NULL. NULL session: nothing to do. */
 int silrig_session_close(silrig_session *session, const char *error);
 
+/* ---- Your own plant (silrig run --plant-cmd): the same library, the plant's side. ----
+ * Fill a silrig_plant_info_t with your model's name, outputs (name, unit, OUTPUT_IN_TRACE flag) and inputs (name,
+ * unit, min, max, hold: what the failsafe commands; input_held_output: the output that reports the actuator's
+ * position, or SILRIG_NO_OUTPUT), open the session, then loop: hand in the outputs at this tick, get the inputs
+ * to step the model with over one period. The rig keeps the clock (realtime sleeps or lockstep), the commands and
+ * their misses, the watchdog and failsafe, the faults, the logger and the plant's timing report; the model's step
+ * time is what passes between silrig_plant_tick calls. */
+typedef struct SilrigPlantSession silrig_plant_session;
+
+/* Open the run's plant session (use SILRIG_PLANT_OPEN) and wait up to SILRIG_STARTUP_TIMEOUT_S for the
+ * controller and the logger. SILRIG_ERR_PLANT: the announcement breaks a rule (no outputs, a name twice, a name
+ * too long, a hold value outside its range, ...), named; or the run has a plant already. */
+int silrig_plant_open(uint32_t layout_version, size_t plant_info_size, size_t plant_sample_size,
+                      size_t command_sample_size, const silrig_plant_info_t *info,
+                      silrig_plant_session **session_out);
+
+#define SILRIG_PLANT_OPEN(info, session_out)                                                                     \
+    silrig_plant_open(SILRIG_WIRE_LAYOUT_VERSION, sizeof(silrig_plant_info_t), sizeof(silrig_plant_sample_t),    \
+                      sizeof(silrig_command_sample_t), (info), (session_out))
+
+/* Hand in the outputs at this tick (output_count = the announced count) and get the inputs (input_count = the
+ * announced count) to step the model with over one period: SILRIG_OK. SILRIG_RUN_ENDED once the scenario's last
+ * tick is flown (the outputs of that call close it), SILRIG_STOPPED on SIGTERM/SIGINT: close then. Outputs with
+ * NaN or infinity are refused (counted, said in the run's events) and the last valid ones published. */
+int silrig_plant_tick(silrig_plant_session *session, const double *outputs, size_t output_count, double *inputs_out,
+                      size_t input_count);
+
+/* The run's step, s. */
+double silrig_plant_dt_s(silrig_plant_session *session);
+
+/* Write the plant's report (<out>/plant.report.json) and free the session; `error`: why your model gave up, or
+ * NULL. */
+int silrig_plant_close(silrig_plant_session *session, const char *error);
+
 #ifdef __cplusplus
 }
 #endif

@@ -13,7 +13,11 @@ examples/c/silrig_client.h for the rules) with no third-party dependency. Write 
 
     raise SystemExit(serve(Hold()))
 
-and fly it with `silrig run --controller-cmd "python3 my_controller.py"`. The launcher passes the run in SILRIG_*
+and fly it with `silrig run --controller-cmd "python3 my_controller.py"`.
+
+A plant of your own is a `PlantModel` (its signals, its outputs now, one step with given inputs) handed to
+`serve_plant()`, flown with `silrig run --plant-cmd "python3 my_plant.py"`; the rig keeps the clock, the
+watchdog, the failsafe and the faults around it (examples/python/jsbsim_plant.py flies JSBSim's aircraft). The launcher passes the run in SILRIG_*
 variables and the library's path in SILRIG_CLIENT_LIB; by hand (`--controller external`), `. <out>/controller.env`
 first.
 """
@@ -25,8 +29,11 @@ import sys
 
 from silrig_contract import (
     ERR_COMMAND_REFUSED,
+    INPUT_COMMAND_IN_TRACE,
     MAX_INPUTS,
+    NO_OUTPUT,
     OK,
+    OUTPUT_IN_TRACE,
     RUN_ENDED,
     STOPPED,
     WIRE_LAYOUT_VERSION,
@@ -76,6 +83,14 @@ def _load():
             ctypes.c_int,
         ),
         "silrig_session_held_command": ([session_p, c_double_p, ctypes.c_size_t], ctypes.c_int),
+        "silrig_plant_open": (
+            [ctypes.c_uint32, ctypes.c_size_t, ctypes.c_size_t, ctypes.c_size_t, ctypes.POINTER(PlantInfo),
+             ctypes.POINTER(session_p)],
+            ctypes.c_int,
+        ),
+        "silrig_plant_tick": ([session_p, c_double_p, ctypes.c_size_t, c_double_p, ctypes.c_size_t], ctypes.c_int),
+        "silrig_plant_dt_s": ([session_p], ctypes.c_double),
+        "silrig_plant_close": ([session_p, ctypes.c_char_p], ctypes.c_int),
         "silrig_session_dt_s": ([session_p], ctypes.c_double),
         "silrig_session_setpoint_deg": ([session_p, c_double_p], ctypes.c_int),
         "silrig_session_restored_checkpoint": ([session_p], ctypes.c_char_p),
@@ -323,3 +338,131 @@ def serve(controller):
                 text = controller.checkpoint()
                 if text is not None:
                     session.save_checkpoint(text)
+
+
+class PlantModel:
+    """A vehicle model for `serve_plant()`. Set `name`, `outputs` and `inputs`; implement `outputs_now` and `step`.
+
+    outputs: [(name, unit)] or [(name, unit, in_trace)], in the order `outputs_now` returns them.
+    inputs: [(name, unit, min, max, hold)] or with a sixth item, the name of the output that reports the
+      actuator's position (the controller's session blends from it after a restart; the trace shows it after the
+      commands); `hold` is what the rig's failsafe commands while no controller answers.
+    """
+
+    name = "plant"
+    outputs = ()
+    inputs = ()
+
+    def start(self, dt_s):
+        """Called once the session is open, with the run's step, s."""
+
+    def outputs_now(self):
+        """The outputs at this tick, one float per entry of `outputs`."""
+        raise NotImplementedError
+
+    def step(self, inputs, dt_s):
+        """Advance the model by one period with these inputs (one float per entry of `inputs`)."""
+        raise NotImplementedError
+
+
+def _put(field, text, what):
+    """`text` NUL-padded into a name or unit field of the contract; too long is an error naming it."""
+    data = text.encode()
+    if len(data) >= len(field):
+        raise ValueError(f"{what} {text!r} is {len(data)} bytes; the contract holds at most {len(field) - 1}")
+    ctypes.memmove(field, data, len(data))
+
+
+def plant_info(model):
+    """The contract's PlantInfo for a PlantModel's name and signals (the library checks the rules and names any
+    broken one)."""
+    info = PlantInfo()
+    info.header.layout_version = WIRE_LAYOUT_VERSION
+    _put(info.plant_name, model.name, "plant name")
+    info.outputs_len = len(model.outputs)
+    info.inputs_len = len(model.inputs)
+    output_index = {}
+    for k, output in enumerate(model.outputs):
+        name, unit = output[0], output[1]
+        in_trace = output[2] if len(output) > 2 else True
+        _put(info.output_names[k], name, "output name")
+        _put(info.output_units[k], unit, f"unit of output {name}")
+        info.output_flags[k] = OUTPUT_IN_TRACE if in_trace else 0
+        output_index[name] = k
+    for k, entry in enumerate(model.inputs):
+        name, unit, low, high, hold = entry[:5]
+        held = entry[5] if len(entry) > 5 else None
+        _put(info.input_names[k], name, "input name")
+        _put(info.input_units[k], unit, f"unit of input {name}")
+        info.input_min[k], info.input_max[k], info.input_hold[k] = low, high, hold
+        if held is not None and held not in output_index:
+            raise ValueError(f"input {name}: its position output {held!r} is not among the plant's outputs")
+        info.input_held_output[k] = NO_OUTPUT if held is None else output_index[held]
+        info.input_flags[k] = INPUT_COMMAND_IN_TRACE
+    return info
+
+
+class PlantSession:
+    """The plant's side of one run: `tick(outputs)` gives the inputs to step with, or None at the end."""
+
+    def __init__(self, model):
+        lib = library()
+        self._lib = lib
+        self._handle = ctypes.c_void_p()
+        self._info = plant_info(model)
+        _check(lib.silrig_plant_open(
+            WIRE_LAYOUT_VERSION, ctypes.sizeof(PlantInfo), ctypes.sizeof(PlantSample), ctypes.sizeof(CommandSample),
+            ctypes.byref(self._info), ctypes.byref(self._handle)))
+        self._outputs = (ctypes.c_double * max(len(model.outputs), 1))()
+        self._output_count = len(model.outputs)
+        self._inputs = (ctypes.c_double * max(len(model.inputs), 1))()
+        self._input_count = len(model.inputs)
+        #: Why the session ended: STOPPED or RUN_ENDED (None while it runs).
+        self.stop_reason = None
+
+    @property
+    def dt_s(self):
+        """The run's step, s."""
+        return self._lib.silrig_plant_dt_s(self._handle)
+
+    def tick(self, outputs):
+        """Hand in the outputs at this tick; the inputs to step with (a list), or None when the run is over."""
+        buffer = self._outputs
+        for i, value in enumerate(outputs):
+            buffer[i] = value
+        code = _check(self._lib.silrig_plant_tick(self._handle, buffer, len(outputs), self._inputs,
+                                                  self._input_count))
+        if code == OK:
+            return self._inputs[:self._input_count]
+        self.stop_reason = code
+        return None
+
+    def close(self, error=None):
+        """Write the plant's report and end the session."""
+        if self._handle:
+            handle, self._handle = self._handle, ctypes.c_void_p()
+            _check(self._lib.silrig_plant_close(handle, None if error is None else str(error).encode()))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, value, traceback):
+        self.close(None if value is None else f"{kind.__name__}: {value}")
+        return False
+
+
+def serve_plant(model):
+    """Fly `model` as the run's plant until the run ends or SIGTERM; returns the process's exit status."""
+    try:
+        session = PlantSession(model)
+    except (SilrigError, ValueError) as e:
+        print(f"silrig_client: {e}", file=sys.stderr)
+        return 2
+    with session:
+        dt_s = session.dt_s
+        model.start(dt_s)
+        while True:
+            inputs = session.tick(model.outputs_now())
+            if inputs is None:
+                return 0
+            model.step(inputs, dt_s)

@@ -1,12 +1,14 @@
-//! `libsilrig_client.so`: silrig's controller session ([`silrig_rig::session::ControllerSession`]) behind a C ABI,
-//! so that a controller in C, C++, Python (ctypes), MATLAB or anything with a C FFI flies in the rig exactly as
-//! `silrig-controller` does. The functions and their rules are declared, with ownership and threading, in
+//! `libsilrig_client.so`: silrig's controller session ([`silrig_rig::session::ControllerSession`]) and plant
+//! session ([`silrig_rig::plant_session::PlantSession`]) behind a C ABI, so that a controller in C, C++, Python
+//! (ctypes), MATLAB or anything with a C FFI flies in the rig exactly as `silrig-controller` does, and a vehicle
+//! model of the user's own flies as the plant. The functions and their rules are declared, with ownership and threading, in
 //! `examples/c/silrig_client.h`; the status codes and sample structs come from `silrig contract --c-header`.
 //!
 //! Every entry point returns a status code (never unwinds into C: a panic becomes `SILRIG_ERR_INTERNAL`), and an
 //! error's text is kept per thread for `silrig_last_error`.
 
 use silrig_rig::ProcessArgs;
+use silrig_rig::plant_session::{PlantSession, PlantTick};
 use silrig_rig::session::{ControllerSession, Next, SessionError, Status, StopReason, check_client_layout};
 use silrig_wire::wire::{PlantInfo, PlantSample};
 use std::cell::RefCell;
@@ -372,6 +374,126 @@ pub unsafe extern "C" fn silrig_session_close(session: *mut SilrigSession, error
             s.session.fail(&error);
         }
         s.session.finish().map_err(|e| SessionError::Setup(format!("writing the controller report: {e:#}")))?;
+        Ok(Status::Ok)
+    })
+}
+
+/// One plant's session: opaque to C.
+pub struct SilrigPlantSession {
+    session: PlantSession,
+}
+
+/// Borrow the plant session behind a pointer from C.
+///
+/// # Safety
+/// `session` is NULL or a pointer `silrig_plant_open` returned and `silrig_plant_close` has not freed.
+unsafe fn plant_mut<'a>(session: *mut SilrigPlantSession) -> Result<&'a mut SilrigPlantSession, SessionError> {
+    // SAFETY: the caller's contract above.
+    unsafe { session.as_mut() }.ok_or_else(|| usage("the plant session pointer is NULL"))
+}
+
+/// Open the run's plant session from the `SILRIG_*` environment, announcing `*info`; see the header.
+///
+/// # Safety
+/// `info` points to a readable `silrig_plant_info_t`; `session_out` points to writable storage for one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_open(
+    layout_version: u32,
+    plant_info_size: usize,
+    plant_sample_size: usize,
+    command_sample_size: usize,
+    info: *const PlantInfo,
+    session_out: *mut *mut SilrigPlantSession,
+) -> c_int {
+    boundary(|| {
+        if session_out.is_null() || info.is_null() {
+            return Err(usage("info or session_out is NULL"));
+        }
+        // SAFETY: checked non-NULL; the caller gives storage for one pointer.
+        unsafe { *session_out = std::ptr::null_mut() };
+        check_client_layout(layout_version, plant_sample_size, command_sample_size)?;
+        if plant_info_size != size_of::<PlantInfo>() {
+            return Err(SessionError::Layout(format!(
+                "the client's plant info is {plant_info_size} bytes, the contract's is {} (layout version \
+                 {layout_version}): the header was changed or compiled with other packing",
+                size_of::<PlantInfo>()
+            )));
+        }
+        // SAFETY: checked non-NULL; the caller gives a readable announcement.
+        let signals = unsafe { info.read() }.signals().map_err(SessionError::Plant)?;
+        let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
+        let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
+        let session = PlantSession::open(args, scenario, &signals)?;
+        // SAFETY: checked non-NULL above.
+        unsafe { *session_out = Box::into_raw(Box::new(SilrigPlantSession { session })) };
+        Ok(Status::Ok)
+    })
+}
+
+/// Hand in the model's outputs at this tick and get the inputs to step it with; see the header.
+///
+/// # Safety
+/// `session` comes from `silrig_plant_open`; `outputs` points to `output_count` doubles; `inputs_out` points to
+/// `input_count` writable doubles (or is NULL with a count of 0).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_tick(
+    session: *mut SilrigPlantSession,
+    outputs: *const f64,
+    output_count: usize,
+    inputs_out: *mut f64,
+    input_count: usize,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { plant_mut(session) }?;
+        if outputs.is_null() || (inputs_out.is_null() && input_count > 0) {
+            return Err(usage("outputs or inputs_out is NULL"));
+        }
+        // SAFETY: the caller gives `output_count` doubles.
+        let outputs = unsafe { std::slice::from_raw_parts(outputs, output_count) };
+        match s.session.tick(outputs)? {
+            PlantTick::Inputs(inputs) => {
+                if inputs.len() != input_count {
+                    let n = inputs.len();
+                    return Err(usage(&format!("room for {input_count} inputs given; the plant announced {n}")));
+                }
+                // SAFETY: the caller gives `input_count` doubles, which equals the count checked.
+                unsafe { std::ptr::copy_nonoverlapping(inputs.as_ptr(), inputs_out, input_count) };
+                Ok(Status::Ok)
+            }
+            PlantTick::RunEnded => Ok(Status::RunEnded),
+            PlantTick::Stopped => Ok(Status::Stopped),
+        }
+    })
+}
+
+/// The run's step, s; NaN for a NULL session.
+///
+/// # Safety
+/// `session` comes from `silrig_plant_open`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_dt_s(session: *mut SilrigPlantSession) -> f64 {
+    // SAFETY: the caller's contract.
+    unsafe { plant_mut(session) }.map_or(f64::NAN, |s| s.session.dt_s())
+}
+
+/// Write the plant's report and free the session; see the header.
+///
+/// # Safety
+/// `session` comes from `silrig_plant_open` and is not used again.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_close(session: *mut SilrigPlantSession, error: *const c_char) -> c_int {
+    boundary(|| {
+        if session.is_null() {
+            return Ok(Status::Ok);
+        }
+        // SAFETY: the caller's contract: a pointer from `silrig_plant_open`, not freed yet.
+        let s = unsafe { Box::from_raw(session) };
+        // SAFETY: the caller gives NULL or a NUL-terminated string.
+        let error = (!error.is_null()).then(|| unsafe { CStr::from_ptr(error) }.to_string_lossy().into_owned());
+        s.session
+            .finish(error.as_deref())
+            .map_err(|e| SessionError::Setup(format!("writing the plant report: {e:#}")))?;
         Ok(Status::Ok)
     })
 }

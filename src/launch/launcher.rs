@@ -69,6 +69,13 @@ pub struct LaunchOptions {
     /// and stderr go to <out>/controller.stderr.log.
     #[arg(long, value_name = "CMD")]
     pub controller_cmd: Option<String>,
+    /// Fly your own vehicle model: run this command in place of silrig-plant, with the run's SILRIG_* variables in
+    /// its environment; it opens a plant session of libsilrig_client.so (Python: `silrig_client.serve_plant`),
+    /// announces its signals and steps its model with the inputs each tick hands it, while the rig keeps the
+    /// clock, the watchdog, the failsafe and the faults. Split and supervised like --controller-cmd; its stdout and
+    /// stderr go to <out>/plant.stderr.log.
+    #[arg(long, value_name = "CMD")]
+    pub plant_cmd: Option<String>,
     /// builtin (silrig-controller, or --controller-cmd) or external: wait for a controller started by hand (in a
     /// debugger, in MATLAB) with the variables printed and written to <out>/controller.env.
     #[arg(long, value_enum, default_value = "builtin", conflicts_with = "controller_cmd")]
@@ -251,11 +258,12 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     {
         anyhow::bail!("fault plan: {} needs a controller the launcher starts, not --controller external", f.describe());
     }
-    if let Some(cmd) = &opts.controller_cmd {
-        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
+    for (flag, cmd) in [("controller-cmd", &opts.controller_cmd), ("plant-cmd", &opts.plant_cmd)] {
+        let Some(cmd) = cmd else { continue };
+        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--{flag}: {e}"))?;
         anyhow::ensure!(
             find_program(&words[0]).is_some(),
-            "--controller-cmd: cannot find `{}` (not an executable file, and not on PATH)",
+            "--{flag}: cannot find `{}` (not an executable file, and not on PATH)",
             words[0]
         );
     }
@@ -472,7 +480,8 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         Some(listen) => Some(super::remote::RemoteBridge::start(listen, &args, events.clone())?),
         None => None,
     };
-    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone())?;
+    let mut sup =
+        Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone(), opts.plant_cmd.clone())?;
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
     let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
     let supervised = supervise(&mut sup, &mut faults, &scenario, &mut bridge, live.as_mut());

@@ -163,7 +163,20 @@ pub(crate) fn write_plots(
         let trace = Trace::load(&out.join("trace.csv"))?;
         // Rows without a command (a lost controller) have NaN command columns, which the plots skip.
         let f_true = silrig_flight::f_true::from_trace(&trace, scenario);
-        silrig_plot::plot_closed_loop(&trace, f_true.as_ref(), out, &silrig_plot::plot_title(scenario))?;
+        match silrig_plot::plot_closed_loop(&trace, f_true.as_ref(), out, &silrig_plot::plot_title(scenario)) {
+            // A plant of the user's own names its signals itself: the F-16's states figure may not fit it. The
+            // trace and the recording hold every signal; a figure of any plant's outputs is not drawn yet.
+            Err(silrig_plot::PlotError::MissingColumn { column, file, .. }) if trace.index("alpha_deg").is_none() => {
+                println!(
+                    "figures: {} not drawn: the plant's trace has no column `{column}` (the closed-loop figures show \
+                     the F-16's states)",
+                    file.display()
+                );
+            }
+            other => {
+                other?;
+            }
+        }
     }
     let mut series: Vec<(String, Vec<(f64, f64)>)> = report
         .processes

@@ -145,19 +145,19 @@ pub(crate) fn end_with_launcher(command: &mut Command, signal: libc::c_int) {
 }
 
 /// Start `role`'s process of the run `args` describes, tied to this process's life ([`end_with_launcher`]): the
-/// rig binary from `bin_dir`, or for the controller a user's command ([`ControllerLaunch::Command`]) with the run's
+/// rig binary from `bin_dir`, or a user's `command` for the role (`--controller-cmd`, `--plant-cmd`) with the run's
 /// `SILRIG_*` variables, in a process group of its own so a stop or kill fault reaches whatever it started.
 pub fn start_process(
     role: Role,
-    controller: &ControllerLaunch,
+    command: Option<&str>,
     args: &ProcessArgs,
     bin_dir: &Path,
     stdout: Stdio,
     stderr: Stdio,
 ) -> anyhow::Result<ChildProcess> {
-    if let (Role::Controller, ControllerLaunch::Command(cmd)) = (role, controller) {
+    if let Some(cmd) = command {
         use std::os::unix::process::CommandExt;
-        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--controller-cmd: {e}"))?;
+        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--{role}-cmd: {e}"))?;
         let mut command = Command::new(&words[0]);
         end_with_launcher(&mut command, libc::SIGTERM);
         let child = command
@@ -169,7 +169,7 @@ pub fn start_process(
             .stdout(stdout)
             .stderr(stderr)
             .spawn()
-            .with_context(|| format!("starting the controller command `{cmd}`"))?;
+            .with_context(|| format!("starting the {role} command `{cmd}`"))?;
         return Ok(ChildProcess::group_leader(child));
     }
     let exe = bin_dir.join(role.binary());
@@ -325,6 +325,8 @@ fn last_chars(text: &str, max_chars: usize) -> &str {
 pub(crate) struct Supervisor {
     bin_dir: PathBuf,
     controller: ControllerLaunch,
+    /// `--plant-cmd`: the user's plant in place of silrig-plant.
+    plant_cmd: Option<String>,
     args: ProcessArgs,
     events: EventLog,
     restart: SupervisionOptions,
@@ -348,12 +350,14 @@ impl Supervisor {
         events: EventLog,
         restart: SupervisionOptions,
         controller: ControllerLaunch,
+        plant_cmd: Option<String>,
     ) -> anyhow::Result<Self> {
         let bin_dir = binary_dir()?;
         warn_if_stale(&bin_dir);
         let mut sup = Self {
             bin_dir,
             controller,
+            plant_cmd,
             args,
             events,
             restart,
@@ -385,7 +389,12 @@ impl Supervisor {
         let marker = resume.then(|| format!("--- silrig run: {role} restarted ---"));
         let output = forward_output(reader, log_path, role, marker);
         let args = ProcessArgs { resume, ..self.args.clone() };
-        let process = start_process(role, &self.controller, &args, &self.bin_dir, log.into(), writer.into())?;
+        let command = match (role, &self.controller) {
+            (Role::Controller, ControllerLaunch::Command(cmd)) => Some(cmd.as_str()),
+            (Role::Plant, _) => self.plant_cmd.as_deref(),
+            _ => None,
+        };
+        let process = start_process(role, command, &args, &self.bin_dir, log.into(), writer.into())?;
         Ok(process.with_output(output))
     }
 

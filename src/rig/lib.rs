@@ -4,7 +4,9 @@
 //!
 //! - [`plant`], [`controller`], [`logger`]: the process bodies; [`session`]: the controller side of the contract as
 //!   one reusable session (open a run, wait for a sample, send a command, stamps, checks, in-loop faults).
-//! - [`f16_plant`]: the F-16 as a [`plant::PlantModel`], the vehicle the plant process flies.
+//! - [`f16_plant`]: the F-16 as a [`plant::PlantModel`], the vehicle the plant process flies;
+//!   [`plant_session`]: the plant's side of the contract for a model of the user's own (announce, then outputs
+//!   in, inputs out, tick by tick), with the same loop around it.
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
@@ -24,6 +26,7 @@ pub mod f16_plant;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;
+pub mod plant_session;
 pub mod report;
 pub mod session;
 pub mod signals;

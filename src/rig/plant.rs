@@ -132,6 +132,11 @@ impl PlantPorts {
         Ok(Self { plant_stream, command_stream, publisher, announcer, commands, acks, _node: node })
     }
 
+    /// Tell readers that did not start with the run (`--controller external`) that it is over.
+    pub fn announce_finished(&self) -> anyhow::Result<()> {
+        Ok(self.publisher.announce_finished()?)
+    }
+
     /// Wait until the controller and the logger are connected, or time out; SIGTERM ends the wait early (false).
     pub fn wait_for_peers(&self, timeout_s: f64) -> anyhow::Result<bool> {
         // Every port the peers read with, the logger's command subscriber too (it subscribes to commands after
@@ -216,12 +221,10 @@ pub struct PlantLoop {
 
 impl PlantLoop {
     /// Phase 1: the scenario, the model at its initial condition, the recorder and the watchdog settings.
-    pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
-        let scenario = args.scenario()?;
+    pub fn setup(args: &ProcessArgs, scenario: Scenario, model: Box<dyn PlantModel>) -> anyhow::Result<Self> {
         let realtime = args.mode == RigMode::Realtime;
         let checkpoint_path = args.out.join("plant.checkpoint.json");
         let scheduling = request_scheduling(Role::Plant, realtime);
-        let model: Box<dyn PlantModel> = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
         let period = scenario.timing.period_ns();
         let o = &args.options;
         let mut rec = Recorder::new(
@@ -329,19 +332,32 @@ impl PlantLoop {
             if signals::termination_requested() {
                 return Ok("terminated by signal".into());
             }
-            self.tick(ports)?;
-            if let Some(exit) = self.left_envelope.take() {
-                self.events.emit(Some(self.sim_tick), "left-envelope", exit.clone());
-                self.publish_end(ports)?;
-                let last_t = self.model.t_s();
-                return Ok(format!("error: {exit}; the flight is logged up to t = {last_t:.2} s"));
+            let held = self.begin_tick(ports)?;
+            let t0 = monotonic_ns();
+            let last = self.sim_tick >= self.ticks;
+            let actuators = self.model.step(&self.applied, last);
+            self.end_tick(ports, actuators, monotonic_ns() - t0, held);
+            if let Some(ended) = self.next_tick(ports)? {
+                return Ok(ended);
             }
-            if self.sim_tick >= self.ticks {
-                self.publish_end(ports)?;
-                return Ok("completed".into());
-            }
-            self.sim_tick += 1;
         }
+    }
+
+    /// After a tick's step: the end of the flight (the state left the model's envelope, or the scenario's last
+    /// tick: the end-of-run sample goes out and how the flight ended is returned), or on to the next tick.
+    pub fn next_tick(&mut self, ports: &mut PlantPorts) -> anyhow::Result<Option<String>> {
+        if let Some(exit) = self.left_envelope.take() {
+            self.events.emit(Some(self.sim_tick), "left-envelope", exit.clone());
+            self.publish_end(ports)?;
+            let last_t = self.model.t_s();
+            return Ok(Some(format!("error: {exit}; the flight is logged up to t = {last_t:.2} s")));
+        }
+        if self.sim_tick >= self.ticks {
+            self.publish_end(ports)?;
+            return Ok(Some("completed".into()));
+        }
+        self.sim_tick += 1;
+        Ok(None)
     }
 
     /// The end-of-run sample: the last tick's outputs once the actuators have moved under its command, so the
@@ -360,7 +376,7 @@ impl PlantLoop {
     }
 
     /// Tick 0 is due two periods from now, giving the peers' first wake-ups a margin.
-    fn start_clock(&mut self) {
+    pub fn start_clock(&mut self) {
         let period = self.schedule.period_ns;
         self.schedule = TickSchedule::new(monotonic_ns() + 2 * period, period);
         self.events.emit(Some(0), "ticking", format!("t0_ns={}", self.schedule.t0_ns));
@@ -370,7 +386,9 @@ impl PlantLoop {
     }
 
     /// One tick: wait for its time, publish the sample, gather the command, check the controller, step.
-    fn tick(&mut self, ports: &mut PlantPorts) -> anyhow::Result<()> {
+    /// The first half of a tick: wait for its time, publish the model's outputs, gather the command, check the
+    /// controller; [`Self::applied`] then holds the inputs to step with. True when the command is held (a miss).
+    pub fn begin_tick(&mut self, ports: &mut PlantPorts) -> anyhow::Result<bool> {
         if self.realtime {
             self.sleep_until_due();
         } else {
@@ -385,14 +403,79 @@ impl PlantLoop {
         if let Some(a) = self.applied_answers {
             *self.rec.command_age_ticks.entry(self.sim_tick - a).or_insert(0) += 1;
         }
-        self.step(held);
+        Ok(held)
+    }
+
+    /// The inputs the actuators follow over this tick's step.
+    pub fn applied(&self) -> &[f64] {
+        &self.applied
+    }
+
+    /// The tick being flown.
+    pub fn sim_tick(&self) -> u64 {
+        self.sim_tick
+    }
+
+    /// The scenario the run flies.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// What the model announced.
+    pub fn signals(&self) -> &PlantSignals {
+        &self.signals
+    }
+
+    /// An event of the plant at the current tick.
+    pub fn event(&self, kind: &str, detail: String) {
+        self.events.emit(Some(self.sim_tick), kind, detail);
+    }
+
+    /// Add to one of the report's counters.
+    pub fn count(&mut self, counter: &str, n: u64) {
+        self.rec.count(counter, n);
+    }
+
+    /// The second half of a tick, once the model has stepped (in `step_exec_ns`): the next sample's flags, an
+    /// overrun if the work ran past the next tick's due time, a checkpoint every few ticks (realtime), the counts.
+    pub fn end_tick(
+        &mut self,
+        ports: &PlantPorts,
+        actuators: Result<ActuatorFlags, String>,
+        step_exec_ns: u64,
+        held: bool,
+    ) {
+        let actuators = actuators.unwrap_or_else(|exit| {
+            self.left_envelope = Some(exit);
+            ActuatorFlags::default()
+        });
+        self.step_exec_ns = step_exec_ns;
+        self.rec.record(STEP_EXEC, step_exec_ns as i64);
+        self.flags = step_flags(actuators, held) | if self.watchdog.in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
+        if self.realtime {
+            let late_ns = monotonic_ns() as i64 - self.schedule.deadline_ns(self.expected_wall_tick) as i64;
+            if late_ns > 0 {
+                // The work of this tick ran past the next tick's due time: an overrun (the Simulink/dSPACE sense).
+                self.rec.count("overruns", 1);
+                self.overrun_counted = true;
+                let detail = format!("tick work ended {:.2} ms after the next tick was due", late_ns as f64 / 1e6);
+                self.events.emit(Some(self.sim_tick), "overrun", detail);
+            }
+        }
+        // Any realtime plant may be restarted (a planned fault, --restart on-failure, a user with --resume), so
+        // recovery never depends on whether a death was planned. Written after the tick's work; its cost is in the
+        // report (`checkpoint_write`).
+        if self.realtime && (self.sim_tick + 1).is_multiple_of(CHECKPOINT_EVERY_TICKS) {
+            let t0 = monotonic_ns();
+            self.save_checkpoint();
+            self.rec.record(CHECKPOINT_WRITE, (monotonic_ns() - t0) as i64);
+        }
         self.rec.count("ticks", 1);
         let stats = ports.commands.stats();
         let extra = [("commands_lost", stats.lost), ("controller_restarts", stats.publisher_restarts)];
         let t_s = self.sim_tick as f64 * self.scenario.timing.dt_s;
         let duration_s = self.scenario.timing.duration_s;
         self.rec.status(self.sim_tick, t_s, duration_s, self.watchdog.in_failsafe, &extra);
-        Ok(())
     }
 
     /// Realtime: sleep to the tick's absolute due time; a wake-up a whole period late skips to the newest due tick.
@@ -584,38 +667,6 @@ impl PlantLoop {
         }
     }
 
-    /// Move the actuators and integrate one step (only move them at the last tick); count an overrun if the work
-    /// ran past the next tick's due time; save a checkpoint every few ticks (realtime).
-    fn step(&mut self, held: bool) {
-        let t0 = monotonic_ns();
-        let last = self.sim_tick >= self.ticks;
-        let actuators = self.model.step(&self.applied, last).unwrap_or_else(|exit| {
-            self.left_envelope = Some(exit);
-            ActuatorFlags::default()
-        });
-        self.step_exec_ns = monotonic_ns() - t0;
-        self.rec.record(STEP_EXEC, self.step_exec_ns as i64);
-        self.flags = step_flags(actuators, held) | if self.watchdog.in_failsafe { wire::FLAG_FAILSAFE } else { 0 };
-        if self.realtime {
-            let late_ns = monotonic_ns() as i64 - self.schedule.deadline_ns(self.expected_wall_tick) as i64;
-            if late_ns > 0 {
-                // The work of this tick ran past the next tick's due time: an overrun (the Simulink/dSPACE sense).
-                self.rec.count("overruns", 1);
-                self.overrun_counted = true;
-                let detail = format!("tick work ended {:.2} ms after the next tick was due", late_ns as f64 / 1e6);
-                self.events.emit(Some(self.sim_tick), "overrun", detail);
-            }
-        }
-        // Any realtime plant may be restarted (a planned fault, --restart on-failure, a user with --resume), so
-        // recovery never depends on whether a death was planned. Written after the tick's work; its cost is in the
-        // report (`checkpoint_write`).
-        if self.realtime && (self.sim_tick + 1).is_multiple_of(CHECKPOINT_EVERY_TICKS) {
-            let t0 = monotonic_ns();
-            self.save_checkpoint();
-            self.rec.record(CHECKPOINT_WRITE, (monotonic_ns() - t0) as i64);
-        }
-    }
-
     fn save_checkpoint(&self) {
         if let (Some(w), Some(text)) = (&self.checkpoints, self.model.checkpoint()) {
             w.save(text);
@@ -635,7 +686,9 @@ impl PlantLoop {
 /// Run the plant process to the end of the scenario (or SIGTERM) and write its report.
 pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     signals::install_termination_flag();
-    let mut plant = PlantLoop::setup(args)?;
+    let scenario = args.scenario()?;
+    let model = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
+    let mut plant = PlantLoop::setup(args, scenario, model)?;
     let mut ports = PlantPorts::connect(args, &plant.info)?;
     let ended = if ports.wait_for_peers(args.options.startup_timeout_s)? {
         if args.resume {
@@ -645,7 +698,7 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         if ended == "completed" {
             // A controller that was not started by a launcher (`--controller external`) learns here that the run
             // is over.
-            let _ = ports.publisher.announce_finished();
+            let _ = ports.announce_finished();
         }
         ended
     } else {

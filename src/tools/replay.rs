@@ -11,9 +11,9 @@ use anyhow::Context;
 use serde::Serialize;
 use silrig_flight::role::Role;
 use silrig_flight::signals::PlantSignals;
+use silrig_launch::launcher::fresh_run_id;
 use silrig_launch::program::binary_dir;
 use silrig_launch::supervision::start_process;
-use silrig_launch::{launcher::fresh_run_id, supervision::ControllerLaunch};
 use silrig_rig::{ProcessArgs, ProcessOptions, RigMode};
 use silrig_wire::ipc::{self, RunId};
 use silrig_wire::recording::reader::RecordedRun;
@@ -302,11 +302,16 @@ impl ReplayRig {
             ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?.publisher().context("the plant-info stream")?;
         announcer.send(0, info)?;
         let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Plant))?;
-        let launch = opts.controller_cmd.clone().map_or(ControllerLaunch::Ours, ControllerLaunch::Command);
         let log_path = out_dir.join(format!("{}.stderr.log", Role::Controller));
         let log = std::fs::File::create(&log_path).with_context(|| format!("creating {}", log_path.display()))?;
-        let child =
-            start_process(Role::Controller, &launch, &args, &binary_dir()?, log.try_clone()?.into(), log.into())?;
+        let child = start_process(
+            Role::Controller,
+            opts.controller_cmd.as_deref(),
+            &args,
+            &binary_dir()?,
+            log.try_clone()?.into(),
+            log.into(),
+        )?;
         Ok(Self {
             run_id,
             child,

@@ -2,8 +2,28 @@
 //! only the child it was given, and the check that a run left no shared memory behind.
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Output};
+use std::process::{Child, Command, Output};
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
+
+/// `libsilrig_client.so` beside the binary `silrig` under test (cargo test builds the binaries, not the cdylib):
+/// built once per test binary with `cargo build --release -p silrig-client`.
+#[allow(dead_code)]
+pub fn client_lib(silrig: &str) -> &'static Path {
+    static LIB: OnceLock<PathBuf> = OnceLock::new();
+    LIB.get_or_init(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let o = Command::new(cargo)
+            .args(["build", "--release", "-p", "silrig-client"])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "building libsilrig_client.so: {}", String::from_utf8_lossy(&o.stderr));
+        let lib = Path::new(silrig).parent().unwrap().join("libsilrig_client.so");
+        assert!(lib.exists(), "{} was not built", lib.display());
+        lib
+    })
+}
 
 /// An empty folder of this test process and test: `<tmp>/silrig-<suite>-<pid>-<test>`.
 pub fn temp_dir(suite: &str, test: &str) -> PathBuf {

@@ -30,6 +30,10 @@ pub struct CheckOptions {
     /// `silrig run --controller-cmd`).
     #[arg(long, value_name = "CMD")]
     pub controller_cmd: Option<String>,
+    /// Fly your own vehicle model: this command runs in place of silrig-plant in every case (as with `silrig run
+    /// --plant-cmd`).
+    #[arg(long, value_name = "CMD")]
+    pub plant_cmd: Option<String>,
     /// Output folder (default: out/check-<suite>-<UTC time>); must not hold a check already.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -79,6 +83,9 @@ impl CheckOptions {
         cmd += &format!(" --case {case}");
         if let Some(c) = &self.controller_cmd {
             cmd += &format!(" --controller-cmd {}", shell_quote(c));
+        }
+        if let Some(c) = &self.plant_cmd {
+            cmd += &format!(" --plant-cmd {}", shell_quote(c));
         }
         // Only the tuning flags that differ from their defaults, so the command stays short.
         let defaults = default_process_options().to_argv();
@@ -130,6 +137,7 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         faults: Vec::new(),
         supervision: SupervisionOptions { restart: RestartMode::Never, max_restarts: 0, restart_backoff_ms: 200.0 },
         controller_cmd: opts.controller_cmd.clone(),
+        plant_cmd: opts.plant_cmd.clone(),
         controller: ControllerKind::Builtin,
         // Not used: the controller is always one the launcher starts.
         external_timeout_s: 120.0,

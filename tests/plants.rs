@@ -1,0 +1,188 @@
+//! Bring your own plant: a vehicle model of the user's own (`tests/clients/toy_plant.py`, three damped rotational
+//! axes with the F-16's signal names, on the Python plant session of `libsilrig_client.so`) flies as the run's
+//! plant through `silrig run --plant-cmd`, against the Python example controller unchanged, in lockstep and in
+//! realtime, with the rig's clock, logger and report around it; the trace's columns are the ones it announced.
+//! A broken announcement, NaN outputs and a controller that needs signals the plant lacks get clear messages.
+//! Each test has its own run id and folder; the launcher reaps what it started, and the tests check that it
+//! removed the run's shared memory. No timing figure is asserted as a bound.
+
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+mod common;
+use common::{no_shared_memory_left, wait_with_watchdog};
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+fn toy(mode: &str) -> String {
+    common::client_lib(SILRIG);
+    format!("python3 {ROOT}/tests/clients/toy_plant.py {mode}")
+}
+
+fn python_pid() -> String {
+    format!("python3 {ROOT}/examples/python/pid_attitude.py")
+}
+
+struct Run {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+    report: Value,
+    out: PathBuf,
+    dir: PathBuf,
+    id: String,
+}
+
+impl Run {
+    fn counter(&self, process: &str, counter: &str) -> u64 {
+        let processes = self.report["processes"].as_array().cloned().unwrap_or_default();
+        let p = processes.iter().find(|p| p["process"] == process).unwrap_or_else(|| panic!("no {process} report"));
+        p["counters"][counter].as_u64().unwrap_or(0)
+    }
+
+    fn failures(&self) -> String {
+        self.report["failures"].to_string()
+    }
+
+    fn event(&self, kind: &str) -> Option<Value> {
+        let text = std::fs::read_to_string(self.out.join("events.jsonl")).unwrap_or_default();
+        text.lines().filter_map(|l| serde_json::from_str::<Value>(l).ok()).find(|e| e["kind"] == kind)
+    }
+
+    /// The trace: header and rows.
+    fn trace(&self) -> (Vec<String>, Vec<Vec<f64>>) {
+        let text = std::fs::read_to_string(self.out.join("trace.csv")).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap().split(',').map(String::from).collect();
+        let rows = lines.map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
+        (header, rows)
+    }
+
+    fn finish(self) {
+        no_shared_memory_left(&self.id);
+        std::fs::remove_dir_all(&self.dir).unwrap();
+    }
+}
+
+/// `silrig run` with its own run id and folder, to the end.
+fn run(test: &str, args: &[&str]) -> Run {
+    let dir = common::temp_dir("plants", test);
+    let id = format!("p{}-{test}", std::process::id());
+    let out = dir.join("out");
+    let child = Command::new(SILRIG)
+        .arg("run")
+        .args(args)
+        .args(["--run-id", &id, "--out", out.to_str().unwrap(), "--no-baseline"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let o = wait_with_watchdog(child, Duration::from_secs(120));
+    let report = std::fs::read_to_string(out.join("report.json"))
+        .map(|t| serde_json::from_str(&t).unwrap())
+        .unwrap_or(Value::Null);
+    Run {
+        code: o.status.code(),
+        stdout: String::from_utf8_lossy(&o.stdout).into(),
+        stderr: String::from_utf8_lossy(&o.stderr).into(),
+        report,
+        out,
+        dir,
+        id,
+    }
+}
+
+fn robust() -> String {
+    format!("{ROOT}/configs/robust.toml")
+}
+
+#[test]
+fn a_python_plant_flies_lockstep_with_the_example_controller_unchanged() {
+    let r = run(
+        "lockstep",
+        &["--mode", "lockstep", "--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &robust()],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 1001);
+    assert_eq!(r.counter("plant", "command_misses"), 0, "a tick went unanswered");
+    assert_eq!(r.counter("controller", "commands_refused"), 0);
+    assert_eq!(r.counter("logger", "rows_written"), 1001);
+    let (header, rows) = r.trace();
+    // The columns the toy announced (no alpha, no airspeed), commands before positions, then the diagnostics.
+    let expected = "t_s,phi_deg,theta_deg,psi_deg,p_dps,q_dps,r_dps,aileron_cmd_deg,elevator_cmd_deg,rudder_cmd_deg,\
+                    aileron_deg,elevator_deg,rudder_deg,flight_segment,err_phi_deg,err_theta_deg,err_psi_deg";
+    assert_eq!(header.join(","), expected);
+    assert_eq!(rows.len(), 1001);
+    let theta = rows.last().unwrap()[2];
+    assert!((theta - 10.0).abs() < 1.0, "theta ends at {theta}, set point 10");
+    // The figures of the F-16's states do not fit this plant: said, not failed.
+    assert!(r.stdout.contains("not drawn: the plant's trace has no column `alpha_deg`"), "{}", r.stdout);
+    r.finish();
+}
+
+#[test]
+fn a_python_plant_flies_2_s_realtime_with_the_rigs_timing_report() {
+    let r = run(
+        "realtime",
+        &["--duration-s", "2", "--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &robust()],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 201);
+    assert!(r.counter("plant", "commands_received") > 150);
+    let latencies =
+        r.report["processes"].as_array().unwrap().iter().find(|p| p["process"] == "plant").unwrap()["latencies"]
+            .as_array()
+            .unwrap()
+            .clone();
+    let count = |name: &str| {
+        latencies.iter().find(|l| l["name"] == name).map_or(0, |l| l["summary"]["count"].as_u64().unwrap())
+    };
+    assert!(count("plant.sense_to_actuate") > 150, "{latencies:?}");
+    assert!(count("plant.wake_lateness") > 150);
+    assert!(count("plant.step_exec") > 150);
+    assert_eq!(r.trace().1.len(), 201);
+    r.finish();
+}
+
+#[test]
+fn nan_outputs_are_refused_counted_and_the_last_valid_ones_published() {
+    let r =
+        run("nan", &["--mode", "lockstep", "--plant-cmd", &toy("nan"), "--controller-cmd", &python_pid(), &robust()]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "outputs_refused"), 10);
+    let refused = r.event("outputs-refused").expect("an outputs-refused event");
+    assert!(refused["detail"].as_str().unwrap().contains("output phi_deg is NaN"), "{refused}");
+    assert!(r.event("outputs-accepted").is_some());
+    let (_, rows) = r.trace();
+    assert_eq!(rows.len(), 1001);
+    assert!(rows.iter().all(|row| row[1].is_finite()), "a NaN reached the trace");
+    r.finish();
+}
+
+#[test]
+fn a_broken_announcement_is_refused_naming_the_rule() {
+    for (mode, needle) in [
+        ("twice", "plant toy: output `phi_deg` named twice"),
+        ("none", "plant toy announces no outputs: a plant publishes at least one"),
+    ] {
+        let r = run(mode, &["--duration-s", "1", "--startup-timeout-s", "2", "--plant-cmd", &toy(mode), &robust()]);
+        assert_eq!(r.code, Some(1), "{mode}: {}\n{}", r.stdout, r.stderr);
+        assert!(r.failures().contains(needle), "{mode}: {}", r.failures());
+        r.finish();
+    }
+}
+
+#[test]
+fn a_controller_needing_signals_the_plant_lacks_is_told_what_the_plant_has() {
+    // Our controller flies the F-16's states in book units, which the toy does not publish.
+    let r = run("ours", &["--duration-s", "1", "--plant-cmd", &toy("ok"), &robust()]);
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    let failures = r.failures();
+    assert!(failures.contains("plant toy has no output `vt_fps`; its outputs: phi_deg, theta_deg"), "{failures}");
+    // The flight is whole: the plant flew its failsafe without a controller, and the logger kept every tick.
+    assert_eq!(r.trace().1.len(), 101);
+    r.finish();
+}
