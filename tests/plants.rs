@@ -2,7 +2,10 @@
 //! axes with the F-16's signal names, on the Python plant session of `libsilrig_client.so`) flies as the run's
 //! plant through `silrig run --plant-cmd`, against the Python example controller unchanged, in lockstep and in
 //! realtime, with the rig's clock, logger and report around it; the trace's columns are the ones it announced.
-//! A broken announcement, NaN outputs and a controller that needs signals the plant lacks get clear messages.
+//! JSBSim's Cessna 172 (`examples/python/jsbsim_plant.py`, PyPI `jsbsim` in `target/test-venv`) flies with the
+//! example PID tuned for it, gets a verdict from `silrig check` with its own suite, and its recording replays
+//! bit-identical. A broken announcement, NaN outputs, a model fault the plant cannot carry out and a controller
+//! that needs signals the plant lacks get clear messages.
 //! Each test has its own run id and folder; the launcher reaps what it started, and the tests check that it
 //! removed the run's shared memory. No timing figure is asserted as a bound.
 
@@ -185,4 +188,83 @@ fn a_controller_needing_signals_the_plant_lacks_is_told_what_the_plant_has() {
     // The flight is whole: the plant flew its failsafe without a controller, and the logger kept every tick.
     assert_eq!(r.trace().1.len(), 101);
     r.finish();
+}
+
+fn jsbsim() -> String {
+    common::client_lib(SILRIG);
+    let python = common::venv_python("jsbsim", "jsbsim");
+    format!("{} {ROOT}/examples/python/jsbsim_plant.py", python.display())
+}
+
+fn c172() -> String {
+    format!("{ROOT}/examples/python/jsbsim_c172.toml")
+}
+
+#[test]
+fn jsbsims_cessna_flies_lockstep_and_realtime_with_the_example_pid() {
+    let r = run(
+        "jsbsim-lockstep",
+        &["--mode", "lockstep", "--plant-cmd", &jsbsim(), "--controller-cmd", &python_pid(), &c172()],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 1001);
+    assert_eq!(r.counter("plant", "command_misses"), 0);
+    assert_eq!(r.counter("controller", "commands_refused"), 0);
+    let (header, rows) = r.trace();
+    for column in ["alpha_deg", "vt_mps", "elevator_deg", "elevator_cmd", "throttle_cmd", "err_theta_deg"] {
+        assert!(header.iter().any(|h| h == column), "{column} in {header:?}");
+    }
+    let theta = rows.last().unwrap()[header.iter().position(|h| h == "theta_deg").unwrap()];
+    assert!((theta - 5.0).abs() < 0.5, "theta ends at {theta}, set point 5");
+    r.finish();
+
+    let r = run(
+        "jsbsim-realtime",
+        &["--duration-s", "2", "--plant-cmd", &jsbsim(), "--controller-cmd", &python_pid(), &c172()],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 201);
+    assert!(r.counter("plant", "commands_received") > 150);
+    assert_eq!(r.trace().1.len(), 201);
+    r.finish();
+}
+
+#[test]
+fn silrig_check_gives_jsbsims_cessna_a_verdict_and_its_recording_replays_bit_identical() {
+    let dir = common::temp_dir("plants", "jsbsim-check");
+    let check_out = dir.join("check");
+    let o = Command::new(SILRIG)
+        .args(["check", &format!("{ROOT}/examples/python/jsbsim_check.toml"), "--out"])
+        .arg(&check_out)
+        .args(["--plant-cmd", &jsbsim(), "--controller-cmd", &python_pid()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("verdict: PASS: 2 of 2 cases passed"), "{stdout}");
+    assert!(stdout.contains("deterministic                  identical over 1001 ticks"), "{stdout}");
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    let r = run(
+        "jsbsim-record",
+        &["--mode", "lockstep", "--plant-cmd", &jsbsim(), "--controller-cmd", &python_pid(), &c172()],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let o = Command::new(SILRIG).arg("replay").arg(&r.out).args(["--controller-cmd", &python_pid()]).output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("compared 1001 ticks: 1001 bit-identical"), "{stdout}");
+    assert!(stdout.contains("throttle_cmd"), "every input compared: {stdout}");
+    r.finish();
+}
+
+#[test]
+fn a_model_fault_the_plant_cannot_carry_out_is_refused_before_anything_runs() {
+    let r = run(
+        "model-fault",
+        &["--plant-cmd", &toy("ok"), "--fault", "plant:sensor-bias@1s,channel=theta_rad,bias=0.01", &robust()],
+    );
+    assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("acts inside the built-in F-16 model, not on a --plant-cmd plant"), "{}", r.stderr);
+    std::fs::remove_dir_all(&r.dir).unwrap();
 }

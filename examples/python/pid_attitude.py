@@ -2,10 +2,13 @@
 
 Each channel is a PID on the Euler angle error with the body rate as the derivative: roll (phi) on the
 aileron, pitch (theta) on the elevator, yaw (psi) on the rudder. The integrators start from the surfaces' positions
-when the controller connects, so taking over is bumpless, and they carry the trim. Gains are in deg of surface per
-deg of error (per deg/s of rate, per deg*s of integral). The Stevens & Lewis sign convention: a positive
-deflection of any surface makes a negative moment, hence the minus signs. It reads and commands the plant's
-signals by name; the throttle, which it does not command, stays where it is.
+when the controller connects, so taking over is bumpless, and they carry the trim. It reads and commands the
+plant's signals by name; the throttle, which it does not command, stays where it is.
+
+The gains are tuned per plant (the announced plant name picks them): for the F-16 in deg of surface per deg of
+error (per deg/s of rate, per deg*s of integral), with the Stevens & Lewis sign convention (a positive deflection
+of any surface makes a negative moment, hence the minus signs); for JSBSim's Cessna 172 (c172x, through
+examples/python/jsbsim_plant.py) in JSBSim's normalized commands per deg, whose aileron rolls right when positive.
 
     silrig run --controller-cmd "python3 examples/python/pid_attitude.py" configs/robust.toml
 """
@@ -16,13 +19,13 @@ import sys
 
 from silrig_client import Controller, serve
 
-KP = (2.0, 4.0, 8.0)  # deg per deg: aileron, elevator, rudder
-KD = (0.6, 1.5, 3.0)  # deg per deg/s
-KI = (1.5, 3.0, 8.0)  # deg per deg*s
-TRAVEL = (21.5, 25.0, 30.0)  # the F-16's surface travel, deg: aileron, elevator, rudder
+# Per plant: KP (per deg), KD (per deg/s), KI (per deg*s) and the travel each command is kept within, each for
+# (aileron, elevator, rudder).
+F16 = ((2.0, 4.0, 8.0), (0.6, 1.5, 3.0), (1.5, 3.0, 8.0), (21.5, 25.0, 30.0))  # deg of surface
+C172 = ((-0.04, 0.3, 0.3), (-0.02, 0.15, 0.15), (-0.02, 0.2, 0.1), (1.0, 1.0, 1.0))  # normalized command
+GAINS = {"f16": F16, "c172x": C172}
 ANGLES = ("phi_deg", "theta_deg", "psi_deg")
 RATES = ("p_dps", "q_dps", "r_dps")
-SURFACES = ("aileron_deg", "elevator_deg", "rudder_deg")  # where the surfaces are now
 INPUTS = ("aileron", "elevator", "rudder")
 
 
@@ -31,19 +34,29 @@ class PidAttitude(Controller):
 
     def __init__(self):
         self.setpoint_deg = (0.0, 0.0, 0.0)
-        self.integral = None  # surface deg carried by the integrators, per channel
+        self.integral = None  # the command carried by the integrators, per channel
+        self.gains = F16
+        self.session = None
 
     def start(self, session):
         self.setpoint_deg = session.setpoint_deg
+        self.session = session
+        plant = session.plant
+        # A plant of the F-16's kind (surfaces in deg) flies with its gains; any other needs a tuning of its own.
+        degrees = all(unit == "deg" for name, unit, *_ in plant.inputs if name in INPUTS)
+        if plant.name not in GAINS and not degrees:
+            raise SystemExit(f"pid_attitude: no gains for plant {plant.name}; tuned for: {', '.join(GAINS)}")
+        self.gains = GAINS.get(plant.name, F16)
         # Fail now, naming what the plant has, if it lacks a signal this law needs.
-        for name in ANGLES + RATES + SURFACES:
+        for name in ANGLES + RATES:
             session.output(name)
-        for name in INPUTS:
-            session.input(name)
+        self.inputs = [session.input(name) for name in INPUTS]
 
     def step(self, sample, dt_s):
+        KP, KD, KI, TRAVEL = self.gains
         if self.integral is None:
-            self.integral = [sample[s] for s in SURFACES]
+            held = self.session.held_command()
+            self.integral = [held[k] for k in self.inputs]
         surfaces = [0.0, 0.0, 0.0]
         errors = [0.0, 0.0, 0.0]
         for c in range(3):
@@ -63,12 +76,14 @@ class PidAttitude(Controller):
         return json.dumps(self.integral)
 
     def restore(self, text):
-        # Three finite integrators within the surfaces' travel, or the text is not a checkpoint of ours.
+        # Three finite integrators within the widest travel of any tuning (the plant is not known yet), or the text
+        # is not a checkpoint of ours.
         try:
             integral = [float(x) for x in json.loads(text)]
         except (ValueError, TypeError):
             return False
-        if len(integral) != 3 or not all(math.isfinite(x) and abs(x) <= t for x, t in zip(integral, TRAVEL)):
+        widest = [max(g[3][c] for g in GAINS.values()) for c in range(3)]
+        if len(integral) != 3 or not all(math.isfinite(x) and abs(x) <= t for x, t in zip(integral, widest)):
             return False
         self.integral = integral
         return True

@@ -258,6 +258,13 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     {
         anyhow::bail!("fault plan: {} needs a controller the launcher starts, not --controller external", f.describe());
     }
+    if opts.plant_cmd.is_some()
+        && let Some(f) = scenario.faults.iter().find(|f| f.action().is_plant_model_fault())
+    {
+        // Sensor and actuator faults act inside the built-in model; a plant of your own owns its sensors and
+        // actuators, so flying the plan without them would report faults that never happened.
+        anyhow::bail!("fault plan: {} acts inside the built-in F-16 model, not on a --plant-cmd plant", f.describe());
+    }
     for (flag, cmd) in [("controller-cmd", &opts.controller_cmd), ("plant-cmd", &opts.plant_cmd)] {
         let Some(cmd) = cmd else { continue };
         let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--{flag}: {e}"))?;

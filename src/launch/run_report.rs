@@ -166,7 +166,9 @@ pub(crate) fn write_plots(
         match silrig_plot::plot_closed_loop(&trace, f_true.as_ref(), out, &silrig_plot::plot_title(scenario)) {
             // A plant of the user's own names its signals itself: the F-16's states figure may not fit it. The
             // trace and the recording hold every signal; a figure of any plant's outputs is not drawn yet.
-            Err(silrig_plot::PlotError::MissingColumn { column, file, .. }) if trace.index("alpha_deg").is_none() => {
+            Err(silrig_plot::PlotError::MissingColumn { column, file, .. })
+                if !silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) =>
+            {
                 println!(
                     "figures: {} not drawn: the plant's trace has no column `{column}` (the closed-loop figures show \
                      the F-16's states)",

@@ -25,6 +25,23 @@ pub fn client_lib(silrig: &str) -> &'static Path {
     })
 }
 
+/// The Python of `target/test-venv` (which `.ci/run` creates), with `package` installed there if `module` does not
+/// import yet.
+#[allow(dead_code)]
+pub fn venv_python(module: &str, package: &str) -> PathBuf {
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-venv");
+    let python = venv.join("bin/python3");
+    let imports =
+        || Command::new(&python).args(["-c", &format!("import {module}")]).status().is_ok_and(|s| s.success());
+    if !imports() {
+        let made = Command::new("python3").args(["-m", "venv"]).arg(&venv).status().expect("python3 runs");
+        assert!(made.success(), "python3 -m venv {} failed (Debian: apt-get install python3-venv)", venv.display());
+        let installed = Command::new(venv.join("bin/pip")).args(["install", "-q", package]).status().expect("pip runs");
+        assert!(installed.success(), "pip install {package} failed");
+    }
+    python
+}
+
 /// An empty folder of this test process and test: `<tmp>/silrig-<suite>-<pid>-<test>`.
 pub fn temp_dir(suite: &str, test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("silrig-{suite}-{}-{test}", std::process::id()));

@@ -394,13 +394,16 @@ fn deterministic(runs: &[RunEvidence]) -> Judgement {
     let (Some(a), Some(b)) = (runs[0].trace.as_ref(), runs.get(1).and_then(|r| r.trace.as_ref())) else {
         return no_evidence("deterministic", limit, "a run logged no trace");
     };
-    let columns =
-        |t: &Trace| -> Vec<Vec<f64>> { COMMAND_COLUMNS.iter().map(|c| t.column(c).unwrap_or_default()).collect() };
+    // The command columns of whatever plant flew: the F-16's `<surface>_cmd_deg`, any plant's `<input>_cmd[_unit]`.
+    let names: Vec<&String> = a.columns.iter().filter(|c| c.contains("_cmd")).collect();
+    let columns = |t: &Trace| -> Vec<Vec<f64>> {
+        names.iter().map(|c| t.column(c).unwrap_or_else(|| vec![f64::NAN; t.rows.len()])).collect()
+    };
     let (ca, cb) = (columns(a), columns(b));
     let t = a.column("t_s").unwrap_or_default();
     let rows = a.rows.len().min(b.rows.len());
     for k in 0..rows {
-        for (c, name) in COMMAND_COLUMNS.iter().enumerate() {
+        for (c, name) in names.iter().enumerate() {
             if ca[c][k].to_bits() != cb[c][k].to_bits() {
                 return judgement(
                     "deterministic",
