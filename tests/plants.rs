@@ -2,6 +2,7 @@
 //! axes with the F-16's signal names, on the Python plant session of `libsilrig_client.so`) flies as the run's
 //! plant through `silrig run --plant-cmd`, against the Python example controller unchanged, in lockstep and in
 //! realtime, with the rig's clock, logger and report around it; the trace's columns are the ones it announced.
+//! The same model in C (`examples/c/toy_plant.c`, compiled here with the system compiler) flies too.
 //! JSBSim's Cessna 172 (`examples/python/jsbsim_plant.py`, PyPI `jsbsim` in `target/test-venv`) flies with the
 //! example PID tuned for it, gets a verdict from `silrig check` with its own suite, and its recording replays
 //! bit-identical. A broken announcement, NaN outputs, a model fault the plant cannot carry out and a controller
@@ -23,6 +24,28 @@ const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 fn toy(mode: &str) -> String {
     common::client_lib(SILRIG);
     format!("python3 {ROOT}/tests/clients/toy_plant.py {mode}")
+}
+
+/// The C example plant, compiled with the system compiler against the header and the library.
+fn c_plant() -> String {
+    let lib_dir = common::client_lib(SILRIG).parent().unwrap().to_path_buf();
+    let out = std::env::temp_dir().join(format!("silrig-plants-{}-toy_plant", std::process::id()));
+    if !out.exists() {
+        let o = Command::new("cc")
+            .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+            .arg(format!("{ROOT}/examples/c"))
+            .arg(format!("{ROOT}/examples/c/toy_plant.c"))
+            .arg("-L")
+            .arg(&lib_dir)
+            .arg("-lsilrig_client")
+            .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "cc: {}", String::from_utf8_lossy(&o.stderr));
+    }
+    out.display().to_string()
 }
 
 fn python_pid() -> String {
@@ -123,6 +146,22 @@ fn a_python_plant_flies_lockstep_with_the_example_controller_unchanged() {
     assert!((theta - 10.0).abs() < 1.0, "theta ends at {theta}, set point 10");
     // The figures of the F-16's states do not fit this plant: said, not failed.
     assert!(r.stdout.contains("not drawn: the plant's trace has no column `alpha_deg`"), "{}", r.stdout);
+    r.finish();
+}
+
+#[test]
+fn a_c_plant_flies_lockstep_with_the_example_controller() {
+    let r = run(
+        "c-lockstep",
+        &["--mode", "lockstep", "--plant-cmd", &c_plant(), "--controller-cmd", &python_pid(), &robust()],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 1001);
+    assert_eq!(r.counter("plant", "command_misses"), 0);
+    let (header, rows) = r.trace();
+    assert_eq!(header[..4], ["t_s", "phi_deg", "theta_deg", "psi_deg"]);
+    let theta = rows.last().unwrap()[2];
+    assert!((theta - 10.0).abs() < 1.0, "theta ends at {theta}, set point 10");
     r.finish();
 }
 
@@ -267,4 +306,40 @@ fn a_model_fault_the_plant_cannot_carry_out_is_refused_before_anything_runs() {
     assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("acts inside the built-in F-16 model, not on a --plant-cmd plant"), "{}", r.stderr);
     std::fs::remove_dir_all(&r.dir).unwrap();
+}
+
+#[test]
+fn a_second_plant_for_a_run_is_refused_and_the_run_goes_on() {
+    let dir = common::temp_dir("plants", "second");
+    let id = format!("p{}-second", std::process::id());
+    let out = dir.join("out");
+    let launcher = Command::new(SILRIG)
+        .args(["run", "--duration-s", "3", "--quiet", "--no-baseline", "--run-id", &id, "--out"])
+        .arg(&out)
+        .args(["--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &robust()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Once the first plant flies (its checkpoint-free run writes its events), a second one is started by hand.
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    while !std::fs::read_to_string(out.join("events.jsonl")).is_ok_and(|t| t.contains("\"ticking\"")) {
+        assert!(std::time::Instant::now() < deadline, "the first plant never started ticking");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let second = Command::new("python3")
+        .arg(format!("{ROOT}/tests/clients/toy_plant.py"))
+        .env("SILRIG_CLIENT_LIB", common::client_lib(SILRIG))
+        .env("SILRIG_RUN_ID", &id)
+        .env("SILRIG_SCENARIO", out.join("scenario.toml"))
+        .env("SILRIG_OUT", dir.join("second"))
+        .output()
+        .unwrap();
+    assert_eq!(second.status.code(), Some(2));
+    let said = String::from_utf8_lossy(&second.stderr);
+    assert!(said.contains(&format!("refusing to start a second plant: run `{id}` has one")), "{said}");
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
 }

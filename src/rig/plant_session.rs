@@ -18,6 +18,7 @@ use super::signals;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_wire::clock::monotonic_ns;
+use silrig_wire::ipc::IpcError;
 use silrig_wire::wire::PlantInfo;
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -106,10 +107,9 @@ impl PlantSession {
         let lp =
             PlantLoop::setup(&args, scenario, Box::new(model)).map_err(|e| SessionError::Setup(format!("{e:#}")))?;
         let ports = PlantPorts::connect(&args, &info).map_err(|e| {
-            let text = format!("{e:#}");
-            match text.contains("publisher") {
+            match e.chain().any(|c| matches!(c.downcast_ref(), Some(IpcError::PublisherAlreadyActive { .. }))) {
                 true => SessionError::Plant(format!("refusing to start a second plant: run `{}` has one", args.run_id)),
-                false => SessionError::Setup(text),
+                false => SessionError::Setup(format!("{e:#}")),
             }
         })?;
         let ready =
