@@ -268,6 +268,51 @@ fn a_controller_started_by_hand_joins_an_external_run() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+#[test]
+fn a_raw_iceoryx2_peer_written_from_the_contract_flies_an_external_run_without_a_report() {
+    let python = common::venv_python("iceoryx2", "iceoryx2==0.10.0");
+    let dir = temp_dir("raw");
+    let id = run_id("raw");
+    let out = dir.join("out");
+    let launcher = Command::new(SILRIG)
+        .args(["run", "--mode", "lockstep", "--controller", "external", "--external-timeout-s", "60"])
+        .args(["--run-id", &id, "--out", out.to_str().unwrap(), &robust()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !out.join("controller.env").exists() {
+        assert!(start.elapsed() < Duration::from_secs(20), "no controller.env");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Only the run id, as a user of another language would take it from the launcher's message.
+    let peer = Command::new(&python)
+        .arg(Path::new(ROOT).join("tests/clients/raw_controller.py"))
+        .arg("10")
+        .env("SILRIG_RUN_ID", &id)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let p = wait_with_watchdog(peer, Duration::from_secs(90));
+    let o = wait_with_watchdog(launcher, Duration::from_secs(90));
+    let peer_said = String::from_utf8_lossy(&p.stderr);
+    assert!(p.status.success(), "raw peer: {peer_said}");
+    assert!(peer_said.contains("answered 1001 samples"), "{peer_said}");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("note: controller: started outside the launcher, it wrote no report"), "{stdout}");
+    let report: Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let plant = report["processes"].as_array().unwrap().iter().find(|p| p["process"] == "plant").unwrap();
+    assert_eq!(plant["counters"]["ticks"], 1001);
+    assert_eq!(plant["counters"]["command_misses"], 0, "a tick went unanswered");
+    assert_eq!(plant["counters"]["commands_invalid"], 0);
+    assert!(report["failures"].as_array().unwrap().is_empty(), "{}", report["failures"]);
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A client run by hand against `out`'s run, or none: (exit code, stderr).
 fn client(mode: &str, env: &[(&str, &str)]) -> (Option<i32>, String) {
     let o = Command::new("python3")

@@ -514,12 +514,19 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         wait_for_external_report(&out);
     }
     let mut failures = std::mem::take(&mut sup.failures);
+    let mut notes = Vec::new();
     let mut processes = Vec::new();
     for role in Role::ALL {
         match read_report(&out, role.label()) {
             Ok(r) => processes.push(r),
             // It reports on its own host.
             Err(_) if role == Role::Controller && bridge.is_some() => {}
+            // A peer of the contract started by hand need not use the session library, which writes the report.
+            Err(_) if role == Role::Controller && controller == ControllerLaunch::External => notes.push(
+                "controller: started outside the launcher, it wrote no report (a peer that speaks the contract \
+                 need not): its timing is what the plant and the logger measured (sense-to-actuate, misses)"
+                    .to_string(),
+            ),
             // A process a planned fault killed for good has no report to give; anything else should have one.
             Err(_) if ended_by_plan.contains(&role) => {}
             Err(e) => failures.push(format!("{role}: no report ({e})")),
@@ -593,6 +600,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         duration_s: scenario.timing.duration_s,
         stopped_by,
         failures,
+        notes,
         leftovers,
         phases: super::run_report::phase_splits(&out, scenario.timing.dt_s, opts.mode == RigMode::Realtime),
     };

@@ -52,6 +52,9 @@ pub struct RigReport {
     pub stopped_by: Option<StoppedBy>,
     /// Processes that failed, and how.
     pub failures: Vec<String>,
+    /// What the run wants the reader to know that is not a failure (a controller started by hand without a report).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
     pub leftovers: Vec<String>,
     /// The plant's per-tick distributions split into warm-up (the first second) and steady state.
@@ -262,6 +265,9 @@ impl RigReport {
         }
         for d in &self.discontinuities {
             out += &format!("flight discontinuity at t = {:.2} s: {}\n", d.at_s, d.detail);
+        }
+        for n in &self.notes {
+            out += &format!("note: {n}\n");
         }
         if self.failures.is_empty() && self.stopped_by.is_none() {
             out += "all processes ended cleanly";

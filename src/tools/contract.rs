@@ -95,6 +95,23 @@ pub const HEADER_RULES: [&str; 9] = [
      each within the input's min..max, or it is refused",
 ];
 
+/// What each peer must do besides sending well-formed samples, for people (the text rendering carries it).
+pub const PEER_RULES: [&str; 5] = [
+    "a plant announces PlantInfo, then publishes one PlantSample per tick (0, 1, ...) once a command publisher exists; \
+     after its last tick it sends that tick again with FLAG_END_OF_RUN and notifies EVENT_FINISHED on stream plant",
+    "a controller opens plant, plant-info, controller-info and command; it announces ControllerInfo (its diagnostics' \
+     names, possibly none) before it creates its command publisher, which is what the plant starts on, and again with \
+     its first command",
+    "a controller answers each plant sample it takes with one CommandSample whose answers_tick and header tick are the \
+     sample's tick; it need not answer every sample (a miss is held and counted by the plant), and never answers the \
+     FLAG_END_OF_RUN sample",
+    "a controller leaves when the run ends (the FLAG_END_OF_RUN sample, or EVENT_FINISHED on stream plant): it drops \
+     its ports and its node; the launcher removes the run's shared memory once no node of the run is alive",
+    "reports: the rig's processes and anything on libsilrig_client write <out>/<role>.report.json; a controller started \
+     outside the launcher (--controller external) need not, and the run's report then says its timing is what the \
+     plant and the logger measured",
+];
+
 /// How peers find each other's signals, for people (the text rendering carries it).
 pub const SIGNAL_RULES: [&str; 4] = [
     "the plant announces PlantInfo on stream plant-info once per epoch, before its first sample; a reader that \
@@ -142,6 +159,10 @@ pub fn text() -> String {
     );
     out += "Namespace of run <id>: iceoryx2 root dir /tmp/silrig_<id>/, file prefix sr_<id>_.\n\nHeader rules:\n";
     for rule in HEADER_RULES {
+        let _ = writeln!(out, "  - {rule}");
+    }
+    out += "\nWhat each peer does:\n";
+    for rule in PEER_RULES {
         let _ = writeln!(out, "  - {rule}");
     }
     out += "\nSignals:\n";
