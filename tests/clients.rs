@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{no_shared_memory_left, wait_with_watchdog};
+use common::{Run, no_shared_memory_left, wait_with_watchdog};
 
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -63,75 +63,9 @@ fn misbehaving(mode: &str) -> String {
     format!("python3 {ROOT}/tests/clients/misbehaving.py {mode}")
 }
 
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-    report: Value,
-    out: PathBuf,
-    dir: PathBuf,
-    id: String,
-}
-
-impl Run {
-    fn process(&self, name: &str) -> &Value {
-        self.report["processes"].as_array().unwrap().iter().find(|p| p["process"] == name).unwrap()
-    }
-
-    fn counter(&self, process: &str, counter: &str) -> u64 {
-        self.process(process)["counters"][counter].as_u64().unwrap_or(0)
-    }
-
-    fn events(&self) -> Vec<Value> {
-        let text = std::fs::read_to_string(self.out.join("events.jsonl")).unwrap_or_default();
-        text.lines().filter_map(|l| serde_json::from_str(l).ok()).collect()
-    }
-
-    fn event(&self, process: &str, kind: &str) -> Option<Value> {
-        self.events().into_iter().find(|e| e["process"] == process && e["kind"] == kind)
-    }
-
-    /// The trace: header and rows.
-    fn trace(&self) -> (Vec<String>, Vec<Vec<f64>>) {
-        let text = std::fs::read_to_string(self.out.join("trace.csv")).unwrap();
-        let mut lines = text.lines();
-        let header = lines.next().unwrap().split(',').map(String::from).collect();
-        let rows = lines.map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
-        (header, rows)
-    }
-
-    fn finish(self) {
-        no_shared_memory_left(&self.id);
-        std::fs::remove_dir_all(&self.dir).unwrap();
-    }
-}
-
 /// `silrig run` with its own run id and folder, to the end.
 fn run(test: &str, args: &[&str]) -> Run {
-    let dir = temp_dir(test);
-    let id = run_id(test);
-    let out = dir.join("out");
-    let child = Command::new(SILRIG)
-        .arg("run")
-        .args(args)
-        .args(["--run-id", &id, "--out", out.to_str().unwrap(), "--no-baseline"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let o = wait_with_watchdog(child, Duration::from_secs(120));
-    let report = std::fs::read_to_string(out.join("report.json"))
-        .map(|t| serde_json::from_str(&t).unwrap())
-        .unwrap_or(Value::Null);
-    Run {
-        code: o.status.code(),
-        stdout: String::from_utf8_lossy(&o.stdout).into(),
-        stderr: String::from_utf8_lossy(&o.stderr).into(),
-        report,
-        out,
-        dir,
-        id,
-    }
+    Run::start(SILRIG, "clients", "c", test, args)
 }
 
 fn robust() -> String {

@@ -16,7 +16,7 @@ use std::process::{Command, Stdio};
 use std::time::Duration;
 
 mod common;
-use common::{no_shared_memory_left, wait_with_watchdog};
+use common::{Run, no_shared_memory_left, wait_with_watchdog};
 
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -52,73 +52,9 @@ fn python_pid() -> String {
     format!("python3 {ROOT}/examples/python/pid_attitude.py")
 }
 
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-    report: Value,
-    out: PathBuf,
-    dir: PathBuf,
-    id: String,
-}
-
-impl Run {
-    fn counter(&self, process: &str, counter: &str) -> u64 {
-        let processes = self.report["processes"].as_array().cloned().unwrap_or_default();
-        let p = processes.iter().find(|p| p["process"] == process).unwrap_or_else(|| panic!("no {process} report"));
-        p["counters"][counter].as_u64().unwrap_or(0)
-    }
-
-    fn failures(&self) -> String {
-        self.report["failures"].to_string()
-    }
-
-    fn event(&self, kind: &str) -> Option<Value> {
-        let text = std::fs::read_to_string(self.out.join("events.jsonl")).unwrap_or_default();
-        text.lines().filter_map(|l| serde_json::from_str::<Value>(l).ok()).find(|e| e["kind"] == kind)
-    }
-
-    /// The trace: header and rows.
-    fn trace(&self) -> (Vec<String>, Vec<Vec<f64>>) {
-        let text = std::fs::read_to_string(self.out.join("trace.csv")).unwrap();
-        let mut lines = text.lines();
-        let header = lines.next().unwrap().split(',').map(String::from).collect();
-        let rows = lines.map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
-        (header, rows)
-    }
-
-    fn finish(self) {
-        no_shared_memory_left(&self.id);
-        std::fs::remove_dir_all(&self.dir).unwrap();
-    }
-}
-
 /// `silrig run` with its own run id and folder, to the end.
 fn run(test: &str, args: &[&str]) -> Run {
-    let dir = common::temp_dir("plants", test);
-    let id = format!("p{}-{test}", std::process::id());
-    let out = dir.join("out");
-    let child = Command::new(SILRIG)
-        .arg("run")
-        .args(args)
-        .args(["--run-id", &id, "--out", out.to_str().unwrap(), "--no-baseline"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let o = wait_with_watchdog(child, Duration::from_secs(120));
-    let report = std::fs::read_to_string(out.join("report.json"))
-        .map(|t| serde_json::from_str(&t).unwrap())
-        .unwrap_or(Value::Null);
-    Run {
-        code: o.status.code(),
-        stdout: String::from_utf8_lossy(&o.stdout).into(),
-        stderr: String::from_utf8_lossy(&o.stderr).into(),
-        report,
-        out,
-        dir,
-        id,
-    }
+    Run::start(SILRIG, "plants", "p", test, args)
 }
 
 fn robust() -> String {
@@ -195,9 +131,9 @@ fn nan_outputs_are_refused_counted_and_the_last_valid_ones_published() {
         run("nan", &["--mode", "lockstep", "--plant-cmd", &toy("nan"), "--controller-cmd", &python_pid(), &robust()]);
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert_eq!(r.counter("plant", "outputs_refused"), 10);
-    let refused = r.event("outputs-refused").expect("an outputs-refused event");
+    let refused = r.event("plant", "outputs-refused").expect("an outputs-refused event");
     assert!(refused["detail"].as_str().unwrap().contains("output phi_deg is NaN"), "{refused}");
-    assert!(r.event("outputs-accepted").is_some());
+    assert!(r.event("plant", "outputs-accepted").is_some());
     let (_, rows) = r.trace();
     assert_eq!(rows.len(), 1001);
     assert!(rows.iter().all(|row| row[1].is_finite()), "a NaN reached the trace");

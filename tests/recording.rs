@@ -257,9 +257,11 @@ fn replay_finds_where_a_changed_controller_diverges() {
     let changed_dir = out.join("changed");
     std::fs::create_dir_all(&changed_dir).unwrap();
     let source = std::fs::read_to_string(Path::new(ROOT).join("examples/python/pid_attitude.py")).unwrap();
-    let old = "KD = (0.6, 1.5, 3.0)";
+    // The F-16's gains: KP, then KD.
+    let old = "F16 = ((2.0, 4.0, 8.0), (0.6, 1.5, 3.0)";
     assert!(source.contains(old));
-    std::fs::write(changed_dir.join("pid_changed.py"), source.replace(old, "KD = (0.6, 1.8, 3.0)")).unwrap();
+    let new = "F16 = ((2.0, 4.0, 8.0), (0.6, 1.8, 3.0)";
+    std::fs::write(changed_dir.join("pid_changed.py"), source.replace(old, new)).unwrap();
     let cmd = format!("python3 {}", changed_dir.join("pid_changed.py").display());
     let pythonpath = Path::new(ROOT).join("examples/python");
     let env = [("PYTHONPATH", pythonpath.to_str().unwrap())];

@@ -5,10 +5,9 @@
 //! very numbers the single-process loop hands it.
 
 use crate::signals::{InputSignal, OutputSignal, PlantSignals};
-use crate::sim::PlantSnapshot;
+use crate::sim::{PlantSnapshot, measured_columns};
 use silrig_model::actuator::SURFACE_CMD_LIMIT_DEG;
 use silrig_model::plant::{F16State, STATE_LEN, STATE_NAMES};
-use silrig_model::units::{M_PER_FT, rad_to_deg};
 
 /// The F-16's plant name.
 pub const PLANT_NAME: &str = "f16";
@@ -75,30 +74,19 @@ pub fn f16_signals(hold: [f64; 4]) -> PlantSignals {
     PlantSignals { plant: PLANT_NAME.into(), outputs: traced.chain(states).collect(), inputs: inputs.collect() }
 }
 
-/// A snapshot's outputs in the order of [`f16_signals`], computed as the single-process loop's trace row computes
-/// its columns.
+/// A snapshot's outputs in the order of [`f16_signals`]: the measured ones as the single-process loop's trace row
+/// computes its columns ([`measured_columns`]), then the actuators' positions and the states.
 pub fn f16_outputs(snap: &PlantSnapshot) -> [f64; OUTPUTS_LEN] {
-    let x = &snap.state;
     let mut out = [0.0; OUTPUTS_LEN];
-    out[..TRACED.len()].copy_from_slice(&[
-        rad_to_deg(x.phi_rad),
-        rad_to_deg(x.theta_rad),
-        rad_to_deg(x.psi_rad),
-        rad_to_deg(x.alpha_rad),
-        rad_to_deg(x.beta_rad),
-        rad_to_deg(x.p_radps),
-        rad_to_deg(x.q_radps),
-        rad_to_deg(x.r_radps),
-        x.vt_fps * M_PER_FT,
-        x.alt_ft,
-        snap.nz_g,
-        snap.ny_g,
+    let measured = measured_columns(snap);
+    out[..measured.len()].copy_from_slice(&measured);
+    out[measured.len()..TRACED.len()].copy_from_slice(&[
         snap.surfaces_deg[0],
         snap.surfaces_deg[1],
         snap.surfaces_deg[2],
         snap.throttle,
     ]);
-    let states = x.to_array();
+    let states = snap.state.to_array();
     for (slot, k) in out[TRACED.len()..].iter_mut().zip((0..STATE_LEN).filter(|k| *k != ALT_STATE)) {
         *slot = states[k];
     }

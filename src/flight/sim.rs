@@ -554,20 +554,11 @@ pub fn measurement(s: &PlantSnapshot) -> Measurement {
     }
 }
 
-/// The loop part of a `trace.csv` row ([`crate::trace::LOOP_COLUMNS`]): the snapshot at t_k, the controller's
-/// command computed from it, and the actuator positions held over [t_k, t_k+1) (the positions the plant reports
-/// with its next sample, or after the last tick's [`PlantRunner::actuate`]); the controller's diagnostics follow.
-pub fn trace_row(
-    snap: &PlantSnapshot,
-    held: &HeldActuators,
-    command: &SurfaceCommand,
-    flight_segment: u32,
-    diagnostics: &[f64],
-) -> Vec<f64> {
+/// What the plant measured at t_k, as the trace shows it (`phi_deg` to `ny_g` of [`crate::trace::LOOP_COLUMNS`]):
+/// also the F-16's first outputs on the wire ([`crate::f16_signals::f16_outputs`]), so both give the same bits.
+pub fn measured_columns(snap: &PlantSnapshot) -> [f64; 12] {
     let x = &snap.state;
-    let mut row = Vec::with_capacity(trace::LOOP_COLUMNS.len() + diagnostics.len());
-    row.extend_from_slice(&[
-        snap.t_s,
+    [
         rad_to_deg(x.phi_rad),
         rad_to_deg(x.theta_rad),
         rad_to_deg(x.psi_rad),
@@ -580,6 +571,23 @@ pub fn trace_row(
         x.alt_ft,
         snap.nz_g,
         snap.ny_g,
+    ]
+}
+
+/// The loop part of a `trace.csv` row ([`crate::trace::LOOP_COLUMNS`]): the snapshot at t_k, the controller's
+/// command computed from it, and the actuator positions held over [t_k, t_k+1) (the positions the plant reports
+/// with its next sample, or after the last tick's [`PlantRunner::actuate`]); the controller's diagnostics follow.
+pub fn trace_row(
+    snap: &PlantSnapshot,
+    held: &HeldActuators,
+    command: &SurfaceCommand,
+    flight_segment: u32,
+    diagnostics: &[f64],
+) -> Vec<f64> {
+    let mut row = Vec::with_capacity(trace::LOOP_COLUMNS.len() + diagnostics.len());
+    row.push(snap.t_s);
+    row.extend_from_slice(&measured_columns(snap));
+    row.extend_from_slice(&[
         command.aileron_deg,
         command.elevator_deg,
         command.rudder_deg,

@@ -2,7 +2,7 @@
 //! [`PlantRunner`] as `silrig sim` (actuators, sensor faults, RK4), announcing the F-16's signals
 //! ([`silrig_flight::f16_signals`]) with the scenario's trim as its failsafe's hold values.
 
-use super::plant::{ActuatorFlags, PlantModel};
+use super::plant_model::{ActuatorFlags, PlantModel};
 use silrig_flight::f16_signals::{f16_outputs, f16_signals};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;

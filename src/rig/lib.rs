@@ -4,7 +4,7 @@
 //!
 //! - [`plant`], [`controller`], [`logger`]: the process bodies; [`session`]: the controller side of the contract as
 //!   one reusable session (open a run, wait for a sample, send a command, stamps, checks, in-loop faults).
-//! - [`f16_plant`]: the F-16 as a [`plant::PlantModel`], the vehicle the plant process flies;
+//! - [`plant_model`]: what the plant process flies; [`f16_plant`]: the F-16 as a [`plant_model::PlantModel`];
 //!   [`plant_session`]: the plant's side of the contract for a model of the user's own (announce, then outputs
 //!   in, inputs out, tick by tick), with the same loop around it.
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
@@ -26,6 +26,7 @@ pub mod f16_plant;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;
+pub mod plant_model;
 pub mod plant_session;
 pub mod report;
 pub mod session;

@@ -11,7 +11,8 @@
 //! join), and a model leaving its envelope other than by closing the session with an error.
 
 use super::ProcessArgs;
-use super::plant::{ActuatorFlags, PlantLoop, PlantModel, PlantPorts};
+use super::plant::{PlantLoop, PlantPorts};
+use super::plant_model::{ActuatorFlags, PlantModel};
 use super::report::ProcessReport;
 use super::session::SessionError;
 use super::signals;

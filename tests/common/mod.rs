@@ -78,3 +78,95 @@ pub fn no_shared_memory_left(run_id: &str) {
     assert!(left.is_empty(), "shared memory left behind: {left:?}");
     assert!(!Path::new(&format!("/tmp/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
 }
+
+/// A finished `silrig run` of a test: its exit code, output, report and folders.
+#[allow(dead_code)]
+pub struct Run {
+    /// The launcher's exit code.
+    pub code: Option<i32>,
+    /// What it printed.
+    pub stdout: String,
+    /// What it said on stderr.
+    pub stderr: String,
+    /// `report.json` (Null when none was written).
+    pub report: serde_json::Value,
+    /// The run's folder.
+    pub out: PathBuf,
+    /// The test's folder (the run's parent).
+    pub dir: PathBuf,
+    /// The run id.
+    pub id: String,
+}
+
+#[allow(dead_code)]
+impl Run {
+    /// `silrig run ARGS` with its own run id (`<id_prefix><pid>-<test>`) and folder, to the end (120 s at most).
+    pub fn start(silrig: &str, suite: &str, id_prefix: &str, test: &str, args: &[&str]) -> Run {
+        let dir = temp_dir(suite, test);
+        let id = format!("{id_prefix}{}-{test}", std::process::id());
+        let out = dir.join("out");
+        let child = Command::new(silrig)
+            .arg("run")
+            .args(args)
+            .args(["--run-id", &id, "--out", out.to_str().unwrap(), "--no-baseline"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let o = wait_with_watchdog(child, Duration::from_secs(120));
+        let report = std::fs::read_to_string(out.join("report.json"))
+            .map(|t| serde_json::from_str(&t).unwrap())
+            .unwrap_or(serde_json::Value::Null);
+        Run {
+            code: o.status.code(),
+            stdout: String::from_utf8_lossy(&o.stdout).into(),
+            stderr: String::from_utf8_lossy(&o.stderr).into(),
+            report,
+            out,
+            dir,
+            id,
+        }
+    }
+
+    /// One process's report.
+    pub fn process(&self, name: &str) -> &serde_json::Value {
+        let processes = self.report["processes"].as_array().unwrap_or_else(|| panic!("no report: {}", self.stdout));
+        processes.iter().find(|p| p["process"] == name).unwrap_or_else(|| panic!("no {name} report"))
+    }
+
+    /// One of a process's counters (0 when it has none of that name).
+    pub fn counter(&self, process: &str, counter: &str) -> u64 {
+        self.process(process)["counters"][counter].as_u64().unwrap_or(0)
+    }
+
+    /// The report's failures, as JSON text.
+    pub fn failures(&self) -> String {
+        self.report["failures"].to_string()
+    }
+
+    /// Every event of the run.
+    pub fn events(&self) -> Vec<serde_json::Value> {
+        let text = std::fs::read_to_string(self.out.join("events.jsonl")).unwrap_or_default();
+        text.lines().filter_map(|l| serde_json::from_str(l).ok()).collect()
+    }
+
+    /// The first event of `process` of this kind.
+    pub fn event(&self, process: &str, kind: &str) -> Option<serde_json::Value> {
+        self.events().into_iter().find(|e| e["process"] == process && e["kind"] == kind)
+    }
+
+    /// The trace: header and rows.
+    pub fn trace(&self) -> (Vec<String>, Vec<Vec<f64>>) {
+        let text = std::fs::read_to_string(self.out.join("trace.csv")).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap().split(',').map(String::from).collect();
+        let rows = lines.map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
+        (header, rows)
+    }
+
+    /// The run left no shared memory; its folder goes.
+    pub fn finish(self) {
+        no_shared_memory_left(&self.id);
+        std::fs::remove_dir_all(&self.dir).unwrap();
+    }
+}
