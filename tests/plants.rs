@@ -10,8 +10,6 @@
 //! Each test has its own run id and folder; the launcher reaps what it started, and the tests check that it
 //! removed the run's shared memory. No timing figure is asserted as a bound.
 
-use serde_json::Value;
-use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
