@@ -277,3 +277,18 @@ fn a_second_plant_for_a_run_is_refused_and_the_run_goes_on() {
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_raw_iceoryx2_plant_written_from_the_contract_flies_2_s_realtime_without_a_report() {
+    let python = common::venv_python("iceoryx2", "iceoryx2==0.10.0");
+    let plant = format!("{} {ROOT}/tests/clients/raw_plant.py", python.display());
+    let r = run("raw", &["--duration-s", "2", "--plant-cmd", &plant, "--controller-cmd", &python_pid(), &robust()]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("note: plant: your --plant-cmd wrote no report"), "{}", r.stdout);
+    assert_eq!(r.counter("logger", "rows_written"), 201);
+    assert!(r.counter("controller", "commands_sent") > 150, "the controller answered the raw plant");
+    let (header, rows) = r.trace();
+    assert_eq!(header[..4], ["t_s", "phi_deg", "theta_deg", "psi_deg"]);
+    assert_eq!(rows.len(), 201);
+    r.finish();
+}

@@ -521,6 +521,13 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             Ok(r) => processes.push(r),
             // It reports on its own host.
             Err(_) if role == Role::Controller && bridge.is_some() => {}
+            // A plant of the user's own that speaks the contract itself need not write one either; had it failed,
+            // its exit is a failure already.
+            Err(_) if role == Role::Plant && opts.plant_cmd.is_some() => notes.push(
+                "plant: your --plant-cmd wrote no report (a peer that speaks the contract need not): the run's timing \
+                 is what the controller and the logger measured"
+                    .to_string(),
+            ),
             // A peer of the contract started by hand need not use the session library, which writes the report.
             Err(_) if role == Role::Controller && controller == ControllerLaunch::External => notes.push(
                 "controller: started outside the launcher, it wrote no report (a peer that speaks the contract \

@@ -485,7 +485,10 @@ impl Supervisor {
             }
             // Only a flight flown to its end is the run's end: a clean exit on somebody else's SIGTERM is not.
             let ended = read_report(&self.args.out, role.label()).map(|r| r.ended).unwrap_or_default();
-            let completed = status.success() && ended == "completed";
+            // A plant of the user's own that speaks the contract itself writes no report: its clean exit is the end
+            // of its flight (the logger's rows say how much of it there was).
+            let raw_plant_done = role == Role::Plant && self.plant_cmd.is_some() && ended.is_empty();
+            let completed = status.success() && (ended == "completed" || raw_plant_done);
             if role == Role::Plant && completed && self.plant_done_at.is_none() {
                 self.plant_done();
                 continue;

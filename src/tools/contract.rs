@@ -98,7 +98,8 @@ pub const HEADER_RULES: [&str; 9] = [
 /// What each peer must do besides sending well-formed samples, for people (the text rendering carries it).
 pub const PEER_RULES: [&str; 5] = [
     "a plant announces PlantInfo, then publishes one PlantSample per tick (0, 1, ...) once a command publisher exists; \
-     after its last tick it sends that tick again with FLAG_END_OF_RUN and notifies EVENT_FINISHED on stream plant",
+     after its last tick it sends that tick again with FLAG_END_OF_RUN, notifies EVENT_FINISHED on stream plant and \
+     exits with status 0 (a --plant-cmd plant without a report: that exit is the end of its flight)",
     "a controller opens plant, plant-info, controller-info and command; it announces ControllerInfo (its diagnostics' \
      names, possibly none) before it creates its command publisher, which is what the plant starts on, and again with \
      its first command",
@@ -108,8 +109,8 @@ pub const PEER_RULES: [&str; 5] = [
     "a controller leaves when the run ends (the FLAG_END_OF_RUN sample, or EVENT_FINISHED on stream plant): it drops \
      its ports and its node; the launcher removes the run's shared memory once no node of the run is alive",
     "reports: the rig's processes and anything on libsilrig_client write <out>/<role>.report.json; a controller started \
-     outside the launcher (--controller external) need not, and the run's report then says its timing is what the \
-     plant and the logger measured",
+     outside the launcher (--controller external) or a --plant-cmd plant that speaks the contract itself need not, \
+     and the run's report then says whose measurements stand in for it",
 ];
 
 /// How peers find each other's signals, for people (the text rendering carries it).
@@ -177,7 +178,8 @@ pub fn text() -> String {
     for st in Status::ALL {
         let _ = writeln!(out, "  SILRIG_{:<22} {:>3}  {}", st.name(), st.code(), st.meaning());
     }
-    out += "\nEnvironment of a controller started by `silrig run --controller-cmd` (read by silrig_session_open):\n";
+    out += "\nEnvironment of a controller or plant started by `silrig run --controller-cmd` or `--plant-cmd` (read by \
+            silrig_session_open and silrig_plant_open):\n";
     for (name, help) in ProcessArgs::env_variables() {
         let _ = writeln!(out, "  {name:<28} {}", help.replace('\n', " "));
     }
