@@ -19,10 +19,14 @@ a positive rudder command yaws left.
 """
 
 import math
+import os
 import pathlib
 import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+
+# JSBSim prints its banner when the first FDM is built, before any debug level can be set on it.
+os.environ.setdefault("JSBSIM_DEBUG", "0")
 
 import jsbsim  # noqa: E402
 
@@ -71,6 +75,13 @@ class JsbsimPlant(PlantModel):
         fdm.set_debug_level(0)
         if not fdm.load_model(aircraft):
             raise SystemExit(f"jsbsim_plant: JSBSim cannot load aircraft {aircraft!r}")
+        # The aircraft may declare file outputs of its own (c172x: JSBout172B.csv in the working folder at 10 Hz),
+        # which disable_output() alone does not stop being created: the rig records everything already.
+        n = 0
+        while n < 64 and fdm.get_output_filename(n):
+            fdm.set_output_filename(n, os.devnull)
+            n += 1
+        fdm.disable_output()
         fdm["ic/h-sl-ft"] = altitude_ft
         fdm["ic/vc-kts"] = speed_kt
         fdm["ic/psi-true-deg"] = 0.0

@@ -326,22 +326,33 @@ impl Summary {
                 opt_s(a.settle_within_2pct_s)
             );
         }
-        out += &format!("  alpha: final {:.3} deg, peak {:.3} deg\n", self.alpha_final_deg, self.alpha_peak_deg);
+        // A plant of the user's own may have no such column (NaN): its line is left out rather than printed as NaN.
+        if !self.alpha_final_deg.is_nan() {
+            out += &format!("  alpha: final {:.3} deg, peak {:.3} deg\n", self.alpha_final_deg, self.alpha_peak_deg);
+        }
         let [p, q, r] = self.body_rate_max_late_dps;
         if p.is_nan() {
             out += &format!("  max |p|, |q|, |r| after {RATES_FROM_S} s: n/a (the run is shorter)\n");
         } else {
             out += &format!("  max |p|, |q|, |r| after {RATES_FROM_S} s: {p:.3}, {q:.3}, {r:.3} deg/s\n");
         }
-        out += &format!(
-            "  flight path: altitude {:+.1} ft, airspeed {:+.2} m/s{}, energy height {:+.1} ft\n",
-            self.altitude_change_ft,
-            self.airspeed_change_mps,
-            if self.speed_hold { " (speed hold)" } else { "" },
-            self.energy_height_change_ft
-        );
-        out += "  surface   peak(deg)  rate-limit  pos-limit  rms rate(dps)  after 5 s  rms cmd rate\n";
-        for s in &self.surfaces {
+        if !self.altitude_change_ft.is_nan() {
+            out += &format!(
+                "  flight path: altitude {:+.1} ft, airspeed {:+.2} m/s{}, energy height {:+.1} ft\n",
+                self.altitude_change_ft,
+                self.airspeed_change_mps,
+                if self.speed_hold { " (speed hold)" } else { "" },
+                self.energy_height_change_ft
+            );
+        }
+        // The limits counted are the scenario's F-16 actuators': a plant whose commands are not the F-16's
+        // `<surface>_cmd_deg` columns is not judged against them.
+        if self.surfaces.iter().all(|s| s.rms_command_rate_dps.is_nan()) {
+            out += "  surfaces: not the F-16's commands; the scenario's actuator limits do not apply\n";
+        } else {
+            out += "  surface   peak(deg)  rate-limit  pos-limit  rms rate(dps)  after 5 s  rms cmd rate\n";
+        }
+        for s in self.surfaces.iter().filter(|s| !s.rms_command_rate_dps.is_nan()) {
             // NaN: the run ended before the window began, or had no command to differentiate.
             let figure = |v: f64| if v.is_nan() { "n/a".to_string() } else { format!("{v:.3}") };
             out += &format!(
