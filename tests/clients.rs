@@ -161,10 +161,11 @@ fn in_loop_faults_and_a_restart_reach_a_users_controller() {
     r.finish();
 }
 
-#[test]
-fn a_controller_started_by_hand_joins_an_external_run() {
-    let dir = temp_dir("external");
-    let id = run_id("external");
+/// A lockstep `silrig run --controller external` started for `test`, once it waits for a controller: its folder,
+/// run id, run folder and launcher.
+fn start_external_run(test: &str) -> (PathBuf, String, PathBuf, std::process::Child) {
+    let dir = temp_dir(test);
+    let id = run_id(test);
     let out = dir.join("out");
     let launcher = Command::new(SILRIG)
         .args(["run", "--mode", "lockstep", "--controller", "external", "--external-timeout-s", "60"])
@@ -173,12 +174,18 @@ fn a_controller_started_by_hand_joins_an_external_run() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let env_file = out.join("controller.env");
     let start = Instant::now();
-    while !env_file.exists() {
+    while !out.join("controller.env").exists() {
         assert!(start.elapsed() < Duration::from_secs(20), "no controller.env");
         std::thread::sleep(Duration::from_millis(20));
     }
+    (dir, id, out, launcher)
+}
+
+#[test]
+fn a_controller_started_by_hand_joins_an_external_run() {
+    let (dir, id, out, launcher) = start_external_run("external");
+    let env_file = out.join("controller.env");
     std::thread::sleep(Duration::from_millis(50));
     let controller = Command::new("sh")
         .arg("-c")
@@ -205,21 +212,7 @@ fn a_controller_started_by_hand_joins_an_external_run() {
 #[test]
 fn a_raw_iceoryx2_peer_written_from_the_contract_flies_an_external_run_without_a_report() {
     let python = common::venv_python("iceoryx2", "iceoryx2==0.10.0");
-    let dir = temp_dir("raw");
-    let id = run_id("raw");
-    let out = dir.join("out");
-    let launcher = Command::new(SILRIG)
-        .args(["run", "--mode", "lockstep", "--controller", "external", "--external-timeout-s", "60"])
-        .args(["--run-id", &id, "--out", out.to_str().unwrap(), &robust()])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while !out.join("controller.env").exists() {
-        assert!(start.elapsed() < Duration::from_secs(20), "no controller.env");
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let (dir, id, out, launcher) = start_external_run("raw");
     // Only the run id, as a user of another language would take it from the launcher's message.
     let peer = Command::new(&python)
         .arg(Path::new(ROOT).join("tests/clients/raw_controller.py"))
