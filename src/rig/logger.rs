@@ -115,14 +115,13 @@ impl Writer {
             self.flight_segment,
             &diagnostics,
         );
-        let plant = sample;
-        let row = LoggedRow { plant, command, step_exec_ns, trace: &trace };
+        let row = LoggedRow { plant: sample, command, step_exec_ns, trace: &trace };
         for sink in &mut self.sinks {
             sink.row(&row)?;
         }
         self.rows += 1;
-        self.last_tick = Some(plant.sample.header.tick);
-        self.last_written = Some(plant.sample);
+        self.last_tick = Some(sample.sample.header.tick);
+        self.last_written = Some(sample.sample);
         if self.rows.is_multiple_of(FLUSH_EVERY_ROWS) {
             self.flush()?;
         }
