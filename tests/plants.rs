@@ -292,3 +292,53 @@ fn a_raw_iceoryx2_plant_written_from_the_contract_flies_2_s_realtime_without_a_r
     assert_eq!(rows.len(), 201);
     r.finish();
 }
+
+#[test]
+fn a_plant_started_by_hand_joins_an_external_run() {
+    let dir = common::temp_dir("plants", "external");
+    let id = format!("p{}-external", std::process::id());
+    let out = dir.join("out");
+    let launcher = Command::new(SILRIG)
+        .args(["run", "--mode", "lockstep", "--plant", "external", "--external-timeout-s", "60", "--no-baseline"])
+        .args(["--run-id", &id, "--out", out.to_str().unwrap(), "--controller-cmd", &python_pid(), &robust()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let env_file = out.join("plant.env");
+    let start = std::time::Instant::now();
+    while !env_file.exists() {
+        assert!(start.elapsed() < Duration::from_secs(20), "no plant.env");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let plant = Command::new("sh")
+        .arg("-c")
+        .arg(format!(". '{}' && exec {}", env_file.display(), toy("ok")))
+        .env("SILRIG_CLIENT_LIB", common::client_lib(SILRIG))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let p = wait_with_watchdog(plant, Duration::from_secs(90));
+    let o = wait_with_watchdog(launcher, Duration::from_secs(90));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(p.status.success(), "plant: {}", String::from_utf8_lossy(&p.stderr));
+    assert!(o.status.success(), "{}\n{stderr}", String::from_utf8_lossy(&o.stdout));
+    assert!(stderr.contains("waiting up to 60 s for a plant"), "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let plant = report["processes"].as_array().unwrap().iter().find(|p| p["process"] == "plant").unwrap();
+    assert_eq!(plant["ended"], "completed", "the plant's own report joins the run's");
+    assert_eq!(plant["counters"]["ticks"], 1001);
+    assert_eq!(plant["counters"]["command_misses"], 0);
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_process_fault_on_a_plant_the_launcher_did_not_start_is_refused() {
+    let r = run("external-fault", &["--plant", "external", "--fault", "plant:kill@1s", &robust()]);
+    assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("needs a plant the launcher starts, not --plant external"), "{}", r.stderr);
+    std::fs::remove_dir_all(&r.dir).unwrap();
+}

@@ -76,11 +76,15 @@ pub struct LaunchOptions {
     /// stderr go to <out>/plant.stderr.log.
     #[arg(long, value_name = "CMD")]
     pub plant_cmd: Option<String>,
+    /// builtin (silrig-plant, or --plant-cmd) or external: wait for a plant started by hand (in a debugger, in a
+    /// simulation tool) with the variables printed and written to <out>/plant.env.
+    #[arg(long, value_enum, default_value = "builtin", conflicts_with = "plant_cmd")]
+    pub plant: PlantKind,
     /// builtin (silrig-controller, or --controller-cmd) or external: wait for a controller started by hand (in a
     /// debugger, in MATLAB) with the variables printed and written to <out>/controller.env.
     #[arg(long, value_enum, default_value = "builtin", conflicts_with = "controller_cmd")]
     pub controller: ControllerKind,
-    /// --controller external: how long the plant waits for the controller to connect, s.
+    /// --controller or --plant external: how long the rig waits for the process started by hand to connect, s.
     #[arg(long, default_value_t = 120.0)]
     pub external_timeout_s: f64,
     /// The controller runs on another host: start the plant-side bridge listening here (IP:PORT, tcp/IP:PORT or
@@ -109,6 +113,15 @@ pub enum FloorSource {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum ControllerKind {
     /// The launcher starts it: silrig-controller, or the `--controller-cmd` command.
+    Builtin,
+    /// Somebody else starts it; the launcher waits for it.
+    External,
+}
+
+/// Where the run's plant comes from (`--plant`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PlantKind {
+    /// The launcher starts it: silrig-plant, or the `--plant-cmd` command.
     Builtin,
     /// Somebody else starts it; the launcher waits for it.
     External,
@@ -144,9 +157,25 @@ fn write_controller_env(args: &ProcessArgs, controller: &ControllerLaunch, remot
     Ok(())
 }
 
-/// A controller the launcher did not start writes its report when it sees the run end; give it a moment.
-fn wait_for_external_report(out: &Path) {
-    let path = silrig_rig::report::report_path(out, Role::Controller.label());
+/// `<out>/plant.env` for `--plant external`: the same variables, printed with how to start a plant.
+fn write_plant_env(args: &ProcessArgs) -> anyhow::Result<()> {
+    let lines: String =
+        args.to_env().iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
+    let path = args.out.join("plant.env");
+    std::fs::write(&path, lines).with_context(|| format!("writing {}", path.display()))?;
+    eprintln!(
+        "silrig run: waiting up to {} s for a plant on run {}; start yours with the run's variables, e.g.\n  \
+         . {} && python3 tests/clients/toy_plant.py",
+        args.options.startup_timeout_s,
+        args.run_id,
+        path.display()
+    );
+    Ok(())
+}
+
+/// A process the launcher did not start writes its report when it sees the run end; give it a moment.
+fn wait_for_external_report(out: &Path, role: Role) {
+    let path = silrig_rig::report::report_path(out, role.label());
     let deadline = std::time::Instant::now() + Duration::from_secs(5);
     while !path.exists() && std::time::Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(20));
@@ -258,7 +287,12 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     {
         anyhow::bail!("fault plan: {} needs a controller the launcher starts, not --controller external", f.describe());
     }
-    if opts.plant_cmd.is_some()
+    if opts.plant == PlantKind::External
+        && let Some(f) = scenario.faults.iter().find(|f| f.target() == Role::Plant && f.action().is_process_fault())
+    {
+        anyhow::bail!("fault plan: {} needs a plant the launcher starts, not --plant external", f.describe());
+    }
+    if (opts.plant_cmd.is_some() || opts.plant == PlantKind::External)
         && let Some(f) = scenario.faults.iter().find(|f| f.action().is_plant_model_fault())
     {
         // Sensor and actuator faults act inside the built-in model; a plant of your own owns its sensors and
@@ -474,21 +508,25 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         resume: false,
         options: opts.process.clone(),
     };
-    if controller == ControllerLaunch::External {
+    let plant_external = opts.plant == PlantKind::External;
+    if controller == ControllerLaunch::External || plant_external {
         args.options.startup_timeout_s = opts.external_timeout_s;
     }
     // First, so a floor that cannot be taken (cyclictest not installed) stops the run before anything flies.
     let realtime_floor = opts.mode == RigMode::Realtime && !opts.no_baseline;
     let mut baseline = if realtime_floor { Some(start_baseline(&scenario, &out, opts.floor)?) } else { None };
     write_controller_env(&args, &controller, opts.bridge_listen.is_some())?;
+    if plant_external {
+        write_plant_env(&args)?;
+    }
     let conditions_start = MachineConditions::now();
     let events = EventLog::new(&out, "launcher");
     let mut bridge = match &opts.bridge_listen {
         Some(listen) => Some(super::remote::RemoteBridge::start(listen, &args, events.clone())?),
         None => None,
     };
-    let mut sup =
-        Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone(), opts.plant_cmd.clone())?;
+    let plant_launch = if plant_external { None } else { Some(opts.plant_cmd.clone()) };
+    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone(), plant_launch)?;
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
     let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
     let supervised = supervise(&mut sup, &mut faults, &scenario, &mut bridge, live.as_mut());
@@ -511,7 +549,10 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     let conditions_end = MachineConditions::now();
 
     if controller == ControllerLaunch::External && bridge.is_none() {
-        wait_for_external_report(&out);
+        wait_for_external_report(&out, Role::Controller);
+    }
+    if plant_external {
+        wait_for_external_report(&out, Role::Plant);
     }
     let mut failures = std::mem::take(&mut sup.failures);
     let mut notes = Vec::new();
@@ -523,6 +564,11 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             Err(_) if role == Role::Controller && bridge.is_some() => {}
             // A plant of the user's own that speaks the contract itself need not write one either; had it failed,
             // its exit is a failure already.
+            Err(_) if role == Role::Plant && plant_external => notes.push(
+                "plant: started outside the launcher, it wrote no report (a peer that speaks the contract need not): \
+                 the run's timing is what the controller and the logger measured"
+                    .to_string(),
+            ),
             Err(_) if role == Role::Plant && opts.plant_cmd.is_some() => notes.push(
                 "plant: your --plant-cmd wrote no report (a peer that speaks the contract need not): the run's timing \
                  is what the controller and the logger measured"
@@ -566,9 +612,9 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         exit_status: signals::exit_status_for(signal),
     });
     let mut cleanup = ipc::cleanup_run(&run_id)?;
-    if controller == ControllerLaunch::External {
-        // A controller we did not start writes its report before it closes its ports and exits: give it a moment
-        // to leave, or cleaning up finds it alive and removes nothing.
+    if controller == ControllerLaunch::External || plant_external {
+        // A process we did not start writes its report before it closes its ports and exits: give it a moment to
+        // leave, or cleaning up finds it alive and removes nothing.
         let deadline = std::time::Instant::now() + Duration::from_secs(5);
         while !cleanup.is_clean() && std::time::Instant::now() < deadline {
             std::thread::sleep(Duration::from_millis(20));

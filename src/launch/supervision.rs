@@ -327,6 +327,8 @@ pub(crate) struct Supervisor {
     controller: ControllerLaunch,
     /// `--plant-cmd`: the user's plant in place of silrig-plant.
     plant_cmd: Option<String>,
+    /// `--plant external`: nobody here starts the plant; the logger's end is the run's.
+    plant_external: bool,
     args: ProcessArgs,
     events: EventLog,
     restart: SupervisionOptions,
@@ -350,14 +352,15 @@ impl Supervisor {
         events: EventLog,
         restart: SupervisionOptions,
         controller: ControllerLaunch,
-        plant_cmd: Option<String>,
+        plant: Option<Option<String>>,
     ) -> anyhow::Result<Self> {
         let bin_dir = binary_dir()?;
         warn_if_stale(&bin_dir);
         let mut sup = Self {
             bin_dir,
             controller,
-            plant_cmd,
+            plant_cmd: plant.clone().flatten(),
+            plant_external: plant.is_none(),
             args,
             events,
             restart,
@@ -369,7 +372,9 @@ impl Supervisor {
             lives: Vec::new(),
         };
         for role in [Role::Logger, Role::Controller, Role::Plant] {
-            if role == Role::Controller && sup.controller == ControllerLaunch::External {
+            if (role == Role::Controller && sup.controller == ControllerLaunch::External)
+                || (role == Role::Plant && sup.plant_external)
+            {
                 continue;
             }
             let process = sup.spawn(role, false)?;
@@ -493,7 +498,11 @@ impl Supervisor {
                 self.plant_done();
                 continue;
             }
-            // The logger ends by itself once it has written the last tick; the others end when told to.
+            // The logger ends by itself once it has written the last tick; the others end when told to. With a plant
+            // started by hand, that is the end of the flight as seen from here.
+            if role == Role::Logger && completed && self.plant_external {
+                self.plant_done();
+            }
             if (role == Role::Logger && completed)
                 || self.plant_done_at.is_some()
                 || self.failures.iter().any(|f| f.starts_with(role.label()))

@@ -138,6 +138,7 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         supervision: SupervisionOptions { restart: RestartMode::Never, max_restarts: 0, restart_backoff_ms: 200.0 },
         controller_cmd: opts.controller_cmd.clone(),
         plant_cmd: opts.plant_cmd.clone(),
+        plant: silrig_launch::launcher::PlantKind::Builtin,
         controller: ControllerKind::Builtin,
         // Not used: the controller is always one the launcher starts.
         external_timeout_s: 120.0,
