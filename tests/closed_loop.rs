@@ -57,7 +57,8 @@ fn row_k_shows_the_deflection_held_over_t_k_to_t_k_plus_1_row_0_included() {
     // paper-ideal: same-tick, no lag, no rate limit: the deflection held over [t_k, t_k+1) is the command of row k
     // clipped to the stops, from the very first row on.
     let (s, trace, summary) = run("paper-ideal");
-    let limits = [s.actuators.aileron_deg, s.actuators.elevator_deg, s.actuators.rudder_deg];
+    let a = s.f16_actuators();
+    let limits = [a.aileron_deg, a.elevator_deg, a.rudder_deg];
     for (name, lim) in ["aileron", "elevator", "rudder"].iter().zip(limits) {
         let (held, cmd) =
             (trace.column(&format!("{name}_deg")).unwrap(), trace.column(&format!("{name}_cmd_deg")).unwrap());
@@ -263,7 +264,7 @@ fn book_rate_limits_drive_the_published_gains_into_a_pitch_limit_cycle() {
 fn robust_tuning_meets_its_four_targets_with_real_actuators_and_delay() {
     let (scenario, _, s) = run("robust");
     assert_eq!(scenario.timing.command_timing, silrig::scenario::CommandTiming::NextTick);
-    assert!(scenario.actuators.elevator_deg.rate_limit_per_s == Some(60.0));
+    assert!(scenario.f16_actuators().elevator_deg.rate_limit_per_s == Some(60.0));
     assert!(s.angles[1].settle_within_0p5deg_s.unwrap() <= 3.0, "{:?}", s.angles[1]);
     assert!(s.angles[0].settle_within_0p5deg_s.unwrap() <= 6.0, "{:?}", s.angles[0]);
     assert!(s.angles[2].settle_within_0p5deg_s.unwrap() <= 6.0, "{:?}", s.angles[2]);
@@ -338,4 +339,35 @@ fn bad_scenarios_are_refused_naming_the_key_and_the_problem() {
     let e = invalid("name = \"x\"\n[[[");
     assert!(e.contains("test.toml"), "{e}");
     assert!(matches!(Scenario::load(&config("does-not-exist")), Err(ScenarioError::Io { .. })));
+}
+
+#[test]
+fn the_f16_takes_its_actuators_by_input_name_and_refuses_what_it_does_not_have() {
+    let base = paper_text();
+    // One actuator given: the others keep the book's limits.
+    let only_elevator = base[..base.find("[actuators.").unwrap()].to_string()
+        + "[actuators.elevator_deg]\nmin = -20.0\nmax = 20.0\nrate_limit_per_s = 30.0\n\n"
+        + &base[base.find("[timing]").unwrap()..];
+    let s = Scenario::from_toml(&only_elevator, "test.toml").unwrap();
+    let a = s.f16_actuators();
+    assert_eq!((a.elevator_deg.max, a.elevator_deg.rate_limit_per_s), (20.0, Some(30.0)));
+    assert_eq!(a.aileron_deg, silrig::actuator::ActuatorSetLimits::default().aileron_deg);
+    silrig::sim::fly(&s).unwrap();
+    // A scenario for a plant of your own parses, but the F-16 says what it lacks before flying.
+    for (extra, needle) in [
+        (
+            "[actuators.flap]\nmin = 0.0\nmax = 40.0\n",
+            "`actuators.flap`: the F-16 has no input `flap`; its inputs: aileron_deg",
+        ),
+        ("[plant.parameters]\nmass_kg = 1200.0\n", "`plant.parameters.mass_kg`: is for a plant of your own"),
+        ("[actuators.throttle]\nmin = 0.0\nmax = 2.0\n", "`actuators.throttle`: position limits must lie within 0..1"),
+    ] {
+        let text = only_elevator.replace("[actuators.elevator_deg]", &format!("{extra}\n[actuators.elevator_deg]"));
+        let s = Scenario::from_toml(&text, "test.toml").unwrap();
+        let e = silrig::sim::fly(&s).unwrap_err().to_string();
+        assert!(e.contains(needle), "{e}");
+    }
+    // An actuator with nonsense limits is refused on load, whatever the plant.
+    let e = invalid(&only_elevator.replace("min = -20.0", "min = 30.0"));
+    assert!(e.contains("`actuators.elevator_deg`") && e.contains("min < max"), "{e}");
 }

@@ -59,11 +59,16 @@ fn robust() -> String {
     format!("{ROOT}/configs/robust.toml")
 }
 
+/// The scenario the plants of our own fly: set points and timing, none of the F-16's sections.
+fn toy_scenario() -> String {
+    format!("{ROOT}/tests/scenarios/toy.toml")
+}
+
 #[test]
 fn a_python_plant_flies_lockstep_with_the_example_controller_unchanged() {
     let r = run(
         "lockstep",
-        &["--mode", "lockstep", "--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &robust()],
+        &["--mode", "lockstep", "--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &toy_scenario()],
     );
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert_eq!(r.counter("plant", "ticks"), 1001);
@@ -87,7 +92,7 @@ fn a_python_plant_flies_lockstep_with_the_example_controller_unchanged() {
 fn a_c_plant_flies_lockstep_with_the_example_controller() {
     let r = run(
         "c-lockstep",
-        &["--mode", "lockstep", "--plant-cmd", &c_plant(), "--controller-cmd", &python_pid(), &robust()],
+        &["--mode", "lockstep", "--plant-cmd", &c_plant(), "--controller-cmd", &python_pid(), &toy_scenario()],
     );
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert_eq!(r.counter("plant", "ticks"), 1001);
@@ -97,13 +102,27 @@ fn a_c_plant_flies_lockstep_with_the_example_controller() {
     let theta = rows.last().unwrap()[2];
     assert!((theta - 10.0).abs() < 1.0, "theta ends at {theta}, set point 10");
     r.finish();
+
+    // The plant reads its parameters from the scenario: with no control power it cannot leave 0 deg.
+    let dir = common::temp_dir("plants", "c-param-scenario");
+    let scenario = dir.join("toy-no-gain.toml");
+    let base = std::fs::read_to_string(toy_scenario()).unwrap();
+    std::fs::write(&scenario, base + "\n[plant.parameters]\ngain_dps2_per_deg = 0.0\n").unwrap();
+    let args = ["--mode", "lockstep", "--duration-s", "1", "--plant-cmd", &c_plant(), "--controller-cmd"];
+    let r = run("c-parameters", &[&args[..], &[&python_pid(), scenario.to_str().unwrap()]].concat());
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let (_, rows) = r.trace();
+    assert!(rows.iter().all(|row| row[2] == 0.0), "theta moved without control power");
+    assert!(rows.iter().any(|row| row[8] != 0.0), "the controller did command the elevator");
+    r.finish();
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn a_python_plant_flies_2_s_realtime_with_the_rigs_timing_report() {
     let r = run(
         "realtime",
-        &["--duration-s", "2", "--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &robust()],
+        &["--duration-s", "2", "--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &toy_scenario()],
     );
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert_eq!(r.counter("plant", "ticks"), 201);
@@ -125,8 +144,10 @@ fn a_python_plant_flies_2_s_realtime_with_the_rigs_timing_report() {
 
 #[test]
 fn nan_outputs_are_refused_counted_and_the_last_valid_ones_published() {
-    let r =
-        run("nan", &["--mode", "lockstep", "--plant-cmd", &toy("nan"), "--controller-cmd", &python_pid(), &robust()]);
+    let r = run(
+        "nan",
+        &["--mode", "lockstep", "--plant-cmd", &toy("nan"), "--controller-cmd", &python_pid(), &toy_scenario()],
+    );
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert_eq!(r.counter("plant", "outputs_refused"), 10);
     let refused = r.event("plant", "outputs-refused").expect("an outputs-refused event");
@@ -144,7 +165,8 @@ fn a_broken_announcement_is_refused_naming_the_rule() {
         ("twice", "plant toy: output `phi_deg` named twice"),
         ("none", "plant toy announces no outputs: a plant publishes at least one"),
     ] {
-        let r = run(mode, &["--duration-s", "1", "--startup-timeout-s", "2", "--plant-cmd", &toy(mode), &robust()]);
+        let r =
+            run(mode, &["--duration-s", "1", "--startup-timeout-s", "2", "--plant-cmd", &toy(mode), &toy_scenario()]);
         assert_eq!(r.code, Some(1), "{mode}: {}\n{}", r.stdout, r.stderr);
         assert!(r.failures().contains(needle), "{mode}: {}", r.failures());
         r.finish();
@@ -154,7 +176,7 @@ fn a_broken_announcement_is_refused_naming_the_rule() {
 #[test]
 fn a_controller_needing_signals_the_plant_lacks_is_told_what_the_plant_has() {
     // Our controller flies the F-16's states in book units, which the toy does not publish.
-    let r = run("ours", &["--duration-s", "1", "--plant-cmd", &toy("ok"), &robust()]);
+    let r = run("ours", &["--duration-s", "1", "--plant-cmd", &toy("ok"), &toy_scenario()]);
     assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
     let failures = r.failures();
     assert!(failures.contains("plant toy has no output `vt_fps`; its outputs: phi_deg, theta_deg"), "{failures}");
@@ -191,15 +213,24 @@ fn jsbsims_cessna_flies_lockstep_and_realtime_with_the_example_pid() {
     assert!((theta - 5.0).abs() < 0.5, "theta ends at {theta}, set point 5");
     r.finish();
 
+    // Realtime, trimmed where the scenario's [plant.parameters] says (6,000 ft instead of the example's 4,000).
+    let dir = common::temp_dir("plants", "jsbsim-6000ft-scenario");
+    let scenario = dir.join("c172-6000ft.toml");
+    let text = std::fs::read_to_string(c172()).unwrap().replace("altitude_ft = 4000.0", "altitude_ft = 6000.0");
+    std::fs::write(&scenario, text).unwrap();
     let r = run(
         "jsbsim-realtime",
-        &["--duration-s", "2", "--plant-cmd", &jsbsim(), "--controller-cmd", &python_pid(), &c172()],
+        &["--duration-s", "2", "--plant-cmd", &jsbsim(), "--controller-cmd", &python_pid(), scenario.to_str().unwrap()],
     );
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert_eq!(r.counter("plant", "ticks"), 201);
     assert!(r.counter("plant", "commands_received") > 150);
-    assert_eq!(r.trace().1.len(), 201);
+    let (header, rows) = r.trace();
+    assert_eq!(rows.len(), 201);
+    let alt_ft = rows[0][header.iter().position(|h| h == "alt_ft").unwrap()];
+    assert!((alt_ft - 6000.0).abs() < 1.0, "trimmed at {alt_ft} ft");
     r.finish();
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -232,13 +263,115 @@ fn silrig_check_gives_jsbsims_cessna_a_verdict_and_its_recording_replays_bit_ide
 }
 
 #[test]
-fn a_model_fault_the_plant_cannot_carry_out_is_refused_before_anything_runs() {
+fn the_rigs_actuators_and_sensor_faults_act_on_the_named_signals_of_a_plant_of_your_own() {
+    // The toy reports the positions its inputs held over the last step (aileron_deg ... rudder_deg): what the rig's
+    // actuators gave it. Its own travel is -30..30 deg.
+    let dir = common::temp_dir("plants", "chain-scenario");
+    let scenario = dir.join("toy-actuators.toml");
+    let base = std::fs::read_to_string(toy_scenario()).unwrap();
+    std::fs::write(&scenario, base + "\n[actuators.elevator]\nmin = -20.0\nmax = 20.0\nrate_limit_per_s = 20.0\n")
+        .unwrap();
     let r = run(
-        "model-fault",
-        &["--plant-cmd", &toy("ok"), "--fault", "plant:sensor-bias@1s,channel=theta_rad,bias=0.01", &robust()],
+        "chain",
+        &[
+            "--mode",
+            "lockstep",
+            "--plant-cmd",
+            &toy("ok"),
+            "--controller-cmd",
+            &python_pid(),
+            "--fault",
+            "plant:sensor-bias@5s,channel=theta_deg,bias=2.0",
+            "--fault",
+            "plant:actuator-hard-over@9s,surface=aileron,limit=max",
+            scenario.to_str().unwrap(),
+        ],
     );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let (header, rows) = r.trace();
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap_or_else(|| panic!("{name} in {header:?}"));
+    let (t, theta, elevator, aileron) = (col("t_s"), col("theta_deg"), col("elevator_deg"), col("aileron_deg"));
+    // 20 deg/s at 100 Hz: at most 0.2 deg a tick, and the pitch step asks for more at first.
+    let steps: Vec<f64> = rows.windows(2).map(|w| (w[1][elevator] - w[0][elevator]).abs()).collect();
+    assert!(
+        steps.iter().all(|d| *d <= 0.2 + 1e-9),
+        "largest elevator step {:?}",
+        steps.iter().cloned().fold(0.0, f64::max)
+    );
+    assert!(steps.iter().filter(|d| (**d - 0.2).abs() < 1e-9).count() >= 5, "the rate limit never cut the command");
+    assert!(rows.iter().all(|row| row[elevator].abs() <= 20.0));
+    // The bias shows in the measured theta from 5 s (the controller then flies it back to 10 deg measured).
+    let at = |ts: f64| rows.iter().position(|row| (row[t] - ts).abs() < 1e-9).unwrap();
+    // (less the tick's own motion, taken from the tick before)
+    let step = |k: usize| rows[k][theta] - rows[k - 1][theta];
+    let jump = step(at(5.0)) - step(at(4.99));
+    assert!((jump - 2.0).abs() < 0.1, "theta jumped {jump} deg at 5 s");
+    // Hard-over without `[actuators.aileron]`: instantly to the announced maximum, and held there.
+    assert!(rows[at(8.99)][aileron] < 30.0);
+    assert!(rows[at(9.01)..].iter().all(|row| row[aileron] == 30.0), "aileron after 9 s");
+    r.finish();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_killed_plant_of_your_own_restarts_from_its_checkpoint_and_the_flight_goes_on() {
+    let r = run(
+        "plant-kill",
+        &[
+            "--duration-s",
+            "3",
+            "--plant-cmd",
+            &toy("ok"),
+            "--controller-cmd",
+            &python_pid(),
+            "--fault",
+            "plant:kill@1s,restart_after=0.3s",
+            &toy_scenario(),
+        ],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let resumed = r.event("plant", "plant-resumed").expect("a plant-resumed event");
+    let detail = resumed["detail"].as_str().unwrap();
+    let tick: u64 = detail.rsplit(' ').next().unwrap().parse().unwrap();
+    assert!((50..=100).contains(&tick) && tick.is_multiple_of(10), "{detail}");
+    assert!(r.event("plant", "plant-restarted-from-start").is_none(), "flew again from tick 0");
+    // Every tick is logged exactly once, in order, and the model took up its state where it was saved.
+    let (header, rows) = r.trace();
+    let t: Vec<f64> = rows.iter().map(|row| row[0]).collect();
+    assert_eq!(t.len(), 301);
+    assert!(t.windows(2).all(|w| w[1] > w[0]), "ticks out of order or repeated");
+    let theta = header.iter().position(|h| h == "theta_deg").unwrap();
+    let jumps = rows.windows(2).map(|w| (w[1][theta] - w[0][theta]).abs()).fold(0.0, f64::max);
+    assert!(jumps < 1.0, "theta jumped {jumps} deg between two ticks");
+    r.finish();
+}
+
+#[test]
+fn names_a_plant_lacks_are_refused_with_its_list() {
+    // A plant of your own checks the scenario against the signals it announces...
+    let r = run(
+        "chain-names",
+        &[
+            "--duration-s",
+            "1",
+            "--plant-cmd",
+            &toy("ok"),
+            "--controller-cmd",
+            &python_pid(),
+            "--fault",
+            "plant:sensor-bias@0.5s,channel=theta_rad,bias=0.01",
+            &toy_scenario(),
+        ],
+    );
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    let failures = r.failures();
+    assert!(failures.contains("`faults[0].channel`: plant toy has no channel"), "{failures}");
+    assert!(failures.contains("theta_rad") && failures.contains("one of phi_deg, theta_deg"), "{failures}");
+    r.finish();
+    // ... and the built-in F-16 before anything runs.
+    let r = run("f16-names", &["--fault", "plant:sensor-bias@1s,channel=theta_deg,bias=0.01", &robust()]);
     assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
-    assert!(r.stderr.contains("acts inside the built-in F-16 model, not on a --plant-cmd plant"), "{}", r.stderr);
+    assert!(r.stderr.contains("the F-16 has no channel \"theta_deg\"; one of vt_fps"), "{}", r.stderr);
     std::fs::remove_dir_all(&r.dir).unwrap();
 }
 
@@ -250,7 +383,7 @@ fn a_second_plant_for_a_run_is_refused_and_the_run_goes_on() {
     let launcher = Command::new(SILRIG)
         .args(["run", "--duration-s", "3", "--quiet", "--no-baseline", "--run-id", &id, "--out"])
         .arg(&out)
-        .args(["--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &robust()])
+        .args(["--plant-cmd", &toy("ok"), "--controller-cmd", &python_pid(), &toy_scenario()])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -282,7 +415,8 @@ fn a_second_plant_for_a_run_is_refused_and_the_run_goes_on() {
 fn a_raw_iceoryx2_plant_written_from_the_contract_flies_2_s_realtime_without_a_report() {
     let python = common::venv_python("iceoryx2", "iceoryx2==0.10.0");
     let plant = format!("{} {ROOT}/tests/clients/raw_plant.py", python.display());
-    let r = run("raw", &["--duration-s", "2", "--plant-cmd", &plant, "--controller-cmd", &python_pid(), &robust()]);
+    let r =
+        run("raw", &["--duration-s", "2", "--plant-cmd", &plant, "--controller-cmd", &python_pid(), &toy_scenario()]);
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert!(r.stdout.contains("note: plant: your --plant-cmd wrote no report"), "{}", r.stdout);
     assert_eq!(r.counter("logger", "rows_written"), 201);
@@ -300,7 +434,7 @@ fn a_plant_started_by_hand_joins_an_external_run() {
     let out = dir.join("out");
     let launcher = Command::new(SILRIG)
         .args(["run", "--mode", "lockstep", "--plant", "external", "--external-timeout-s", "60", "--no-baseline"])
-        .args(["--run-id", &id, "--out", out.to_str().unwrap(), "--controller-cmd", &python_pid(), &robust()])
+        .args(["--run-id", &id, "--out", out.to_str().unwrap(), "--controller-cmd", &python_pid(), &toy_scenario()])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -337,7 +471,7 @@ fn a_plant_started_by_hand_joins_an_external_run() {
 
 #[test]
 fn a_process_fault_on_a_plant_the_launcher_did_not_start_is_refused() {
-    let r = run("external-fault", &["--plant", "external", "--fault", "plant:kill@1s", &robust()]);
+    let r = run("external-fault", &["--plant", "external", "--fault", "plant:kill@1s", &toy_scenario()]);
     assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("needs a plant the launcher starts, not --plant external"), "{}", r.stderr);
     std::fs::remove_dir_all(&r.dir).unwrap();

@@ -115,6 +115,11 @@ int silrig_session_close(silrig_session *session, const char *error);
  * time is what passes between silrig_plant_tick calls. */
 typedef struct SilrigPlantSession silrig_plant_session;
 
+/* The run's [plant.parameters] value of `name` (numbers only), readable before silrig_plant_open so the model can
+ * start (trim) at it and announce its hold values: SILRIG_OK with *value_out set, SILRIG_NOT_GIVEN when the
+ * scenario gives none (keep the model's own value), an error when the run's variables or scenario are unusable. */
+int silrig_plant_parameter(const char *name, double *value_out);
+
 /* Open the run's plant session (use SILRIG_PLANT_OPEN) and wait up to SILRIG_STARTUP_TIMEOUT_S for the
  * controller and the logger. SILRIG_ERR_PLANT: the announcement breaks a rule (no outputs, a name twice, a name
  * too long, a hold value outside its range, ...), named; or the run has a plant already. */
@@ -135,6 +140,17 @@ int silrig_plant_tick(silrig_plant_session *session, const double *outputs, size
 
 /* The run's step, s. */
 double silrig_plant_dt_s(silrig_plant_session *session);
+
+/* Checkpoints (realtime), so a restarted plant goes on with the flight instead of flying it again from tick 0:
+ * after stepping with the inputs silrig_plant_tick handed out, when silrig_plant_checkpoint_due returns 1, save the
+ * model's state as text with silrig_plant_save_checkpoint (the rig adds the tick and its actuators' positions). A
+ * plant the launcher restarts finds that text in silrig_plant_restored_checkpoint (NULL otherwise; owned by the
+ * session) and says, before its first tick, whether it restored it: used 1 (the flight goes on from the saved
+ * tick), or 0 with a reason (or NULL): it flies again from tick 0, as a plant that never answers does. */
+const char *silrig_plant_restored_checkpoint(silrig_plant_session *session);
+int silrig_plant_checkpoint_used(silrig_plant_session *session, int used, const char *reason);
+int silrig_plant_checkpoint_due(silrig_plant_session *session);
+int silrig_plant_save_checkpoint(silrig_plant_session *session, const char *text);
 
 /* Write the plant's report (<out>/plant.report.json) and free the session; `error`: why your model gave up, or
  * NULL. */

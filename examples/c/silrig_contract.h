@@ -67,6 +67,7 @@
 #define SILRIG_OK (0) /* the call did what it says */
 #define SILRIG_STOPPED (1) /* SIGTERM or SIGINT arrived: close the session and exit */
 #define SILRIG_RUN_ENDED (2) /* the plant has flown the whole scenario: close the session and exit */
+#define SILRIG_NOT_GIVEN (3) /* the scenario gives no value of that name: the model keeps its own */
 #define SILRIG_ERR_USAGE (-1) /* API misuse: NULL pointer, command without a sample, wrong count */
 #define SILRIG_ERR_LAYOUT (-2) /* built against another contract (layout version or sample sizes) */
 #define SILRIG_ERR_SETUP (-3) /* SILRIG_* variables, scenario or diagnostics unusable */

@@ -16,8 +16,9 @@
 #define N_OUT 9
 #define N_IN 3
 
-static const double GAIN = 4.0;    /* deg/s^2 of angular acceleration per deg of surface */
-static const double DAMPING = 1.0; /* 1/s */
+/* Parameters, each overridable from the scenario's [plant.parameters] by the same name. */
+static double gain_dps2_per_deg = 4.0; /* angular acceleration per deg of surface */
+static double damping_per_s = 1.0;
 
 static const char *const OUT_NAME[N_OUT] = {"phi_deg",     "theta_deg",    "psi_deg",
                                             "p_dps",       "q_dps",        "r_dps",
@@ -48,7 +49,20 @@ static void announce(silrig_plant_info_t *info) {
     }
 }
 
+/* The scenario's value of a parameter, or the model's own when it gives none. */
+static int read_parameter(const char *name, double *value) {
+    int rc = silrig_plant_parameter(name, value);
+    if (rc != SILRIG_OK && rc != SILRIG_NOT_GIVEN) {
+        fprintf(stderr, "toy_plant: reading parameter %s: %s (status %d)\n", name, silrig_last_error(), rc);
+        return 0;
+    }
+    return 1;
+}
+
 int main(void) {
+    if (!read_parameter("gain_dps2_per_deg", &gain_dps2_per_deg) || !read_parameter("damping_per_s", &damping_per_s)) {
+        return 2;
+    }
     silrig_plant_info_t info;
     announce(&info);
     silrig_plant_session *plant = NULL;
@@ -72,7 +86,7 @@ int main(void) {
         }
         for (int c = 0; c < 3; c++) {
             surface[c] = inputs[c];
-            rate[c] += (-GAIN * inputs[c] - DAMPING * rate[c]) * dt_s;
+            rate[c] += (-gain_dps2_per_deg * inputs[c] - damping_per_s * rate[c]) * dt_s;
             angle[c] += rate[c] * dt_s;
         }
     }

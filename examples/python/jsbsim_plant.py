@@ -15,7 +15,10 @@ elevator, rudder (-1..1; the elevator's trim stays in JSBSim's pitch trim, so 0 
 (0..1). JSBSim's signs: a positive aileron command rolls right, a positive elevator command pitches the nose down,
 a positive rudder command yaws left.
 
-    python3 jsbsim_plant.py [AIRCRAFT] [ALTITUDE_FT] [SPEED_KT]     defaults: c172x 4000 100
+    python3 jsbsim_plant.py [AIRCRAFT]     default: c172x
+
+The trim point comes from the scenario's `[plant.parameters]`: `altitude_ft` (default 4000) and `speed_kt`
+(calibrated airspeed, default 100), so a sweep can disperse them as `plant.parameters.altitude_ft`.
 """
 
 import math
@@ -30,7 +33,7 @@ os.environ.setdefault("JSBSIM_DEBUG", "0")
 
 import jsbsim  # noqa: E402
 
-from silrig_client import PlantModel, serve_plant  # noqa: E402
+from silrig_client import PlantModel, plant_parameter, serve_plant  # noqa: E402
 
 SUBSTEPS = 4  # JSBSim steps per rig tick: 2.5 ms at 100 Hz, finer than JSBSim's own 1/120 s default
 M_PER_FT = 0.3048
@@ -119,8 +122,7 @@ class JsbsimPlant(PlantModel):
 
 
 if __name__ == "__main__":
-    args = sys.argv[1:]
-    aircraft = args[0] if args else "c172x"
-    altitude_ft = float(args[1]) if len(args) > 1 else 4000.0
-    speed_kt = float(args[2]) if len(args) > 2 else 100.0
+    aircraft = sys.argv[1] if len(sys.argv) > 1 else "c172x"
+    altitude_ft = plant_parameter("altitude_ft", 4000.0)
+    speed_kt = plant_parameter("speed_kt", 100.0)
     sys.exit(serve_plant(JsbsimPlant(aircraft, altitude_ft, speed_kt)))

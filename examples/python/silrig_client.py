@@ -32,6 +32,7 @@ from silrig_contract import (
     INPUT_COMMAND_IN_TRACE,
     MAX_INPUTS,
     NO_OUTPUT,
+    NOT_GIVEN,
     OK,
     OUTPUT_IN_TRACE,
     RUN_ENDED,
@@ -90,6 +91,11 @@ def _load():
         ),
         "silrig_plant_tick": ([session_p, c_double_p, ctypes.c_size_t, c_double_p, ctypes.c_size_t], ctypes.c_int),
         "silrig_plant_dt_s": ([session_p], ctypes.c_double),
+        "silrig_plant_parameter": ([ctypes.c_char_p, c_double_p], ctypes.c_int),
+        "silrig_plant_restored_checkpoint": ([session_p], ctypes.c_char_p),
+        "silrig_plant_checkpoint_used": ([session_p, ctypes.c_int, ctypes.c_char_p], ctypes.c_int),
+        "silrig_plant_checkpoint_due": ([session_p], ctypes.c_int),
+        "silrig_plant_save_checkpoint": ([session_p, ctypes.c_char_p], ctypes.c_int),
         "silrig_plant_close": ([session_p, ctypes.c_char_p], ctypes.c_int),
         "silrig_session_dt_s": ([session_p], ctypes.c_double),
         "silrig_session_setpoint_deg": ([session_p, c_double_p], ctypes.c_int),
@@ -364,6 +370,15 @@ class PlantModel:
         """Advance the model by one period with these inputs (one float per entry of `inputs`)."""
         raise NotImplementedError
 
+    def save(self):
+        """The model's state as text, for a plant the launcher restarts (realtime); None: keep no checkpoint (a
+        restarted plant then flies again from tick 0)."""
+        return None
+
+    def restore(self, text):
+        """Take back the state `save` returned; raise to refuse it (the flight then starts again from tick 0)."""
+        raise NotImplementedError("this model keeps no checkpoint")
+
 
 def _put(field, text, what):
     """`text` NUL-padded into a name or unit field of the contract; too long is an error naming it."""
@@ -402,6 +417,15 @@ def plant_info(model):
     return info
 
 
+def plant_parameter(name, default):
+    """The run's `[plant.parameters]` value of `name`, or `default` when the scenario gives none. Readable before
+    the plant's session opens, so a model can start (trim) at it and announce the trim as its hold values."""
+    value = ctypes.c_double()
+    if _check(library().silrig_plant_parameter(name.encode(), ctypes.byref(value))) == NOT_GIVEN:
+        return default
+    return value.value
+
+
 class PlantSession:
     """The plant's side of one run: `tick(outputs)` gives the inputs to step with, or None at the end."""
 
@@ -424,6 +448,25 @@ class PlantSession:
     def dt_s(self):
         """The run's step, s."""
         return self._lib.silrig_plant_dt_s(self._handle)
+
+    @property
+    def restored_checkpoint(self):
+        """What a predecessor saved (a restarted plant), or None."""
+        text = self._lib.silrig_plant_restored_checkpoint(self._handle)
+        return None if text is None else text.decode()
+
+    def checkpoint_used(self, used, reason=None):
+        """Say whether the model restored `restored_checkpoint` (before the first tick)."""
+        _check(self._lib.silrig_plant_checkpoint_used(self._handle, int(bool(used)),
+                                                      None if reason is None else reason.encode()))
+
+    @property
+    def checkpoint_due(self):
+        """True when the rig wants the model's state now (after stepping)."""
+        return bool(self._lib.silrig_plant_checkpoint_due(self._handle))
+
+    def save_checkpoint(self, text):
+        _check(self._lib.silrig_plant_save_checkpoint(self._handle, text.encode()))
 
     def tick(self, outputs):
         """Hand in the outputs at this tick; the inputs to step with (a list), or None when the run is over."""
@@ -461,8 +504,19 @@ def serve_plant(model):
     with session:
         dt_s = session.dt_s
         model.start(dt_s)
+        saved = session.restored_checkpoint
+        if saved is not None:
+            try:
+                model.restore(saved)
+                session.checkpoint_used(True)
+            except Exception as e:  # noqa: BLE001 - whatever the model refuses with, the flight starts over
+                session.checkpoint_used(False, f"{type(e).__name__}: {e}")
         while True:
             inputs = session.tick(model.outputs_now())
             if inputs is None:
                 return 0
             model.step(inputs, dt_s)
+            if session.checkpoint_due:
+                text = model.save()
+                if text is not None:
+                    session.save_checkpoint(text)

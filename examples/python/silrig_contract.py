@@ -39,6 +39,7 @@ EVENT_PUBLISHER_DEAD = 254  # event id of a cleaned-up dead publisher
 OK = 0  # the call did what it says
 STOPPED = 1  # SIGTERM or SIGINT arrived: close the session and exit
 RUN_ENDED = 2  # the plant has flown the whole scenario: close the session and exit
+NOT_GIVEN = 3  # the scenario gives no value of that name: the model keeps its own
 ERR_USAGE = -1  # API misuse: NULL pointer, command without a sample, wrong count
 ERR_LAYOUT = -2  # built against another contract (layout version or sample sizes)
 ERR_SETUP = -3  # SILRIG_* variables, scenario or diagnostics unusable

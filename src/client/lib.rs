@@ -314,17 +314,25 @@ pub unsafe extern "C" fn silrig_session_checkpoint_used(
     boundary(|| {
         // SAFETY: the caller's contract.
         let s = unsafe { session_mut(session) }?;
-        let outcome = if used != 0 {
-            Ok(())
-        } else if reason.is_null() {
-            Err("the controller did not say why".to_string())
-        } else {
-            // SAFETY: the caller gives a NUL-terminated string.
-            Err(unsafe { CStr::from_ptr(reason) }.to_string_lossy().into_owned())
-        };
-        s.session.checkpoint_used(outcome);
+        // SAFETY: the caller's contract.
+        s.session.checkpoint_used(unsafe { used_outcome(used, reason, "controller") });
         Ok(Status::Ok)
     })
+}
+
+/// What `*_checkpoint_used(used, reason)` says: restored, or why not.
+///
+/// # Safety
+/// `reason` is NULL or a NUL-terminated string.
+unsafe fn used_outcome(used: c_int, reason: *const c_char, who: &str) -> Result<(), String> {
+    if used != 0 {
+        Ok(())
+    } else if reason.is_null() {
+        Err(format!("the {who} did not say why"))
+    } else {
+        // SAFETY: the caller gives a NUL-terminated string.
+        Err(unsafe { CStr::from_ptr(reason) }.to_string_lossy().into_owned())
+    }
 }
 
 /// 1 when the session wants a checkpoint now (after the command just sent), 0 otherwise.
@@ -381,6 +389,7 @@ pub unsafe extern "C" fn silrig_session_close(session: *mut SilrigSession, error
 /// One plant's session: opaque to C.
 pub struct SilrigPlantSession {
     session: PlantSession,
+    restored: Option<CString>,
 }
 
 /// Borrow the plant session behind a pointer from C.
@@ -424,8 +433,32 @@ pub unsafe extern "C" fn silrig_plant_open(
         let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
         let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
         let session = PlantSession::open(args, scenario, &signals)?;
+        // Interior NULs cannot come from the JSON-read checkpoint text of a C string; dropped if they do.
+        let restored = session.restored_checkpoint().and_then(|t| CString::new(t).ok());
         // SAFETY: checked non-NULL above.
-        unsafe { *session_out = Box::into_raw(Box::new(SilrigPlantSession { session })) };
+        unsafe { *session_out = Box::into_raw(Box::new(SilrigPlantSession { session, restored })) };
+        Ok(Status::Ok)
+    })
+}
+
+/// The run's `[plant.parameters]` value of `name`, read from the `SILRIG_*` environment before the session opens
+/// (a model trims at its parameters and announces the trim as its hold values); see the header.
+///
+/// # Safety
+/// `name` is a NUL-terminated string; `value_out` points to one writable double.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_parameter(name: *const c_char, value_out: *mut f64) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let name = unsafe { c_str(name, "name") }?;
+        if value_out.is_null() {
+            return Err(usage("value_out is NULL"));
+        }
+        let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
+        let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
+        let Some(value) = scenario.plant.parameters.get(name) else { return Ok(Status::NotGiven) };
+        // SAFETY: checked non-NULL.
+        unsafe { value_out.write(*value) };
         Ok(Status::Ok)
     })
 }
@@ -464,6 +497,63 @@ pub unsafe extern "C" fn silrig_plant_tick(
             PlantTick::RunEnded => Ok(Status::RunEnded),
             PlantTick::Stopped => Ok(Status::Stopped),
         }
+    })
+}
+
+/// What a predecessor saved with `silrig_plant_save_checkpoint` (a restarted plant), or NULL.
+///
+/// # Safety
+/// `session` comes from `silrig_plant_open`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_restored_checkpoint(session: *mut SilrigPlantSession) -> *const c_char {
+    // SAFETY: the caller's contract.
+    unsafe { plant_mut(session) }.ok().and_then(|s| s.restored.as_ref()).map_or(std::ptr::null(), |c| c.as_ptr())
+}
+
+/// Say whether the model restored the checkpoint: `used` 1 (the flight goes on from its tick), or 0 with `reason`
+/// (may be NULL) saying why not (the flight starts again from tick 0). Call before the first `silrig_plant_tick`.
+///
+/// # Safety
+/// `session` comes from `silrig_plant_open`; `reason` is NULL or a NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_checkpoint_used(
+    session: *mut SilrigPlantSession,
+    used: c_int,
+    reason: *const c_char,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { plant_mut(session) }?;
+        // SAFETY: the caller's contract.
+        s.session.checkpoint_used(unsafe { used_outcome(used, reason, "plant") });
+        s.restored = None;
+        Ok(Status::Ok)
+    })
+}
+
+/// 1 when the session wants the model's state now (after stepping with the inputs just handed out), 0 otherwise.
+///
+/// # Safety
+/// `session` comes from `silrig_plant_open`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_checkpoint_due(session: *mut SilrigPlantSession) -> c_int {
+    // SAFETY: the caller's contract.
+    unsafe { plant_mut(session) }.map_or(0, |s| c_int::from(s.session.checkpoint_due()))
+}
+
+/// Save `text` as the model's state a restarted plant resumes from.
+///
+/// # Safety
+/// `session` comes from `silrig_plant_open`; `text` is a NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_plant_save_checkpoint(session: *mut SilrigPlantSession, text: *const c_char) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { plant_mut(session) }?;
+        // SAFETY: the caller's contract.
+        let text = unsafe { c_str(text, "text") }?;
+        s.session.save_checkpoint(text);
+        Ok(Status::Ok)
     })
 }
 

@@ -230,7 +230,7 @@ mod tests {
             .with_values(&[("initial.phi_deg".into(), 7.5), ("actuators.elevator_deg.rate_limit_per_s".into(), 40.0)])
             .unwrap();
         assert_eq!(s.initial.phi_deg, 7.5);
-        assert_eq!(s.actuators.elevator_deg.rate_limit_per_s, Some(40.0));
+        assert_eq!(s.actuators["elevator_deg"].rate_limit_per_s, Some(40.0));
         assert_eq!(s.initial.theta_deg, base.initial.theta_deg);
         assert!(base.with_values(&[("initial.phi_dge".into(), 1.0)]).unwrap_err().contains("initial.phi_dge"));
         assert!(base.with_values(&[("initial.phi_deg".into(), 500.0)]).unwrap_err().contains("initial.phi_deg"));

@@ -85,12 +85,14 @@ impl FaultAction {
     ];
 }
 
-/// Measured channels a sensor fault can hit (the state as the plant publishes it).
+/// The F-16's channels a sensor fault can hit (its state as the plant measures it); on a plant of your own a
+/// sensor fault names one of its outputs.
 pub const SENSOR_CHANNELS: [&str; 10] =
     ["vt_fps", "alpha_rad", "beta_rad", "phi_rad", "theta_rad", "psi_rad", "p_radps", "q_radps", "r_radps", "alt_ft"];
 /// Largest sensor noise (std) or |bias|, in the channel's unit (rad, rad/s, ft/s, ft): beyond any real sensor.
 pub const MAX_SENSOR_ERROR: f64 = 1000.0;
-/// Surfaces an actuator fault can hit.
+/// The F-16's surfaces an actuator fault can hit; on a plant of your own an actuator fault names one of its
+/// inputs.
 pub const SURFACES: [&str; 3] = ["aileron", "elevator", "rudder"];
 
 /// One fault of the plan. Which optional keys apply depends on `action`; [`Fault::validate`] checks that exactly
@@ -125,7 +127,7 @@ pub struct Fault {
     /// drop: skip each tick with this probability (within `duration_s`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub probability: Option<f64>,
-    /// sensor faults: the measured channel (see [`SENSOR_CHANNELS`]).
+    /// sensor faults: the measured channel (the F-16: one of [`SENSOR_CHANNELS`]; a plant of your own: an output).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub channel: Option<String>,
     /// sensor-noise: standard deviation, in the channel's unit.
@@ -134,7 +136,7 @@ pub struct Fault {
     /// sensor-bias: offset, in the channel's unit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bias: Option<f64>,
-    /// actuator faults: "aileron", "elevator" or "rudder".
+    /// actuator faults: the actuator (the F-16: "aileron", "elevator" or "rudder"; a plant of your own: an input).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface: Option<String>,
     /// actuator-hard-over: "min" or "max".
@@ -286,21 +288,36 @@ impl Fault {
         {
             return err("bias", format!("must be finite, got {b}"));
         }
-        if let Some(c) = &self.channel
-            && !SENSOR_CHANNELS.contains(&c.as_str())
-        {
-            return err("channel", format!("unknown channel {c:?}; one of {}", SENSOR_CHANNELS.join(", ")));
-        }
-        if let Some(s) = &self.surface
-            && !SURFACES.contains(&s.as_str())
-        {
-            return err("surface", format!("unknown surface {s:?}; one of aileron, elevator, rudder"));
-        }
         if let Some(l) = &self.limit
             && l != "min"
             && l != "max"
         {
             return err("limit", format!("must be \"min\" or \"max\", got {l:?}"));
+        }
+        Ok(())
+    }
+}
+
+impl Fault {
+    /// Check that a sensor fault's `channel` is one of `channels` and an actuator fault's `surface` one of
+    /// `surfaces`, the names `plant` measures and actuates (the F-16: [`SENSOR_CHANNELS`], [`SURFACES`]; a plant of
+    /// your own: its outputs and inputs). On error (key, problem naming the list).
+    pub fn check_names<S: AsRef<str>>(
+        &self,
+        plant: &str,
+        channels: &[S],
+        surfaces: &[S],
+    ) -> Result<(), (String, String)> {
+        let list = |names: &[S]| names.iter().map(|n| n.as_ref()).collect::<Vec<_>>().join(", ");
+        if let Some(c) = &self.channel
+            && !channels.iter().any(|n| n.as_ref() == c)
+        {
+            return Err(("channel".into(), format!("{plant} has no channel {c:?}; one of {}", list(channels))));
+        }
+        if let Some(s) = &self.surface
+            && !surfaces.iter().any(|n| n.as_ref() == s)
+        {
+            return Err(("surface".into(), format!("{plant} has no actuator {s:?}; one of {}", list(surfaces))));
         }
         Ok(())
     }
@@ -412,7 +429,10 @@ mod tests {
         let f = parse_fault_flag("controller:sensor-bias@1s,channel=phi_rad,bias=0.1").unwrap();
         assert!(f.validate(10.0).unwrap_err().1.contains("target must be plant"));
         let f = parse_fault_flag("plant:sensor-bias@1s,channel=roll,bias=0.1").unwrap();
-        assert!(f.validate(10.0).unwrap_err().1.contains("unknown channel \"roll\""));
+        f.validate(10.0).unwrap();
+        let e = f.check_names("the F-16", &SENSOR_CHANNELS, &SURFACES).unwrap_err();
+        assert_eq!(e.0, "channel");
+        assert!(e.1.contains("the F-16 has no channel \"roll\"; one of vt_fps"), "{}", e.1);
         let f = parse_fault_flag("plant:drop@1s").unwrap();
         assert!(f.validate(10.0).unwrap_err().1.contains("either ticks or probability"));
     }

@@ -7,7 +7,8 @@
 //! - [`sim`]: the single-process loop (plant, actuators, controller in lockstep), whose pieces the rig's processes
 //!   reuse so both give the same trace; [`trace`]: the trace rows and `trace.csv`.
 //! - [`signals`]: a plant's named signals as data (what it announces, the checks, lookups by name, the trace's
-//!   columns of any plant); [`f16_signals`]: the F-16's table, and its snapshot read back by name.
+//!   columns of any plant); [`f16_signals`]: the F-16's table, and its snapshot read back by name;
+//!   [`signal_chain`]: the rig's actuators and sensor faults on the named signals of a plant of your own.
 //! - [`summary`]: control-quality figures; [`f_true`]: the true lumped function the RBF networks estimate;
 //!   [`criteria`] and [`judge`]: pass/fail criteria and how a flight is judged against them.
 //! - [`files`]: writing a run's files without ever leaving a torn one.
@@ -23,6 +24,7 @@ pub mod files;
 pub mod judge;
 pub mod role;
 pub mod scenario;
+pub mod signal_chain;
 pub mod signals;
 pub mod sim;
 pub mod summary;

@@ -5,7 +5,7 @@
 use crate::criteria::Criteria;
 use crate::dispersion::Distribution;
 use serde::{Deserialize, Serialize};
-use silrig_model::actuator::ActuatorSetLimits;
+use silrig_model::actuator::{ActuatorLimits, ActuatorSetLimits, SURFACE_CMD_LIMIT_DEG};
 use silrig_model::control::ControllerGains;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -25,7 +25,9 @@ pub struct Scenario {
     /// Seed for every random source of the run.
     #[serde(default)]
     pub seed: u64,
-    /// Initial condition.
+    /// The F-16's initial condition (default: the embedded default's, explicit at 150 m/s and 25,000 ft); a plant
+    /// of your own takes its start values from `[plant.parameters]`.
+    #[serde(default)]
     pub initial: InitialCondition,
     /// Attitude set points.
     pub setpoint: Setpoint,
@@ -38,9 +40,10 @@ pub struct Scenario {
     /// Controller gains.
     #[serde(default)]
     pub controller: ControllerGains,
-    /// Actuator limits and lags (default: the book's).
-    #[serde(default)]
-    pub actuators: ActuatorSetLimits,
+    /// Actuator limits and lags by input name (`[actuators.<input>]`): for the F-16 any of its four, the book's for
+    /// those not given; for a plant of your own, the rig's actuator model on exactly the inputs named.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub actuators: BTreeMap<String, ActuatorLimits>,
     /// Step, duration and command timing.
     pub timing: Timing,
     /// The fault plan (`[[faults]]`), in any order.
@@ -95,6 +98,26 @@ pub struct InitialCondition {
     /// equilibrium power (explicit mode), or the trim throttle.
     #[serde(default)]
     pub throttle: Option<f64>,
+}
+
+impl Default for InitialCondition {
+    /// The embedded default scenario's: explicit, 150 m/s at 25,000 ft, alpha, phi, theta and psi 5 deg.
+    fn default() -> Self {
+        Self {
+            mode: InitialMode::Explicit,
+            airspeed_mps: 150.0,
+            altitude_ft: 25_000.0,
+            alpha_deg: 5.0,
+            beta_deg: 0.0,
+            phi_deg: 5.0,
+            theta_deg: 5.0,
+            psi_deg: 5.0,
+            p_dps: 0.0,
+            q_dps: 0.0,
+            r_dps: 0.0,
+            throttle: None,
+        }
+    }
 }
 
 /// Initial-condition mode.
@@ -163,7 +186,7 @@ impl Disturbance {
 }
 
 /// Plant options.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlantOptions {
     /// Freeze the airspeed (VT_dot = 0), as the paper assumes.
@@ -182,6 +205,11 @@ pub struct PlantOptions {
     /// Multiplier on the mass and the inertias together (uncertainty; 1: the book's aircraft).
     #[serde(default = "one")]
     pub mass_scale: f64,
+    /// Parameters and start values of a plant of your own, by the names it reads them with
+    /// (`silrig_plant_parameter`; numbers only): dispersions reach them as `plant.parameters.<name>`. The F-16's
+    /// are the keys above.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: BTreeMap<String, f64>,
 }
 
 fn default_xcg() -> f64 {
@@ -200,6 +228,7 @@ impl Default for PlantOptions {
             xcg: default_xcg(),
             aero_scale: AeroScale::default(),
             mass_scale: 1.0,
+            parameters: BTreeMap::new(),
         }
     }
 }
@@ -363,6 +392,57 @@ impl Scenario {
     }
 }
 
+/// The F-16's inputs as `[actuators.<input>]` names them, with the travel each may be given.
+const F16_ACTUATORS: [(&str, (f64, f64)); 4] = [
+    ("aileron_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
+    ("elevator_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
+    ("rudder_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
+    ("throttle", (0.0, 1.0)),
+];
+
+impl Scenario {
+    /// The F-16's four actuators: those `[actuators]` names, the book's for the others.
+    pub fn f16_actuators(&self) -> ActuatorSetLimits {
+        let book = ActuatorSetLimits::default();
+        let get = |name: &str, default: ActuatorLimits| self.actuators.get(name).copied().unwrap_or(default);
+        ActuatorSetLimits {
+            aileron_deg: get("aileron_deg", book.aileron_deg),
+            elevator_deg: get("elevator_deg", book.elevator_deg),
+            rudder_deg: get("rudder_deg", book.rudder_deg),
+            throttle: get("throttle", book.throttle),
+        }
+    }
+
+    /// What only the built-in F-16 can check: `[actuators]` names its inputs within their travel, sensor and
+    /// actuator faults name its channels and surfaces, and `[plant.parameters]` (a plant of your own's) is empty.
+    /// On error (dotted key, problem).
+    pub fn check_for_f16(&self) -> Result<(), (String, String)> {
+        for (name, a) in &self.actuators {
+            let Some((_, travel)) = F16_ACTUATORS.iter().find(|(n, _)| n == name) else {
+                let names: Vec<&str> = F16_ACTUATORS.iter().map(|(n, _)| *n).collect();
+                return Err((
+                    format!("actuators.{name}"),
+                    format!("the F-16 has no input `{name}`; its inputs: {}", names.join(", ")),
+                ));
+            };
+            a.validate(*travel).map_err(|e| (format!("actuators.{name}"), e))?;
+        }
+        if let Some(name) = self.plant.parameters.keys().next() {
+            return Err((
+                format!("plant.parameters.{name}"),
+                "is for a plant of your own (--plant-cmd, --plant external); the F-16's parameters are plant.xcg, \
+                 plant.mass_scale and plant.aero_scale"
+                    .into(),
+            ));
+        }
+        for (i, f) in self.faults.iter().enumerate() {
+            f.check_names("the F-16", &crate::fault::SENSOR_CHANNELS, &crate::fault::SURFACES)
+                .map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
+        }
+        Ok(())
+    }
+}
+
 /// A scenario that cannot be used, with where the problem is.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
@@ -502,14 +582,13 @@ impl Scenario {
             let key = e.split([' ', '[', ':']).next().unwrap_or("").to_string();
             (format!("controller.{key}"), e)
         })?;
-        let surface = (-silrig_model::actuator::SURFACE_CMD_LIMIT_DEG, silrig_model::actuator::SURFACE_CMD_LIMIT_DEG);
-        for (name, a, travel) in [
-            ("elevator_deg", &self.actuators.elevator_deg, surface),
-            ("aileron_deg", &self.actuators.aileron_deg, surface),
-            ("rudder_deg", &self.actuators.rudder_deg, surface),
-            ("throttle", &self.actuators.throttle, (0.0, 1.0)),
-        ] {
-            a.validate(travel).map_err(|e| (format!("actuators.{name}"), e))?;
+        for (name, a) in &self.actuators {
+            // Any travel here: the plant's own ranges are known when it announces them ([`Self::check_for_f16`],
+            // `silrig_flight::signal_chain`).
+            a.validate((f64::NEG_INFINITY, f64::INFINITY)).map_err(|e| (format!("actuators.{name}"), e))?;
+        }
+        for (name, v) in &self.plant.parameters {
+            finite(&format!("plant.parameters.{name}"), *v)?;
         }
         let t = &self.timing;
         if !(t.dt_s >= 1e-4 && t.dt_s <= 0.1) {

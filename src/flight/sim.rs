@@ -63,6 +63,15 @@ pub enum SetupError {
         /// What is wrong.
         problem: String,
     },
+    /// The scenario names what the F-16 does not have (an input, a sensor channel, a parameter of a plant of
+    /// your own).
+    #[error("`{key}`: {problem}")]
+    NotForF16 {
+        /// The dotted key at fault.
+        key: String,
+        /// What is wrong.
+        problem: String,
+    },
 }
 
 /// A flight that left the model's envelope: when, and which state.
@@ -256,7 +265,7 @@ impl PlantRunner {
         };
         state.power_pct = engine::commanded_power_pct(throttle);
         envelope::check(&state)?;
-        let a = &s.actuators;
+        let a = &s.f16_actuators();
         let actuators = [
             Actuator::new(a.aileron_deg, surfaces.aileron_deg),
             Actuator::new(a.elevator_deg, surfaces.elevator_deg),
@@ -276,6 +285,7 @@ impl PlantRunner {
                 f.validate(s.timing.duration_s).map_err(|(key, problem)| SetupError::Fault { index, key, problem })?;
             }
         }
+        s.check_for_f16().map_err(|(key, problem)| SetupError::NotForF16 { key, problem })?;
         let (sensor_faults, surface_faults) = plant_model_faults(&s.faults);
         let mut runner = Self {
             model,

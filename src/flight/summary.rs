@@ -222,11 +222,9 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
             col(trace, name).iter().zip(&t).filter(|(_, ti)| **ti >= from).map(|(v, _)| v.abs()).collect();
         if late.is_empty() { f64::NAN } else { late.iter().fold(0.0, |m, v| m.max(*v)) }
     };
-    let limits = [
-        ("aileron", &scenario.actuators.aileron_deg),
-        ("elevator", &scenario.actuators.elevator_deg),
-        ("rudder", &scenario.actuators.rudder_deg),
-    ];
+    let actuators = scenario.f16_actuators();
+    let limits =
+        [("aileron", &actuators.aileron_deg), ("elevator", &actuators.elevator_deg), ("rudder", &actuators.rudder_deg)];
     let surfaces = limits
         .iter()
         .map(|(name, lim)| {

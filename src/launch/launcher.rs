@@ -292,12 +292,10 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     {
         anyhow::bail!("fault plan: {} needs a plant the launcher starts, not --plant external", f.describe());
     }
-    if (opts.plant_cmd.is_some() || opts.plant == PlantKind::External)
-        && let Some(f) = scenario.faults.iter().find(|f| f.action().is_plant_model_fault())
-    {
-        // Sensor and actuator faults act inside the built-in model; a plant of your own owns its sensors and
-        // actuators, so flying the plan without them would report faults that never happened.
-        anyhow::bail!("fault plan: {} acts inside the built-in F-16 model, not on a --plant-cmd plant", f.describe());
+    // The built-in F-16 is known now; a plant of your own is checked against the signals it announces when it joins
+    // (its `[actuators]`, sensor and actuator faults by its own names: `silrig_flight::signal_chain`).
+    if opts.plant_cmd.is_none() && opts.plant != PlantKind::External {
+        scenario.check_for_f16().map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
     }
     for (flag, cmd) in [("controller-cmd", &opts.controller_cmd), ("plant-cmd", &opts.plant_cmd)] {
         let Some(cmd) = cmd else { continue };

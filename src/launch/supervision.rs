@@ -503,7 +503,10 @@ impl Supervisor {
             if role == Role::Logger && completed && self.plant_external {
                 self.plant_done();
             }
-            if (role == Role::Logger && completed)
+            // A controller's session says "completed" only after the plant's end-of-run sample: the flight ended,
+            // and under load its exit can be reaped before the plant's (or, with a plant started by hand, the
+            // logger's).
+            if (matches!(role, Role::Logger | Role::Controller) && completed)
                 || self.plant_done_at.is_some()
                 || self.failures.iter().any(|f| f.starts_with(role.label()))
             {

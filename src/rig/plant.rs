@@ -390,6 +390,16 @@ impl PlantLoop {
         &self.scenario
     }
 
+    /// Whether the plant keeps realtime (and so saves checkpoints a restarted plant resumes from).
+    pub fn is_realtime(&self) -> bool {
+        self.realtime
+    }
+
+    /// Where the checkpoints go, and where a restarted plant finds its predecessor's.
+    pub fn checkpoint_path(&self) -> &std::path::Path {
+        &self.checkpoint_path
+    }
+
     /// What the model announced.
     pub fn signals(&self) -> &PlantSignals {
         &self.signals

@@ -127,6 +127,8 @@ pub enum Status {
     Stopped = 1,
     /// The plant has flown the whole scenario: close the session and exit.
     RunEnded = 2,
+    /// The scenario gives no value of that name (`silrig_plant_parameter`): the model keeps its own.
+    NotGiven = 3,
     /// The API was used wrongly (a NULL pointer, a command without a sample, a count that does not match).
     ErrUsage = -1,
     /// The client was built against another contract (layout version or sample sizes differ).
@@ -150,10 +152,11 @@ pub enum Status {
 
 impl Status {
     /// Every status, in code order of appearance.
-    pub const ALL: [Status; 12] = [
+    pub const ALL: [Status; 13] = [
         Status::Ok,
         Status::Stopped,
         Status::RunEnded,
+        Status::NotGiven,
         Status::ErrUsage,
         Status::ErrLayout,
         Status::ErrSetup,
@@ -176,6 +179,7 @@ impl Status {
             Status::Ok => "OK",
             Status::Stopped => "STOPPED",
             Status::RunEnded => "RUN_ENDED",
+            Status::NotGiven => "NOT_GIVEN",
             Status::ErrUsage => "ERR_USAGE",
             Status::ErrLayout => "ERR_LAYOUT",
             Status::ErrSetup => "ERR_SETUP",
@@ -194,6 +198,7 @@ impl Status {
             Status::Ok => "the call did what it says",
             Status::Stopped => "SIGTERM or SIGINT arrived: close the session and exit",
             Status::RunEnded => "the plant has flown the whole scenario: close the session and exit",
+            Status::NotGiven => "the scenario gives no value of that name: the model keeps its own",
             Status::ErrUsage => "API misuse: NULL pointer, command without a sample, wrong count",
             Status::ErrLayout => "built against another contract (layout version or sample sizes)",
             Status::ErrSetup => "SILRIG_* variables, scenario or diagnostics unusable",

@@ -4,8 +4,11 @@ moment) and the F-16's signal names, so the example PID flies it unchanged.
 
     python3 toy_plant.py [MODE]     MODE: ok (default), nan (output phi_deg is NaN at ticks 300..=309),
                                     twice (announces phi_deg twice), none (announces no outputs)
+
+It keeps checkpoints (`save`, `restore`), so a restarted toy goes on with the flight.
 """
 
+import json
 import math
 import pathlib
 import sys
@@ -51,6 +54,13 @@ class Toy(PlantModel):
             self.rate[c] += accel * dt_s
             self.angle[c] += self.rate[c] * dt_s
         self.tick += 1
+
+    def save(self):
+        return json.dumps({"angle": self.angle, "rate": self.rate, "surface": self.surface, "tick": self.tick})
+
+    def restore(self, text):
+        state = json.loads(text)
+        self.angle, self.rate, self.surface, self.tick = state["angle"], state["rate"], state["surface"], state["tick"]
 
 
 if __name__ == "__main__":
