@@ -235,5 +235,11 @@ mod tests {
         assert!(base.with_values(&[("initial.phi_dge".into(), 1.0)]).unwrap_err().contains("initial.phi_dge"));
         assert!(base.with_values(&[("initial.phi_deg".into(), 500.0)]).unwrap_err().contains("initial.phi_deg"));
         assert!(base.with_values(&[("name".into(), 1.0)]).unwrap_err().contains("not a number"));
+        // A plant of your own's parameters are dotted keys like any other.
+        let mut own = base.clone();
+        own.plant.parameters.insert("altitude_ft".into(), 4000.0);
+        let s = own.with_values(&[("plant.parameters.altitude_ft".into(), 5500.0)]).unwrap();
+        assert_eq!(s.plant.parameters["altitude_ft"], 5500.0);
+        assert!(own.with_values(&[("plant.parameters.mass_kg".into(), 1.0)]).unwrap_err().contains("mass_kg"));
     }
 }
