@@ -252,7 +252,8 @@ impl MachineConditions {
 }
 
 /// Ask for SCHED_FIFO at the role's priority and mlockall when `realtime` (one warning line on stderr when refused),
-/// and return the scheduling obtained as report text ("SCHED_FIFO 80, memory locked"). Lockstep processes block on each
+/// and return the scheduling obtained as report text ("SCHED_FIFO 80, memory locked", "SCHED_OTHER, memory not locked
+/// (limit 8192 KiB)"). Lockstep processes block on each
 /// other rather than on a clock; FIFO there would only starve their peers on a small machine.
 pub fn request_scheduling(role: Role, realtime: bool) -> String {
     let Some(priority) = role.fifo_priority().filter(|_| realtime) else {
@@ -262,5 +263,5 @@ pub fn request_scheduling(role: Role, realtime: bool) -> String {
     if let Some(w) = &status.warning {
         eprintln!("silrig-{role}: warning: {w}");
     }
-    format!("{}{}", status.policy, if status.memory_locked { ", memory locked" } else { "" })
+    format!("{}, {}", status.policy, status.memory)
 }

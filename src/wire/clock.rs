@@ -84,8 +84,11 @@ pub fn current_policy() -> SchedPolicy {
 pub struct RealtimeStatus {
     /// The policy in force afterwards.
     pub policy: SchedPolicy,
-    /// `mlockall(MCL_CURRENT | MCL_FUTURE)` succeeded.
+    /// `mlockall(MCL_CURRENT | MCL_FUTURE)` succeeded: every page, now and later, stays in RAM.
     pub memory_locked: bool,
+    /// What was locked, for the report: "memory locked", "memory locked at start only (limit 8192 KiB)" (the
+    /// locked-memory limit: what was mapped when it fitted), "memory not locked (...)".
+    pub memory: String,
     /// One line for stderr when something was refused; `None` when everything asked for was obtained.
     pub warning: Option<String>,
 }
@@ -105,24 +108,67 @@ pub fn leave_realtime_scheduling() {
     unsafe { libc::sched_setscheduler(0, libc::SCHED_OTHER, &param) };
 }
 
+/// CAP_IPC_LOCK's bit in the capability sets of `/proc/self/status`.
+const CAP_IPC_LOCK_BIT: u32 = 14;
+
+/// The locked-memory limit in bytes, `None` when nothing limits it (unlimited, or CAP_IPC_LOCK, which the kernel
+/// lets lock past the limit).
+fn memlock_limit_bytes() -> Option<u64> {
+    let has_cap_ipc_lock = std::fs::read_to_string("/proc/self/status").ok().is_some_and(|status| {
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix("CapEff:"))
+            .and_then(|hex| u64::from_str_radix(hex.trim(), 16).ok())
+            .is_some_and(|caps| caps & (1 << CAP_IPC_LOCK_BIT) != 0)
+    });
+    let mut limit = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+    // SAFETY: getrlimit fills the struct it is given.
+    let read = unsafe { libc::getrlimit(libc::RLIMIT_MEMLOCK, &mut limit) } == 0;
+    match has_cap_ipc_lock || (read && limit.rlim_cur == libc::RLIM_INFINITY) {
+        true => None,
+        false => Some(if read { limit.rlim_cur } else { 0 }),
+    }
+}
+
+/// How to get what was refused, once for both privileges (README "Running without root").
+const PRIVILEGE_HINT: &str = "for both: `sudo setcap cap_sys_nice,cap_ipc_lock+ep` on the silrig binaries, or \
+     rtprio and memlock lines for your group in /etc/security/limits.d/ (README \"Running without root\")";
+
 /// Ask for `SCHED_FIFO` at `priority` (1..=99) for the calling process and lock its memory. Never fails: a refusal
 /// (non-root without `ulimit -r`/`-l`, a container without CAP_SYS_NICE) leaves the process as it was and says so in
-/// `warning`, so the caller can print it and carry on (as dora's `--rt` and copper do).
+/// `warning`, so the caller can print it and carry on (as dora's `--rt` and copper do). Pages the process maps later
+/// are locked only when nothing limits locked memory: under the usual 8 MiB limit `MCL_FUTURE` would make every
+/// allocation past it fail (the process aborts), so only what is mapped now is locked, if it fits.
 pub fn try_realtime(priority: i32) -> RealtimeStatus {
     let mut refused = Vec::new();
     let param = libc::sched_param { sched_priority: priority };
     // Safety: plain syscalls on the calling process with valid arguments.
     if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
-        refused.push(format!("SCHED_FIFO {priority} refused ({})", std::io::Error::last_os_error()));
+        let why = std::io::Error::last_os_error();
+        refused.push(format!("SCHED_FIFO {priority} refused ({why}): expect ms-scale wake-up outliers"));
     }
-    let memory_locked = unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } == 0;
+    let (memory_locked, memory) = match memlock_limit_bytes() {
+        // SAFETY: mlockall with valid flags on the calling process.
+        None => match unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } == 0 {
+            true => (true, "memory locked".to_string()),
+            false => (false, format!("memory not locked ({})", std::io::Error::last_os_error())),
+        },
+        Some(limit) => {
+            let kib = limit / 1024;
+            // SAFETY: as above.
+            match unsafe { libc::mlockall(libc::MCL_CURRENT) } == 0 {
+                true => (false, format!("memory locked at start only (limit {kib} KiB)")),
+                false => (false, format!("memory not locked (limit {kib} KiB)")),
+            }
+        }
+    };
     if !memory_locked {
-        refused.push(format!("mlockall refused ({})", std::io::Error::last_os_error()));
+        refused.push(format!("{memory}: pages the loop touches later may fault (`ulimit -l`)"));
     }
     let policy = current_policy();
-    let warning = (!refused.is_empty())
-        .then(|| format!("warning: {}; running with {policy}, expect ms-scale wake-up outliers", refused.join(", ")));
-    RealtimeStatus { policy, memory_locked, warning }
+    let warning =
+        (!refused.is_empty()).then(|| format!("running with {policy}; {}; {PRIVILEGE_HINT}", refused.join("; ")));
+    RealtimeStatus { policy, memory_locked, memory, warning }
 }
 
 /// A fixed-period tick grid: tick `k` is due at `t0_ns + k * period_ns`. Pure: it never reads a clock, so every

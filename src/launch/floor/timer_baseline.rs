@@ -70,7 +70,7 @@ pub fn run(args: &BaselineArgs) -> anyhow::Result<String> {
     if fifo_priority > 0
         && let Some(warning) = clock::try_realtime(fifo_priority).warning
     {
-        eprintln!("{warning}");
+        eprintln!("silrig timer-baseline: warning: {warning}");
     }
     let source = if args.timerfd { TickSource::TimerfdWaitSet } else { TickSource::Nanosleep };
     let report = timer_baseline_with(source, duration_s, (period_ms * 1e6).round() as u64)?;

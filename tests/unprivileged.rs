@@ -1,0 +1,120 @@
+//! What most users run, as they run it: not root. The binaries (and the client library, and the Python example)
+//! are copied into a folder every user can read, and each run is started as uid/gid 65534 (`nobody`) through
+//! `setpriv`, with the usual 8 MiB locked-memory limit and no capabilities. Realtime then gets neither SCHED_FIFO nor
+//! all its memory locked: the run must still fly to the end, say once per process what it lacks and how to get it,
+//! and record in its report what each process had. When the tests themselves run unprivileged, they run the same
+//! commands directly.
+
+use std::os::unix::fs::PermissionsExt;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+mod common;
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+const NOBODY: &str = "65534";
+
+/// A folder of this test everyone may enter, with the rig's binaries in `bin/` and a writable `runs/`.
+fn world_readable_rig(test: &str) -> PathBuf {
+    let dir = common::temp_dir("unprivileged", test);
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let built = Path::new(SILRIG).parent().unwrap();
+    for name in ["silrig", "silrig-plant", "silrig-controller", "silrig-logger"] {
+        std::fs::copy(built.join(name), bin.join(name)).unwrap();
+    }
+    std::fs::copy(common::client_lib(SILRIG), bin.join("libsilrig_client.so")).unwrap();
+    let python = dir.join("python");
+    std::fs::create_dir_all(&python).unwrap();
+    for name in ["silrig_client.py", "silrig_contract.py", "pid_attitude.py"] {
+        std::fs::copy(Path::new(ROOT).join("examples/python").join(name), python.join(name)).unwrap();
+    }
+    std::fs::create_dir_all(dir.join("runs")).unwrap();
+    for (path, mode) in [(dir.clone(), 0o755), (bin, 0o755), (python, 0o755), (dir.join("runs"), 0o777)] {
+        std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode)).unwrap();
+    }
+    // The temp folder's own parents are world-enterable (/tmp); the test folder was made by us.
+    dir
+}
+
+/// `silrig ARGS` as an unprivileged user with the usual limits, from the copied binaries.
+fn silrig_as_user(dir: &Path, args: &[&str]) -> std::process::Output {
+    let silrig = dir.join("bin/silrig");
+    // SAFETY: geteuid has no preconditions.
+    let root = unsafe { libc::geteuid() } == 0;
+    let mut command = if root {
+        let mut c = Command::new("sh");
+        c.arg("-c")
+            .arg("ulimit -l 8192 && exec setpriv --reuid \"$0\" --regid \"$0\" --clear-groups --inh-caps=-all \"$@\"")
+            .arg(NOBODY)
+            .arg(&silrig);
+        c
+    } else {
+        Command::new(&silrig)
+    };
+    let child = command
+        .args(args)
+        .current_dir(dir.join("runs"))
+        .env("SILRIG_CLIENT_LIB", dir.join("bin/libsilrig_client.so"))
+        .env("HOME", dir.join("runs"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    common::wait_with_watchdog(child, Duration::from_secs(120))
+}
+
+fn report(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
+}
+
+fn scheduling(report: &serde_json::Value, process: &str) -> String {
+    let p = report["processes"].as_array().unwrap().iter().find(|p| p["process"] == process).unwrap();
+    p["scheduling"].as_str().unwrap().to_string()
+}
+
+#[test]
+fn the_readme_main_command_flies_realtime_for_an_ordinary_user() {
+    let dir = world_readable_rig("realtime");
+    let out = dir.join("runs/r");
+    let o = silrig_as_user(&dir, &["run", "--duration-s", "2", "--out", out.to_str().unwrap()]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert_eq!(o.status.code(), Some(0), "{stdout}\n{stderr}");
+    assert!(stdout.contains("all processes ended cleanly"), "{stdout}");
+    let r = report(&out);
+    assert_eq!(r["failures"].as_array().unwrap().len(), 0);
+    // SAFETY: geteuid has no preconditions.
+    if unsafe { libc::geteuid() } == 0 {
+        for process in ["plant", "controller"] {
+            let s = scheduling(&r, process);
+            assert!(s.starts_with("SCHED_OTHER, memory "), "{process}: {s}");
+            let log = std::fs::read_to_string(out.join(format!("{process}.stderr.log"))).unwrap();
+            assert_eq!(log.matches("warning").count(), 1, "one warning, said once: {log}");
+            assert!(log.contains("SCHED_FIFO") && log.contains("setcap cap_sys_nice,cap_ipc_lock+ep"), "{log}");
+        }
+    }
+    let rows = std::fs::read_to_string(out.join("trace.csv")).unwrap().lines().count() - 1;
+    assert_eq!(rows, 201);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_ordinary_user_flies_lockstep_a_python_controller_and_a_killed_controller_restarting() {
+    let dir = world_readable_rig("lockstep");
+    let python_pid = format!("python3 {}", dir.join("python/pid_attitude.py").display());
+    for (name, extra) in [
+        ("lockstep", vec!["--mode", "lockstep"]),
+        ("python", vec!["--duration-s", "2", "--controller-cmd", python_pid.as_str()]),
+        ("fault", vec!["--duration-s", "3", "--fault", "controller:kill@1s,restart_after=0.3s"]),
+    ] {
+        let out = dir.join("runs").join(name);
+        let args: Vec<&str> = ["run", "--out", out.to_str().unwrap()].into_iter().chain(extra).collect();
+        let o = silrig_as_user(&dir, &args);
+        let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert_eq!(o.status.code(), Some(0), "{name}: {stdout}\n{stderr}");
+        assert_eq!(report(&out)["failures"].as_array().unwrap().len(), 0, "{name}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
