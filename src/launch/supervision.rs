@@ -336,6 +336,8 @@ pub(crate) struct Supervisor {
     processes: Vec<RoleProcess>,
     /// When the plant ended for good (its last tick, or its death without a restart).
     plant_done_at: Option<Instant>,
+    /// The run is stopping: every exit is judged now, without waiting out the grace of a clean one.
+    stopping: bool,
     /// Wall time from the start to the plant's end, s.
     pub(crate) wall_s: f64,
     /// Processes that failed, and how.
@@ -367,6 +369,7 @@ impl Supervisor {
             started: Instant::now(),
             processes: Vec::new(),
             plant_done_at: None,
+            stopping: false,
             wall_s: 0.0,
             failures: Vec::new(),
             lives: Vec::new(),
@@ -459,7 +462,7 @@ impl Supervisor {
             }
             // A process that ends cleanly by itself mid-run has usually seen the plant's last tick a moment before
             // the plant's own exit reaches us: judge it once the plant has had time to end.
-            if status.success() && p.role != Role::Plant && self.plant_done_at.is_none() {
+            if status.success() && p.role != Role::Plant && self.plant_done_at.is_none() && !self.stopping {
                 let seen = *p.clean_exit_seen.get_or_insert_with(Instant::now);
                 if seen.elapsed() < CLEAN_EXIT_GRACE {
                     continue;
@@ -490,6 +493,15 @@ impl Supervisor {
             }
             // Only a flight flown to its end is the run's end: a clean exit on somebody else's SIGTERM is not.
             let ended = read_report(&self.args.out, role.label()).map(|r| r.ended).unwrap_or_default();
+            // The launcher signals a process only for the fault plan (handled above) and when it stops the run
+            // (reaped in `stop_all`): a clean exit on SIGTERM or SIGINT here came from outside, whenever the plant
+            // ends, and the flight it cut short is a failure.
+            if status.success() && ended == "terminated by signal" {
+                let tail = stderr_tail(&self.args.out, role);
+                let death = format!("{role}: ended by a SIGTERM or SIGINT the launcher did not send{tail}");
+                self.on_death(i, death);
+                continue;
+            }
             // A plant of the user's own that speaks the contract itself writes no report: its clean exit is the end
             // of its flight (the logger's rows say how much of it there was).
             let raw_plant_done = role == Role::Plant && self.plant_cmd.is_some() && ended.is_empty();
@@ -606,6 +618,10 @@ impl Supervisor {
         if self.plant_done_at.is_none() {
             self.wall_s = self.started.elapsed().as_secs_f64();
         }
+        // Exits already there are judged as exits by themselves (an outside SIGTERM to the logger included) before
+        // the launcher's own SIGTERM makes every exit look asked for.
+        self.stopping = true;
+        self.handle_exits()?;
         for p in self.processes.iter_mut() {
             p.process.signal(libc::SIGTERM);
         }
