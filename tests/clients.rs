@@ -362,10 +362,31 @@ fn a_controller_that_exits_at_once_is_reported_with_its_status_and_stderr() {
     let r = run("exits", &["--duration-s", "1", "--startup-timeout-s", "1", "--controller-cmd", cmd, &robust()]);
     assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
     let failures = r.report["failures"].to_string();
-    assert!(failures.contains("controller: exit status 3"), "{failures}");
+    assert!(failures.contains("controller: exit status 3 before the plant's first tick"), "{failures}");
     assert!(failures.contains("cannot find my gains file"), "{failures}");
-    // The plant never flew without a controller: it says so in its report rather than recording a flight.
-    assert!(failures.contains("no controller and logger connected"), "{failures}");
+    // The run ends there: the plant never flew (no row logged), and is not left waiting out its start-up timeout.
+    assert!(!r.out.join("trace.csv").exists() || r.trace().1.is_empty());
+    r.finish();
+}
+
+#[test]
+fn a_controllers_children_end_with_the_run_and_an_early_clean_exit_fails_it_at_once() {
+    // A marker no other test's process carries, so the check below finds only what this test started.
+    let marker = format!("{}.{}", 300 + std::process::id() % 100, std::process::id());
+    let pid = format!("{ROOT}/examples/python/pid_attitude.py");
+    let cmd = format!("sh -c \"sleep {marker} & exec python3 {pid}\"");
+    let r = run("children", &["--duration-s", "1", "--controller-cmd", &cmd, &robust()]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let left = Command::new("pgrep").args(["-f", &format!("sleep {marker}")]).output().unwrap();
+    assert!(left.stdout.is_empty(), "left running: {}", String::from_utf8_lossy(&left.stdout));
+    r.finish();
+
+    let cmd = format!("sh -c \"sleep {marker} & exit 0\"");
+    let r = run("exits-clean", &["--duration-s", "1", "--controller-cmd", &cmd, &robust()]);
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.failures().contains("controller: exit status 0 before the plant's first tick"), "{}", r.failures());
+    let left = Command::new("pgrep").args(["-f", &format!("sleep {marker}")]).output().unwrap();
+    assert!(left.stdout.is_empty(), "left running: {}", String::from_utf8_lossy(&left.stdout));
     r.finish();
 }
 

@@ -120,8 +120,44 @@ impl ChildProcess {
             self.status = Some(self.child.wait()?);
             self.let_output_catch_up();
         }
+        self.end_group_leftovers(timeout);
         Ok(self.status.expect("reaped"))
     }
+
+    /// A user's command may leave processes it started (`sh -c "helper & exec my_controller"`) after it ended:
+    /// they end with the run. Linux never gives out a pid still used as a process group id, so while any process
+    /// sits in the group the id names this group alone; SIGTERM, then SIGKILL past `timeout`.
+    fn end_group_leftovers(&self, timeout: Duration) {
+        let pgid = self.child.id() as libc::pid_t;
+        if !self.group {
+            return;
+        }
+        let deadline = Instant::now() + timeout;
+        let mut signal = libc::SIGTERM;
+        while !members_of_group(pgid).is_empty() {
+            // SAFETY: kill(2) on a process group that still has members (see above), so it is this group.
+            unsafe { libc::kill(-pgid, signal) };
+            if Instant::now() >= deadline {
+                signal = libc::SIGKILL;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
+/// The live processes in process group `pgid` (from `/proc/<pid>/stat`; zombies, which init reaps, left out).
+fn members_of_group(pgid: libc::pid_t) -> Vec<libc::pid_t> {
+    let Ok(entries) = std::fs::read_dir("/proc") else { return Vec::new() };
+    entries
+        .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<libc::pid_t>().ok())
+        .filter(|pid| {
+            std::fs::read_to_string(format!("/proc/{pid}/stat")).ok().is_some_and(|stat| {
+                // After the command in parentheses (which may hold spaces): state, ppid, pgrp.
+                let fields: Vec<&str> = stat.rsplit_once(')').map_or("", |(_, rest)| rest).split_whitespace().collect();
+                fields.first().is_some_and(|state| *state != "Z") && fields.get(2) == Some(&pgid.to_string().as_str())
+            })
+        })
+        .collect()
 }
 
 /// The child gets `signal` when the launcher dies, however it dies (`kill -9` included), so nothing outlives its
@@ -444,6 +480,11 @@ impl Supervisor {
         self.processes.iter_mut().find(|p| p.role == role).expect("every role is supervised")
     }
 
+    /// Whether the plant has started ticking (its `ticking` event is in the run's events).
+    fn plant_ticking(&self) -> bool {
+        std::fs::read_to_string(self.args.out.join("events.jsonl")).is_ok_and(|t| t.contains("\"ticking\""))
+    }
+
     fn plant_done(&mut self) {
         if self.plant_done_at.is_none() {
             self.plant_done_at = Some(Instant::now());
@@ -462,12 +503,16 @@ impl Supervisor {
             }
             // A process that ends cleanly by itself mid-run has usually seen the plant's last tick a moment before
             // the plant's own exit reaches us: judge it once the plant has had time to end.
-            if status.success() && p.role != Role::Plant && self.plant_done_at.is_none() && !self.stopping {
+            // (Before the plant's first tick there is no last tick to have seen: judged at once.)
+            let wait = status.success() && p.role != Role::Plant && self.plant_done_at.is_none() && !self.stopping;
+            if wait && self.plant_ticking() {
+                let p = &mut self.processes[i];
                 let seen = *p.clean_exit_seen.get_or_insert_with(Instant::now);
                 if seen.elapsed() < CLEAN_EXIT_GRACE {
                     continue;
                 }
             }
+            let p = &mut self.processes[i];
             p.exit_handled = true;
             let (role, pid, planned) = (p.role, p.process.pid(), p.planned_exit);
             self.end_life(pid, status, if planned { " (the fault plan)" } else { "" });
@@ -530,7 +575,8 @@ impl Supervisor {
                 describe(status)
             };
             let tail = stderr_tail(&self.args.out, role);
-            self.on_death(i, format!("{role}: {how} before the end of the run{tail}"));
+            let when = if self.plant_ticking() { "before the end of the run" } else { "before the plant's first tick" };
+            self.on_death(i, format!("{role}: {how} {when}{tail}"));
         }
         Ok(())
     }
@@ -549,8 +595,9 @@ impl Supervisor {
             }
             _ => {
                 // The survivors carry on (the plant in failsafe, the logger marking the gap): the run goes to its
-                // end and reports the failure. Without a plant there is nothing left to run.
-                if role == Role::Plant {
+                // end and reports the failure. Without a plant there is nothing left to run, and a controller that
+                // dies before the plant's first tick leaves it waiting out its start-up timeout for nothing.
+                if role == Role::Plant || (role == Role::Controller && !self.plant_ticking()) {
                     self.plant_done();
                 }
                 self.failures.push(death);
