@@ -11,6 +11,7 @@ struct Cli {
 }
 
 fn main() -> std::process::ExitCode {
+    silrig::rig::owner_only_files();
     let cli = Cli::parse();
     let result = silrig::bridge::run_bridge(&cli.bridge);
     silrig::rig::finish_process("bridge", &cli.bridge.process, result)

@@ -11,6 +11,7 @@ struct Cli {
 }
 
 fn main() -> std::process::ExitCode {
+    silrig::rig::owner_only_files();
     let cli = Cli::parse();
     silrig::rig::finish_process("plant", &cli.args, silrig::rig::plant::run_plant(&cli.args))
 }

@@ -119,6 +119,7 @@ enum PlantCommand {
 }
 
 fn main() -> ExitCode {
+    silrig::rig::owner_only_files();
     match run(Cli::parse()) {
         Ok(code) => code,
         Err(e) => {

@@ -542,3 +542,47 @@ fn a_process_started_by_hand_that_fails_at_start_up_leaves_no_iceoryx2_files() {
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn every_file_of_a_run_is_its_owners_only_whatever_the_umask() {
+    use std::os::unix::fs::PermissionsExt;
+    use std::os::unix::process::CommandExt;
+    let dir = temp_dir("umask");
+    let id = run_id("umask");
+    let out = dir.join("run");
+    let mut command = Command::new(SILRIG);
+    command
+        .args(["run", "--run-id", &id, "--out", out.to_str().unwrap(), "--duration-s", "2"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    // SAFETY: umask(2) in the child between fork and exec is async-signal-safe.
+    unsafe { command.pre_exec(|| Ok(drop(libc::umask(0)))) };
+    let launcher = command.spawn().unwrap();
+    wait_until_ticking(&out);
+    let open_to_others = |path: &Path| {
+        let mut found = Vec::new();
+        let mut stack = vec![path.to_path_buf()];
+        while let Some(p) = stack.pop() {
+            let Ok(meta) = std::fs::symlink_metadata(&p) else { continue };
+            if meta.permissions().mode() & 0o077 != 0 {
+                found.push(format!("{} {:o}", p.display(), meta.permissions().mode() & 0o777));
+            }
+            if meta.is_dir() {
+                stack.extend(std::fs::read_dir(&p).unwrap().flatten().map(|e| e.path()));
+            }
+        }
+        found
+    };
+    // While it flies: the run's iceoryx2 folder (status files, locks) and its lock file.
+    let running: Vec<String> = [format!("/tmp/silrig_{id}"), format!("/tmp/silrig_{id}.lock")]
+        .iter()
+        .flat_map(|p| open_to_others(Path::new(p)))
+        .collect();
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(running.is_empty(), "open to others while running: {running:?}");
+    let after = open_to_others(&out);
+    assert!(after.is_empty(), "open to others: {after:?}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -306,6 +306,15 @@ impl CheckpointWriter {
     }
 }
 
+/// Every file and folder this process creates from now on is its owner's only (umask 077), whatever umask it was
+/// started with: a run's trace, reports, checkpoints, recordings, status files and locks say how someone's
+/// controller behaves and are nobody else's to read or change. Children (the rig's processes, a user's command)
+/// inherit it. Called first thing by every silrig binary.
+pub fn owner_only_files() {
+    // SAFETY: umask(2) only sets the calling process's file mode creation mask.
+    unsafe { libc::umask(0o077) };
+}
+
 /// End a rig process: its exit status ([`exit_status`]), and, for a process started by hand (not by `silrig
 /// run`, which cleans up after its run), the run's iceoryx2 files once no process of the run is left, so a process
 /// that fails at start-up leaves no `/tmp/silrig_<run>` folder or shared memory behind.

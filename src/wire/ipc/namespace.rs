@@ -102,8 +102,10 @@ fn node_failure_detail(run: &RunId, iceoryx2_reason: &str) -> String {
 }
 
 /// iceoryx2 creates the node counter it shares between all nodes of a root path (`<prefix>node.<version>.global_mgmt`
-/// in `/dev/shm`) writable by everyone; the run's other files are owner-only, and so should this be. Every node
-/// narrows it after creating itself (the file exists by then; narrowing twice is harmless).
+/// in `/dev/shm`) writable by everyone, and the folders of the run's root path (`nodes/`, `services/`, one per node)
+/// readable by the group; the run's other files are owner-only, and so should these be. Every node narrows them
+/// after creating itself and after opening its streams (what it created exists by then; narrowing twice is
+/// harmless).
 fn restrict_global_mgmt(run: &RunId) {
     use std::os::unix::fs::PermissionsExt;
     let prefix = run.prefix();
@@ -112,6 +114,24 @@ fn restrict_global_mgmt(run: &RunId) {
         let name = name.to_string_lossy();
         if name.starts_with(&prefix) && name.ends_with(".global_mgmt") {
             let _ = std::fs::set_permissions(entry.path(), std::fs::Permissions::from_mode(0o600));
+        }
+    }
+    restrict_root_path(&run.root_dir());
+}
+
+/// Everything under a run's iceoryx2 root path made owner-only: folders 0700, files without group or other bits.
+pub(crate) fn restrict_root_path(root: &std::path::Path) {
+    use std::os::unix::fs::PermissionsExt;
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(path) = stack.pop() {
+        let Ok(meta) = std::fs::symlink_metadata(&path) else { continue };
+        let mode = meta.permissions().mode() & 0o777;
+        if mode & 0o077 != 0 {
+            let narrowed = if meta.is_dir() { 0o700 } else { mode & 0o700 };
+            let _ = std::fs::set_permissions(&path, std::fs::Permissions::from_mode(narrowed));
+        }
+        if meta.is_dir() {
+            stack.extend(std::fs::read_dir(&path).into_iter().flatten().flatten().map(|e| e.path()));
         }
     }
 }

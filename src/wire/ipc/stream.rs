@@ -211,6 +211,7 @@ pub fn open_stream<T: WireSample>(
         transient_event,
     )
     .map_err(|e| IpcError::OpenStream { run: run.clone(), stream, pattern: "event", detail: format!("{e:?}") })?;
+    super::namespace::restrict_root_path(std::path::Path::new(&node.config().global.root_path().to_string()));
 
     Ok(StreamService { spec, run, pubsub, event })
 }
