@@ -556,7 +556,12 @@ fn every_file_of_a_run_is_its_owners_only_whatever_the_umask() {
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     // SAFETY: umask(2) in the child between fork and exec is async-signal-safe.
-    unsafe { command.pre_exec(|| Ok(drop(libc::umask(0)))) };
+    unsafe {
+        command.pre_exec(|| {
+            libc::umask(0);
+            Ok(())
+        })
+    };
     let launcher = command.spawn().unwrap();
     wait_until_ticking(&out);
     let open_to_others = |path: &Path| {
