@@ -1,7 +1,7 @@
 //! `silrig`: the command-line front end. Parses arguments and calls the library; no logic of its own.
 
 use anyhow::Context;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use silrig::campaign::{SweepAction, SweepCommand};
 use silrig::derivative_csv;
 use silrig::plant::{F16Model, trim::trim_level_flight};
@@ -120,7 +120,8 @@ enum PlantCommand {
 
 fn main() -> ExitCode {
     silrig::rig::owner_only_files();
-    match run(Cli::parse()) {
+    let matches = silrig::rig::negative_numbers_as_values(Cli::command()).get_matches();
+    match run(Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())) {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");

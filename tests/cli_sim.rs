@@ -82,3 +82,16 @@ fn a_bad_scenario_file_exits_2_naming_the_file_and_key() {
     assert!(!dir.join("out").exists(), "nothing is written for a refused scenario");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_negative_number_gets_the_range_message_not_an_unknown_flag() {
+    for (args, needle) in [
+        (vec!["run", "--duration-s", "-1"], "`timing.duration_s`: must be within (0, 3600] s, got -1"),
+        (vec!["timer-baseline", "--duration-s", "-5"], "--duration-s must be within 0.01..3600 s, got -5"),
+    ] {
+        let o = silrig(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle) && !stderr.contains("unexpected argument"), "{args:?}: {stderr}");
+    }
+}

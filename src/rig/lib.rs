@@ -306,6 +306,23 @@ impl CheckpointWriter {
     }
 }
 
+/// `cmd` with every option that takes a value accepting a negative number (`--duration-s -1`), in every
+/// subcommand, so an out-of-range number reaches the range check that names the range instead of being taken for
+/// an unknown flag.
+pub fn negative_numbers_as_values(cmd: clap::Command) -> clap::Command {
+    let options: Vec<String> = cmd
+        .get_arguments()
+        .filter(|a| a.get_long().is_some() && a.get_action().takes_values())
+        .map(|a| a.get_id().to_string())
+        .collect();
+    let mut cmd = options.iter().fold(cmd, |c, id| c.mut_arg(id, |a| a.allow_negative_numbers(true)));
+    let subcommands: Vec<String> = cmd.get_subcommands().map(|s| s.get_name().to_string()).collect();
+    for name in subcommands {
+        cmd = cmd.mut_subcommand(name, negative_numbers_as_values);
+    }
+    cmd
+}
+
 /// Every file and folder this process creates from now on is its owner's only (umask 077), whatever umask it was
 /// started with: a run's trace, reports, checkpoints, recordings, status files and locks say how someone's
 /// controller behaves and are nobody else's to read or change. Children (the rig's processes, a user's command)
