@@ -226,6 +226,10 @@ pub fn start_process(
 /// Copy a child's output (stdout and stderr, one pipe) into `log_path` line by line. When the log cannot be
 /// written (a full disk), the rest goes to the launcher's own stderr after one line saying why, so nothing the
 /// process said is lost; the child itself never sees the failure, and never dies writing its error to a full disk.
+/// Largest `<role>.stderr.log`, bytes: a process that writes without end (100 KB a tick is 6 GB in ten minutes)
+/// must not fill the disk the trace is written to. Past it lines are counted, and the count closes the log.
+pub const STDERR_LOG_CAP_BYTES: u64 = 16 << 20;
+
 fn forward_output(
     reader: std::io::PipeReader,
     log_path: PathBuf,
@@ -246,10 +250,26 @@ fn forward_output(
             })
         };
         let mut failed = false;
+        // A restarted process appends to its predecessor's log: the cap counts what is there already.
+        let mut logged = std::fs::metadata(&log_path).map_or(0, |m| m.len());
+        let (mut dropped_bytes, mut dropped_lines) = (0u64, 0u64);
         for line in
             marker.into_iter().map(String::into_bytes).map(Ok).chain(std::io::BufReader::new(reader).split(b'\n'))
         {
             let Ok(line) = line else { break };
+            if logged + line.len() as u64 + 1 > STDERR_LOG_CAP_BYTES {
+                if dropped_lines == 0 {
+                    let cap_mib = STDERR_LOG_CAP_BYTES >> 20;
+                    let _ = to_log(
+                        format!("--- silrig run: this log reached its cap of {cap_mib} MiB; what follows is counted, not kept ---")
+                            .as_bytes(),
+                    );
+                }
+                dropped_lines += 1;
+                dropped_bytes += line.len() as u64 + 1;
+                continue;
+            }
+            logged += line.len() as u64 + 1;
             if !failed && let Err(e) = to_log(&line) {
                 failed = true;
                 let _ = writeln!(
@@ -261,6 +281,12 @@ fn forward_output(
             if failed {
                 let _ = writeln!(std::io::stderr(), "silrig run: {role}: {}", String::from_utf8_lossy(&line));
             }
+        }
+        if dropped_lines > 0 {
+            let _ = to_log(
+                format!("--- silrig run: {dropped_lines} lines ({dropped_bytes} bytes) past the cap were dropped ---")
+                    .as_bytes(),
+            );
         }
     })
 }
