@@ -321,6 +321,22 @@ fn replay_refuses_what_is_not_a_whole_recording_of_this_layout() {
     assert_eq!(code, Some(2), "{text}");
     assert!(text.contains("is cut short"), "{text}");
     assert!(!dir.join("replay").exists(), "nothing is started for a recording that cannot be replayed");
+
+    // A whole recording copied into the folder of another run.
+    let other_dir = temp_dir("recording", "other");
+    let (code, text) =
+        run(&other_dir, &format!("m{}-other", std::process::id()), &["--mode", "lockstep", "--duration-s", "1"]);
+    assert_eq!(code, Some(0), "{text}");
+    std::fs::copy(run_dir.join("recording.mcap"), other_dir.join("recording.mcap")).unwrap();
+    let (code, text) = replay(&other_dir, &[], &[]);
+    assert_eq!(code, Some(2), "{text}");
+    let expected = format!(
+        "the recording is of run `{id}`, but this folder's report.json is of run `m{}-other`",
+        std::process::id()
+    );
+    assert!(text.contains(&expected), "{text}");
+    assert!(!other_dir.join("replay").exists() && !other_dir.join("replay.json").exists());
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&run_dir);
+    let _ = std::fs::remove_dir_all(&other_dir);
 }

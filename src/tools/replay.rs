@@ -406,6 +406,23 @@ impl ReplayRig {
     }
 }
 
+/// A recording copied into another run's folder would be replayed against that run's files and leave its
+/// `replay.json` there: the folder's `report.json` and the recording must name the same run.
+fn check_same_run(run_dir: &Path, recorded: &RecordedRun) -> anyhow::Result<()> {
+    let Ok(text) = std::fs::read_to_string(run_dir.join("report.json")) else { return Ok(()) };
+    let folder_run =
+        serde_json::from_str::<serde_json::Value>(&text).ok().and_then(|r| r["run_id"].as_str().map(str::to_string));
+    let recording_run = recorded.run.get("run_id");
+    match (folder_run, recording_run) {
+        (Some(folder), Some(recording)) if &folder != recording => anyhow::bail!(
+            "{}: the recording is of run `{recording}`, but this folder's report.json is of run `{folder}`: it was \
+             copied here from another run; replay it from a folder of its own",
+            recorded.files[0].display()
+        ),
+        _ => Ok(()),
+    }
+}
+
 /// Replay the recording in `opts.run_dir` against the controller, and compare. A recording that cannot be read is
 /// an error ([`silrig_wire::recording::reader::RecordingError`]); a controller that dies or stops answering is an error
 /// naming the tick.
@@ -414,6 +431,7 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<ReplayOutcome> {
     silrig_rig::flag_in_range("answer-timeout-s", opts.answer_timeout_s, 0.1, 3600.0, "s")
         .map_err(anyhow::Error::msg)?;
     let recorded = RecordedRun::read(&opts.run_dir)?;
+    check_same_run(&opts.run_dir, &recorded)?;
     anyhow::ensure!(
         !recorded.plant.is_empty(),
         "{}: the recording holds no plant samples",
