@@ -320,8 +320,14 @@ fn invalid(text: &str) -> String {
 #[test]
 fn bad_scenarios_are_refused_naming_the_key_and_the_problem() {
     let base = paper_text();
-    let e = invalid(&base.replace("[setpoint]", "[setpoint]\nroll_deg = 3.0"));
-    assert!(e.contains("unknown field `roll_deg`"), "{e}");
+    // A set point by any output name parses (a plant of your own may have it); the F-16 says it has none such.
+    let s = Scenario::from_toml(&base.replace("[setpoint]", "[setpoint]\nroll_deg = 3.0"), "test.toml").unwrap();
+    let e = silrig::sim::fly(&s).unwrap_err().to_string();
+    assert!(e.contains("`setpoint.roll_deg`: the F-16 has no output `roll_deg`; its outputs: phi_deg"), "{e}");
+    let e = invalid(&base.replace("[setpoint]", "[setpoint]\nalt_ft = inf"));
+    assert!(e.contains("`setpoint.alt_ft`") && e.contains("finite"), "{e}");
+    let e = invalid(&base.replace("[setpoint]", "[setpoint]\nalt_ft = \"high\""));
+    assert!(e.contains("setpoint") && e.contains("test.toml"), "{e}");
     let e =
         invalid(&base.replace("switching_gain_radps2 = [2.0, 2.0, 2.0]", "switching_gain_radps2 = [2.0, -1.0, 2.0]"));
     assert!(e.contains("controller.switching_gain_radps2") && e.contains("(theta) must be >= 0, got -1"), "{e}");
@@ -357,7 +363,7 @@ fn the_f16_takes_its_actuators_by_input_name_and_refuses_what_it_does_not_have()
     for (extra, needle) in [
         (
             "[actuators.flap]\nmin = 0.0\nmax = 40.0\n",
-            "`actuators.flap`: the F-16 has no input `flap`; its inputs: aileron_deg",
+            "`actuators.flap`: the F-16 has no input `flap`; its inputs: aileron, elevator",
         ),
         ("[plant.parameters]\nmass_kg = 1200.0\n", "`plant.parameters.mass_kg`: is for a plant of your own"),
         ("[actuators.throttle]\nmin = 0.0\nmax = 2.0\n", "`actuators.throttle`: position limits must lie within 0..1"),
@@ -367,7 +373,32 @@ fn the_f16_takes_its_actuators_by_input_name_and_refuses_what_it_does_not_have()
         let e = silrig::sim::fly(&s).unwrap_err().to_string();
         assert!(e.contains(needle), "{e}");
     }
+    // The F-16's input names work as well as its scenarios' keys, but not both for one actuator.
+    let by_input = only_elevator.replace("[actuators.elevator_deg]", "[actuators.elevator]");
+    let s = Scenario::from_toml(&by_input, "test.toml").unwrap();
+    assert_eq!(s.f16_actuators().elevator_deg.max, 20.0);
+    let both = only_elevator.replace("[timing]", "[actuators.elevator]\nmin = -10.0\nmax = 10.0\n\n[timing]");
+    let e = silrig::sim::fly(&Scenario::from_toml(&both, "test.toml").unwrap()).unwrap_err().to_string();
+    assert!(e.contains("`actuators.elevator_deg`: is `actuators.elevator` again"), "{e}");
     // An actuator with nonsense limits is refused on load, whatever the plant.
     let e = invalid(&only_elevator.replace("min = -20.0", "min = 30.0"));
     assert!(e.contains("`actuators.elevator_deg`") && e.contains("min < max"), "{e}");
+}
+
+#[test]
+fn an_output_with_a_set_point_of_its_own_gets_a_line_in_the_summary() {
+    let mut s = Scenario::embedded_default();
+    s.setpoint.outputs.insert("alt_ft".into(), 25_000.0);
+    let (trace, _) = silrig::sim::fly(&s).unwrap();
+    let summary = summarize(&trace, &s);
+    let alt = &summary.outputs[0];
+    assert_eq!((alt.name.as_str(), alt.setpoint, alt.initial), ("alt_ft", 25_000.0, 25_000.0));
+    assert_eq!(alt.final_value, *trace.column("alt_ft").unwrap().last().unwrap());
+    let text = summary.to_text();
+    assert!(text.contains("  output        set       initial   final     overshoot  settle(2%)"), "{text}");
+    assert!(text.lines().any(|l| l.trim_start().starts_with("alt_ft") && l.contains("25000.000")), "{text}");
+    // Without such set points the summary is as it always was.
+    let plain = summarize(&trace, &Scenario::embedded_default());
+    assert!(plain.outputs.is_empty() && !plain.to_text().contains("output "));
+    assert!(!serde_json::to_string(&plain).unwrap().contains("\"outputs\""));
 }

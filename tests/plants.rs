@@ -246,7 +246,13 @@ fn silrig_check_gives_jsbsims_cessna_a_verdict_and_its_recording_replays_bit_ide
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
     assert!(stdout.contains("verdict: PASS: 2 of 2 cases passed"), "{stdout}");
-    assert!(stdout.contains("deterministic                  identical over 1001 ticks"), "{stdout}");
+    let line = |criterion: &str| stdout.lines().find(|l| l.split_whitespace().any(|w| w == criterion)).unwrap_or("");
+    assert!(line("deterministic").contains("identical over 1001 ticks"), "{stdout}");
+    // Criteria on the Cessna's own outputs, by name, in their units.
+    for criterion in ["outputs.theta_deg.settled", "outputs.alt_ft.max", "outputs.vt_mps.min"] {
+        assert!(line(criterion).trim_end().ends_with("pass"), "{criterion}: {stdout}");
+    }
+    assert!(line("outputs.vt_mps.min").contains("at least 40"), "{stdout}");
     std::fs::remove_dir_all(&dir).unwrap();
 
     let r = run(

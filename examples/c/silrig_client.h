@@ -91,6 +91,11 @@ double silrig_session_dt_s(silrig_session *session);
 /* The scenario's attitude set point, deg: roll (phi), pitch (theta), yaw (psi). */
 int silrig_session_setpoint_deg(silrig_session *session, double setpoint_deg_out[3]);
 
+/* The scenario's set point of output `name` ([setpoint] alt_ft = 4000.0), in that output's unit: SILRIG_OK with
+ * *value_out set, SILRIG_NOT_GIVEN when the scenario gives none (phi_deg, theta_deg and psi_deg are always given,
+ * 0 by default). */
+int silrig_session_setpoint(silrig_session *session, const char *name, double *value_out);
+
 /* Checkpoints, so a restarted controller resumes instead of starting cold (copper's Freezable): after a send,
  * when silrig_session_checkpoint_due returns 1, save your state as text with silrig_session_save_checkpoint. A
  * controller the launcher restarts finds that text in silrig_session_restored_checkpoint (NULL otherwise; owned by

@@ -39,7 +39,7 @@ class PidAttitude(Controller):
         self.session = None
 
     def start(self, session):
-        self.setpoint_deg = session.setpoint_deg
+        self.setpoint_deg = tuple(session.setpoint(name) for name in ANGLES)
         self.session = session
         plant = session.plant
         # A plant of the F-16's kind (surfaces in deg) flies with its gains; any other needs a tuning of its own.

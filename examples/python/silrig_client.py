@@ -99,6 +99,7 @@ def _load():
         "silrig_plant_close": ([session_p, ctypes.c_char_p], ctypes.c_int),
         "silrig_session_dt_s": ([session_p], ctypes.c_double),
         "silrig_session_setpoint_deg": ([session_p, c_double_p], ctypes.c_int),
+        "silrig_session_setpoint": ([session_p, ctypes.c_char_p, c_double_p], ctypes.c_int),
         "silrig_session_restored_checkpoint": ([session_p], ctypes.c_char_p),
         "silrig_session_checkpoint_due": ([session_p], ctypes.c_int),
         "silrig_session_checkpoint_used": ([session_p, ctypes.c_int, ctypes.c_char_p], ctypes.c_int),
@@ -201,6 +202,14 @@ class Session:
         out = (ctypes.c_double * 3)()
         _check(self._lib.silrig_session_setpoint_deg(self._handle, out))
         return tuple(out)
+
+    def setpoint(self, name, default=None):
+        """The scenario's set point of output `name` (`[setpoint] alt_ft = 4000.0`), in its unit; `default` when the
+        scenario gives none."""
+        value = ctypes.c_double()
+        if _check(self._lib.silrig_session_setpoint(self._handle, name.encode(), ctypes.byref(value))) == NOT_GIVEN:
+            return default
+        return value.value
 
     @property
     def plant(self):

@@ -289,6 +289,32 @@ pub unsafe extern "C" fn silrig_session_setpoint_deg(session: *mut SilrigSession
     })
 }
 
+/// The scenario's set point of output `name`, in that output's unit; see the header.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `name` is a NUL-terminated string; `value_out` points to one
+/// writable double.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_setpoint(
+    session: *mut SilrigSession,
+    name: *const c_char,
+    value_out: *mut f64,
+) -> c_int {
+    boundary(|| {
+        // SAFETY: the caller's contract.
+        let s = unsafe { session_mut(session) }?;
+        // SAFETY: the caller's contract.
+        let name = unsafe { c_str(name, "name") }?;
+        if value_out.is_null() {
+            return Err(usage("value_out is NULL"));
+        }
+        let Some(value) = s.session.scenario().setpoint.get(name) else { return Ok(Status::NotGiven) };
+        // SAFETY: checked non-NULL.
+        unsafe { value_out.write(value) };
+        Ok(Status::Ok)
+    })
+}
+
 /// What a predecessor saved with `silrig_session_save_checkpoint` (a restarted controller), or NULL.
 ///
 /// # Safety

@@ -3,6 +3,7 @@
 //! criteria `silrig_tools::check::criteria`.
 
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// What a run must meet (`[cases.criteria]` of a check suite, `[criteria]` of a sweep). Every key is optional;
 /// only what is named is judged. The rig's timing and fault criteria need `silrig check`; a sweep judges the
@@ -51,6 +52,113 @@ pub struct Criteria {
     /// Two runs of the case give bit-identical commands (lockstep only).
     #[serde(default)]
     pub deterministic: bool,
+    /// Criteria on any output of the plant by name (`[criteria.outputs.alt_ft]`), each in that output's unit.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub outputs: BTreeMap<String, OutputCriteria>,
+}
+
+/// What one output must meet (`[criteria.outputs.<name>]`), in the output's own unit. Set points come from the
+/// scenario's `[setpoint]` by the same name.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputCriteria {
+    /// From `within_s` on, within `band` of its set point.
+    pub settled: Option<SettledBand>,
+    /// Largest excursion past the set point in the direction of the step.
+    pub overshoot_max: Option<f64>,
+    /// Largest |last value - set point|.
+    pub final_error_max: Option<f64>,
+    /// Highest value over the run.
+    pub max: Option<f64>,
+    /// Lowest value over the run.
+    pub min: Option<f64>,
+    /// Largest |value| from `after_s` on.
+    pub abs_max: Option<AbsMax>,
+    /// No oscillation in the last 3 s that swings more than this either way, sustained (at least two whole
+    /// periods, not decaying: the summary's limit-cycle detector with this amplitude).
+    pub oscillation_max: Option<f64>,
+}
+
+/// `settled = { within_s = T, band = B }` of an output, B in its unit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettledBand {
+    /// From this time on, s.
+    pub within_s: f64,
+    /// Half-width of the band around the set point.
+    pub band: f64,
+}
+
+/// `abs_max = { after_s = T, max = X }`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AbsMax {
+    /// From this time on, s.
+    pub after_s: f64,
+    /// Largest |value|.
+    pub max: f64,
+}
+
+impl OutputCriteria {
+    /// Whether it asks for its output's set point.
+    pub fn needs_setpoint(&self) -> bool {
+        self.settled.is_some() || self.overshoot_max.is_some() || self.final_error_max.is_some()
+    }
+
+    /// Whether any criterion is set.
+    fn any(&self) -> bool {
+        self.needs_setpoint()
+            || self.max.is_some()
+            || self.min.is_some()
+            || self.abs_max.is_some()
+            || self.oscillation_max.is_some()
+    }
+
+    /// Refuse what cannot be judged over a run of `duration_s`; `at` is the table's key below `criteria`
+    /// (`outputs.alt_ft`).
+    fn validate(&self, at: &str, duration_s: f64) -> Result<(), String> {
+        let key = |k: &str| format!("{at}.{k}");
+        let within_run = |k: &str, t: f64| {
+            if t >= 0.0 && t < duration_s {
+                Ok(())
+            } else {
+                Err(format!("`criteria.{}` must be within 0..{duration_s} s, got {t}", key(k)))
+            }
+        };
+        if let Some(s) = self.settled {
+            positive(&key("settled.band"), s.band)?;
+            within_run("settled.within_s", s.within_s)?;
+        }
+        for (k, v) in [
+            ("overshoot_max", self.overshoot_max),
+            ("final_error_max", self.final_error_max),
+            ("oscillation_max", self.oscillation_max),
+            ("abs_max.max", self.abs_max.map(|a| a.max)),
+        ] {
+            if let Some(v) = v {
+                positive(&key(k), v)?;
+            }
+        }
+        if let Some(a) = self.abs_max {
+            within_run("abs_max.after_s", a.after_s)?;
+        }
+        for (k, v) in [("max", self.max), ("min", self.min)] {
+            if let Some(v) = v
+                && !v.is_finite()
+            {
+                return Err(format!("`criteria.{}` must be a finite number, got {v}", key(k)));
+            }
+        }
+        if let (Some(lo), Some(hi)) = (self.min, self.max)
+            && lo >= hi
+        {
+            return Err(format!("`criteria.{}` ({lo}) must be below `criteria.{}` ({hi})", key("min"), key("max")));
+        }
+        if !self.any() {
+            return Err(format!("`criteria.{at}` sets no criterion"));
+        }
+        Ok(())
+    }
 }
 
 /// A time budget: an absolute time, or a multiple of the OS floor (the p99 wake-up lateness of a bare timer loop
@@ -147,8 +255,22 @@ impl Criteria {
         RIG_CRITERIA.iter().zip(set).filter(|(_, on)| *on).map(|(k, _)| *k).collect()
     }
 
-    /// Refuse flight criteria that cannot be judged over a run of `duration_s`.
-    pub fn validate_flight(&self, duration_s: f64) -> Result<(), String> {
+    /// Refuse flight criteria that cannot be judged over a run of `duration_s` with these set points (an output's
+    /// settling, overshoot and final error need its set point).
+    pub fn validate_flight(&self, duration_s: f64, setpoint: &crate::scenario::Setpoint) -> Result<(), String> {
+        for (name, c) in &self.outputs {
+            let at = format!("outputs.{name}");
+            if !crate::signals::valid_name(name) {
+                return Err(format!("`criteria.{at}`: `{name}` is not an output name"));
+            }
+            c.validate(&at, duration_s)?;
+            if c.needs_setpoint() && setpoint.get(name).is_none() {
+                return Err(format!(
+                    "`criteria.{at}` judges against a set point, and the scenario gives none: add `{name} = ...` to \
+                     [setpoint]"
+                ));
+            }
+        }
         if let Some(s) = self.settled {
             positive("settled.band_deg", s.band_deg)?;
             if !(s.within_s >= 0.0 && s.within_s < duration_s) {
@@ -191,7 +313,8 @@ impl Criteria {
 
     /// Whether any flight criterion is set.
     pub fn has_flight_criteria(&self) -> bool {
-        self.settled.is_some()
+        !self.outputs.is_empty()
+            || self.settled.is_some()
             || self.alpha_max_deg.is_some()
             || self.overshoot_max_deg.is_some()
             || self.final_error_max_deg.is_some()

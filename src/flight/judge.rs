@@ -2,7 +2,7 @@
 //! limit it is held to, and the sentence that explains a failure to someone who has not read the code. Pure: the
 //! same code judges `silrig check` runs and sweep cases.
 
-use crate::criteria::{BodyRateLimit, Criteria, Judgement, Settled};
+use crate::criteria::{BodyRateLimit, Criteria, Judgement, OutputCriteria, Settled};
 use crate::scenario::Scenario;
 use crate::summary::{Summary, settle_time};
 use crate::trace::Trace;
@@ -62,7 +62,151 @@ pub fn judge_flight(
     if criteria.no_sustained_oscillation {
         out.push(no_sustained_oscillation(summary));
     }
+    for (name, c) in &criteria.outputs {
+        out.extend(judge_output(name, c, scenario, trace));
+    }
     out
+}
+
+/// The criteria on one named output, in a fixed order, each labelled `outputs.<name>.<key>`. An output the trace
+/// lacks fails every one of them, naming the trace's columns.
+fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Option<&Trace>) -> Vec<Judgement> {
+    let setpoint = scenario.setpoint.get(name).unwrap_or(f64::NAN);
+    let mut asked: Vec<(&str, String)> = Vec::new();
+    if let Some(s) = c.settled {
+        asked.push(("settled", format!("within {} of {setpoint} from {} s", s.band, s.within_s)));
+    }
+    if let Some(o) = c.overshoot_max {
+        asked.push(("overshoot_max", format!("{o} past {setpoint}")));
+    }
+    if let Some(e) = c.final_error_max {
+        asked.push(("final_error_max", format!("{e} from {setpoint}")));
+    }
+    if let Some(m) = c.max {
+        asked.push(("max", format!("at most {m}")));
+    }
+    if let Some(m) = c.min {
+        asked.push(("min", format!("at least {m}")));
+    }
+    if let Some(a) = c.abs_max {
+        asked.push(("abs_max", format!("|value| at most {} after {} s", a.max, a.after_s)));
+    }
+    if let Some(o) = c.oscillation_max {
+        asked.push(("oscillation_max", format!("none sustained beyond +-{o} in the last 3 s")));
+    }
+    let label = |key: &str| format!("outputs.{name}.{key}");
+    let (t, x) = match trace.map(|tr| (tr.column("t_s"), tr.column(name), tr)) {
+        Some((Some(t), Some(x), _)) => (t, x),
+        Some((_, _, tr)) => {
+            let what = format!("the trace has no column `{name}`; its columns: {}", tr.columns.join(", "));
+            return asked.into_iter().map(|(key, limit)| no_evidence(&label(key), limit, &what)).collect();
+        }
+        None => {
+            return asked
+                .into_iter()
+                .map(|(key, limit)| no_evidence(&label(key), limit, "no trace was logged"))
+                .collect();
+        }
+    };
+    // The highest (or lowest) value and when; NaN, a flight that is no longer a number, is beyond every bound.
+    let extreme = |upper: bool| {
+        t.iter().zip(&x).map(|(ti, v)| (*v, *ti)).reduce(|w, c| {
+            let beats = !w.0.is_nan() && (c.0.is_nan() || if upper { c.0 > w.0 } else { c.0 < w.0 });
+            if beats { c } else { w }
+        })
+    };
+    asked
+        .into_iter()
+        .map(|(key, limit)| {
+            let (measured, failure, value) = match key {
+                "settled" => {
+                    let s = c.settled.expect("asked");
+                    let at = crate::summary::settle_time(&t, &x, setpoint, s.band);
+                    let failure = match at {
+                        Some(a) if a <= s.within_s => None,
+                        Some(a) => Some(format!(
+                            "{name} only stayed within {} of its set point {setpoint} from {a:.2} s on, later than the \
+                             {} s allowed",
+                            s.band, s.within_s
+                        )),
+                        None => Some(format!(
+                            "{name} was still more than {} from its set point {setpoint} at the end of the run",
+                            s.band
+                        )),
+                    };
+                    let measured = at.map_or("never settled".to_string(), |a| format!("settled at {a:.2} s"));
+                    (measured, failure, at.unwrap_or(f64::INFINITY))
+                }
+                "overshoot_max" => {
+                    let (over, max) = (crate::summary::overshoot(&x, setpoint), c.overshoot_max.expect("asked"));
+                    let failure = (over > max).then(|| {
+                        format!("{name} went {} past its set point {setpoint}, more than the {max} allowed", figure(over))
+                    });
+                    (figure(over), failure, over)
+                }
+                "final_error_max" => {
+                    let e = x.last().map_or(f64::INFINITY, |v| (v - setpoint).abs());
+                    let e = if e.is_nan() { f64::INFINITY } else { e };
+                    let max = c.final_error_max.expect("asked");
+                    let failure = (e > max).then(|| {
+                        format!("{name} ended {} from its set point {setpoint}, more than the {max} allowed", figure(e))
+                    });
+                    (figure(e), failure, e)
+                }
+                "max" | "min" => {
+                    let upper = key == "max";
+                    let bound = if upper { c.max } else { c.min }.expect("asked");
+                    let (v, at) = extreme(upper).unwrap_or((f64::NAN, 0.0));
+                    let beyond = v.is_nan() || if upper { v > bound } else { v < bound };
+                    let word = if upper { "above" } else { "below" };
+                    let failure = beyond.then(|| format!("{name} reached {} at {at:.2} s, {word} the {bound} allowed", figure(v)));
+                    let excess = if upper { v - bound } else { bound - v };
+                    (format!("{} at {at:.2} s", figure(v)), failure, excess)
+                }
+                "abs_max" => {
+                    let a = c.abs_max.expect("asked");
+                    let peak = t
+                        .iter()
+                        .zip(&x)
+                        .filter(|(ti, _)| **ti >= a.after_s)
+                        .map(|(ti, v)| (if v.is_nan() { f64::INFINITY } else { v.abs() }, *ti))
+                        .max_by(|p, q| p.0.total_cmp(&q.0));
+                    match peak {
+                        None => return no_evidence(&label(key), limit, "the trace ends before `after_s`"),
+                        Some((v, at)) => {
+                            let failure = (v > a.max).then(|| {
+                                format!(
+                                    "|{name}| reached {} at {at:.2} s, after the {} s by which it should stay within {}",
+                                    figure(v),
+                                    a.after_s,
+                                    a.max
+                                )
+                            });
+                            (format!("{} at {at:.2} s", figure(v)), failure, v)
+                        }
+                    }
+                }
+                _ => {
+                    let threshold = c.oscillation_max.expect("asked");
+                    let o = crate::summary::oscillation_above(name, &t, &x, threshold);
+                    let failure = o.sustained.then(|| {
+                        format!(
+                            "{name} did not come to rest: +-{} every {:.2} s in the last 3 s of the run, not decaying",
+                            figure(o.amplitude),
+                            o.period_s
+                        )
+                    });
+                    let measured = if o.sustained {
+                        format!("+-{} every {:.2} s", figure(o.amplitude), o.period_s)
+                    } else {
+                        format!("none sustained (swing +-{})", figure(o.amplitude))
+                    };
+                    (measured, failure, o.amplitude)
+                }
+            };
+            judgement(&label(key), measured, limit, failure).with_value(value)
+        })
+        .collect()
 }
 
 fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement {
@@ -126,20 +270,11 @@ fn overshoot_max(scenario: &Scenario, trace: Option<&Trace>, max: f64) -> Judgem
     let limit = format!("{max} deg");
     let Some(trace) = trace else { return no_evidence("overshoot_max_deg", limit, "no trace was logged") };
     // Past the set point in the direction of the step; an axis already at its set point has no step to overshoot.
+    // An axis already at its set point has no step to overshoot: left out.
     let worst = angles(scenario, trace)
         .into_iter()
-        .filter_map(|(name, setpoint, x)| {
-            let step = setpoint - x.first()?;
-            // f64::signum gives 1 for 0: an axis without a step is left out explicitly.
-            let direction = if step > 0.0 { 1.0 } else { -1.0 };
-            (step != 0.0).then(|| {
-                let over = x
-                    .iter()
-                    .map(|v| (v - setpoint) * direction)
-                    .fold(0.0_f64, |m, v| if v.is_nan() { f64::INFINITY } else { m.max(v) });
-                (name, over)
-            })
-        })
+        .filter(|(_, setpoint, x)| x.first().is_some_and(|first| setpoint - first != 0.0))
+        .map(|(name, setpoint, x)| (name, crate::summary::overshoot(&x, setpoint)))
         .max_by(|a, b| a.1.total_cmp(&b.1));
     let (axis, over) = worst.unwrap_or(("-", 0.0));
     let failure = (over > max).then(|| {
@@ -278,6 +413,85 @@ mod tests {
         let mut t = Trace::new(["t_s", "phi_deg", "theta_deg", "psi_deg"].map(String::from).to_vec());
         t.rows = rows.iter().enumerate().map(|(k, r)| vec![k as f64 * 0.01, r[0], r[1], r[2]]).collect();
         t
+    }
+
+    /// A scenario with `alt_ft = 4000` among its set points, and a trace of `alt_ft` at 0.01 s steps.
+    fn altitude(values: &[f64]) -> (Scenario, Trace) {
+        let mut s = Scenario::embedded_default();
+        s.setpoint.outputs.insert("alt_ft".into(), 4000.0);
+        let mut t = Trace::new(["t_s", "alt_ft"].map(String::from).to_vec());
+        t.rows = values.iter().enumerate().map(|(k, v)| vec![k as f64 * 0.01, *v]).collect();
+        (s, t)
+    }
+
+    fn criteria(toml_table: &str) -> Criteria {
+        toml::from_str(&format!("[outputs.alt_ft]\n{toml_table}")).unwrap()
+    }
+
+    fn judged(c: &Criteria, s: &Scenario, t: &Trace) -> Vec<(String, bool, String)> {
+        judge_flight(c, s, Some(t), None).into_iter().map(|j| (j.criterion, j.passed, j.measured)).collect()
+    }
+
+    #[test]
+    fn a_named_output_is_judged_against_its_own_set_point_in_its_own_unit() {
+        // A climb from 3,900 ft past 4,000 to 4,030, settling at 4,002 from 0.04 s on.
+        let (s, t) = altitude(&[3900.0, 3980.0, 4030.0, 4010.0, 4002.0, 4002.0, 4001.5]);
+        let c = criteria(
+            "settled = { within_s = 0.05, band = 5.0 }\novershoot_max = 20.0\nfinal_error_max = 1.0\nmax = 4050.0\n\
+             min = 3800.0\nabs_max = { after_s = 0.03, max = 4020.0 }",
+        );
+        let j = judged(&c, &s, &t);
+        let keys: Vec<&str> = j.iter().map(|(k, _, _)| k.as_str()).collect();
+        assert_eq!(
+            keys,
+            [
+                "outputs.alt_ft.settled",
+                "outputs.alt_ft.overshoot_max",
+                "outputs.alt_ft.final_error_max",
+                "outputs.alt_ft.max",
+                "outputs.alt_ft.min",
+                "outputs.alt_ft.abs_max"
+            ]
+        );
+        assert_eq!(j[0], ("outputs.alt_ft.settled".into(), true, "settled at 0.04 s".into()));
+        assert_eq!((j[1].1, j[1].2.as_str()), (false, "30.00"), "30 ft past 4,000 on the way up");
+        assert_eq!((j[2].1, j[2].2.as_str()), (false, "1.50"));
+        assert_eq!((j[3].1, j[4].1), (true, true));
+        assert_eq!((j[5].1, j[5].2.as_str()), (true, "4010.00 at 0.03 s"));
+        let tight = criteria("max = 4020.0\nmin = 3950.0\nsettled = { within_s = 0.02, band = 5.0 }");
+        let j = judged(&tight, &s, &t);
+        assert!(j.iter().all(|(_, passed, _)| !passed), "{j:?}");
+        // An output the trace lacks fails, naming what the trace has.
+        let mut no_alt = criteria("max = 1.0");
+        no_alt.outputs = [("vt_mps".to_string(), no_alt.outputs["alt_ft"].clone())].into();
+        let missing = judge_flight(&no_alt, &s, Some(&t), None);
+        assert!(!missing[0].passed);
+        assert!(missing[0].why_failed.as_ref().unwrap().contains("no column `vt_mps`; its columns: t_s, alt_ft"));
+    }
+
+    #[test]
+    fn a_named_output_that_keeps_swinging_fails_its_oscillation_bound() {
+        // 4,000 ft +- 12 ft at 1 Hz for 6 s: sustained beyond 10 ft, within 15.
+        let values: Vec<f64> =
+            (0..600).map(|k| 4000.0 + 12.0 * (2.0 * std::f64::consts::PI * k as f64 * 0.01).sin()).collect();
+        let (s, t) = altitude(&values);
+        let j = judged(&criteria("oscillation_max = 10.0"), &s, &t);
+        assert!(!j[0].1 && j[0].2.starts_with("+-12.00 every 1.00 s"), "{j:?}");
+        assert!(judged(&criteria("oscillation_max = 15.0"), &s, &t)[0].1);
+    }
+
+    #[test]
+    fn criteria_on_named_outputs_are_checked_before_anything_flies() {
+        let s = Scenario::embedded_default();
+        let e = |table: &str| criteria(table).validate_flight(10.0, &s.setpoint).unwrap_err();
+        assert!(e("settled = { within_s = 2.0, band = 5.0 }").contains("add `alt_ft = ...` to [setpoint]"));
+        assert!(e("min = 5.0\nmax = 1.0").contains("`criteria.outputs.alt_ft.min` (5) must be below"));
+        assert!(e("abs_max = { after_s = 20.0, max = 1.0 }").contains("abs_max.after_s` must be within 0..10"));
+        assert!(e("oscillation_max = -1.0").contains("`criteria.outputs.alt_ft.oscillation_max` must be a positive"));
+        let empty: Criteria = toml::from_str("[outputs.alt_ft]\n").unwrap();
+        assert!(empty.validate_flight(10.0, &s.setpoint).unwrap_err().contains("sets no criterion"));
+        assert!(toml::from_str::<Criteria>("[outputs.alt_ft]\nmaximum = 3.0\n").is_err(), "unknown keys refused");
+        criteria("max = 4100.0").validate_flight(10.0, &s.setpoint).unwrap();
     }
 
     #[test]

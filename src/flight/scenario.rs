@@ -29,7 +29,8 @@ pub struct Scenario {
     /// of your own takes its start values from `[plant.parameters]`.
     #[serde(default)]
     pub initial: InitialCondition,
-    /// Attitude set points.
+    /// Set points: the F-16 controller's attitude, and any other output by name.
+    #[serde(default)]
     pub setpoint: Setpoint,
     /// Disturbance on the Euler-angle accelerations.
     #[serde(default)]
@@ -131,16 +132,43 @@ pub enum InitialMode {
     Trim,
 }
 
-/// Constant attitude set points, deg.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// Constant set points: the attitude our controller flies (`phi_deg`, `theta_deg`, `psi_deg`, 0 when not given),
+/// and any other plant output by its name, in that output's unit (`alt_ft = 4000.0`), which a controller of your
+/// own reads by name and the criteria judge against.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Setpoint {
     /// Roll, deg.
+    #[serde(default)]
     pub phi_deg: f64,
     /// Pitch, deg.
+    #[serde(default)]
     pub theta_deg: f64,
     /// Heading, deg.
+    #[serde(default)]
     pub psi_deg: f64,
+    /// Set points of other outputs, by output name.
+    #[serde(flatten)]
+    pub outputs: BTreeMap<String, f64>,
+}
+
+impl Setpoint {
+    /// The set point of output `name`, if the scenario gives one (the three angles always).
+    pub fn get(&self, name: &str) -> Option<f64> {
+        match name {
+            "phi_deg" => Some(self.phi_deg),
+            "theta_deg" => Some(self.theta_deg),
+            "psi_deg" => Some(self.psi_deg),
+            _ => self.outputs.get(name).copied(),
+        }
+    }
+
+    /// Every set point, the three angles first.
+    pub fn all(&self) -> Vec<(&str, f64)> {
+        [("phi_deg", self.phi_deg), ("theta_deg", self.theta_deg), ("psi_deg", self.psi_deg)]
+            .into_iter()
+            .chain(self.outputs.iter().map(|(k, v)| (k.as_str(), *v)))
+            .collect()
+    }
 }
 
 /// d(t) = amplitude * sin(frequency * t) on the chosen Euler-angle accelerations.
@@ -392,24 +420,28 @@ impl Scenario {
     }
 }
 
-/// The F-16's inputs as `[actuators.<input>]` names them, with the travel each may be given.
-const F16_ACTUATORS: [(&str, (f64, f64)); 4] = [
-    ("aileron_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
-    ("elevator_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
-    ("rudder_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
-    ("throttle", (0.0, 1.0)),
+/// The F-16's inputs as `[actuators.<input>]` names them (its input's name, or the key its scenarios have always
+/// used), with the travel each may be given.
+const F16_ACTUATORS: [(&str, &str, (f64, f64)); 4] = [
+    ("aileron", "aileron_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
+    ("elevator", "elevator_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
+    ("rudder", "rudder_deg", (-SURFACE_CMD_LIMIT_DEG, SURFACE_CMD_LIMIT_DEG)),
+    ("throttle", "throttle", (0.0, 1.0)),
 ];
 
 impl Scenario {
     /// The F-16's four actuators: those `[actuators]` names, the book's for the others.
     pub fn f16_actuators(&self) -> ActuatorSetLimits {
         let book = ActuatorSetLimits::default();
-        let get = |name: &str, default: ActuatorLimits| self.actuators.get(name).copied().unwrap_or(default);
+        let get = |k: usize, default: ActuatorLimits| {
+            let (input, key, _) = F16_ACTUATORS[k];
+            self.actuators.get(input).or_else(|| self.actuators.get(key)).copied().unwrap_or(default)
+        };
         ActuatorSetLimits {
-            aileron_deg: get("aileron_deg", book.aileron_deg),
-            elevator_deg: get("elevator_deg", book.elevator_deg),
-            rudder_deg: get("rudder_deg", book.rudder_deg),
-            throttle: get("throttle", book.throttle),
+            aileron_deg: get(0, book.aileron_deg),
+            elevator_deg: get(1, book.elevator_deg),
+            rudder_deg: get(2, book.rudder_deg),
+            throttle: get(3, book.throttle),
         }
     }
 
@@ -418,14 +450,25 @@ impl Scenario {
     /// On error (dotted key, problem).
     pub fn check_for_f16(&self) -> Result<(), (String, String)> {
         for (name, a) in &self.actuators {
-            let Some((_, travel)) = F16_ACTUATORS.iter().find(|(n, _)| n == name) else {
-                let names: Vec<&str> = F16_ACTUATORS.iter().map(|(n, _)| *n).collect();
+            let Some((input, key, travel)) = F16_ACTUATORS.iter().find(|(i, k, _)| i == name || k == name) else {
+                let names: Vec<&str> = F16_ACTUATORS.iter().map(|(i, _, _)| *i).collect();
                 return Err((
                     format!("actuators.{name}"),
                     format!("the F-16 has no input `{name}`; its inputs: {}", names.join(", ")),
                 ));
             };
+            if input != key && self.actuators.contains_key(*input) && self.actuators.contains_key(*key) {
+                return Err((format!("actuators.{key}"), format!("is `actuators.{input}` again: give one of the two")));
+            }
             a.validate(*travel).map_err(|e| (format!("actuators.{name}"), e))?;
+        }
+        let outputs: Vec<String> =
+            crate::f16_signals::f16_signals([0.0; 4]).outputs.into_iter().map(|o| o.name).collect();
+        if let Some(name) = self.setpoint.outputs.keys().find(|n| !outputs.contains(n)) {
+            return Err((
+                format!("setpoint.{name}"),
+                format!("the F-16 has no output `{name}`; its outputs: {}", outputs.join(", ")),
+            ));
         }
         if let Some(name) = self.plant.parameters.keys().next() {
             return Err((
@@ -537,6 +580,18 @@ impl Scenario {
         {
             return err("initial.throttle", format!("must be within 0..1, got {t}"));
         }
+        for (name, v) in &self.setpoint.outputs {
+            if !crate::signals::valid_name(name) {
+                return err(
+                    &format!("setpoint.{name}"),
+                    format!(
+                        "is not an output name: use 1..={} of ASCII letters, digits and '_'",
+                        crate::signals::MAX_NAME_LEN
+                    ),
+                );
+            }
+            finite(&format!("setpoint.{name}"), *v)?;
+        }
         for (key, v, limit) in [
             ("setpoint.phi_deg", self.setpoint.phi_deg, 90.0),
             ("setpoint.theta_deg", self.setpoint.theta_deg, 60.0),
@@ -628,7 +683,7 @@ impl Scenario {
                         .into(),
                 );
             }
-            c.validate_flight(t.duration_s).map_err(|e| ("criteria".to_string(), e))?;
+            c.validate_flight(t.duration_s, &self.setpoint).map_err(|e| ("criteria".to_string(), e))?;
         }
         self.validate_dispersions()?;
         Ok(())

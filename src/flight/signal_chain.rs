@@ -65,6 +65,14 @@ impl SignalChain {
             })?;
             actuators[k] = Some(Actuator::new(*limits, initial_inputs[k]));
         }
+        // A set point is in an output's own unit, so it must name one (the attitude our controller flies excepted:
+        // it is always there, 0 when not given).
+        if let Some(name) = scenario.setpoint.outputs.keys().find(|n| !output_names.contains(&n.as_str())) {
+            return Err((
+                format!("setpoint.{name}"),
+                format!("plant {} has no output `{name}`; its outputs: {}", plant.plant, output_names.join(", ")),
+            ));
+        }
         let plant_label = format!("plant {}", plant.plant);
         let (mut sensor_faults, mut input_faults) = (Vec::new(), Vec::new());
         for (i, f) in scenario.faults.iter().enumerate() {
@@ -192,9 +200,8 @@ mod tests {
     }
 
     fn scenario(extra: &str) -> Scenario {
-        let text = format!(
-            "name = \"t\"\n[setpoint]\nphi_deg = 0.0\ntheta_deg = 0.0\npsi_deg = 0.0\n[timing]\ndt_s = 0.01\nduration_s = 2.0\ncommand_timing = \"next-tick\"\n{extra}"
-        );
+        let text =
+            format!("name = \"t\"\n[timing]\ndt_s = 0.01\nduration_s = 2.0\ncommand_timing = \"next-tick\"\n{extra}");
         Scenario::from_toml(&text, "test").unwrap()
     }
 
@@ -252,6 +259,10 @@ mod tests {
         let e = SignalChain::new(&s, &plant(), &[0.0, 0.0]).unwrap_err();
         assert_eq!(e.0, "actuators.flap");
         assert!(e.1.contains("plant toy has no input `flap`; its inputs: u, w"), "{}", e.1);
+        let s = scenario("[setpoint]\naltitude = 3.0\n");
+        let e = SignalChain::new(&s, &plant(), &[0.0, 0.0]).unwrap_err();
+        assert_eq!(e.0, "setpoint.altitude");
+        assert!(e.1.contains("plant toy has no output `altitude`; its outputs: x, v"), "{}", e.1);
         let s = scenario("[actuators.u]\nmin = -2.0\nmax = 1.0\n");
         let e = SignalChain::new(&s, &plant(), &[0.0, 0.0]).unwrap_err();
         assert!(e.1.contains("within -1..1") && e.1.contains("announced range of input u"), "{}", e.1);

@@ -32,6 +32,24 @@ pub struct AngleFigures {
     pub settle_within_2pct_s: Option<f64>,
 }
 
+/// One output with a set point of its own (`[setpoint] alt_ft = 4000.0`; the F-16's angles are [`AngleFigures`]),
+/// in that output's unit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OutputFigures {
+    /// The output's name (a trace column).
+    pub name: String,
+    /// Set point.
+    pub setpoint: f64,
+    /// Value at t = 0 (NaN: the trace has no such column).
+    pub initial: f64,
+    /// Value at the end.
+    pub final_value: f64,
+    /// Time after which it stays within 2 % of the step (|set point - initial|), s; `None` if it never does.
+    pub settle_within_2pct_s: Option<f64>,
+    /// Largest excursion past the set point in the direction of the step (0 without a step).
+    pub overshoot: f64,
+}
+
 /// One control surface.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SurfaceFigures {
@@ -114,6 +132,9 @@ pub struct Summary {
     pub limit_cycle: bool,
     /// phi, theta, psi channels of a sliding-mode controller (empty for a controller without S diagnostics).
     pub channels: Vec<ChannelFigures>,
+    /// Outputs with set points of their own, in name order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outputs: Vec<OutputFigures>,
 }
 
 /// Amplitude above which an oscillation of `signal` counts: 0.1 deg for angles, 0.5 deg for surfaces.
@@ -146,6 +167,25 @@ fn rms(values: impl Iterator<Item = f64>) -> f64 {
 }
 
 fn oscillation(signal: &str, t: &[f64], x: &[f64]) -> Oscillation {
+    oscillation_above(signal, t, x, limit_cycle_threshold(signal))
+}
+
+/// Largest excursion of `x` past `setpoint` in the direction of the step from its first value (0 without a step;
+/// infinite once a value is NaN, a flight that is no longer a number).
+pub fn overshoot(x: &[f64], setpoint: f64) -> f64 {
+    let Some(first) = x.first() else { return 0.0 };
+    let step = setpoint - first;
+    if step == 0.0 {
+        return 0.0;
+    }
+    // f64::signum gives 1 for 0: the step's direction is taken explicitly.
+    let direction = if step > 0.0 { 1.0 } else { -1.0 };
+    x.iter().map(|v| (v - setpoint) * direction).fold(0.0_f64, |m, v| if v.is_nan() { f64::INFINITY } else { m.max(v) })
+}
+
+/// The oscillation of `x` in the last [`LIMIT_CYCLE_WINDOW_S`], sustained when it swings at least `threshold` (in
+/// the signal's unit) either way, at least two whole periods, without decaying.
+pub fn oscillation_above(signal: &str, t: &[f64], x: &[f64], threshold: f64) -> Oscillation {
     let t_end = t.last().copied().unwrap_or(0.0);
     let start = t.iter().position(|v| *v >= t_end - LIMIT_CYCLE_WINDOW_S).unwrap_or(0);
     let (tw, xw) = (&t[start..], &x[start..]);
@@ -182,7 +222,7 @@ fn oscillation(signal: &str, t: &[f64], x: &[f64]) -> Oscillation {
     let swing =
         |s: &[f64]| s.iter().fold(f64::NEG_INFINITY, |a, v| a.max(*v)) - s.iter().fold(f64::INFINITY, |a, v| a.min(*v));
     let not_decaying = half > 0 && swing(&xw[half..]) >= 0.5 * swing(&xw[..half]);
-    let sustained = crossings.len() >= 4 && amplitude >= limit_cycle_threshold(signal) && not_decaying;
+    let sustained = crossings.len() >= 4 && amplitude >= threshold && not_decaying;
     Oscillation { signal: signal.into(), amplitude, period_s, sustained }
 }
 
@@ -204,6 +244,22 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
                 final_deg: x.last().copied().unwrap_or(f64::NAN),
                 settle_within_0p5deg_s: settle_time(&t, &x, *setpoint_deg, 0.5),
                 settle_within_2pct_s: settle_time(&t, &x, *setpoint_deg, 0.02 * step),
+            }
+        })
+        .collect();
+    let outputs: Vec<OutputFigures> = sp
+        .outputs
+        .iter()
+        .map(|(name, setpoint)| {
+            let x = col(trace, name);
+            let initial = x.first().copied().unwrap_or(f64::NAN);
+            OutputFigures {
+                name: name.clone(),
+                setpoint: *setpoint,
+                initial,
+                final_value: x.last().copied().unwrap_or(f64::NAN),
+                settle_within_2pct_s: settle_time(&t, &x, *setpoint, 0.02 * (setpoint - initial).abs()),
+                overshoot: overshoot(&x, *setpoint),
             }
         })
         .collect();
@@ -297,6 +353,7 @@ pub fn summarize(trace: &Trace, scenario: &Scenario) -> Summary {
         limit_cycle: oscillations.iter().any(|o| o.sustained),
         oscillations,
         channels,
+        outputs,
     }
 }
 
@@ -322,6 +379,20 @@ impl Summary {
                 a.final_deg,
                 opt_s(a.settle_within_0p5deg_s),
                 opt_s(a.settle_within_2pct_s)
+            );
+        }
+        if !self.outputs.is_empty() {
+            out += "  output        set       initial   final     overshoot  settle(2%)\n";
+        }
+        for o in &self.outputs {
+            out += &format!(
+                "  {:<12} {:>9.3} {:>9.3} {:>9.3} {:>9.3}  {:>10}\n",
+                o.name,
+                o.setpoint,
+                o.initial,
+                o.final_value,
+                o.overshoot,
+                opt_s(o.settle_within_2pct_s)
             );
         }
         // A plant of the user's own may have no such column (NaN): its line is left out rather than printed as NaN.

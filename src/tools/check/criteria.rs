@@ -75,7 +75,7 @@ impl RigCriteria for Criteria {
                 }
             }
         }
-        self.validate_flight(duration)?;
+        self.validate_flight(duration, &scenario.setpoint)?;
         if let Some(t) = self.recovered_within_s {
             positive("recovered_within_s", t)?;
             if comebacks(scenario, None).is_empty() {
