@@ -83,8 +83,16 @@ fn a_python_plant_flies_lockstep_with_the_example_controller_unchanged() {
     assert_eq!(rows.len(), 1001);
     let theta = rows.last().unwrap()[2];
     assert!((theta - 10.0).abs() < 1.0, "theta ends at {theta}, set point 10");
-    // The figures of the F-16's states do not fit this plant: said, not failed.
+    // The figures of the F-16's states do not fit this plant: said, not failed; the signals figure shows its own.
     assert!(r.stdout.contains("not drawn: the plant's trace has no column `alpha_deg`"), "{}", r.stdout);
+    for file in ["signals.png", "signals.svg"] {
+        let bytes = std::fs::read(r.out.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert!(bytes.len() > 10_000, "{file}: {} bytes", bytes.len());
+    }
+    let svg = std::fs::read_to_string(r.out.join("signals.svg")).unwrap();
+    for caption in ["theta_deg (set point 10, dashed)", "elevator command", "deg/s"] {
+        assert!(svg.contains(caption), "{caption} missing from signals.svg");
+    }
     r.finish();
 }
 

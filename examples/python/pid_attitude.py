@@ -22,7 +22,7 @@ from silrig_client import Controller, serve
 # Per plant: KP (per deg), KD (per deg/s), KI (per deg*s) and the travel each command is kept within, each for
 # (aileron, elevator, rudder).
 F16 = ((2.0, 4.0, 8.0), (0.6, 1.5, 3.0), (1.5, 3.0, 8.0), (21.5, 25.0, 30.0))  # deg of surface
-C172 = ((-0.04, 0.3, 0.3), (-0.02, 0.15, 0.15), (-0.02, 0.2, 0.1), (1.0, 1.0, 1.0))  # normalized command
+C172 = ((-0.04, 0.15, 0.3), (-0.02, 0.05, 0.15), (-0.02, 0.08, 0.1), (1.0, 1.0, 1.0))  # normalized command
 GAINS = {"f16": F16, "c172x": C172}
 ANGLES = ("phi_deg", "theta_deg", "psi_deg")
 RATES = ("p_dps", "q_dps", "r_dps")

@@ -167,14 +167,14 @@ pub(crate) fn write_plots(
         // Rows without a command (a lost controller) have NaN command columns, which the plots skip.
         let f_true = silrig_flight::f_true::from_trace(&trace, scenario);
         match silrig_plot::plot_closed_loop(&trace, f_true.as_ref(), out, &silrig_plot::plot_title(scenario)) {
-            // A plant of the user's own names its signals itself: the F-16's states figure may not fit it. The
-            // trace and the recording hold every signal; a figure of any plant's outputs is not drawn yet.
+            // A plant of the user's own names its signals itself: the F-16's states figure may not fit it; the
+            // signals figure below shows every one of its signals.
             Err(silrig_plot::PlotError::MissingColumn { column, file, .. })
                 if !silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) =>
             {
                 println!(
                     "figures: {} not drawn: the plant's trace has no column `{column}` (the closed-loop figures show \
-                     the F-16's states)",
+                     the F-16's states; signals.png shows this plant's)",
                     file.display()
                 );
             }
@@ -182,6 +182,12 @@ pub(crate) fn write_plots(
                 other?;
             }
         }
+        // The units are in the plant's announcement, which the recording keeps (a run without one draws bare names).
+        let plant = silrig_wire::recording::reader::RecordedRun::read(out).ok().and_then(|r| r.plant_signals().ok());
+        let plant_name = plant.as_ref().map_or(String::new(), |p| format!(", plant {}", p.plant));
+        let title = format!("{}{plant_name}: every signal, commands in orange", scenario.name);
+        let setpoint = |name: &str| scenario.setpoint.get(name);
+        silrig_plot::plot_signals(&trace, plant.as_ref(), &setpoint, out, "signals", &title)?;
     }
     let mut series: Vec<(String, Vec<(f64, f64)>)> = report
         .processes

@@ -12,7 +12,8 @@
 //!
 //! The engine: `figure.rs` (the data), `axis.rs`, `layout.rs` (pixel sizes) and `render.rs` (both backends, the font,
 //! the files). Each figure family is one file that turns trace columns (`columns.rs`) into figures: `closed_loop.rs`,
-//! `smc_rbf.rs`, `overlay.rs`, `latency.rs`, `timeline.rs`, `sweep.rs`.
+//! `smc_rbf.rs`, `overlay.rs`, `latency.rs`, `timeline.rs`, `sweep.rs`, and `signals.rs` (any plant's outputs and
+//! commands by name).
 
 use silrig_flight::scenario::Scenario;
 use std::path::PathBuf;
@@ -25,6 +26,7 @@ mod latency;
 mod layout;
 mod overlay;
 mod render;
+mod signals;
 mod smc_rbf;
 mod sweep;
 mod timeline;
@@ -32,6 +34,7 @@ mod timeline;
 pub use closed_loop::plot_closed_loop;
 pub use latency::{plot_latency_histograms, plot_percentile_distributions};
 pub use overlay::plot_overlay;
+pub use signals::plot_signals;
 pub use sweep::{Envelope, Histogram, Scatter, plot_envelope, plot_histograms, plot_scatter};
 pub use timeline::plot_timeline;
 
