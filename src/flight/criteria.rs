@@ -255,16 +255,16 @@ impl Criteria {
         RIG_CRITERIA.iter().zip(set).filter(|(_, on)| *on).map(|(k, _)| *k).collect()
     }
 
-    /// Refuse flight criteria that cannot be judged over a run of `duration_s` with these set points (an output's
-    /// settling, overshoot and final error need its set point).
-    pub fn validate_flight(&self, duration_s: f64, setpoint: &crate::scenario::Setpoint) -> Result<(), String> {
+    /// Refuse flight criteria that cannot be judged over a run of `duration_s`; `has_setpoint` says whether the
+    /// scenario gives an output a set point (its settling, overshoot and final error need one).
+    pub fn validate_flight(&self, duration_s: f64, has_setpoint: &dyn Fn(&str) -> bool) -> Result<(), String> {
         for (name, c) in &self.outputs {
             let at = format!("outputs.{name}");
             if !crate::signals::valid_name(name) {
                 return Err(format!("`criteria.{at}`: `{name}` is not an output name"));
             }
             c.validate(&at, duration_s)?;
-            if c.needs_setpoint() && setpoint.get(name).is_none() {
+            if c.needs_setpoint() && !has_setpoint(name) {
                 return Err(format!(
                     "`criteria.{at}` judges against a set point, and the scenario gives none: add `{name} = ...` to \
                      [setpoint]"

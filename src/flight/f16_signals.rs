@@ -1,13 +1,55 @@
-//! The F-16 as one plant among others: its announcement ([`f16_signals`]), the outputs of a snapshot in that order
-//! ([`f16_outputs`]) and, for a controller built for the F-16 such as the paper's, the snapshot read back from any
+//! The F-16 as one plant among others: what it reports each tick ([`PlantSnapshot`], [`measured_columns`]), its
+//! announcement ([`f16_signals`]), the outputs of a snapshot in that order ([`f16_outputs`]) and, for a controller built for the F-16 such as the paper's, the snapshot read back from any
 //! plant's outputs by name ([`F16Outputs`]). Its traced outputs are the trace's plant columns of old, so every
 //! golden trace keeps its bytes; the 13 states in book units follow untraced, so the paper's controller reads the
 //! very numbers the single-process loop hands it.
 
 use crate::signals::{InputSignal, OutputSignal, PlantSignals};
-use crate::sim::{PlantSnapshot, measured_columns};
 use silrig_model::actuator::SURFACE_CMD_LIMIT_DEG;
 use silrig_model::plant::{F16State, STATE_LEN, STATE_NAMES};
+use silrig_model::units::{M_PER_FT, rad_to_deg};
+
+/// What the plant reports each tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlantSnapshot {
+    /// Tick index.
+    pub tick: u64,
+    /// Simulated time, s.
+    pub t_s: f64,
+    /// The 13 states as measured: the true state plus any active sensor fault (see [`crate::sim::PlantRunner::true_state`]).
+    pub state: F16State,
+    /// Surface positions the actuators hold now: aileron, elevator, rudder, deg. Taken when a tick begins, that is
+    /// the deflection held over the step that ended at t_s (the initial position at tick 0); after
+    /// [`crate::sim::PlantRunner::actuate`], the one for the step that starts at t_s.
+    pub surfaces_deg: [f64; 3],
+    /// Throttle position, 0..1 (as the surfaces).
+    pub throttle: f64,
+    /// Normal load factor at the accelerometer, g, of the true state with these surface positions
+    /// ([`silrig_model::plant::ModelOutputs::nz_g`]).
+    pub nz_g: f64,
+    /// Lateral load factor at the accelerometer, g ([`silrig_model::plant::ModelOutputs::ny_g`]).
+    pub ny_g: f64,
+}
+
+/// What the plant measured at t_k, as the trace shows it (`phi_deg` to `ny_g` of [`crate::trace::LOOP_COLUMNS`]):
+/// also the F-16's first outputs on the wire ([`f16_outputs`]), so both give the same bits.
+pub fn measured_columns(snap: &PlantSnapshot) -> [f64; 12] {
+    let x = &snap.state;
+    [
+        rad_to_deg(x.phi_rad),
+        rad_to_deg(x.theta_rad),
+        rad_to_deg(x.psi_rad),
+        rad_to_deg(x.alpha_rad),
+        rad_to_deg(x.beta_rad),
+        rad_to_deg(x.p_radps),
+        rad_to_deg(x.q_radps),
+        rad_to_deg(x.r_radps),
+        x.vt_fps * M_PER_FT,
+        x.alt_ft,
+        snap.nz_g,
+        snap.ny_g,
+    ]
+}
 
 /// The F-16's plant name.
 pub const PLANT_NAME: &str = "f16";

@@ -30,7 +30,7 @@ use silrig_model::plant::trim::trim_level_flight;
 use silrig_model::plant::{ControlInputs, ExternalForcing, F16Model, F16State, STATE_NAMES, engine};
 use silrig_model::plant::{envelope, envelope::EnvelopeError};
 use silrig_model::rng::SplitMix64;
-use silrig_model::units::{M_PER_FT, deg_to_rad, m_to_ft, rad_to_deg};
+use silrig_model::units::{deg_to_rad, m_to_ft};
 
 /// Why a scenario cannot start.
 #[derive(Debug, thiserror::Error)]
@@ -100,27 +100,7 @@ pub enum SimError {
     },
 }
 
-/// What the plant reports each tick.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlantSnapshot {
-    /// Tick index.
-    pub tick: u64,
-    /// Simulated time, s.
-    pub t_s: f64,
-    /// The 13 states as measured: the true state plus any active sensor fault (see [`PlantRunner::true_state`]).
-    pub state: F16State,
-    /// Surface positions the actuators hold now: aileron, elevator, rudder, deg. Taken when a tick begins, that is
-    /// the deflection held over the step that ended at t_s (the initial position at tick 0); after
-    /// [`PlantRunner::actuate`], the one for the step that starts at t_s.
-    pub surfaces_deg: [f64; 3],
-    /// Throttle position, 0..1 (as the surfaces).
-    pub throttle: f64,
-    /// Normal load factor at the accelerometer, g, of the true state with these surface positions
-    /// ([`silrig_model::plant::ModelOutputs::nz_g`]).
-    pub nz_g: f64,
-    /// Lateral load factor at the accelerometer, g ([`silrig_model::plant::ModelOutputs::ny_g`]).
-    pub ny_g: f64,
-}
+pub use crate::f16_signals::{PlantSnapshot, measured_columns};
 
 /// The actuator positions held over one step, as row k of the trace shows them: the deflections and throttle the
 /// actuators took at t_k, acting until t_k+1.
@@ -228,6 +208,46 @@ fn holding_throttle(model: &F16Model, state: &F16State, surfaces: &ControlInputs
     Ok(0.5 * (lo + hi))
 }
 
+/// What only the built-in F-16 can check: `[actuators]` names its inputs within their travel, sensor and
+/// actuator faults name its channels and surfaces, and `[plant.parameters]` (a plant of your own's) is empty.
+/// On error (dotted key, problem).
+pub fn check_for_f16(s: &Scenario) -> Result<(), (String, String)> {
+    for (name, a) in &s.actuators {
+        let Some((input, key, travel)) = crate::scenario::F16_ACTUATORS.iter().find(|(i, k, _)| i == name || k == name)
+        else {
+            let names: Vec<&str> = crate::scenario::F16_ACTUATORS.iter().map(|(i, _, _)| *i).collect();
+            return Err((
+                format!("actuators.{name}"),
+                format!("the F-16 has no input `{name}`; its inputs: {}", names.join(", ")),
+            ));
+        };
+        if input != key && s.actuators.contains_key(*input) && s.actuators.contains_key(*key) {
+            return Err((format!("actuators.{key}"), format!("is `actuators.{input}` again: give one of the two")));
+        }
+        a.validate(*travel).map_err(|e| (format!("actuators.{name}"), e))?;
+    }
+    let outputs: Vec<String> = crate::f16_signals::f16_signals([0.0; 4]).outputs.into_iter().map(|o| o.name).collect();
+    if let Some(name) = s.setpoint.outputs.keys().find(|n| !outputs.contains(n)) {
+        return Err((
+            format!("setpoint.{name}"),
+            format!("the F-16 has no output `{name}`; its outputs: {}", outputs.join(", ")),
+        ));
+    }
+    if let Some(name) = s.plant.parameters.keys().next() {
+        return Err((
+            format!("plant.parameters.{name}"),
+            "is for a plant of your own (--plant-cmd, --plant external); the F-16's parameters are plant.xcg, \
+             plant.mass_scale and plant.aero_scale"
+                .into(),
+        ));
+    }
+    for (i, f) in s.faults.iter().enumerate() {
+        f.check_names("the F-16", &crate::fault::SENSOR_CHANNELS, &crate::fault::SURFACES)
+            .map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
+    }
+    Ok(())
+}
+
 impl PlantRunner {
     /// The plant at the scenario's initial condition.
     pub fn new(s: &Scenario) -> Result<Self, SetupError> {
@@ -285,7 +305,7 @@ impl PlantRunner {
                 f.validate(s.timing.duration_s).map_err(|(key, problem)| SetupError::Fault { index, key, problem })?;
             }
         }
-        s.check_for_f16().map_err(|(key, problem)| SetupError::NotForF16 { key, problem })?;
+        check_for_f16(s).map_err(|(key, problem)| SetupError::NotForF16 { key, problem })?;
         let (sensor_faults, surface_faults) = plant_model_faults(&s.faults);
         let mut runner = Self {
             model,
@@ -562,26 +582,6 @@ pub fn measurement(s: &PlantSnapshot) -> Measurement {
         vt_fps: s.state.vt_fps,
         alt_ft: s.state.alt_ft,
     }
-}
-
-/// What the plant measured at t_k, as the trace shows it (`phi_deg` to `ny_g` of [`crate::trace::LOOP_COLUMNS`]):
-/// also the F-16's first outputs on the wire ([`crate::f16_signals::f16_outputs`]), so both give the same bits.
-pub fn measured_columns(snap: &PlantSnapshot) -> [f64; 12] {
-    let x = &snap.state;
-    [
-        rad_to_deg(x.phi_rad),
-        rad_to_deg(x.theta_rad),
-        rad_to_deg(x.psi_rad),
-        rad_to_deg(x.alpha_rad),
-        rad_to_deg(x.beta_rad),
-        rad_to_deg(x.p_radps),
-        rad_to_deg(x.q_radps),
-        rad_to_deg(x.r_radps),
-        x.vt_fps * M_PER_FT,
-        x.alt_ft,
-        snap.nz_g,
-        snap.ny_g,
-    ]
 }
 
 /// The loop part of a `trace.csv` row ([`crate::trace::LOOP_COLUMNS`]): the snapshot at t_k, the controller's

@@ -295,7 +295,8 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     // The built-in F-16 is known now; a plant of your own is checked against the signals it announces when it joins
     // (its `[actuators]`, sensor and actuator faults by its own names: `silrig_flight::signal_chain`).
     if opts.plant_cmd.is_none() && opts.plant != PlantKind::External {
-        scenario.check_for_f16().map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
+        silrig_flight::sim::check_for_f16(&scenario)
+            .map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
     }
     for (flag, cmd) in [("controller-cmd", &opts.controller_cmd), ("plant-cmd", &opts.plant_cmd)] {
         let Some(cmd) = cmd else { continue };

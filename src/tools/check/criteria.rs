@@ -75,7 +75,7 @@ impl RigCriteria for Criteria {
                 }
             }
         }
-        self.validate_flight(duration, &scenario.setpoint)?;
+        self.validate_flight(duration, &|name| scenario.setpoint.get(name).is_some())?;
         if let Some(t) = self.recovered_within_s {
             positive("recovered_within_s", t)?;
             if comebacks(scenario, None).is_empty() {
