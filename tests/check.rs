@@ -314,6 +314,7 @@ fn a_malformed_suite_or_an_unrunnable_controller_is_no_verdict() {
         let c = check(&format!("malformed-{i}"), &args);
         assert_eq!(c.code, Some(2), "{suite}: {}{}", c.stdout, c.stderr);
         assert!(c.stderr.contains(message), "{suite}: expected {message:?} in:\n{}", c.stderr);
+        assert_eq!(c.stderr.matches(message).count(), 1, "said once: {}", c.stderr);
         assert!(!c.out.join("check.json").exists(), "nothing judged, nothing written");
         c.finish();
     }

@@ -504,6 +504,8 @@ fn a_full_disk_is_named_with_the_file_and_the_process_and_leaves_every_file_whol
             && logger_error.contains("No space left on device"),
         "{logger_error}"
     );
+    // Each file's error said once, not again as its own cause.
+    assert!(!logger_error.contains("(os error 28): No space left on device"), "said twice: {logger_error}");
     assert!(text.contains("FAILED"), "{text}");
     for entry in std::fs::read_dir(&out).unwrap().flatten() {
         let path = entry.path();

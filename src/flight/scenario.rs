@@ -450,12 +450,12 @@ impl Scenario {
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
     /// The file could not be read.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: String,
         /// The cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// Malformed TOML or an unknown or mistyped key.
     #[error("{origin}: {message}")]
@@ -489,7 +489,7 @@ impl Scenario {
     /// Read, parse and validate a scenario file.
     pub fn load(path: &Path) -> Result<Self, ScenarioError> {
         let text = std::fs::read_to_string(path)
-            .map_err(|source| ScenarioError::Io { path: path.display().to_string(), source })?;
+            .map_err(|cause| ScenarioError::Io { path: path.display().to_string(), cause })?;
         Self::from_toml(&text, &path.display().to_string())
     }
 

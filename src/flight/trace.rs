@@ -73,7 +73,7 @@ pub struct Trace {
 #[derive(Debug, thiserror::Error)]
 pub enum TraceReadError {
     /// I/O failure.
-    #[error("{0}")]
+    #[error(transparent)]
     Io(#[from] std::io::Error),
     /// The file has no header.
     #[error("empty trace file")]

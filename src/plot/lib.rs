@@ -69,20 +69,20 @@ pub enum PlotError {
         problem: String,
     },
     /// The output directory cannot be created.
-    #[error("cannot create the output directory {dir}: {source}")]
+    #[error("cannot create the output directory {dir}: {cause}")]
     CreateDir {
         /// The directory.
         dir: PathBuf,
         /// The I/O error.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// Writing a file failed.
-    #[error("cannot write {file}: {source}")]
+    #[error("cannot write {file}: {cause}")]
     Write {
         /// The file.
         file: PathBuf,
         /// The I/O error.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The plotting backend failed (drawing or PNG encoding).
     #[error("cannot draw {file}: {message}")]

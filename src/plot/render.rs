@@ -252,7 +252,7 @@ fn ensure_font(file: &Path) -> Result<(), PlotError> {
 /// Encode an 8-bit RGB buffer as a PNG file. (The `png` crate directly, rather than plotters' `bitmap_encoder`
 /// feature, which pulls in the whole `image` crate: the largest single crate of a clean build.)
 fn write_png(file: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), PlotError> {
-    let out = std::fs::File::create(file).map_err(|source| PlotError::Write { file: file.to_path_buf(), source })?;
+    let out = std::fs::File::create(file).map_err(|cause| PlotError::Write { file: file.to_path_buf(), cause })?;
     let mut encoder = png::Encoder::new(std::io::BufWriter::new(out), w, h);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
@@ -261,7 +261,7 @@ fn write_png(file: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), PlotErro
         writer.finish()
     });
     encoded.map_err(|e| match e {
-        png::EncodingError::IoError(source) => PlotError::Write { file: file.to_path_buf(), source },
+        png::EncodingError::IoError(cause) => PlotError::Write { file: file.to_path_buf(), cause },
         other => PlotError::Draw { file: file.to_path_buf(), message: format!("PNG encoding: {other}") },
     })
 }
@@ -271,7 +271,7 @@ pub(super) fn write_figure(fig: &Figure, out_dir: &Path, stem: &str) -> Result<V
     let png = out_dir.join(format!("{stem}.png"));
     let svg = out_dir.join(format!("{stem}.svg"));
     ensure_font(&png)?;
-    std::fs::create_dir_all(out_dir).map_err(|source| PlotError::CreateDir { dir: out_dir.to_path_buf(), source })?;
+    std::fs::create_dir_all(out_dir).map_err(|cause| PlotError::CreateDir { dir: out_dir.to_path_buf(), cause })?;
     let lay = layout(fig);
     let draw_error = |file: &Path, message: String| PlotError::Draw { file: file.to_path_buf(), message };
 
@@ -290,6 +290,6 @@ pub(super) fn write_figure(fig: &Figure, out_dir: &Path, stem: &str) -> Result<V
         draw_figure(&root, fig, &lay).map_err(|e| draw_error(&svg, e.to_string()))?;
         root.present().map_err(|e| draw_error(&svg, e.to_string()))?;
     }
-    std::fs::write(&svg, text).map_err(|source| PlotError::Write { file: svg.clone(), source })?;
+    std::fs::write(&svg, text).map_err(|cause| PlotError::Write { file: svg.clone(), cause })?;
     Ok(vec![png, svg])
 }

@@ -45,8 +45,9 @@ pub struct CheckOptions {
 /// Why a check could not judge anything (exit status 2).
 #[derive(Debug, thiserror::Error)]
 pub enum CheckError {
-    /// The suite is malformed, or a case's scenario does not load.
-    #[error("{0}")]
+    /// The suite is malformed, or a case's scenario does not load (transparent: its message is said once, not
+    /// again as its own source).
+    #[error(transparent)]
     Suite(#[from] suite::SuiteError),
     /// A bad command-line argument.
     #[error("{0}")]

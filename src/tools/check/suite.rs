@@ -86,12 +86,12 @@ pub struct Case {
 #[derive(Debug, thiserror::Error)]
 pub enum SuiteError {
     /// The file could not be read.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: String,
         /// The cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// Malformed TOML, or an unknown or mistyped key (the parser's message names it).
     #[error("{origin}: {message}")]
@@ -142,7 +142,7 @@ impl Suite {
     /// Read a suite file; scenario paths in it are relative to its folder.
     pub fn load(path: &Path) -> Result<Self, SuiteError> {
         let text = std::fs::read_to_string(path)
-            .map_err(|source| SuiteError::Io { path: path.display().to_string(), source })?;
+            .map_err(|cause| SuiteError::Io { path: path.display().to_string(), cause })?;
         Self::from_toml(&text, Some(path))
     }
 

@@ -135,12 +135,12 @@ pub enum IpcError {
         detail: String,
     },
     /// A sample to be sent failed validation.
-    #[error("stream `{stream}`: refusing to send an invalid sample: {source}")]
+    #[error("stream `{stream}`: refusing to send an invalid sample: {cause}")]
     InvalidSample {
         /// Stream label.
         stream: &'static str,
         /// What is wrong.
-        source: WireError,
+        cause: WireError,
     },
     /// Loan, send, notify or receive failed.
     #[error("stream `{stream}`: {op} failed: {detail}")]

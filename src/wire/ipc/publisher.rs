@@ -62,7 +62,7 @@ impl<T: WireSample> StreamPublisher<T> {
     }
 
     fn transmit(&mut self, mut out: T) -> Result<SendReceipt, IpcError> {
-        out.validate().map_err(|source| IpcError::InvalidSample { stream: self.stream, source })?;
+        out.validate().map_err(|cause| IpcError::InvalidSample { stream: self.stream, cause })?;
         let loan = self.publisher.loan_uninit().map_err(|e| IpcError::Transfer {
             stream: self.stream,
             op: "loan",
