@@ -343,6 +343,16 @@ fn a_controller_that_never_answers_leaves_the_plant_in_failsafe() {
 }
 
 #[test]
+fn a_controller_that_never_answers_in_lockstep_fails_the_run_and_the_plant_says_why_in_its_report() {
+    let r = run("never-lockstep", &["--mode", "lockstep", "--controller-cmd", &misbehaving("never"), &robust()]);
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    let plant = r.report["processes"].as_array().unwrap().iter().find(|p| p["process"] == "plant").unwrap().clone();
+    let ended = plant["ended"].as_str().unwrap();
+    assert!(ended.starts_with("error: lockstep: no command for tick 0 within"), "{ended}");
+    r.finish();
+}
+
+#[test]
 fn a_controller_asking_for_a_signal_the_plant_lacks_is_told_what_the_plant_has() {
     let r = run("missing", &["--duration-s", "1", "--controller-cmd", &misbehaving("missing"), &robust()]);
     assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);

@@ -268,6 +268,10 @@ fn malformed_fault_plans_are_rejected_naming_the_problem() {
     bad(&["--fault", "controller:kill@60s"], "beyond the run");
     bad(&["--fault", "controller:stop@1s"], "duration_s");
     bad(&["--mode", "lockstep", "--fault", "controller:kill@1s"], "needs realtime mode");
+    bad(
+        &["--fault", "controller:kill@1s", "--fault", "controller:kill@1s"],
+        "`faults[1]`: controller kill at 1 s is faults[0] again: give it once",
+    );
     let dir = temp_dir("plan");
     let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robust.toml")).unwrap()
         + "\n[[faults]]\nat_s = 1.0\ntarget = \"controller\"\naction = \"kill\"\nrestart = true\n";

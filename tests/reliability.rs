@@ -217,9 +217,13 @@ fn two_runs_started_together_never_share_a_folder_or_a_run_id() {
                 || stderr.contains("is in use by live processes"),
             "{stderr}"
         );
-        let winner = if a.status.success() { &out1 } else { &out2 };
+        let (winner, loser) = if a.status.success() { (&out1, &out2) } else { (&out2, &out1) };
         let rows = std::fs::read_to_string(winner.join("trace.csv")).unwrap().lines().count() - 1;
         assert_eq!(rows, 151, "one row per tick, written once");
+        // The refused run leaves no folder of its own behind (in the shared folder, nothing of its own).
+        if loser != winner {
+            assert!(!loser.exists(), "{} left behind", loser.display());
+        }
         no_shared_memory_left(&id1);
         no_shared_memory_left(&id2);
     }

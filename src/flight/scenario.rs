@@ -633,6 +633,10 @@ impl Scenario {
         }
         for (i, f) in self.faults.iter().enumerate() {
             f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
+            // The same fault twice would be injected twice; a plan that means it twice gives two times.
+            if let Some(j) = self.faults[..i].iter().position(|g| g == f) {
+                return err(&format!("faults[{i}]"), format!("{} is faults[{j}] again: give it once", f.describe()));
+            }
         }
         if let Some(c) = &self.criteria {
             if let Some(rig) = c.rig_criteria_set().first() {

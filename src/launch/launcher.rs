@@ -314,7 +314,20 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
         out.display()
     );
+    let created = !out.exists();
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    claim(scenario, run_id, out.clone()).inspect_err(|_| {
+        // A refused run leaves no folder behind: only an empty one it made itself goes (never one that another
+        // run, racing for it, has put anything in).
+        if created {
+            let _ = std::fs::remove_dir(&out);
+        }
+    })
+}
+
+/// Phase 1, once the folder exists: claim it and the run id, clear a crashed run's leftovers, and write the
+/// effective scenario last, so that a refusal leaves the folder as it found it.
+fn claim(scenario: Scenario, run_id: RunId, out: PathBuf) -> anyhow::Result<Prepared> {
     let claims = [
         Claim::take(out.join(".silrig-run.lock"), &format!("the folder {}", out.display()))?,
         Claim::take(PathBuf::from(format!("/tmp/silrig_{run_id}.lock")), &format!("run id {run_id}"))?,
@@ -325,8 +338,6 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
         out.display()
     );
-    let scenario_path = out.join("scenario.toml");
-    std::fs::write(&scenario_path, scenario.to_toml())?;
     let root = run_id.root_dir();
     anyhow::ensure!(
         // Without its trailing slash, so that a file there is seen as one.
@@ -353,6 +364,8 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
             runs.join(", ")
         );
     }
+    let scenario_path = out.join("scenario.toml");
+    std::fs::write(&scenario_path, scenario.to_toml())?;
     Ok(Prepared { scenario, run_id, out, scenario_path, _claims: claims })
 }
 

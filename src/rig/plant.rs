@@ -673,7 +673,8 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         if args.resume {
             plant.resume_from_checkpoint()?;
         }
-        let ended = plant.fly(&mut ports)?;
+        // A plant that gives up (a lockstep peer silent past its timeout) still writes its report, saying why.
+        let ended = plant.fly(&mut ports).unwrap_or_else(|e| format!("error: {e:#}"));
         if ended == "completed" {
             // A controller that was not started by a launcher (`--controller external`) learns here that the run
             // is over.
