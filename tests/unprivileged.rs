@@ -47,7 +47,7 @@ fn silrig_as_user(dir: &Path, args: &[&str]) -> std::process::Output {
     let mut command = if root {
         let mut c = Command::new("sh");
         c.arg("-c")
-            .arg("ulimit -l 8192 && exec setpriv --reuid \"$0\" --regid \"$0\" --clear-groups --inh-caps=-all \"$@\"")
+            .arg("ulimit -l 8192 2>/dev/null; exec setpriv --reuid \"$0\" --regid \"$0\" --clear-groups --inh-caps=-all \"$@\"")
             .arg(NOBODY)
             .arg(&silrig);
         c
