@@ -206,39 +206,45 @@ struct Claim(PathBuf);
 
 impl Claim {
     fn take(path: PathBuf, what: &str) -> anyhow::Result<Self> {
-        for _ in 0..2 {
-            match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
-                Ok(mut f) => {
-                    use std::io::Write;
-                    write!(f, "{}", std::process::id()).with_context(|| format!("writing {}", path.display()))?;
-                    return Ok(Self(path));
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    if let Some(holder) = live_holder(&path) {
-                        anyhow::bail!(
-                            "{what} is taken by another silrig run (pid {holder}): wait for it, or choose another"
-                        );
+        // The claim appears with its pid in it (written beside it, then linked into place: a link never replaces),
+        // so a run that finds it taken can always say by whom.
+        let staged = PathBuf::from(format!("{}.{}", path.display(), std::process::id()));
+        std::fs::write(&staged, std::process::id().to_string())
+            .with_context(|| format!("writing {}", staged.display()))?;
+        let claimed = (|| {
+            for _ in 0..2 {
+                match std::fs::hard_link(&staged, &path) {
+                    Ok(()) => return Ok(Self(path.clone())),
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                        if let Some(holder) = live_holder(&path) {
+                            let who = holder.map_or("pid not written".to_string(), |pid| format!("pid {pid}"));
+                            anyhow::bail!(
+                                "{what} is taken by another silrig run ({who}): wait for it, or choose another"
+                            );
+                        }
+                        // Its launcher died without removing it.
+                        let _ = std::fs::remove_file(&path);
                     }
-                    // Its launcher died without removing it.
-                    let _ = std::fs::remove_file(&path);
+                    Err(e) => return Err(e).with_context(|| format!("creating {}", path.display())),
                 }
-                Err(e) => return Err(e).with_context(|| format!("creating {}", path.display())),
             }
-        }
-        anyhow::bail!("{what}: cannot claim {} (another run keeps taking it)", path.display())
+            anyhow::bail!("{what}: cannot claim {} (another run keeps taking it)", path.display())
+        })();
+        let _ = std::fs::remove_file(&staged);
+        claimed
     }
 }
 
-/// The pid holding a claim file, if that process is alive. A file too fresh to hold a pid yet (its launcher is
-/// between creating and writing it) counts as held.
-fn live_holder(path: &Path) -> Option<i32> {
+/// The holder of a claim file if it is alive: `Some(Some(pid))`; `Some(None)` for a file without a pid (written by
+/// an older silrig) that is too fresh to call abandoned.
+fn live_holder(path: &Path) -> Option<Option<i32>> {
     let holder: Option<i32> = std::fs::read_to_string(path).ok().and_then(|t| t.trim().parse().ok());
     match holder {
         // SAFETY: kill with signal 0 only asks whether the process exists.
-        Some(pid) => (pid > 0 && unsafe { libc::kill(pid, 0) } == 0).then_some(pid),
+        Some(pid) => (pid > 0 && unsafe { libc::kill(pid, 0) } == 0).then_some(Some(pid)),
         None => {
             let age = std::fs::metadata(path).and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
-            age.is_none_or(|a| a < Duration::from_secs(5)).then_some(0)
+            age.is_none_or(|a| a < Duration::from_secs(5)).then_some(None)
         }
     }
 }
