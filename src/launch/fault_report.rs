@@ -1,6 +1,8 @@
 //! The fault report: for every fault of the plan, when it was injected, when and by whom it was detected, when the
 //! failsafe engaged, when the loop recovered, and what was lost on each stream, from the run's event log and the
-//! logger's `timing.csv`. Times are seconds from the plant's tick 0.
+//! logger's `timing.csv`. Times are simulated seconds, as the figures' axes are: an event is placed at the tick the
+//! plant had published when it happened (from `timing.csv`), so a stall or a restart does not shift the marks by the
+//! outage; the injection's wall time from tick 0 is kept beside it.
 
 use serde::{Deserialize, Serialize};
 use silrig_flight::fault::Fault;
@@ -13,8 +15,12 @@ use std::path::Path;
 pub struct FaultRecord {
     /// The fault, as planned.
     pub fault: String,
-    /// When it was injected, s (None: never, e.g. its target was not running).
+    /// When it was injected, simulated s (None: never, e.g. its target was not running).
     pub injected_at_s: Option<f64>,
+    /// When it was injected, wall-clock s from the plant's tick 0 (later than `injected_at_s` once a stall or a
+    /// restart has held simulated time back).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub injected_at_wall_s: Option<f64>,
     /// First detection after injection: when, s.
     pub detected_at_s: Option<f64>,
     /// ... by which process, and how.
@@ -83,8 +89,9 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
     let Some(t0) = plant_t0_ns(out_dir) else {
         return plan.iter().map(empty).collect();
     };
-    let rel = |t_ns: u64| (t_ns as f64 - t0 as f64) / 1e9;
     let timing = read_timing(out_dir);
+    let clock = SimClock::new(&timing, t0, dt_s);
+    let rel = |t_ns: u64| clock.sim_s(t_ns);
     let mut order: Vec<&Fault> = plan.iter().collect();
     order.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
     order
@@ -114,9 +121,12 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
             });
             let end_ns = recovery.map_or(next_ns.min(inj + 2_000_000_000), |e| e.t_ns);
             let (plant_lost, command_lost) = losses(&timing, inj, end_ns);
+            // A plant-model fault acts at its planned simulated time, whatever the wall clock says.
+            let injected_at_s = if f.action().is_plant_model_fault() { f.at_s } else { rel(inj) };
             FaultRecord {
                 fault: desc,
-                injected_at_s: Some(rel(inj)),
+                injected_at_s: Some(injected_at_s),
+                injected_at_wall_s: Some((inj as f64 - t0 as f64) / 1e9),
                 detected_at_s: detection.map(|e| rel(e.t_ns)),
                 detected_by: detection.map(|e| format!("{} ({})", e.process, e.kind)),
                 failsafe_at_s: failsafe.map(|e| rel(e.t_ns)),
@@ -133,6 +143,7 @@ fn empty(f: &Fault) -> FaultRecord {
     FaultRecord {
         fault: f.describe(),
         injected_at_s: None,
+        injected_at_wall_s: None,
         detected_at_s: None,
         detected_by: None,
         failsafe_at_s: None,
@@ -140,6 +151,32 @@ fn empty(f: &Fault) -> FaultRecord {
         plant_samples_lost: 0,
         command_samples_lost: 0,
         discontinuity: None,
+    }
+}
+
+/// Simulated time of a CLOCK_MONOTONIC instant: the tick the plant had last published by then, plus the time since,
+/// up to one period (past that the plant was not ticking: stopped, delayed, dead, and simulated time waited).
+struct SimClock {
+    /// (plant send time ns, tick), by send time.
+    sent: Vec<(u64, u64)>,
+    t0_ns: u64,
+    dt_s: f64,
+}
+
+impl SimClock {
+    fn new(timing: &[(u64, u64, bool)], t0_ns: u64, dt_s: f64) -> Self {
+        let mut sent: Vec<(u64, u64)> = timing.iter().map(|r| (r.1, r.0)).collect();
+        sent.sort_unstable();
+        Self { sent, t0_ns, dt_s }
+    }
+
+    fn sim_s(&self, t_ns: u64) -> f64 {
+        let k = self.sent.partition_point(|(sent, _)| *sent <= t_ns);
+        match k.checked_sub(1).map(|i| self.sent[i]) {
+            Some((sent, tick)) => tick as f64 * self.dt_s + ((t_ns - sent) as f64 / 1e9).min(self.dt_s),
+            // Before the first logged tick (or without timing.csv): the wall clock from tick 0.
+            None => (t_ns as f64 - self.t0_ns as f64) / 1e9,
+        }
     }
 }
 
@@ -169,4 +206,26 @@ fn losses(timing: &[(u64, u64, bool)], from_ns: u64, to_ns: u64) -> (u64, u64) {
     ticks.dedup();
     let plant_lost = ticks.windows(2).map(|w| w[1] - w[0] - 1).sum();
     (plant_lost, command_lost)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn simulated_time_waits_while_the_plant_does_not_tick() {
+        // Ticks 0..=9 every 10 ms from t0 = 1 s, then a 500 ms stall, then ticks 10.. again every 10 ms.
+        let t0 = 1_000_000_000;
+        let mut timing: Vec<(u64, u64, bool)> = (0..10).map(|k| (k, t0 + k * 10_000_000, false)).collect();
+        timing.extend((10..20).map(|k| (k, t0 + 590_000_000 + k * 10_000_000, false)));
+        let clock = SimClock::new(&timing, t0, 0.01);
+        let at = |ms: u64| clock.sim_s(t0 + ms * 1_000_000);
+        assert!((at(45) - 0.045).abs() < 1e-9, "between ticks 4 and 5: {}", at(45));
+        // In the stall simulated time stands one period after tick 9.
+        assert!((at(300) - 0.10).abs() < 1e-9, "{}", at(300));
+        // After it, 0.5 s of wall time behind.
+        assert!((at(705) - 0.115).abs() < 1e-9, "{}", at(705));
+        // Before tick 0: the wall clock.
+        assert!((clock.sim_s(t0 - 5_000_000) + 0.005).abs() < 1e-9);
+    }
 }

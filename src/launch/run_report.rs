@@ -416,11 +416,16 @@ impl RigReport {
         if self.faults.is_empty() {
             return String::new();
         }
-        let mut out = "\nfaults (s from tick 0)            injected  detected  by                               failsafe  recovered  plant lost  cmd lost\n".to_string();
+        let mut out = "\nfaults (simulated s)             injected  detected  by                               failsafe  recovered  plant lost  cmd lost\n".to_string();
         let t = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
         for f in &self.faults {
+            // Wall time beside simulated time once a stall or a restart has set them apart.
+            let wall = match (f.injected_at_s, f.injected_at_wall_s) {
+                (Some(sim), Some(wall)) if wall - sim > 0.005 => format!(" (injected at {wall:.3} s of wall time)"),
+                _ => String::new(),
+            };
             out += &format!(
-                "  {}\n  {:<32} {:>8} {:>9}  {:<32} {:>8} {:>10} {:>11} {:>9}\n",
+                "  {}{wall}\n  {:<32} {:>8} {:>9}  {:<32} {:>8} {:>10} {:>11} {:>9}\n",
                 f.fault,
                 "",
                 t(f.injected_at_s),
