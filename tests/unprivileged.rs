@@ -118,3 +118,76 @@ fn an_ordinary_user_flies_lockstep_a_python_controller_and_a_killed_controller_r
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `cmd ARGS` as user `uid` (directly when the tests are not root: then both "users" are the same, and the test
+/// only checks what one user sees).
+fn as_user(uid: &str, dir: &Path, cmd: &Path, args: &[&str]) -> std::process::Command {
+    let mut c = Command::new("setpriv");
+    c.args(["--reuid", uid, "--regid", uid, "--clear-groups", "--inh-caps=-all"])
+        .arg(cmd)
+        .args(args)
+        .current_dir(dir.join("runs"))
+        .env("HOME", dir.join("runs"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped());
+    c
+}
+
+#[test]
+fn two_users_side_by_side_can_neither_read_nor_join_nor_take_the_others_run() {
+    // SAFETY: geteuid has no preconditions.
+    if unsafe { libc::geteuid() } != 0 {
+        eprintln!("two users need root to become them: skipped as uid {}", unsafe { libc::geteuid() });
+        return;
+    }
+    let dir = world_readable_rig("two-users");
+    let silrig = dir.join("bin/silrig");
+    let id = format!("u{}-alice", std::process::id());
+    let alice_out = dir.join("runs/alice");
+    let alice = as_user(
+        NOBODY,
+        &dir,
+        &silrig,
+        &["run", "--duration-s", "4", "--run-id", &id, "--out", alice_out.to_str().unwrap()],
+    )
+    .spawn()
+    .unwrap();
+    let start = std::time::Instant::now();
+    while !std::fs::read_to_string(alice_out.join("events.jsonl")).is_ok_and(|t| t.contains("\"ticking\"")) {
+        assert!(start.elapsed() < Duration::from_secs(30), "alice's run never started ticking");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let bob = "65533";
+    // Bob cannot read Alice's files ...
+    let read = as_user(bob, &dir, Path::new("/bin/cat"), &[alice_out.join("events.jsonl").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!read.status.success(), "bob read alice's events");
+    // ... nor take her run id ...
+    let bob_out = dir.join("runs/bob");
+    let take =
+        as_user(bob, &dir, &silrig, &["run", "--duration-s", "1", "--run-id", &id, "--out", bob_out.to_str().unwrap()])
+            .output()
+            .unwrap();
+    let said = String::from_utf8_lossy(&take.stderr);
+    assert_eq!(take.status.code(), Some(2), "{said}");
+    assert!(said.contains("is taken by another silrig run (another user's"), "{said}");
+    // ... nor join it as its controller.
+    let join = as_user(
+        bob,
+        &dir,
+        &dir.join("bin/silrig-controller"),
+        &["--run-id", &id, "--out", bob_out.to_str().unwrap(), "--startup-timeout-s", "1"],
+    )
+    .output()
+    .unwrap();
+    let said = String::from_utf8_lossy(&join.stderr);
+    assert!(!join.status.success() && said.contains("cannot create iceoryx2 node"), "bob joined alice's run: {said}");
+    // Alice's run is untouched by all of it.
+    let o = common::wait_with_watchdog(alice, Duration::from_secs(60));
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
+    let rows = std::fs::read_to_string(alice_out.join("trace.csv")).unwrap().lines().count() - 1;
+    assert_eq!(rows, 401);
+    common::no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

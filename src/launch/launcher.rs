@@ -217,7 +217,10 @@ impl Claim {
                     Ok(()) => return Ok(Self(path.clone())),
                     Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
                         if let Some(holder) = live_holder(&path) {
-                            let who = holder.map_or("pid not written".to_string(), |pid| format!("pid {pid}"));
+                            let who = holder.map_or(
+                                "another user's, or one just starting: its pid cannot be read".to_string(),
+                                |pid| format!("pid {pid}"),
+                            );
                             anyhow::bail!(
                                 "{what} is taken by another silrig run ({who}): wait for it, or choose another"
                             );
@@ -235,10 +238,14 @@ impl Claim {
     }
 }
 
-/// The holder of a claim file if it is alive: `Some(Some(pid))`; `Some(None)` for a file without a pid (written by
-/// an older silrig) that is too fresh to call abandoned.
+/// The holder of a claim file if it is alive: `Some(Some(pid))`; `Some(None)` for one whose pid cannot be read:
+/// another user's (owner-only), or without a pid (written by an older silrig) and too fresh to call abandoned.
 fn live_holder(path: &Path) -> Option<Option<i32>> {
-    let holder: Option<i32> = std::fs::read_to_string(path).ok().and_then(|t| t.trim().parse().ok());
+    let text = match std::fs::read_to_string(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => return Some(None),
+        read => read.ok(),
+    };
+    let holder: Option<i32> = text.and_then(|t| t.trim().parse().ok());
     match holder {
         // SAFETY: kill with signal 0 only asks whether the process exists.
         Some(pid) => (pid > 0 && unsafe { libc::kill(pid, 0) } == 0).then_some(Some(pid)),
