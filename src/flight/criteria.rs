@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 /// What a run must meet (`[cases.criteria]` of a check suite, `[criteria]` of a sweep). Every key is optional;
 /// only what is named is judged. The rig's timing and fault criteria need `silrig check`; a sweep judges the
-/// flight ones ([`Criteria::judge_flight`]).
+/// flight ones ([`crate::judge::judge_flight`]).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Criteria {
