@@ -191,6 +191,14 @@ fn a_sweep_split_in_shards_merges_into_the_same_bytes_and_refuses_what_does_not_
     std::fs::copy(other.join("shards/shard-1-of-3.json"), &mine).unwrap();
     refused(&["sweep", "merge", p], "belongs to another plan");
     assert!(!plan.join("sweep.json").exists(), "nothing written half");
+    // A shard renamed into another's place, and one whose values were edited after it was flown.
+    std::fs::copy(plan.join("shards/shard-0-of-3.json"), &mine).unwrap();
+    refused(&["sweep", "merge", p], "holds shard 0's results, not shard 1's");
+    let text = String::from_utf8(saved.clone()).unwrap();
+    let value = text.split("\"values\":[").nth(1).unwrap().split([',', ']']).next().unwrap();
+    std::fs::write(&mine, text.replacen(&format!("\"values\":[{value}"), "\"values\":[1e300", 1)).unwrap();
+    refused(&["sweep", "merge", p], "its cases were changed after it was flown");
+    assert!(!plan.join("sweep.json").exists(), "nothing written half");
     std::fs::write(&mine, saved).unwrap();
     ok(&["sweep", "merge", p]);
     refused(&["sweep", "merge", p], "already holds merged results");

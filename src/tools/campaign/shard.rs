@@ -47,6 +47,14 @@ pub struct ShardResult {
     pub cases_range: (u64, u64),
     /// The cases, in index order.
     pub cases: Vec<CaseResult>,
+    /// A checksum of `cases` as written ([`cases_checksum`]): a shard edited after it was flown is refused at merge.
+    #[serde(default)]
+    pub checksum: String,
+}
+
+/// The checksum of a shard's cases: FNV-1a of their JSON, which reads back to the same bytes (floats round-trip).
+fn cases_checksum(cases: &[CaseResult]) -> anyhow::Result<String> {
+    Ok(fnv1a(&[&serde_json::to_string(cases)?]))
 }
 
 fn fnv1a(parts: &[&str]) -> String {
@@ -194,6 +202,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<(PathBuf, ShardResult)> {
         fingerprint: manifest.fingerprint.clone(),
         shard: k,
         cases_range: (range.start, range.end),
+        checksum: cases_checksum(&cases)?,
         cases,
     };
     let path = manifest.shard_path(&opts.dir, k);
@@ -223,11 +232,22 @@ pub fn merge(dir: &Path) -> anyhow::Result<super::SweepRun> {
         let shard: ShardResult =
             serde_json::from_str(&text).with_context(|| format!("{}: not a shard's results", path.display()))?;
         anyhow::ensure!(
-            shard.fingerprint == manifest.fingerprint && shard.shard == k,
+            shard.fingerprint == manifest.fingerprint,
             "{} belongs to another plan (fingerprint {}, this plan's {}): shards of different plans never merge",
             path.display(),
             shard.fingerprint,
             manifest.fingerprint
+        );
+        anyhow::ensure!(
+            shard.shard == k,
+            "{} holds shard {}'s results, not shard {k}'s: renamed or copied over? fly shard {k} again",
+            path.display(),
+            shard.shard
+        );
+        anyhow::ensure!(
+            shard.checksum == cases_checksum(&shard.cases)?,
+            "{}: its cases were changed after it was flown (their checksum does not match); fly shard {k} again",
+            path.display()
         );
         let range = manifest.range(k);
         let indices: Vec<u64> = shard.cases.iter().map(|c| c.index).collect();
