@@ -138,13 +138,20 @@ impl LaunchOptions {
     }
 }
 
+/// `<out>/<name>`: the run's variables as `export NAME='value'` lines, written whole or not at all (someone waiting for
+/// the file to appear sources it at once).
+fn write_env_file(args: &ProcessArgs, name: &str) -> anyhow::Result<PathBuf> {
+    let lines: String =
+        args.to_env().iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
+    let path = args.out.join(name);
+    silrig_flight::files::write_atomically(&path, &lines).with_context(|| format!("writing {}", path.display()))?;
+    Ok(path)
+}
+
 /// `<out>/controller.env`: the variables a controller of this run reads (`export NAME='value'` lines, for `.` in a
 /// shell); for `--controller external` also printed with how to start it.
 fn write_controller_env(args: &ProcessArgs, controller: &ControllerLaunch, remote: bool) -> anyhow::Result<()> {
-    let env = args.to_env();
-    let lines: String = env.iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
-    let path = args.out.join("controller.env");
-    std::fs::write(&path, lines).with_context(|| format!("writing {}", path.display()))?;
+    let path = write_env_file(args, "controller.env")?;
     if *controller == ControllerLaunch::External && !remote {
         eprintln!(
             "silrig run: waiting up to {} s for a controller on run {}; start yours with the run's variables, e.g.\n  \
@@ -159,10 +166,7 @@ fn write_controller_env(args: &ProcessArgs, controller: &ControllerLaunch, remot
 
 /// `<out>/plant.env` for `--plant external`: the same variables, printed with how to start a plant.
 fn write_plant_env(args: &ProcessArgs) -> anyhow::Result<()> {
-    let lines: String =
-        args.to_env().iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
-    let path = args.out.join("plant.env");
-    std::fs::write(&path, lines).with_context(|| format!("writing {}", path.display()))?;
+    let path = write_env_file(args, "plant.env")?;
     eprintln!(
         "silrig run: waiting up to {} s for a plant on run {}; start yours with the run's variables, e.g.\n  \
          . {} && python3 tests/clients/toy_plant.py",
