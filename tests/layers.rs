@@ -7,12 +7,14 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The library crates from the bottom up, each with the crates it may depend on.
-const LAYERS: [(&str, &[&str]); 7] = [
+const LAYERS: [(&str, &[&str]); 8] = [
     ("model", &[]),
+    // The FMU importer knows no silrig crate: it opens, instantiates and steps any co-simulation FMU.
+    ("fmi", &[]),
     ("flight", &["model"]),
     ("wire", &["model", "flight"]),
     ("plot", &["flight"]),
-    ("rig", &["model", "flight", "wire"]),
+    ("rig", &["model", "flight", "wire", "fmi"]),
     ("launch", &["flight", "wire", "plot", "rig"]),
     ("tools", &["model", "flight", "wire", "plot", "rig", "launch"]),
 ];

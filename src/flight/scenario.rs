@@ -234,10 +234,14 @@ pub struct PlantOptions {
     #[serde(default = "one")]
     pub mass_scale: f64,
     /// Parameters and start values of a plant of your own, by the names it reads them with
-    /// (`silrig_plant_parameter`; numbers only): dispersions reach them as `plant.parameters.<name>`. The F-16's
-    /// are the keys above.
+    /// (`silrig_plant_parameter`; an FMU's: its variables' names; numbers only): dispersions reach them as
+    /// `plant.parameters.<name>`. The F-16's are the keys above.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub parameters: BTreeMap<String, f64>,
+    /// A co-simulation FMU (FMI 2.0 or 3.0) the plant process flies in place of the F-16; a relative path is
+    /// relative to the scenario file's folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fmu: Option<std::path::PathBuf>,
 }
 
 fn default_xcg() -> f64 {
@@ -257,6 +261,7 @@ impl Default for PlantOptions {
             aero_scale: AeroScale::default(),
             mass_scale: 1.0,
             parameters: BTreeMap::new(),
+            fmu: None,
         }
     }
 }
@@ -490,7 +495,13 @@ impl Scenario {
     pub fn load(path: &Path) -> Result<Self, ScenarioError> {
         let text = std::fs::read_to_string(path)
             .map_err(|cause| ScenarioError::Io { path: path.display().to_string(), cause })?;
-        Self::from_toml(&text, &path.display().to_string())
+        let mut scenario = Self::from_toml(&text, &path.display().to_string())?;
+        // Absolute, so the scenario means the same FMU wherever a run writes it down.
+        if let Some(fmu) = scenario.plant.fmu.as_mut().filter(|f| f.is_relative()) {
+            let beside = path.parent().unwrap_or(Path::new("")).join(&*fmu);
+            *fmu = std::path::absolute(&beside).unwrap_or(beside);
+        }
+        Ok(scenario)
     }
 
     /// The embedded default scenario.

@@ -212,6 +212,16 @@ fn holding_throttle(model: &F16Model, state: &F16State, surfaces: &ControlInputs
 /// actuator faults name its channels and surfaces, and `[plant.parameters]` (a plant of your own's) is empty.
 /// On error (dotted key, problem).
 pub fn check_for_f16(s: &Scenario) -> Result<(), (String, String)> {
+    if let Some(fmu) = &s.plant.fmu {
+        return Err((
+            "plant.fmu".into(),
+            format!(
+                "{} is a plant of your own: it flies in the rig (`silrig run`, `silrig check`), not in place of \
+                 the built-in F-16 in one process",
+                fmu.display()
+            ),
+        ));
+    }
     for (name, a) in &s.actuators {
         let Some((input, key, travel)) = crate::scenario::F16_ACTUATORS.iter().find(|(i, k, _)| i == name || k == name)
         else {

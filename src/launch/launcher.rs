@@ -76,6 +76,11 @@ pub struct LaunchOptions {
     /// stderr go to <out>/plant.stderr.log.
     #[arg(long, value_name = "CMD")]
     pub plant_cmd: Option<String>,
+    /// Fly a co-simulation FMU (FMI 2.0 or 3.0, with a Linux x86-64 binary) as the plant: silrig-plant loads it,
+    /// announces its Real outputs and inputs as the plant's signals and steps it once per tick; the scenario's
+    /// `[plant.parameters]` set its parameters by variable name. Same as the scenario key `[plant] fmu`.
+    #[arg(long, value_name = "FILE.fmu", conflicts_with_all = ["plant_cmd", "plant"])]
+    pub plant_fmu: Option<PathBuf>,
     /// builtin (silrig-plant, or --plant-cmd) or external: wait for a plant started by hand (in a debugger, in a
     /// simulation tool) with the variables printed and written to <out>/plant.env.
     #[arg(long, value_enum, default_value = "builtin", conflicts_with = "plant_cmd")]
@@ -293,6 +298,21 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     }
     scenario.faults.extend(opts.faults.iter().cloned());
     scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("fault plan: `{key}`: {problem}"))?;
+    if let Some(fmu) = &opts.plant_fmu {
+        scenario.plant.fmu = Some(fmu.clone());
+    }
+    if let Some(fmu) = scenario.plant.fmu.take() {
+        anyhow::ensure!(
+            opts.plant_cmd.is_none() && opts.plant == PlantKind::Builtin,
+            "the scenario's plant is the FMU {}: it flies in silrig-plant, not with --plant-cmd or --plant external",
+            fmu.display()
+        );
+        // The processes read the scenario from the run's folder: the FMU by its absolute path.
+        let fmu = std::path::absolute(&fmu).map_err(|e| anyhow::anyhow!("--plant-fmu {}: {e}", fmu.display()))?;
+        // Every problem of the file, its variables and the parameters is said here, before any process starts.
+        silrig_rig::fmu_plant::FmuPlant::check(&fmu, &scenario)?;
+        scenario.plant.fmu = Some(fmu);
+    }
     if opts.mode == RigMode::Lockstep
         && let Some(f) = scenario.faults.iter().find(|f| !f.action().is_plant_model_fault())
     {
@@ -311,7 +331,7 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     }
     // The built-in F-16 is known now; a plant of your own is checked against the signals it announces when it joins
     // (its `[actuators]`, sensor and actuator faults by its own names: `silrig_flight::signal_chain`).
-    if opts.plant_cmd.is_none() && opts.plant != PlantKind::External {
+    if opts.plant_cmd.is_none() && opts.plant != PlantKind::External && scenario.plant.fmu.is_none() {
         silrig_flight::sim::check_for_f16(&scenario)
             .map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
     }

@@ -6,7 +6,8 @@
 //!   one reusable session (open a run, wait for a sample, send a command, stamps, checks, in-loop faults).
 //! - [`plant_model`]: what the plant process flies; [`f16_plant`]: the F-16 as a [`plant_model::PlantModel`];
 //!   [`plant_session`]: the plant's side of the contract for a model of the user's own (announce, then outputs
-//!   in, inputs out, tick by tick), with the same loop around it.
+//!   in, inputs out, tick by tick), with the same loop around it; [`fmu_plant`]: a co-simulation FMU flown
+//!   through that session.
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
@@ -17,12 +18,13 @@
 //! All processes of one run load the same scenario and use the same run id, which selects the iceoryx2
 //! namespace (see [`silrig_wire::ipc::rig_config`]), so rigs side by side never see each other.
 //!
-//! Layers: uses `silrig-model`, `silrig-flight` and `silrig-wire`; the launcher that starts these processes is
+//! Layers: uses `silrig-model`, `silrig-flight`, `silrig-wire` and `silrig-fmi`; the launcher that starts these processes is
 //! `silrig-launch`, above.
 
 pub mod controller;
 pub mod events;
 pub mod f16_plant;
+pub mod fmu_plant;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;

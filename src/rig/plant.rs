@@ -666,6 +666,9 @@ impl PlantLoop {
 pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     signals::install_termination_flag();
     let scenario = args.scenario()?;
+    if let Some(fmu) = scenario.plant.fmu.clone() {
+        return super::fmu_plant::run_fmu_plant(args, scenario, &fmu);
+    }
     let model = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
     let mut plant = PlantLoop::setup(args, scenario, model)?;
     let mut ports = PlantPorts::connect(args, &plant.info)?;

@@ -210,6 +210,11 @@ impl PlantSession {
         Ok(session)
     }
 
+    /// Put an event in the run's log (`events.jsonl`, the report's event list) at the tick being flown.
+    pub fn event(&self, kind: &str, detail: String) {
+        self.lp.event(kind, detail);
+    }
+
     /// The run's step, s.
     pub fn dt_s(&self) -> f64 {
         self.lp.scenario().timing.dt_s

@@ -34,6 +34,9 @@ pub struct CheckOptions {
     /// --plant-cmd`).
     #[arg(long, value_name = "CMD")]
     pub plant_cmd: Option<String>,
+    /// Fly a co-simulation FMU as the plant in every case (as with `silrig run --plant-fmu`).
+    #[arg(long, value_name = "FILE.fmu", conflicts_with = "plant_cmd")]
+    pub plant_fmu: Option<PathBuf>,
     /// Output folder (default: out/check-<suite>-<UTC time>); must not hold a check already.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -88,6 +91,9 @@ impl CheckOptions {
         if let Some(c) = &self.plant_cmd {
             cmd += &format!(" --plant-cmd {}", shell_quote(c));
         }
+        if let Some(f) = &self.plant_fmu {
+            cmd += &format!(" --plant-fmu {}", shell_quote(&f.display().to_string()));
+        }
         // Only the tuning flags that differ from their defaults, so the command stays short.
         let defaults = default_process_options().to_argv();
         for (flag, value) in self
@@ -139,6 +145,7 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         supervision: SupervisionOptions { restart: RestartMode::Never, max_restarts: 0, restart_backoff_ms: 200.0 },
         controller_cmd: opts.controller_cmd.clone(),
         plant_cmd: opts.plant_cmd.clone(),
+        plant_fmu: opts.plant_fmu.clone(),
         plant: silrig_launch::launcher::PlantKind::Builtin,
         controller: ControllerKind::Builtin,
         // Not used: the controller is always one the launcher starts.

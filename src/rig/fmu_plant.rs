@@ -1,0 +1,284 @@
+//! A co-simulation FMU as the run's plant (`silrig run --plant-fmu`, a scenario's `[plant] fmu`): its Real
+//! (Float64) variables of causality output and input become the plant's named signals ([`fmu_signals`]), its
+//! parameters and start values come from `[plant.parameters]` by variable name, and [`run_fmu_plant`] flies it
+//! through the same [`PlantSession`] as any plant of the user's own, so it gets the rig's clock, actuators, sensor
+//! and actuator faults, watchdog and failsafe, logger, recording and timing report. The step time the report gives
+//! is the FMU's: setting the inputs, `doStep` and reading the outputs. Checkpoints go through the FMU's own
+//! serialized state where its description offers it; where it does not, the run's events say so.
+//!
+//! How variables become signals: a signal's name is the variable's, with every character other than an ASCII
+//! letter, digit or '_' turned into '_' (`body.w[1]` is `body_w_1_`); an input's range is its min and max (the
+//! whole finite range of a double where the FMU declares none) and its failsafe holds its start value; the output
+//! named `<input>_<unit>` (`aileron_deg` for an input `aileron` in deg) reports that input's actuator. A variable
+//! may say otherwise with an annotation `<Tool name="silrig"><Signal name=".." trace="false" position_of=".."/>`
+//! (how the exported F-16 keeps the built-in plant's names): `name` renames it, `trace="false"` keeps an output out
+//! of `trace.csv` (an input's command out of it), `position_of` names the input whose actuator an output reports.
+
+use super::ProcessArgs;
+use super::plant_session::{PlantSession, PlantTick};
+use super::report::ProcessReport;
+use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
+use silrig_fmi::{Fmu, Instance};
+use silrig_flight::scenario::Scenario;
+use silrig_flight::signals::{InputSignal, OutputSignal, PlantSignals, valid_name, valid_unit};
+use std::path::Path;
+
+/// The plant's signals of an FMU, and where each lives in it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FmuSignals {
+    /// What the plant announces.
+    pub signals: PlantSignals,
+    /// The value reference of each output, in the announced order.
+    pub output_refs: Vec<u32>,
+    /// The value reference of each input, in the announced order.
+    pub input_refs: Vec<u32>,
+    /// `[plant.parameters]`: value references and the values set before initialization.
+    pub parameters: Vec<(u32, f64)>,
+}
+
+/// The signal name of an FMU variable: its name with every character other than an ASCII letter, digit or '_'
+/// turned into '_'.
+pub fn signal_name(variable: &str) -> String {
+    variable.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect()
+}
+
+/// Map an FMU's variables to the plant's signals, and `[plant.parameters]` to its parameters. Errors name the
+/// FMU, the variable and the rule.
+pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Result<FmuSignals, String> {
+    let bad = |problem: String| format!("FMU {file}: {problem}");
+    let real = |v: &&Variable| v.kind == ValueKind::Real;
+    let traced = |v: &Variable| v.silrig.get("trace").is_none_or(|t| t != "false");
+    let named = |v: &Variable| -> Result<String, String> {
+        let name = v.silrig.get("name").cloned().unwrap_or_else(|| signal_name(&v.name));
+        if !valid_name(&name) {
+            return Err(bad(format!(
+                "variable {:?} makes the signal name {name:?}, longer than 31 characters: give it a shorter one \
+                 with a silrig annotation (<Tool name=\"silrig\"><Signal name=\"...\"/>)",
+                v.name
+            )));
+        }
+        Ok(name)
+    };
+    let unit = |v: &Variable| -> Result<String, String> {
+        let unit = v.unit.clone().unwrap_or_default();
+        match valid_unit(&unit) {
+            true => Ok(unit),
+            false => Err(bad(format!(
+                "variable {:?}: unit {unit:?} is not one a signal can carry (at most 15 printable characters, no \
+                 comma or quote)",
+                v.name
+            ))),
+        }
+    };
+    let outputs: Vec<&Variable> = d.variables.iter().filter(|v| v.causality == Causality::Output).filter(real).collect();
+    let inputs: Vec<&Variable> = d.variables.iter().filter(|v| v.causality == Causality::Input).filter(real).collect();
+    let mut signals = PlantSignals { plant: signal_name(&d.model_name), outputs: Vec::new(), inputs: Vec::new() };
+    if !valid_name(&signals.plant) {
+        signals.plant = d.co_simulation.model_identifier.clone();
+    }
+    for v in &outputs {
+        let trace = traced(v);
+        signals.outputs.push(OutputSignal { name: named(v)?, unit: unit(v)?, in_trace: trace });
+    }
+    for v in &inputs {
+        let (min, max) = (v.min.unwrap_or(f64::MIN), v.max.unwrap_or(f64::MAX));
+        let hold = v.start.unwrap_or(0.0).clamp(min, max);
+        let name = named(v)?;
+        let unit = unit(v)?;
+        // The output that reports this input's actuator: named by an annotation, or `<input>_<unit>`.
+        let by_annotation =
+            outputs.iter().position(|o| o.silrig.get("position_of").is_some_and(|p| *p == v.name || *p == name));
+        let by_name = format!("{name}_{}", signal_name(&unit));
+        let held_output = by_annotation.or_else(|| signals.outputs.iter().position(|o| o.name == by_name));
+        signals.inputs.push(InputSignal { name, unit, min, max, hold, held_output, command_in_trace: traced(v) });
+    }
+    signals
+        .check(silrig_wire::wire::MAX_OUTPUTS, silrig_wire::wire::MAX_INPUTS)
+        .map_err(|e| bad(format!("its variables as the plant's signals: {e}")))?;
+    let mut parameters = Vec::new();
+    for (name, value) in &scenario.plant.parameters {
+        let variable = d.variable(name).or_else(|| d.variables.iter().find(|v| signal_name(&v.name) == *name));
+        let settable: Vec<String> = d
+            .variables
+            .iter()
+            .filter(|v| v.kind == ValueKind::Real && matches!(v.causality, Causality::Parameter | Causality::Input))
+            .map(|v| v.name.clone())
+            .collect();
+        let Some(v) = variable else {
+            return Err(bad(format!(
+                "`plant.parameters.{name}`: no variable of that name; its Real parameters and inputs: {}",
+                settable.join(", ")
+            )));
+        };
+        if v.kind != ValueKind::Real {
+            return Err(bad(format!("`plant.parameters.{name}`: variable {:?} is not a Real (Float64)", v.name)));
+        }
+        if !matches!(v.causality, Causality::Parameter | Causality::Input) || v.variability == "constant" {
+            return Err(bad(format!(
+                "`plant.parameters.{name}`: variable {:?} has causality {} (variability {}): only a parameter's \
+                 value or an input's start value can be set; settable: {}",
+                v.name,
+                v.causality.label(),
+                v.variability,
+                settable.join(", ")
+            )));
+        }
+        if v.min.is_some_and(|m| *value < m) || v.max.is_some_and(|m| *value > m) {
+            return Err(bad(format!(
+                "`plant.parameters.{name}` = {value} is outside the variable's range {}..{}",
+                v.min.unwrap_or(f64::NEG_INFINITY),
+                v.max.unwrap_or(f64::INFINITY)
+            )));
+        }
+        parameters.push((v.value_reference, *value));
+    }
+    Ok(FmuSignals {
+        output_refs: outputs.iter().map(|v| v.value_reference).collect(),
+        input_refs: inputs.iter().map(|v| v.value_reference).collect(),
+        signals,
+        parameters,
+    })
+}
+
+/// An FMU unpacked, mapped and initialized at t = 0, ready to fly.
+pub struct FmuPlant {
+    // Dropped before `fmu`: the instance is freed before its folder is removed.
+    instance: Instance,
+    fmu: Fmu,
+    /// Its signals and references.
+    pub map: FmuSignals,
+    tick: u64,
+    dt_s: f64,
+}
+
+/// A checkpoint of an FMU plant: the tick its state belongs to and the FMU's serialized state, hex-encoded.
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
+struct SavedFmu {
+    tick: u64,
+    state_hex: String,
+}
+
+impl FmuPlant {
+    /// Open the FMU at `path`, map its signals, set `[plant.parameters]` and initialize it.
+    pub fn open(path: &Path, scenario: &Scenario) -> anyhow::Result<Self> {
+        let fmu = Fmu::open(path)?;
+        let map = Self::describe(&fmu, scenario).map_err(anyhow::Error::msg)?;
+        let mut instance = fmu.instantiate("plant")?;
+        if !map.parameters.is_empty() {
+            let (refs, values): (Vec<u32>, Vec<f64>) = map.parameters.iter().copied().unzip();
+            instance.set_reals(&refs, &values)?;
+        }
+        instance.enter_initialization(0.0)?;
+        instance.exit_initialization()?;
+        Ok(Self { instance, fmu, map, tick: 0, dt_s: scenario.timing.dt_s })
+    }
+
+    /// The signals of the FMU at `path` under `scenario`, without instantiating it: what the launcher checks
+    /// before starting a run.
+    pub fn check(path: &Path, scenario: &Scenario) -> anyhow::Result<FmuSignals> {
+        let fmu = Fmu::open(path)?;
+        Self::describe(&fmu, scenario).map_err(anyhow::Error::msg)
+    }
+
+    fn describe(fmu: &Fmu, scenario: &Scenario) -> Result<FmuSignals, String> {
+        fmu_signals(fmu.file(), &fmu.description, scenario)
+    }
+
+    /// The FMU as given, and what it is (`FMI 2.0, model airframe`).
+    pub fn describe_fmu(&self) -> String {
+        let d = &self.fmu.description;
+        format!("{} ({}, model {})", self.fmu.file(), d.version.label(), d.model_name)
+    }
+
+    /// Whether a restarted plant can resume from the FMU's state, or why not.
+    pub fn can_checkpoint(&self) -> Result<(), String> {
+        let cs = &self.fmu.description.co_simulation;
+        match (cs.can_get_and_set_state, cs.can_serialize_state) {
+            (true, true) => Ok(()),
+            (false, _) => Err("the FMU cannot get and set its state (canGetAndSetFMUstate is not true)".into()),
+            (true, false) => Err("the FMU cannot serialize its state (canSerializeFMUstate is not true)".into()),
+        }
+    }
+
+    /// Its outputs now, in the announced order.
+    pub fn outputs(&mut self, values: &mut [f64]) -> Result<(), String> {
+        self.instance.get_reals(&self.map.output_refs, values).map_err(|e| e.to_string())
+    }
+
+    /// Set the inputs and step one period.
+    pub fn step(&mut self, inputs: &[f64]) -> Result<(), String> {
+        self.instance.set_reals(&self.map.input_refs, inputs).map_err(|e| e.to_string())?;
+        let t_s = self.tick as f64 * self.dt_s;
+        self.instance.do_step(t_s, self.dt_s).map_err(|e| e.to_string())?;
+        self.tick += 1;
+        Ok(())
+    }
+
+    /// The FMU's state after the last step, as checkpoint text.
+    pub fn checkpoint(&mut self) -> Result<String, String> {
+        let bytes = self.instance.save_state().map_err(|e| e.to_string())?;
+        let state_hex = bytes.iter().map(|b| format!("{b:02x}")).collect();
+        serde_json::to_string(&SavedFmu { tick: self.tick, state_hex }).map_err(|e| e.to_string())
+    }
+
+    /// Put back the state a checkpoint holds.
+    pub fn restore(&mut self, text: &str) -> Result<(), String> {
+        let saved: SavedFmu = serde_json::from_str(text).map_err(|e| format!("not an FMU plant's checkpoint: {e}"))?;
+        let hex = saved.state_hex.as_bytes();
+        if hex.len() % 2 != 0 || !hex.iter().all(u8::is_ascii_hexdigit) {
+            return Err("its FMU state is not hex bytes".into());
+        }
+        let bytes: Vec<u8> = hex
+            .chunks(2)
+            .map(|pair| u8::from_str_radix(std::str::from_utf8(pair).unwrap_or("zz"), 16).unwrap_or(0))
+            .collect();
+        self.instance.restore_state(&bytes).map_err(|e| e.to_string())?;
+        self.tick = saved.tick;
+        Ok(())
+    }
+}
+
+/// Fly the scenario's FMU as the run's plant, to the end of the scenario (or SIGTERM), and write the report.
+pub fn run_fmu_plant(args: &ProcessArgs, scenario: Scenario, path: &Path) -> anyhow::Result<ProcessReport> {
+    let mut plant = FmuPlant::open(path, &scenario)?;
+    let mut session = PlantSession::open(args.clone(), scenario, &plant.map.signals.clone())?;
+    let checkpoints = plant.can_checkpoint();
+    session.event(
+        "plant-fmu",
+        match &checkpoints {
+            Ok(()) => format!("flying {}: checkpoints through its own state", plant.describe_fmu()),
+            Err(why) => format!("flying {}: {why}, so a restarted plant flies again from tick 0", plant.describe_fmu()),
+        },
+    );
+    if let Some(text) = session.restored_checkpoint() {
+        let outcome = match &checkpoints {
+            Ok(()) => plant.restore(text),
+            Err(why) => Err(why.clone()),
+        };
+        session.checkpoint_used(outcome);
+    }
+    let mut outputs = vec![0.0; plant.map.output_refs.len()];
+    let error = loop {
+        if let Err(e) = plant.outputs(&mut outputs) {
+            break Some(e);
+        }
+        match session.tick(&outputs)? {
+            PlantTick::Inputs(inputs) => {
+                if let Err(e) = plant.step(inputs) {
+                    break Some(e);
+                }
+            }
+            PlantTick::RunEnded | PlantTick::Stopped => break None,
+        }
+        if checkpoints.is_ok() && session.checkpoint_due() {
+            match plant.checkpoint() {
+                Ok(text) => session.save_checkpoint(&text),
+                Err(e) => session.event("plant-checkpoint-failed", e),
+            }
+        }
+    };
+    if let Some(e) = &error {
+        eprintln!("silrig-plant: {e}");
+    }
+    session.finish(error.as_deref())
+}
