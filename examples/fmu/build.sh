@@ -62,5 +62,10 @@ mkdir -p "$tmp/fmu/binaries/linux64"
 cp "$src/modelDescription.xml" "$tmp/fmu/modelDescription.xml"
 (cd "$tmp/fmu" && "$python" -m zipfile -c "$tmp/packed.fmu" modelDescription.xml binaries) ||
     die "packing $out failed"
-mv "$tmp/packed.fmu" "$out" || die "cannot write $out"
+# Copied beside OUT first and renamed into place: a reader never sees half an FMU, even across file systems.
+partial="$out.partial.$$"
+if ! cp "$tmp/packed.fmu" "$partial" || ! mv -f "$partial" "$out"; then
+    rm -f "$partial"
+    die "cannot write $out"
+fi
 echo "build.sh: $out ($id, FMI 2.0 co-simulation, binaries/linux64/$id.so)"

@@ -6,10 +6,14 @@ Rust test judges it) and exits 0, unless the FMU takes the process down (misbeha
     python3 check_fmu.py roundtrip AIRFRAME.fmu  FMU state got, serialized, restored: does the flight go on the same?
     python3 check_fmu.py misbehave MISBEHAVE.fmu FAULT   fault from 0.5 s, stepping 0.01 s to 1 s
     python3 check_fmu.py instantiate FMU         instantiate as the model description says: failure and log
+
+It unpacks the FMU into folders beside it (unzipped-*), which it leaves there.
 """
 
 import json
 import math
+import os
+import tempfile
 from ctypes import byref
 import struct
 import sys
@@ -51,9 +55,16 @@ class Logged:
         addLoggerProxy(byref(self.callbacks))  # formats the FMU's printf-style message before log() sees it
 
 
+def unzipped(fmu):
+    """The FMU unpacked beside it (the test's own folder, which the test removes: a segfault leaves nothing
+    behind elsewhere)."""
+    folder = tempfile.mkdtemp(prefix="unzipped-", dir=os.path.dirname(os.path.abspath(fmu)))
+    return extract(fmu, unzipdir=folder)
+
+
 def open_slave(fmu, logged=None, name="check"):
     md = read_model_description(fmu)
-    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu), modelIdentifier=md.coSimulation.modelIdentifier,
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped(fmu), modelIdentifier=md.coSimulation.modelIdentifier,
                       instanceName=name)
     slave.instantiate(callbacks=logged.callbacks if logged else None)
     return md, slave, {v.name: v.valueReference for v in md.modelVariables}
@@ -63,7 +74,6 @@ def validate(fmu):
     """FMPy's validation, and which functions of the FMI 2.0 API (every fmi2...TYPE of fmpy's fmi2FunctionTypes.h)
     the binary does not export."""
     import ctypes
-    import os
     import re
 
     import fmpy
@@ -71,7 +81,7 @@ def validate(fmu):
     md = read_model_description(fmu)
     header = os.path.join(os.path.dirname(fmpy.__file__), "c-code", "fmi2FunctionTypes.h")
     api = sorted(set(re.findall(r"\b(fmi2\w+)TYPE\b", open(header).read())))
-    binary = os.path.join(extract(fmu), "binaries", "linux64", md.coSimulation.modelIdentifier + ".so")
+    binary = os.path.join(unzipped(fmu), "binaries", "linux64", md.coSimulation.modelIdentifier + ".so")
     lib = ctypes.CDLL(binary)
     return {"problems": validate_fmu(fmu), "api_functions": len(api),
             "missing_functions": [f for f in api if not hasattr(lib, f)]}

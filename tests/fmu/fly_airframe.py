@@ -17,6 +17,7 @@ import argparse
 import json
 import math
 import pathlib
+import shutil
 import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "python"))
@@ -68,7 +69,7 @@ class Session:
 def fly(fmu, setpoints, duration_s, delay_ticks, parameters, trace=None):
     md = read_model_description(fmu)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzipped = extract(fmu)
+    unzipped = extract(fmu)  # a temporary folder, removed at the end
     slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
                       instanceName="airframe")
     slave.instantiate()
@@ -101,6 +102,7 @@ def fly(fmu, setpoints, duration_s, delay_ticks, parameters, trace=None):
         t = (k + 1) * DT_S
     slave.terminate()
     slave.freeInstance()
+    shutil.rmtree(unzipped, ignore_errors=True)
 
     if trace:
         with open(trace, "w") as f:
