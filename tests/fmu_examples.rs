@@ -8,7 +8,7 @@
 //!   modelDescription.xml are the ones the C code uses.
 //! - Closed loop with the example PID (`examples/python/pid_attitude.py`'s class, the F-16 gains it picks for a
 //!   plant in deg) at 100 Hz with the rig's one tick of delay, and with one more: the 10 deg roll and 5 deg pitch
-//!   steps settle and nothing keeps swinging (`tests/fmu/fly_airframe.py`).
+//!   steps settle and nothing keeps swinging (`tests/fmu/fly_airframe.py`); the C example's gains are the same.
 //! - Its FMU state, taken, serialized and put back (in the same instance, and in a new one from the bytes), flies
 //!   on bit-identically; bytes that are not a state are refused.
 //! - misbehave fails as its `fault` says (fmi2Error, fmi2Discard, fmi2Fatal from doStep, a segfault, NaN, a slow
@@ -154,6 +154,30 @@ fn airframe_flies_with_the_example_pid() {
         }
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The C example (`examples/c/pid_attitude.c`) flies every plant on the F-16's gains: the same numbers as the Python
+/// example's `F16`, which the closed loop above flew, so what it showed holds for the C controller too.
+#[test]
+fn c_example_pid_has_the_gains_the_closed_loop_flew() {
+    let c = std::fs::read_to_string(Path::new(ROOT).join("examples/c/pid_attitude.c")).unwrap();
+    let array = |name: &str| -> Vec<f64> {
+        let line = c
+            .lines()
+            .find(|l| l.starts_with(&format!("static const double {name}[3] = {{")))
+            .unwrap_or_else(|| panic!("pid_attitude.c has no {name}[3]"));
+        let inside = &line[line.find('{').unwrap() + 1..line.find('}').unwrap()];
+        inside.split(',').map(|x| x.trim().parse().unwrap()).collect()
+    };
+    let c_gains: Vec<Vec<f64>> = ["KP", "KD", "KI", "TRAVEL"].iter().map(|n| array(n)).collect();
+    let o = Command::new(fmpy_python())
+        .current_dir(Path::new(ROOT).join("examples/python"))
+        .args(["-c", "import json, pid_attitude; print(json.dumps(pid_attitude.F16))"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let python: Vec<Vec<f64>> = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(c_gains, python, "pid_attitude.c's KP, KD, KI, TRAVEL against pid_attitude.py's F16");
 }
 
 #[test]

@@ -13,11 +13,11 @@ It unpacks the FMU into folders beside it (unzipped-*), which it leaves there.
 import json
 import math
 import os
-import tempfile
-from ctypes import byref
 import struct
 import sys
+import tempfile
 import time
+from ctypes import byref
 
 import numpy as np
 from fmpy import extract, read_model_description, simulate_fmu
