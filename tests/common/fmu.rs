@@ -8,9 +8,11 @@ use std::sync::OnceLock;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-/// The Python of `target/test-venv` with FMPy installed.
+/// The Python of `target/test-venv` with FMPy installed (by the first caller of this test process, so that tests
+/// running in parallel do not pip-install it into the venv at the same time).
 pub fn fmpy_python() -> PathBuf {
-    super::venv_python("fmpy", "fmpy")
+    static PYTHON: OnceLock<PathBuf> = OnceLock::new();
+    PYTHON.get_or_init(|| super::venv_python("fmpy", "fmpy")).clone()
 }
 
 /// The folder of FMI headers inside the venv's `fmpy` package (`fmpy/c-code`, holding `fmi2Functions.h`).
