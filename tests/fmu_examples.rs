@@ -4,8 +4,9 @@
 //!
 //! - Both build, FMPy's validation finds no problem, and their binaries export the whole FMI 2.0 API.
 //! - The airframe flies open loop under FMPy's own master: a step of each surface moves its axis the way the
-//!   Stevens & Lewis signs say (a positive deflection, a negative moment), and its parameters' start values in
-//!   modelDescription.xml are the ones the C code uses.
+//!   Stevens & Lewis signs say (a positive deflection, a negative moment); its parameters' start values in
+//!   modelDescription.xml are the ones the C code uses, set by name they reach the model, and once initialized
+//!   they are fixed.
 //! - Closed loop with the example PID (`examples/python/pid_attitude.py`'s class, the F-16 gains it picks for a
 //!   plant in deg) at 100 Hz with the rig's one tick of delay, and with one more: the 10 deg roll and 5 deg pitch
 //!   steps settle and nothing keeps swinging (`tests/fmu/fly_airframe.py`); the C example's gains are the same.
@@ -103,6 +104,17 @@ fn airframe_open_loop_responds_with_the_book_signs() {
     assert!(f(&rd["at_0.7s"]["beta_deg"]) > 0.1, "{rd}");
     assert!(f(&rd["at_1.5s"]["phi_deg"]) < -1.0, "{rd}");
     assert_eq!(f(&e["airspeed_mps"]), 25.0, "{e}");
+
+    // Parameters set by name before initialization reach the model; after it they are refused and kept.
+    let off = &r["ineffective_aileron"];
+    for axis in ["phi_deg", "psi_deg", "p_dps", "r_dps", "beta_deg"] {
+        assert_eq!(f(&off[axis]), 0.0, "Cl_da = Cn_da = 0, yet the aileron moved {axis}: {off}");
+    }
+    assert!((f(&off["aileron_deg"]) - 5.0).abs() < 1e-6, "{off}");
+    assert_eq!(f(&off["airspeed_mps"]), 30.0, "{off}");
+    assert_eq!(r["fixed_parameter_set_after_initialization"], "error", "{r}");
+    assert_eq!(f(&r["Cl_da_after"]), -0.07, "{r}");
+    assert!(r["fixed_log"].to_string().contains("is fixed"), "{r}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

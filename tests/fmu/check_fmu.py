@@ -98,14 +98,38 @@ def open_loop(fmu):
     result["parameters"] = len(params)
     slave.freeInstance()
 
-    # FMPy's own co-simulation master: one surface steps to +5 deg at 0.5 s, the others stay at 0.
-    result["steps"] = {}
-    for surface in ("aileron", "elevator", "rudder"):
+    # A parameter is fixed once initialized: setting it then is an error, and it keeps its value.
+    logged = Logged()
+    md2, slave, vr = open_slave(fmu, logged)
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    try:
+        slave.setReal([vr["Cl_da"]], [0.0])
+        result["fixed_parameter_set_after_initialization"] = "accepted"
+    except FMICallException as e:
+        result["fixed_parameter_set_after_initialization"] = STATUS[e.status]
+    result["Cl_da_after"] = slave.getReal([vr["Cl_da"]])[0]
+    result["fixed_log"] = logged.messages
+    slave.freeInstance()
+
+    def step(surface, parameters=None):
+        """FMPy's own co-simulation master: `surface` steps to +5 deg at 0.5 s, the others stay at 0."""
         columns = ("aileron", "elevator", "rudder")
         signal = np.array([(t,) + tuple(v if c == surface else 0.0 for c in columns)
                            for t, v in ((0.0, 0.0), (0.5, 0.0), (0.5, 5.0), (3.0, 5.0))],
                           dtype=[("time", np.float64)] + [(c, np.float64) for c in columns])
-        r = simulate_fmu(fmu, stop_time=3.0, step_size=DT_S, output_interval=DT_S, input=signal)
+        return simulate_fmu(fmu, stop_time=3.0, step_size=DT_S, output_interval=DT_S, input=signal,
+                            start_values=parameters or {})
+
+    # Parameters reach the model: no aileron effectiveness, no roll or yaw from the aileron at all; the airspeed.
+    r = step("aileron", {"Cl_da": 0.0, "Cn_da": 0.0, "trim_airspeed_mps": 30.0})
+    result["ineffective_aileron"] = {n: float(abs(r[n]).max()) for n in ("phi_deg", "psi_deg", "p_dps", "r_dps",
+                                                                        "beta_deg", "aileron_deg", "airspeed_mps")}
+
+    result["steps"] = {}
+    for surface in ("aileron", "elevator", "rudder"):
+        r = step(surface)
         names = r.dtype.names
         before = r[r["time"] <= 0.5 + 1e-9]
         at = lambda t: r[np.argmin(abs(r["time"] - t))]  # noqa: E731
