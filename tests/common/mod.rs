@@ -1,6 +1,9 @@
 //! Helpers the tests that start the rig's processes share: a fresh folder per test, a watchdog that kills and reaps
 //! only the child it was given, and the check that a run left no shared memory behind.
 
+#[allow(dead_code)]
+pub mod fmu;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output};
 use std::sync::OnceLock;

@@ -1,0 +1,87 @@
+//! The FMUs this repository builds from C, for the tests that fly or break them: `airframe` (the example vehicle,
+//! `examples/fmu/airframe`) and `misbehave` (the importer's error fixture, `tests/fmu/misbehave`), each built by
+//! `examples/fmu/build.sh` with the system `cc` against the FMI 2.0 headers of the test venv's `fmpy`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+/// The Python of `target/test-venv` with FMPy installed (by the first caller of this test process, so that tests
+/// running in parallel do not pip-install it into the venv at the same time).
+pub fn fmpy_python() -> PathBuf {
+    static PYTHON: OnceLock<PathBuf> = OnceLock::new();
+    PYTHON.get_or_init(|| super::venv_python("fmpy", "fmpy")).clone()
+}
+
+/// The folder of FMI headers inside the venv's `fmpy` package (`fmpy/c-code`, holding `fmi2Functions.h`).
+pub fn fmi_headers() -> &'static Path {
+    static HEADERS: OnceLock<PathBuf> = OnceLock::new();
+    HEADERS.get_or_init(|| {
+        let o = Command::new(fmpy_python())
+            .args(["-c", "import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), 'c-code'))"])
+            .output()
+            .expect("the venv's python runs");
+        assert!(o.status.success(), "locating fmpy's headers: {}", String::from_utf8_lossy(&o.stderr));
+        let dir = PathBuf::from(String::from_utf8_lossy(&o.stdout).trim());
+        assert!(dir.join("fmi2Functions.h").exists(), "{} has no fmi2Functions.h", dir.display());
+        dir
+    })
+}
+
+/// The source folder (C files and `modelDescription.xml`) of an FMU this repository builds.
+pub fn fmu_source(name: &str) -> PathBuf {
+    match name {
+        "airframe" => Path::new(ROOT).join("examples/fmu/airframe"),
+        "misbehave" => Path::new(ROOT).join("tests/fmu/misbehave"),
+        other => panic!("no FMU named {other}: airframe or misbehave"),
+    }
+}
+
+/// `examples/fmu/build.sh SRC OUT` with the venv's headers and Python: its output, whatever the outcome.
+pub fn run_build_sh(src: &Path, out: &Path) -> std::process::Output {
+    Command::new("sh")
+        .arg(Path::new(ROOT).join("examples/fmu/build.sh"))
+        .arg(src)
+        .arg(out)
+        .env("FMI_HEADERS", fmi_headers())
+        .env("PYTHON", fmpy_python())
+        .output()
+        .expect("sh runs")
+}
+
+/// Build FMU `name` ("airframe" or "misbehave") into `out_dir/<name>.fmu` and return that path.
+pub fn build_fmu(name: &str, out_dir: &Path) -> PathBuf {
+    build(&fmu_source(name), &out_dir.join(format!("{name}.fmu")))
+}
+
+/// `misbehave` with a GUID in its `modelDescription.xml` that its binary does not know: `out_dir/wrong_guid.fmu`
+/// (built from the same C source; its `fmi2Instantiate` logs "wrong GUID ..." and returns NULL).
+pub fn build_wrong_guid_fmu(out_dir: &Path) -> PathBuf {
+    let src = out_dir.join("wrong_guid_src");
+    std::fs::create_dir_all(&src).unwrap();
+    let original = fmu_source("misbehave");
+    std::fs::copy(original.join("misbehave.c"), src.join("misbehave.c")).unwrap();
+    let xml = std::fs::read_to_string(original.join("modelDescription.xml")).unwrap();
+    let start = xml.find("guid=\"").expect("misbehave's modelDescription.xml has a guid") + "guid=\"".len();
+    let end = start + xml[start..].find('"').unwrap();
+    let wrong = "{00000000-0000-4000-8000-000000000bad}";
+    assert_ne!(&xml[start..end], wrong);
+    std::fs::write(src.join("modelDescription.xml"), format!("{}{wrong}{}", &xml[..start], &xml[end..])).unwrap();
+    build(&src, &out_dir.join("wrong_guid.fmu"))
+}
+
+fn build(src: &Path, out: &Path) -> PathBuf {
+    let o = run_build_sh(src, out);
+    assert!(
+        o.status.success(),
+        "building {} from {}: {}{}",
+        out.display(),
+        src.display(),
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.exists(), "build.sh succeeded but wrote no {}", out.display());
+    out.to_path_buf()
+}
