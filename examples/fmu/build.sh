@@ -1,11 +1,11 @@
 #!/bin/sh
-# Build an FMI 2.0 co-simulation FMU for Linux x86-64 from a folder of C sources and its modelDescription.xml:
+# Build an FMI 2.0 or 3.0 co-simulation FMU for Linux x86-64 from a folder of C sources and its modelDescription.xml:
 #
 #   examples/fmu/build.sh SRC_DIR OUT.fmu
 #
-# compiles SRC_DIR/*.c with the system C compiler (`cc`, or $CC) into binaries/linux64/<modelIdentifier>.so, adds
-# SRC_DIR/modelDescription.xml and packs both into OUT.fmu with Python's zipfile module (no `zip` needed).
-# The FMI 2.0 headers come from $FMI_HEADERS (a folder holding fmi2Functions.h), else from the fmpy package that
+# compiles SRC_DIR/*.c with the system C compiler (`cc`, or $CC) into binaries/linux64/<modelIdentifier>.so (FMI 3.0:
+# binaries/x86_64-linux/), adds SRC_DIR/modelDescription.xml and packs both into OUT.fmu with Python's zipfile module
+# (no `zip` needed). The FMI headers come from $FMI_HEADERS (a folder holding fmi2Functions.h and fmi3Functions.h), else from the fmpy package that
 # `python3` ($PYTHON) imports (pip install fmpy). Everything happens in a temporary folder: OUT.fmu appears whole or
 # not at all.
 set -eu
@@ -36,28 +36,35 @@ case $python in
 esac
 command -v "$compiler" >/dev/null 2>&1 || die "C compiler $compiler not found (Debian: apt-get install gcc; or set CC)"
 
-# The binary's name: the modelIdentifier of <CoSimulation> (this also checks that the XML is well-formed).
-id=$("$python" -c '
+# The binary's name, the modelIdentifier of <CoSimulation>, and its folder, which the FMI version decides (this also
+# checks that the XML is well-formed).
+found=$("$python" -c '
 import sys, xml.etree.ElementTree as ET
 root = ET.parse(sys.argv[1]).getroot()
 cs = root.find("CoSimulation")
-if root.get("fmiVersion") != "2.0" or cs is None or not cs.get("modelIdentifier"):
-    sys.exit(sys.argv[1] + ": not an FMI 2.0 co-simulation model description with a modelIdentifier")
-print(cs.get("modelIdentifier"))
+folders = {"2.0": "linux64", "3.0": "x86_64-linux"}
+if root.get("fmiVersion") not in folders or cs is None or not cs.get("modelIdentifier"):
+    sys.exit(sys.argv[1] + ": not an FMI 2.0 or 3.0 co-simulation model description with a modelIdentifier")
+print(cs.get("modelIdentifier"), folders[root.get("fmiVersion")], root.get("fmiVersion"))
 ' "$src/modelDescription.xml") || die "cannot read the modelIdentifier from $src/modelDescription.xml"
+id=${found%% *}
+rest=${found#* }
+platform=${rest%% *}
+version=${rest#* }
 
 if [ -z "${FMI_HEADERS:-}" ]; then
     FMI_HEADERS=$("$python" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))' 2>/dev/null) ||
-        die "no FMI 2.0 headers: set FMI_HEADERS to a folder with fmi2Functions.h, or pip install fmpy for $python"
+        die "no FMI headers: set FMI_HEADERS to a folder with fmi2Functions.h, or pip install fmpy for $python"
 fi
-[ -f "$FMI_HEADERS/fmi2Functions.h" ] || die "$FMI_HEADERS has no fmi2Functions.h (FMI_HEADERS must hold the FMI 2.0 headers)"
+header=fmi${version%%.*}Functions.h
+[ -f "$FMI_HEADERS/$header" ] || die "$FMI_HEADERS has no $header (FMI_HEADERS must hold the FMI $version headers)"
 
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/fmu-build.XXXXXX") || die "cannot create a temporary folder"
 trap 'rm -rf "$tmp"' EXIT
 trap 'exit 1' HUP INT TERM
-mkdir -p "$tmp/fmu/binaries/linux64"
+mkdir -p "$tmp/fmu/binaries/$platform"
 
-"$compiler" -shared -fPIC -O2 -Wall -I "$FMI_HEADERS" -o "$tmp/fmu/binaries/linux64/$id.so" "$@" -lm ||
+"$compiler" -shared -fPIC -O2 -Wall -I "$FMI_HEADERS" -o "$tmp/fmu/binaries/$platform/$id.so" "$@" -lm ||
     die "compiling $* failed"
 cp "$src/modelDescription.xml" "$tmp/fmu/modelDescription.xml"
 (cd "$tmp/fmu" && "$python" -m zipfile -c "$tmp/packed.fmu" modelDescription.xml binaries) ||
@@ -68,4 +75,4 @@ if ! cp "$tmp/packed.fmu" "$partial" || ! mv -f "$partial" "$out"; then
     rm -f "$partial"
     die "cannot write $out"
 fi
-echo "build.sh: $out ($id, FMI 2.0 co-simulation, binaries/linux64/$id.so)"
+echo "build.sh: $out ($id, FMI $version co-simulation, binaries/$platform/$id.so)"

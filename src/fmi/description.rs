@@ -181,10 +181,8 @@ impl ModelDescription {
         })?;
         let child = |name: &str| root.children().find(|n| n.has_tag_name(name));
         let Some(cs) = child("CoSimulation") else {
-            let offers: Vec<&str> = ["ModelExchange", "ScheduledExecution"]
-                .into_iter()
-                .filter(|k| child(k).is_some())
-                .collect();
+            let offers: Vec<&str> =
+                ["ModelExchange", "ScheduledExecution"].into_iter().filter(|k| child(k).is_some()).collect();
             return Err(FmiError::Unsupported {
                 file: file.to_string(),
                 what: match offers.is_empty() {
@@ -216,13 +214,11 @@ impl ModelDescription {
                     .filter(|n| n.has_tag_name("ScalarVariable"))
                     .map(|n| variable_v2(n, &units).map_err(&bad))
                     .collect::<Result<_, _>>()?,
-                FmiVersion::V3 => {
-                    list.children().filter(|n| n.is_element()).map(|n| variable_v3(n).map_err(&bad)).collect::<Result<
-                        _,
-                        _,
-                    >>(
-                    )?
-                }
+                FmiVersion::V3 => list
+                    .children()
+                    .filter(|n| n.is_element())
+                    .map(|n| variable_v3(n).map_err(&bad))
+                    .collect::<Result<_, _>>()?,
             },
         };
         Ok(Self { version, model_name, token, co_simulation, default_step_s, variables })
@@ -265,9 +261,9 @@ fn declared_units(root: &roxmltree::Node) -> DeclaredTypes {
 fn attribute_number(node: roxmltree::Node, name: &str, variable: &str) -> Result<Option<f64>, String> {
     match node.attribute(name) {
         None => Ok(None),
-        Some(text) => number(text)
-            .map(Some)
-            .ok_or_else(|| format!("variable {variable:?}: {name}={text:?} is not a number")),
+        Some(text) => {
+            number(text).map(Some).ok_or_else(|| format!("variable {variable:?}: {name}={text:?} is not a number"))
+        }
     }
 }
 
@@ -285,9 +281,7 @@ fn silrig_annotation(node: roxmltree::Node) -> BTreeMap<String, String> {
 
 fn common(node: roxmltree::Node) -> Result<(String, u32, Causality, String), String> {
     let name = node.attribute("name").ok_or("a variable without a name")?.to_string();
-    let vr = node
-        .attribute("valueReference")
-        .ok_or_else(|| format!("variable {name:?} has no valueReference"))?;
+    let vr = node.attribute("valueReference").ok_or_else(|| format!("variable {name:?} has no valueReference"))?;
     let value_reference =
         vr.parse().map_err(|_| format!("variable {name:?}: valueReference {vr:?} is not an unsigned integer"))?;
     let causality_text = node.attribute("causality").unwrap_or("local");
@@ -402,13 +396,10 @@ mod tests {
         assert!(d.co_simulation.can_get_and_set_state && d.co_simulation.can_serialize_state);
         assert_eq!(d.default_step_s, Some(0.01));
         let u = d.variable("u").unwrap();
-        assert_eq!((u.causality, u.unit.as_deref(), u.min, u.max, u.start), (
-            Causality::Input,
-            Some("deg"),
-            Some(-30.0),
-            Some(30.0),
-            Some(0.0)
-        ));
+        assert_eq!(
+            (u.causality, u.unit.as_deref(), u.min, u.max, u.start),
+            (Causality::Input, Some("deg"), Some(-30.0), Some(30.0), Some(0.0))
+        );
         assert_eq!(d.variable("k").unwrap().start, Some(2.0));
         let y = &d.variable("y").unwrap().silrig;
         assert_eq!((y["name"].as_str(), y["trace"].as_str(), y.len()), ("y_m", "false", 2));

@@ -49,7 +49,14 @@ struct LogEnv {
 }
 
 unsafe extern "C" {
-    fn silrig_fmi2_logger(env: *mut c_void, instance: *const c_char, status: Status, cat: *const c_char, msg: *const c_char, ...);
+    fn silrig_fmi2_logger(
+        env: *mut c_void,
+        instance: *const c_char,
+        status: Status,
+        cat: *const c_char,
+        msg: *const c_char,
+        ...
+    );
     fn calloc(count: usize, size: usize) -> *mut c_void;
     fn free(ptr: *mut c_void);
 }

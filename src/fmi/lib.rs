@@ -171,8 +171,8 @@ fn unpack_folder() -> PathBuf {
 fn unpack(path: &Path, file: &str, folder: &Path) -> Result<(), FmiError> {
     let archive_error = |problem: String| FmiError::Archive { file: file.into(), problem };
     let reader = std::fs::File::open(path).map_err(|e| archive_error(format!("cannot be read: {e}")))?;
-    let mut zip = zip::ZipArchive::new(reader)
-        .map_err(|e| archive_error(format!("not a zip archive, as an FMU is ({e})")))?;
+    let mut zip =
+        zip::ZipArchive::new(reader).map_err(|e| archive_error(format!("not a zip archive, as an FMU is ({e})")))?;
     let _ = std::fs::remove_dir_all(folder);
     std::fs::create_dir_all(folder).map_err(|e| archive_error(format!("unpacking into {}: {e}", folder.display())))?;
     // extract() keeps every entry inside the folder (entries with `..` or absolute paths are refused).

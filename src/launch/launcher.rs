@@ -576,6 +576,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     };
     let plant_launch = if plant_external { None } else { Some(opts.plant_cmd.clone()) };
     let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone(), plant_launch)?;
+    sup.plant_fmu = scenario.plant.fmu.clone();
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
     let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
     let supervised = supervise(&mut sup, &mut faults, &scenario, &mut bridge, live.as_mut());

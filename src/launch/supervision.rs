@@ -391,6 +391,8 @@ pub(crate) struct Supervisor {
     plant_cmd: Option<String>,
     /// `--plant external`: nobody here starts the plant; the logger's end is the run's.
     plant_external: bool,
+    /// The FMU silrig-plant flies, if it flies one: named when the plant process dies of a signal.
+    pub(crate) plant_fmu: Option<PathBuf>,
     args: ProcessArgs,
     events: EventLog,
     restart: SupervisionOptions,
@@ -425,6 +427,7 @@ impl Supervisor {
             controller,
             plant_cmd: plant.clone().flatten(),
             plant_external: plant.is_none(),
+            plant_fmu: None,
             args,
             events,
             restart,
@@ -602,7 +605,17 @@ impl Supervisor {
             };
             let tail = stderr_tail(&self.args.out, role);
             let when = if self.plant_ticking() { "before the end of the run" } else { "before the plant's first tick" };
-            self.on_death(i, format!("{role}: {how} {when}{tail}"));
+            let fmu = match (&self.plant_fmu, role, status.code()) {
+                // A crash in an FMU's code takes the plant process with it: say which FMU it was flying.
+                (Some(fmu), Role::Plant, None) => {
+                    format!(
+                        " while flying the FMU {} (a crash in the FMU's code ends the plant process)",
+                        fmu.display()
+                    )
+                }
+                _ => String::new(),
+            };
+            self.on_death(i, format!("{role}: {how} {when}{fmu}{tail}"));
         }
         Ok(())
     }

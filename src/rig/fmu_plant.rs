@@ -17,10 +17,10 @@
 use super::ProcessArgs;
 use super::plant_session::{PlantSession, PlantTick};
 use super::report::ProcessReport;
-use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
-use silrig_fmi::{Fmu, Instance};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::{InputSignal, OutputSignal, PlantSignals, valid_name, valid_unit};
+use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
+use silrig_fmi::{Fmu, Instance};
 use std::path::Path;
 
 /// The plant's signals of an FMU, and where each lives in it.
@@ -70,7 +70,8 @@ pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Res
             ))),
         }
     };
-    let outputs: Vec<&Variable> = d.variables.iter().filter(|v| v.causality == Causality::Output).filter(real).collect();
+    let outputs: Vec<&Variable> =
+        d.variables.iter().filter(|v| v.causality == Causality::Output).filter(real).collect();
     let inputs: Vec<&Variable> = d.variables.iter().filter(|v| v.causality == Causality::Input).filter(real).collect();
     let mut signals = PlantSignals { plant: signal_name(&d.model_name), outputs: Vec::new(), inputs: Vec::new() };
     if !valid_name(&signals.plant) {
@@ -277,8 +278,5 @@ pub fn run_fmu_plant(args: &ProcessArgs, scenario: Scenario, path: &Path) -> any
             }
         }
     };
-    if let Some(e) = &error {
-        eprintln!("silrig-plant: {e}");
-    }
     session.finish(error.as_deref())
 }

@@ -1,6 +1,7 @@
 //! The FMUs this repository builds from C, for the tests that fly or break them: `airframe` (the example vehicle,
-//! `examples/fmu/airframe`) and `misbehave` (the importer's error fixture, `tests/fmu/misbehave`), each built by
-//! `examples/fmu/build.sh` with the system `cc` against the FMI 2.0 headers of the test venv's `fmpy`.
+//! `examples/fmu/airframe`), `misbehave` (the importer's error fixture, `tests/fmu/misbehave`) and `lag3` (a
+//! first-order lag in FMI 3.0, `tests/fmu/lag3`), each built by `examples/fmu/build.sh` with the system `cc` against
+//! the FMI headers of the test venv's `fmpy`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -35,7 +36,8 @@ pub fn fmu_source(name: &str) -> PathBuf {
     match name {
         "airframe" => Path::new(ROOT).join("examples/fmu/airframe"),
         "misbehave" => Path::new(ROOT).join("tests/fmu/misbehave"),
-        other => panic!("no FMU named {other}: airframe or misbehave"),
+        "lag3" => Path::new(ROOT).join("tests/fmu/lag3"),
+        other => panic!("no FMU named {other}: airframe, misbehave or lag3"),
     }
 }
 
@@ -51,7 +53,7 @@ pub fn run_build_sh(src: &Path, out: &Path) -> std::process::Output {
         .expect("sh runs")
 }
 
-/// Build FMU `name` ("airframe" or "misbehave") into `out_dir/<name>.fmu` and return that path.
+/// Build FMU `name` ("airframe", "misbehave" or "lag3", the FMI 3.0 one) into `out_dir/<name>.fmu` and return that path.
 pub fn build_fmu(name: &str, out_dir: &Path) -> PathBuf {
     build(&fmu_source(name), &out_dir.join(format!("{name}.fmu")))
 }
