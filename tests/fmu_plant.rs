@@ -131,10 +131,11 @@ fn the_c_example_pid_flies_the_airframe_fmu() {
 
 #[test]
 fn a_parameter_set_by_name_reaches_the_fmu() {
-    // Without aileron effectiveness the PID cannot roll the airframe at all: the parameter reached the model.
-    let dir = common::temp_dir("fmu-plant", "parameter-scenario");
-    let text = std::fs::read_to_string(airframe_scenario()).unwrap().replace("servo_tau_s = 0.04", "Cl_da = 0.0");
-    let path = dir.join("no-aileron.toml");
+    // The airframe flies at its trim airspeed, a parameter, and reports it as an output.
+    let dir = common::temp_dir("fmu-plant", "parameter-files");
+    let text =
+        std::fs::read_to_string(airframe_scenario()).unwrap().replace("servo_tau_s = 0.04", "trim_airspeed_mps = 31.5");
+    let path = dir.join("faster.toml");
     std::fs::write(&path, text).unwrap();
     let plant = fmu("airframe");
     let r = run(
@@ -143,15 +144,15 @@ fn a_parameter_set_by_name_reaches_the_fmu() {
     );
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     let (header, rows) = r.trace();
-    let phi = column(&header, "phi_deg");
-    assert!(rows.iter().all(|row| row[phi].abs() < 1.0), "rolled without ailerons");
+    let airspeed = column(&header, "airspeed_mps");
+    assert!(rows.iter().all(|row| row[airspeed] == 31.5), "the parameter did not reach the model");
     r.finish();
     std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]
 fn an_fmi3_fmu_flies_and_follows_its_equation() {
-    let dir = common::temp_dir("fmu-plant", "lag3-scenario");
+    let dir = common::temp_dir("fmu-plant", "lag3-files");
     let path = scenario(&dir, "lag", 2.0, "gain = 3.0\ntau = 0.2");
     let plant = fmu("lag3");
     let r = run("lag3", &["--mode", "lockstep", "--plant-fmu", &plant, "--controller-cmd", &hold("u=1.5"), &path]);
@@ -277,7 +278,7 @@ fn bad_fmu_files_are_refused_naming_the_file_and_the_problem() {
 
 #[test]
 fn parameters_that_do_not_exist_or_cannot_be_set_are_refused_by_name() {
-    let dir = common::temp_dir("fmu-plant", "bad-parameters");
+    let dir = common::temp_dir("fmu-plant", "bad-parameters-files");
     let plant = fmu("misbehave");
     let unknown = scenario(&dir, "unknown", 1.0, "nope = 1.0");
     let stderr = refused("unknown-parameter", &["--mode", "lockstep", "--plant-fmu", &plant, &unknown]);
@@ -296,7 +297,7 @@ fn parameters_that_do_not_exist_or_cannot_be_set_are_refused_by_name() {
 
 #[test]
 fn a_wrong_guid_fails_the_plant_with_what_the_fmu_logged() {
-    let dir = common::temp_dir("fmu-plant", "wrong-guid");
+    let dir = common::temp_dir("fmu-plant", "wrong-guid-files");
     let plant = common::fmu::build_wrong_guid_fmu(&dir);
     let path = scenario(&dir, "guid", 1.0, "");
     let r = run(
@@ -312,7 +313,7 @@ fn a_wrong_guid_fails_the_plant_with_what_the_fmu_logged() {
 
 #[test]
 fn do_step_error_discard_and_fatal_fail_the_run_saying_so() {
-    let dir = common::temp_dir("fmu-plant", "do-step");
+    let dir = common::temp_dir("fmu-plant", "do-step-files");
     let plant = fmu("misbehave");
     for (fault, status) in [(1, "fmi2Error"), (2, "fmi2Discard"), (3, "fmi2Fatal")] {
         let path = scenario(&dir, &format!("fault{fault}"), 2.0, &format!("fault = {fault}\nfault_time_s = 0.5"));
@@ -335,7 +336,7 @@ fn do_step_error_discard_and_fatal_fail_the_run_saying_so() {
 
 #[test]
 fn nan_outputs_of_an_fmu_are_refused_and_counted() {
-    let dir = common::temp_dir("fmu-plant", "nan");
+    let dir = common::temp_dir("fmu-plant", "nan-files");
     let plant = fmu("misbehave");
     let path = scenario(&dir, "nan", 1.0, "fault = 5\nfault_time_s = 0.5");
     let r = run("nan", &["--mode", "lockstep", "--plant-fmu", &plant, "--controller-cmd", &hold("u=1"), &path]);
@@ -351,7 +352,7 @@ fn nan_outputs_of_an_fmu_are_refused_and_counted() {
 
 #[test]
 fn a_segfault_in_the_fmu_is_the_plants_death_with_the_fmu_named() {
-    let dir = common::temp_dir("fmu-plant", "segfault");
+    let dir = common::temp_dir("fmu-plant", "segfault-files");
     let plant = fmu("misbehave");
     let path = scenario(&dir, "segfault", 2.0, "fault = 4\nfault_time_s = 0.5");
     let r = run("segfault", &["--mode", "lockstep", "--plant-fmu", &plant, "--controller-cmd", &hold("u=1"), &path]);
@@ -367,7 +368,7 @@ fn a_segfault_in_the_fmu_is_the_plants_death_with_the_fmu_named() {
 
 #[test]
 fn a_do_step_slower_than_the_period_is_counted_as_overruns() {
-    let dir = common::temp_dir("fmu-plant", "slow");
+    let dir = common::temp_dir("fmu-plant", "slow-files");
     let plant = fmu("misbehave");
     let path = scenario(&dir, "slow", 1.5, "fault = 6\nfault_time_s = 0.5");
     let r = run("slow", &["--plant-fmu", &plant, "--controller-cmd", &hold("u=1"), &path]);
@@ -380,7 +381,7 @@ fn a_do_step_slower_than_the_period_is_counted_as_overruns() {
 
 #[test]
 fn the_single_process_loop_says_an_fmu_flies_in_the_rig() {
-    let dir = common::temp_dir("fmu-plant", "sim");
+    let dir = common::temp_dir("fmu-plant", "sim-files");
     let path = dir.join("fmu.toml");
     let toy = std::fs::read_to_string(format!("{ROOT}/tests/scenarios/toy.toml")).unwrap();
     std::fs::write(&path, format!("{toy}\n[plant]\nfmu = \"airframe.fmu\"\n")).unwrap();
