@@ -110,6 +110,9 @@ enum BenchCommand {
     /// The iceoryx2 ping-pong ceiling between two processes on this machine, and lockstep rig runs as a ratio to it.
     #[command(name = silrig::bench::ipc::SUBCOMMAND)]
     Ipc(silrig::bench::ipc::IpcBenchArgs),
+    /// One plant tick through an FMU (set inputs, doStep, get outputs) against the built-in F-16's tick.
+    #[command(name = silrig::bench::fmu::SUBCOMMAND)]
+    Fmu(silrig::bench::fmu::FmuBenchArgs),
 }
 
 #[derive(Subcommand)]
@@ -149,6 +152,10 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Contract { c_header, python } => contract(c_header, python),
         Command::Bench { what: None } => bench(),
         Command::Bench { what: Some(BenchCommand::Ipc(args)) } => bench_ipc(&args),
+        Command::Bench { what: Some(BenchCommand::Fmu(args)) } => {
+            print!("{}", silrig::bench::fmu::run(&args)?);
+            Ok(ExitCode::SUCCESS)
+        }
         Command::TimerBaseline(args) => timer_baseline(&args),
     }
 }

@@ -1,9 +1,10 @@
 //! Benchmarks run by `silrig bench`: the cost of one plant derivative, one RK4 step, and closed-loop steps per
 //! second in one process. Each figure is the median (and spread) of many batches, so one descheduled batch on a
 //! shared machine does not move it. Beside them, the transport's ping-pong ceiling with the lockstep rig against it
-//! ([`ipc`]); the OS timer floor, ours and cyclictest's, is `silrig_launch::floor`, since `silrig run --floor` takes it
+//! ([`ipc`]), and one plant tick through an FMU against the built-in F-16's ([`fmu`]); the OS timer floor, ours and cyclictest's, is `silrig_launch::floor`, since `silrig run --floor` takes it
 //! beside a run.
 
+pub mod fmu;
 pub mod ipc;
 
 use serde::Serialize;
