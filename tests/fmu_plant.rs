@@ -394,3 +394,36 @@ fn the_single_process_loop_says_an_fmu_flies_in_the_rig() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn silrig_check_judges_the_airframe_fmu_and_its_recording_replays_bit_identical() {
+    let plant = fmu("airframe");
+    let dir = common::temp_dir("fmu-plant", "check-files");
+    let check = Command::new(SILRIG)
+        .args(["check", &format!("{ROOT}/examples/fmu/airframe_check.toml"), "--case", "lockstep-steps"])
+        .args(["--plant-fmu", &plant, "--controller-cmd", &python_pid(), "--out"])
+        .arg(dir.join("check"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&check.stdout);
+    assert_eq!(check.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&check.stderr));
+    assert!(stdout.contains("outputs.phi_deg.settled") && stdout.contains("verdict: PASS"), "{stdout}");
+    assert!(stdout.contains("identical over 1001 ticks"), "{stdout}");
+    let r = run(
+        "replayed",
+        &["--mode", "lockstep", "--plant-fmu", &plant, "--controller-cmd", &python_pid(), &airframe_scenario()],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let replay = Command::new(SILRIG)
+        .arg("replay")
+        .arg(&r.out)
+        .args(["--controller-cmd", &python_pid(), "--out"])
+        .arg(dir.join("replay"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&replay.stdout);
+    assert_eq!(replay.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&replay.stderr));
+    assert!(stdout.contains("PASSED (tolerance 0)"), "{stdout}");
+    r.finish();
+    std::fs::remove_dir_all(dir).unwrap();
+}
