@@ -13,6 +13,41 @@
 //!
 //! Layers: depends on no other silrig crate; the rig's plant process (silrig-rig) uses it.
 
+/// A struct of an FMI version's functions, resolved in the FMU's binary by name, each a missing function named.
+macro_rules! fmi_functions {
+    ($standard:literal, $($field:ident: $symbol:literal: fn($($arg:ty),*) $(-> $ret:ty)?;)*) => {
+        /// The functions a co-simulation importer calls, resolved in the FMU's binary.
+        pub struct Functions {
+            $($field: unsafe extern "C" fn($($arg),*) $(-> $ret)?,)*
+            /// Keeps the binary loaded while the pointers above are in use.
+            _library: libloading::Library,
+        }
+
+        impl Functions {
+            /// Load the binary and resolve every function; a missing one is named.
+            pub fn load(binary: &std::path::Path) -> Result<Self, String> {
+                // SAFETY: loading runs the binary's initializers: an FMU's binary is code the user chose to run.
+                let library = unsafe { libloading::Library::new(binary) }
+                    .map_err(|e| format!("cannot load {}: {e}", binary.display()))?;
+                Ok(Self {
+                    $($field: {
+                        // SAFETY: the symbol has the type the standard's function-types header gives it.
+                        let symbol = unsafe {
+                            library.get::<unsafe extern "C" fn($($arg),*) $(-> $ret)?>($symbol.as_bytes())
+                        }
+                        .map_err(|_| {
+                            format!("its binary {} lacks the {} function {}", binary.display(), $standard, $symbol)
+                        })?;
+                        *symbol
+                    },)*
+                    _library: library,
+                })
+            }
+        }
+    };
+}
+
+mod calls;
 pub mod description;
 pub mod fmi2;
 pub mod fmi3;

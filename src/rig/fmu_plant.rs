@@ -226,7 +226,7 @@ impl FmuPlant {
     pub fn restore(&mut self, text: &str) -> Result<(), String> {
         let saved: SavedFmu = serde_json::from_str(text).map_err(|e| format!("not an FMU plant's checkpoint: {e}"))?;
         let hex = saved.state_hex.as_bytes();
-        if hex.len() % 2 != 0 || !hex.iter().all(u8::is_ascii_hexdigit) {
+        if !hex.len().is_multiple_of(2) || !hex.iter().all(u8::is_ascii_hexdigit) {
             return Err("its FMU state is not hex bytes".into());
         }
         let bytes: Vec<u8> = hex
