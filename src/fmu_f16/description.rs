@@ -5,6 +5,7 @@
 use crate::variables::{
     BOOLEAN_PARAMETERS, FIRST_INPUT_VR, FIRST_PARAMETER_VR, Parameters, REAL_PARAMETERS, inputs, outputs,
 };
+use silrig_model::f16_outputs::{HELD_OUTPUT, INPUTS, PLANT_NAME};
 use silrig_model::vehicle::{F16Vehicle, failsafe_command};
 
 /// The model identifier: the binary's file name in `binaries/<platform>/` and the FMU's name.
@@ -130,6 +131,21 @@ fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid
     for (k, ((name, description), v)) in BOOLEAN_PARAMETERS.iter().zip(p.booleans).enumerate() {
         add(name, k as u32, "parameter", "fixed", description, format!("<Boolean start=\"{v}\"/>"));
     }
+    // How the rig announces this plant beyond what FMI says: its name, which outputs `trace.csv` shows, the rig's
+    // name of each input, the output that reports its actuator's position, and whether its command is traced
+    // (`f16_signals` in silrig-flight), so an importer can announce the FMU exactly as the built-in plant.
+    let mut plant = format!("      <Plant name=\"{PLANT_NAME}\">\n");
+    for (name, _, in_trace) in &outputs {
+        plant.push_str(&format!("        <Output variable=\"{name}\" inTrace=\"{in_trace}\"/>\n"));
+    }
+    for (k, (name, _, _)) in inputs().iter().enumerate() {
+        let (signal, held) = (INPUTS[k].0, outputs[HELD_OUTPUT[k]].0);
+        plant.push_str(&format!(
+            "        <Input variable=\"{name}\" signal=\"{signal}\" heldOutput=\"{held}\" commandInTrace=\"{}\"/>\n",
+            k < 3
+        ));
+    }
+    plant.push_str("      </Plant>\n");
     units.sort_unstable();
     units.dedup();
     let unit_definitions: String = units.iter().map(|u| format!("    <Unit name=\"{}\"/>\n", escape(u))).collect();
@@ -156,6 +172,10 @@ fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid
   <UnitDefinitions>
 {unit_definitions}  </UnitDefinitions>
   <DefaultExperiment startTime="0.0" stopTime="{stop_time_s:?}" stepSize="{step_s:?}"/>
+  <VendorAnnotations>
+    <Tool name="silrig">
+{plant}    </Tool>
+  </VendorAnnotations>
   <ModelVariables>
 {variables}  </ModelVariables>
   <ModelStructure>
@@ -209,6 +229,10 @@ mod tests {
         assert_ne!(guid(&p, &Experiment { stop_time_s: 20.0, step_s: 0.01 }).unwrap(), g);
         assert_eq!(xml.matches("<ScalarVariable").count(), 28 + 4 + 35 + 3);
         assert_eq!(read_start_file(&start_file(&q, &e)).unwrap(), (q, e));
+        let annotation =
+            "<Input variable=\"throttle_cmd\" signal=\"throttle\" heldOutput=\"throttle\" commandInTrace=\"false\"/>";
+        assert!(xml.contains(annotation), "{xml}");
+        assert!(xml.contains("<Input variable=\"elevator\" signal=\"elevator\" heldOutput=\"elevator_deg\""), "{xml}");
     }
 
     #[test]
