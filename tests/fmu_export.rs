@@ -114,10 +114,11 @@ fn compare(csv: &Path, rust: &[[f64; OUTPUTS_LEN]]) -> Agreement {
             a.identical += usize::from(x.to_bits() == y.to_bits());
             let abs = (x - y).abs();
             let rel = abs / y.abs().max(1e-300);
-            if !(abs <= a.max_abs.0) {
+            // NaN (a value one side has and the other not) counts as the largest.
+            if abs > a.max_abs.0 || abs.is_nan() {
                 a.max_abs = (abs, names[k].to_string());
             }
-            if !(rel <= a.max_rel.0) {
+            if rel > a.max_rel.0 || rel.is_nan() {
                 a.max_rel = (rel, names[k].to_string());
             }
         }

@@ -1,6 +1,6 @@
 //! One FMU instance in safe Rust: its phase (FMI 2.0's state machine for co-simulation), its variables' values,
 //! the vehicle once initialised, and its state saved, restored, serialised and read back. The C functions
-//! ([`crate::ffi`]) only translate to and from this; every error is a message for the importer's logger.
+//! (`ffi.rs`) only translate to and from this; every error is a message for the importer's logger.
 
 use crate::description::{DEFAULT_STEP_S, input_starts};
 use crate::variables::{BOOLEAN_PARAMETERS, FIRST_INPUT_VR, FIRST_PARAMETER_VR, Parameters, REAL_PARAMETERS};
