@@ -94,6 +94,15 @@ enum Command {
         #[arg(long)]
         python: Option<PathBuf>,
     },
+    /// Write the built-in F-16 (its actuators, trim and parameters) as an FMI 2.0 co-simulation FMU, for
+    /// `--plant-fmu` or any FMI importer; with a scenario, the parameters' start values come from it.
+    ExportFmu {
+        /// Scenario file (TOML); without it, the book's aircraft at the model's default initial condition.
+        config: Option<PathBuf>,
+        /// The FMU to write (`f16.fmu`).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Micro-benchmarks of the model (median of batches; run on an idle machine); `bench ipc`: the transport's
     /// ping-pong ceiling and the lockstep rig against it.
     Bench {
@@ -150,6 +159,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Check(opts) => check(&opts),
         Command::Replay(opts) => replay(&opts),
         Command::Contract { c_header, python } => contract(c_header, python),
+        Command::ExportFmu { config, out } => export_fmu(config.as_deref(), &out),
         Command::Bench { what: None } => bench(),
         Command::Bench { what: Some(BenchCommand::Ipc(args)) } => bench_ipc(&args),
         Command::Bench { what: Some(BenchCommand::Fmu(args)) } => {
@@ -324,6 +334,17 @@ fn contract(c_header: Option<PathBuf>, python: Option<PathBuf>) -> anyhow::Resul
             println!("wrote {}", path.display());
         }
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn export_fmu(config: Option<&Path>, out: &Path) -> anyhow::Result<ExitCode> {
+    let scenario = config.map(|path| load_scenario(Some(path), None)).transpose()?;
+    let library = silrig::export_fmu::library_beside_executable()?;
+    let exported = silrig::export_fmu::export_fmu(out, scenario.as_ref(), &library)?;
+    for note in &exported.notes {
+        eprintln!("note: {note}");
+    }
+    println!("wrote {} (FMI 2.0 co-simulation, GUID {})", out.display(), exported.guid);
     Ok(ExitCode::SUCCESS)
 }
 

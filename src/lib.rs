@@ -2,7 +2,8 @@
 //! library crates (in `src/`, one per layer), so the binaries in `bins/` and the tests use one name,
 //! `silrig::<module>`, while the compiler keeps the layers apart:
 //!
-//! - `silrig-model` ([`plant`], [`control`], [`actuator`], [`integrator`], [`units`], [`rng`]): the math, no I/O.
+//! - `silrig-model` ([`plant`], [`control`], [`actuator`], [`integrator`], [`units`], [`rng`], [`vehicle`],
+//!   [`f16_outputs`]): the math, no I/O.
 //! - `silrig-flight` ([`scenario`], [`fault`], [`role`], [`dispersion`], [`sim`], [`trace`], [`summary`],
 //!   [`f_true`], [`criteria`], [`judge`], [`files`]): a flight as data and as one deterministic process.
 //! - `silrig-wire` ([`wire`], [`topology`], [`ipc`], [`clock`], [`timing`], [`recording`]): the contract and the
@@ -11,7 +12,7 @@
 //! - `silrig-rig` ([`rig`]): the plant, controller and logger processes and the controller session.
 //! - `silrig-launch` ([`launch`]): `silrig run`, supervision, faults, the run's report.
 //! - `silrig-tools` ([`check`], [`campaign`], [`replay`], [`bench`], [`contract`], [`outputs`],
-//!   [`derivative_csv`]): the tools on top.
+//!   [`derivative_csv`], [`export_fmu`]): the tools on top.
 //! - `silrig-bridge` ([`bridge`], feature `bridge`): the rig's streams between two hosts over Zenoh.
 
 #![warn(missing_docs)]
@@ -21,8 +22,8 @@ pub use silrig_bridge as bridge;
 
 pub use silrig_flight::{criteria, dispersion, f_true, fault, files, judge, role, scenario, sim, summary, trace};
 pub use silrig_launch as launch;
-pub use silrig_model::{actuator, control, integrator, plant, rng, units};
+pub use silrig_model::{actuator, control, f16_outputs, integrator, plant, rng, units, vehicle};
 pub use silrig_plot as plot;
 pub use silrig_rig as rig;
-pub use silrig_tools::{bench, campaign, check, contract, derivative_csv, outputs, replay};
+pub use silrig_tools::{bench, campaign, check, contract, derivative_csv, export_fmu, outputs, replay};
 pub use silrig_wire::{clock, ipc, recording, timing, topology, wire};

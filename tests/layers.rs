@@ -16,12 +16,14 @@ const LAYERS: [(&str, &[&str]); 8] = [
     ("plot", &["flight"]),
     ("rig", &["model", "flight", "wire", "fmi"]),
     ("launch", &["flight", "wire", "plot", "rig"]),
-    ("tools", &["model", "flight", "wire", "plot", "rig", "launch"]),
+    // `fmu-f16`: `silrig export-fmu` writes the description the FMU's binary checks its GUID with.
+    ("tools", &["model", "flight", "wire", "plot", "rig", "launch", "fmu-f16"]),
 ];
 
-/// The crates beside the layers, each linking only what its users need: the C ABI a user's controller loads, and
-/// the Zenoh bridge.
-const LEAVES: [(&str, &[&str]); 2] = [("client", &["wire", "rig"]), ("bridge", &["flight", "wire", "rig"])];
+/// The crates beside the layers, each linking only what its users need: the C ABI a user's controller loads, the
+/// Zenoh bridge, and the F-16 as an FMU (the model alone: an importer loads it into any process).
+const LEAVES: [(&str, &[&str]); 3] =
+    [("client", &["wire", "rig"]), ("bridge", &["flight", "wire", "rig"]), ("fmu_f16", &["model"])];
 
 /// Crates that link the rig with the OS or draw: never below the wire, nor (plotting) under the client.
 const TRANSPORT_DEPS: [&str; 4] = ["iceoryx2", "libc", "mcap", "zenoh"];
@@ -63,6 +65,8 @@ fn every_crate_depends_only_on_the_layers_below_it() {
     }
     let client = dependencies("client");
     assert!(client.iter().all(|d| ["silrig-rig", "silrig-wire"].contains(&d.as_str())), "the client links {client:?}");
+    let fmu = dependencies("fmu_f16");
+    assert!(fmu.iter().all(|d| d == "silrig-model"), "the FMU links {fmu:?}: the model alone");
 }
 
 /// Every `.rs` file of a crate with its module path (`""` for lib.rs, `a::b` for a/b.rs or a/b/mod.rs).

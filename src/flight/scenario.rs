@@ -59,78 +59,8 @@ pub struct Scenario {
     pub criteria: Option<Criteria>,
 }
 
-/// How the run starts.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct InitialCondition {
-    /// `explicit`: every angle below is used as given; `trim`: alpha, theta, throttle and elevator come from the
-    /// level-flight trim at this airspeed and altitude (phi, psi and the rates still from below).
-    #[serde(default)]
-    pub mode: InitialMode,
-    /// True airspeed, m/s.
-    pub airspeed_mps: f64,
-    /// Altitude, ft.
-    pub altitude_ft: f64,
-    /// Angle of attack, deg (explicit mode).
-    #[serde(default)]
-    pub alpha_deg: f64,
-    /// Sideslip, deg.
-    #[serde(default)]
-    pub beta_deg: f64,
-    /// Roll angle, deg.
-    #[serde(default)]
-    pub phi_deg: f64,
-    /// Pitch angle, deg (explicit mode).
-    #[serde(default)]
-    pub theta_deg: f64,
-    /// Heading, deg.
-    #[serde(default)]
-    pub psi_deg: f64,
-    /// Body roll rate, deg/s.
-    #[serde(default)]
-    pub p_dps: f64,
-    /// Body pitch rate, deg/s.
-    #[serde(default)]
-    pub q_dps: f64,
-    /// Body yaw rate, deg/s.
-    #[serde(default)]
-    pub r_dps: f64,
-    /// Throttle 0..1; omitted: the value that gives VT_dot = 0 at the initial state with the engine at its
-    /// equilibrium power (explicit mode), or the trim throttle.
-    #[serde(default)]
-    pub throttle: Option<f64>,
-}
-
-impl Default for InitialCondition {
-    /// The embedded default scenario's: explicit, 150 m/s at 25,000 ft, alpha, phi, theta and psi 5 deg.
-    fn default() -> Self {
-        Self {
-            mode: InitialMode::Explicit,
-            airspeed_mps: 150.0,
-            altitude_ft: 25_000.0,
-            alpha_deg: 5.0,
-            beta_deg: 0.0,
-            phi_deg: 5.0,
-            theta_deg: 5.0,
-            psi_deg: 5.0,
-            p_dps: 0.0,
-            q_dps: 0.0,
-            r_dps: 0.0,
-            throttle: None,
-        }
-    }
-}
-
-/// Initial-condition mode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum InitialMode {
-    /// Angles and rates as given.
-    #[default]
-    Explicit,
-    /// Level-flight trim.
-    Trim,
-}
+/// How the run starts, and its mode: the vehicle's own ([`silrig_model::vehicle`]), kept here under their old names.
+pub use silrig_model::vehicle::{InitialCondition, InitialMode};
 
 /// Constant set points: the attitude our controller flies (`phi_deg`, `theta_deg`, `psi_deg`, 0 when not given),
 /// and any other plant output by its name, in that output's unit (`alt_ft = 4000.0`), which a controller of your

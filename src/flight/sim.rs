@@ -21,16 +21,15 @@
 //! `tick * dt`, never on a clock.
 
 use crate::fault::{Fault, FaultAction, SENSOR_CHANNELS, SURFACES};
-use crate::scenario::{InitialMode, Scenario};
+use crate::scenario::Scenario;
 use crate::trace::{self, Trace};
-use silrig_model::actuator::{Actuator, ActuatorFault, LimitHits};
+use silrig_model::actuator::ActuatorFault;
 use silrig_model::control::{AttitudeController, ControllerDiagnostics, Measurement, SurfaceCommand};
-use silrig_model::integrator::rk4_step;
-use silrig_model::plant::trim::trim_level_flight;
-use silrig_model::plant::{ControlInputs, ExternalForcing, F16Model, F16State, STATE_NAMES, engine};
-use silrig_model::plant::{envelope, envelope::EnvelopeError};
+use silrig_model::plant::envelope::EnvelopeError;
+use silrig_model::plant::{ExternalForcing, F16State, STATE_NAMES};
 use silrig_model::rng::SplitMix64;
-use silrig_model::units::{deg_to_rad, m_to_ft};
+use silrig_model::units::deg_to_rad;
+use silrig_model::vehicle::{F16Vehicle, InitialError};
 
 /// Why a scenario cannot start.
 #[derive(Debug, thiserror::Error)]
@@ -74,15 +73,19 @@ pub enum SetupError {
     },
 }
 
-/// A flight that left the model's envelope: when, and which state.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("the state left the model's envelope at t = {t_s:.2} s: {error}")]
-pub struct LeftEnvelope {
-    /// Simulated time of the first state outside, s (the flight is kept up to the sample before it).
-    pub t_s: f64,
-    /// The state at fault and why.
-    pub error: EnvelopeError,
+impl From<InitialError> for SetupError {
+    fn from(e: InitialError) -> Self {
+        match e {
+            InitialError::Trim(e) => Self::Trim(e),
+            InitialError::NoThrottle { at_idle, at_full } => Self::NoThrottle { at_idle, at_full },
+            InitialError::OutsideEnvelope(e) => Self::OutsideEnvelope(e),
+        }
+    }
 }
+
+/// A flight that left the envelope, the actuator positions and commands of a step: the vehicle's own
+/// ([`silrig_model::vehicle`]), kept here under their old names.
+pub use silrig_model::vehicle::{ActuatorCommand, HeldActuators, LeftEnvelope, StepHits};
 
 /// Why a closed-loop run did not fly its whole scenario.
 #[derive(Debug, thiserror::Error)]
@@ -101,33 +104,6 @@ pub enum SimError {
 }
 
 pub use crate::f16_signals::{PlantSnapshot, measured_columns};
-
-/// The actuator positions held over one step, as row k of the trace shows them: the deflections and throttle the
-/// actuators took at t_k, acting until t_k+1.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HeldActuators {
-    /// Aileron, elevator, rudder, deg.
-    pub surfaces_deg: [f64; 3],
-    /// Throttle, 0..1.
-    pub throttle: f64,
-}
-
-impl HeldActuators {
-    /// Positions not known (the plant sample that carries them never came): NaN.
-    pub const UNKNOWN: Self = Self { surfaces_deg: [f64::NAN; 3], throttle: f64::NAN };
-}
-
-/// What the actuators are told to do for one tick.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ActuatorCommand {
-    /// Surface commands, deg.
-    pub surfaces: SurfaceCommand,
-    /// Throttle command, 0..1.
-    pub throttle: f64,
-}
-
-/// Which limits bound each actuator in one step: aileron, elevator, rudder, throttle.
-pub type StepHits = [LimitHits; 4];
 
 /// Mixed into `scenario.seed` for the sensor-noise stream, so another random source seeded from the same scenario
 /// seed never draws the same sequence as the noise.
@@ -164,48 +140,24 @@ struct SurfaceFault {
     mode: ActuatorFault,
 }
 
-/// The plant side of the loop: model, actuators and state.
+/// The plant side of the loop: the vehicle (model, actuators and state, [`F16Vehicle`]) with the scenario's
+/// disturbance and plant-model faults around it.
 ///
-/// It also carries the scenario's plant-model faults. Sensor noise comes from one SplitMix64 stream seeded from
+/// It carries the scenario's plant-model faults. Sensor noise comes from one SplitMix64 stream seeded from
 /// `scenario.seed`, drawn once per tick per active noise fault (in plan order) when that tick's state becomes
 /// current, not when it is read: the reported sample is a function of the tick alone, however often
 /// [`PlantRunner::snapshot`] is called, so `silrig sim` and the rig's plant report the same bits.
 #[derive(Debug, Clone)]
 pub struct PlantRunner {
-    model: F16Model,
-    forcing: ExternalForcing,
+    /// Model, holds, actuators, the true state and the tick.
+    vehicle: F16Vehicle,
     disturbance: crate::scenario::Disturbance,
     disturbance_mask: [bool; 3],
-    /// Aileron, elevator, rudder, throttle.
-    actuators: [Actuator; 4],
-    /// The true, integrated state.
-    state: F16State,
-    /// `state` as the sensors report it at `tick` (equal to `state` while no sensor fault is active).
+    /// The vehicle's state as the sensors report it at its tick (equal to it while no sensor fault is active).
     measured: F16State,
-    tick: u64,
-    dt_s: f64,
-    initial_command: ActuatorCommand,
     sensor_faults: Vec<SensorFault>,
     surface_faults: Vec<SurfaceFault>,
     noise: SplitMix64,
-}
-
-/// Throttle that gives VT_dot = 0 at `state` with the engine at its equilibrium power, by bisection.
-fn holding_throttle(model: &F16Model, state: &F16State, surfaces: &ControlInputs) -> Result<f64, SetupError> {
-    let vt_dot = |throttle: f64| {
-        let x = F16State { power_pct: engine::commanded_power_pct(throttle), ..*state };
-        model.derivative(&x, &ControlInputs { throttle, ..*surfaces }, &ExternalForcing::default())[0]
-    };
-    let (at_idle, at_full) = (vt_dot(0.0), vt_dot(1.0));
-    if !(at_idle <= 0.0 && at_full >= 0.0) {
-        return Err(SetupError::NoThrottle { at_idle, at_full });
-    }
-    let (mut lo, mut hi) = (0.0, 1.0);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if vt_dot(mid) < 0.0 { lo = mid } else { hi = mid }
-    }
-    Ok(0.5 * (lo + hi))
 }
 
 /// What only the built-in F-16 can check: `[actuators]` names its inputs within their travel, sensor and
@@ -261,55 +213,12 @@ pub fn check_for_f16(s: &Scenario) -> Result<(), (String, String)> {
 impl PlantRunner {
     /// The plant at the scenario's initial condition.
     pub fn new(s: &Scenario) -> Result<Self, SetupError> {
-        let model = s.plant.model();
-        let i = &s.initial;
-        let vt_fps = m_to_ft(i.airspeed_mps);
-        let mut state = F16State {
-            vt_fps,
-            alpha_rad: deg_to_rad(i.alpha_deg),
-            beta_rad: deg_to_rad(i.beta_deg),
-            phi_rad: deg_to_rad(i.phi_deg),
-            theta_rad: deg_to_rad(i.theta_deg),
-            psi_rad: deg_to_rad(i.psi_deg),
-            p_radps: deg_to_rad(i.p_dps),
-            q_radps: deg_to_rad(i.q_dps),
-            r_radps: deg_to_rad(i.r_dps),
-            north_ft: 0.0,
-            east_ft: 0.0,
-            alt_ft: i.altitude_ft,
-            power_pct: 0.0,
+        let forcing = ExternalForcing {
+            speed_hold: s.plant.speed_hold,
+            sideslip_hold: s.plant.sideslip_hold,
+            ..Default::default()
         };
-        let mut surfaces = ControlInputs::default();
-        let throttle = match i.mode {
-            InitialMode::Explicit => match i.throttle {
-                Some(t) => t,
-                None => holding_throttle(&model, &state, &surfaces)?,
-            },
-            InitialMode::Trim => {
-                let trim = trim_level_flight(&model, vt_fps, i.altitude_ft)?;
-                state.alpha_rad = trim.state.alpha_rad;
-                state.theta_rad = trim.state.theta_rad;
-                surfaces.elevator_deg = trim.elevator_deg;
-                i.throttle.unwrap_or(trim.throttle)
-            }
-        };
-        state.power_pct = engine::commanded_power_pct(throttle);
-        envelope::check(&state)?;
-        let a = &s.f16_actuators();
-        let actuators = [
-            Actuator::new(a.aileron_deg, surfaces.aileron_deg),
-            Actuator::new(a.elevator_deg, surfaces.elevator_deg),
-            Actuator::new(a.rudder_deg, surfaces.rudder_deg),
-            Actuator::new(a.throttle, throttle),
-        ];
-        let initial_command = ActuatorCommand {
-            surfaces: SurfaceCommand {
-                aileron_deg: actuators[0].position,
-                elevator_deg: actuators[1].position,
-                rudder_deg: actuators[2].position,
-            },
-            throttle: actuators[3].position,
-        };
+        let vehicle = F16Vehicle::new(s.plant.model(), &s.initial, &s.f16_actuators(), forcing, s.timing.dt_s)?;
         for (index, f) in s.faults.iter().enumerate() {
             if f.action.is_some_and(FaultAction::is_plant_model_fault) {
                 f.validate(s.timing.duration_s).map_err(|(key, problem)| SetupError::Fault { index, key, problem })?;
@@ -318,20 +227,10 @@ impl PlantRunner {
         check_for_f16(s).map_err(|(key, problem)| SetupError::NotForF16 { key, problem })?;
         let (sensor_faults, surface_faults) = plant_model_faults(&s.faults);
         let mut runner = Self {
-            model,
-            forcing: ExternalForcing {
-                speed_hold: s.plant.speed_hold,
-                sideslip_hold: s.plant.sideslip_hold,
-                ..Default::default()
-            },
+            measured: vehicle.state(),
+            vehicle,
             disturbance: s.disturbance.clone(),
             disturbance_mask: s.disturbance.channel_mask(),
-            actuators,
-            state,
-            measured: state,
-            tick: 0,
-            dt_s: s.timing.dt_s,
-            initial_command,
             sensor_faults,
             surface_faults,
             noise: SplitMix64::new(s.seed ^ SENSOR_NOISE_STREAM),
@@ -342,18 +241,18 @@ impl PlantRunner {
 
     /// Simulated time of the current tick, s (what fault windows are judged on).
     fn t_s(&self) -> f64 {
-        self.tick as f64 * self.dt_s
+        self.vehicle.t_s()
     }
 
     /// Set `measured` for the current tick: the true state plus every active sensor fault. Called exactly once per
     /// tick, so each active noise fault draws exactly one sample per tick.
     fn measure(&mut self) {
         if self.sensor_faults.is_empty() {
-            self.measured = self.state;
+            self.measured = self.vehicle.state();
             return;
         }
         let t = self.t_s();
-        let mut x = self.state.to_array();
+        let mut x = self.vehicle.state().to_array();
         for f in &self.sensor_faults {
             if f.fault.active_at(t) {
                 x[f.index] += match f.kind {
@@ -383,66 +282,32 @@ impl PlantRunner {
     /// The true, integrated state now, as no sensor fault distorts it (what [`PlantRunner::snapshot`] reports
     /// while no sensor fault is active).
     pub fn true_state(&self) -> F16State {
-        self.state
+        self.vehicle.state()
     }
 
     /// The command that holds the initial surfaces and throttle (used before any controller command exists).
     pub fn initial_command(&self) -> ActuatorCommand {
-        self.initial_command
+        self.vehicle.initial_command()
     }
 
     /// The state as measured (with any active sensor fault), the surface positions now, and the load factors of
     /// the true state with them (one evaluation of the equations of motion). The same however often it is called
     /// within a tick: the sensor noise of a tick is drawn when the tick begins.
     pub fn snapshot(&self) -> PlantSnapshot {
-        let held = self.held();
-        let forcing = ExternalForcing {
-            euler_accel_disturbance_radps2: self.disturbance.at(self.t_s(), &self.disturbance_mask),
-            ..self.forcing
-        };
-        let (_, outputs) = self.model.derivative_with_outputs(&self.state, &self.inputs(), &forcing);
-        PlantSnapshot {
-            tick: self.tick,
-            t_s: self.t_s(),
-            state: self.measured,
-            surfaces_deg: held.surfaces_deg,
-            throttle: held.throttle,
-            nz_g: outputs.nz_g,
-            ny_g: outputs.ny_g,
-        }
+        self.vehicle.snapshot(self.measured, self.disturbance.at(self.t_s(), &self.disturbance_mask))
     }
 
     /// The actuator positions now.
     pub fn held(&self) -> HeldActuators {
-        HeldActuators {
-            surfaces_deg: [self.actuators[0].position, self.actuators[1].position, self.actuators[2].position],
-            throttle: self.actuators[3].position,
-        }
-    }
-
-    /// The actuator positions as the equations of motion take them.
-    fn inputs(&self) -> ControlInputs {
-        ControlInputs {
-            aileron_deg: self.actuators[0].position,
-            elevator_deg: self.actuators[1].position,
-            rudder_deg: self.actuators[2].position,
-            throttle: self.actuators[3].position,
-        }
+        self.vehicle.held()
     }
 
     /// Move the actuators under `command` (each surface in the failure mode its active fault gives, if any) to the
     /// positions they hold over the step that starts at the current tick. [`PlantRunner::step`] does this first; on
     /// its own it serves the last sample of a run, whose deflections are logged but not flown.
     pub fn actuate(&mut self, command: &ActuatorCommand) -> StepHits {
-        let dt = self.dt_s;
-        let c = &command.surfaces;
         let modes = if self.surface_faults.is_empty() { [ActuatorFault::None; 3] } else { self.surface_modes() };
-        [
-            self.actuators[0].update_with_fault(c.aileron_deg, dt, modes[0]),
-            self.actuators[1].update_with_fault(c.elevator_deg, dt, modes[1]),
-            self.actuators[2].update_with_fault(c.rudder_deg, dt, modes[2]),
-            self.actuators[3].update(command.throttle, dt),
-        ]
+        self.vehicle.actuate(command, modes)
     }
 
     /// Move the actuators under `command` ([`PlantRunner::actuate`]) and integrate one step with their positions
@@ -450,23 +315,8 @@ impl PlantRunner {
     /// plant stays at the current tick (with the actuators moved) and the flight is over.
     pub fn step(&mut self, command: &ActuatorCommand) -> Result<StepHits, LeftEnvelope> {
         let hits = self.actuate(command);
-        let dt = self.dt_s;
-        let inputs = self.inputs();
-        let t0 = self.tick as f64 * dt;
-        let (model, base, dist, mask) = (&self.model, self.forcing, &self.disturbance, &self.disturbance_mask);
-        let x = rk4_step(
-            |t, x| {
-                let forcing = ExternalForcing { euler_accel_disturbance_radps2: dist.at(t, mask), ..base };
-                model.derivative(&F16State::from_array(x), &inputs, &forcing)
-            },
-            t0,
-            &self.state.to_array(),
-            dt,
-        );
-        let next = F16State::from_array(&x);
-        envelope::check(&next).map_err(|error| LeftEnvelope { t_s: t0 + dt, error })?;
-        self.state = next;
-        self.tick += 1;
+        let (dist, mask) = (&self.disturbance, &self.disturbance_mask);
+        self.vehicle.integrate(|t| dist.at(t, mask))?;
         self.measure();
         Ok(hits)
     }
@@ -486,15 +336,11 @@ pub struct PlantCheckpoint {
 impl PlantRunner {
     /// The state to save now.
     pub fn checkpoint(&self) -> PlantCheckpoint {
+        let held = self.vehicle.held();
         PlantCheckpoint {
-            tick: self.tick,
-            state: self.state,
-            actuator_positions: [
-                self.actuators[0].position,
-                self.actuators[1].position,
-                self.actuators[2].position,
-                self.actuators[3].position,
-            ],
+            tick: self.vehicle.tick(),
+            state: self.vehicle.state(),
+            actuator_positions: [held.surfaces_deg[0], held.surfaces_deg[1], held.surfaces_deg[2], held.throttle],
         }
     }
 
@@ -530,7 +376,7 @@ impl PlantRunner {
             }
         }
         for ((a, p), name) in
-            self.actuators.iter().zip(c.actuator_positions).zip(["aileron", "elevator", "rudder", "throttle"])
+            self.vehicle.actuators().iter().zip(c.actuator_positions).zip(["aileron", "elevator", "rudder", "throttle"])
         {
             if !(a.limits.min..=a.limits.max).contains(&p) {
                 return Err(format!(
@@ -541,11 +387,7 @@ impl PlantRunner {
                 ));
             }
         }
-        self.tick = c.tick;
-        self.state = c.state;
-        for (a, p) in self.actuators.iter_mut().zip(c.actuator_positions) {
-            a.position = p;
-        }
+        self.vehicle.restore(c.tick, c.state, c.actuator_positions);
         // The noise sequence of a restarted plant is not the one the killed plant would have drawn.
         self.measure();
         Ok(())
@@ -657,7 +499,7 @@ pub fn fly(s: &Scenario) -> Result<(Trace, Option<LeftEnvelope>), SetupError> {
 /// Run a scenario's closed loop to the end and return its trace: N + 1 rows, t = 0 to the duration.
 pub fn run(s: &Scenario) -> Result<Trace, SimError> {
     let mut plant = PlantRunner::new(s)?;
-    let mut controller = AttitudeController::new(s.controller.clone(), plant.model.tables());
+    let mut controller = AttitudeController::new(s.controller.clone(), plant.vehicle.model().tables());
     let setpoint = setpoint_rad(s);
     let dt = s.timing.dt_s;
     let steps = s.timing.ticks();

@@ -6,6 +6,8 @@
 //! - [`control`]: the paper's adaptive sliding-mode attitude controller with one RBF network per channel.
 //! - [`actuator`]: surface and throttle actuators (lag, rate and position limits, failure modes).
 //! - [`integrator`]: fixed-step RK4, apart from any equations of motion.
+//! - [`vehicle`]: the F-16 with its actuators stepped tick by tick (initial condition and trim, RK4, envelope);
+//!   [`f16_outputs`]: what it reports and takes, as tables (the snapshot, output and input names, units, ranges).
 //! - [`units`]: every unit conversion; [`rng`]: the seeded generator behind every random source.
 //!
 //! Layers: nothing here knows of scenarios, processes or files (`silrig-flight` and above).
@@ -14,7 +16,9 @@
 
 pub mod actuator;
 pub mod control;
+pub mod f16_outputs;
 pub mod integrator;
 pub mod plant;
 pub mod rng;
 pub mod units;
+pub mod vehicle;

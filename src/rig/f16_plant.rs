@@ -34,17 +34,9 @@ fn actuator_command(inputs: &[f64]) -> ActuatorCommand {
 }
 
 /// The trim surfaces of the scenario's initial airspeed and altitude with the throttle `hold` holds, or `hold`
-/// when level flight has no trim there.
+/// when level flight has no trim there ([`silrig_model::vehicle::failsafe_command`]).
 fn failsafe_command(scenario: &Scenario, hold: ActuatorCommand) -> ActuatorCommand {
-    let model = scenario.plant.model();
-    let vt_fps = silrig_model::units::m_to_ft(scenario.initial.airspeed_mps);
-    match silrig_model::plant::trim::trim_level_flight(&model, vt_fps, scenario.initial.altitude_ft) {
-        Ok(trim) => ActuatorCommand {
-            surfaces: SurfaceCommand { aileron_deg: 0.0, elevator_deg: trim.elevator_deg, rudder_deg: 0.0 },
-            throttle: hold.throttle,
-        },
-        Err(_) => hold,
-    }
+    silrig_model::vehicle::failsafe_command(&scenario.plant.model(), &scenario.initial, hold)
 }
 
 /// The surfaces' limits (the throttle's are not flagged, as before named signals).

@@ -7,6 +7,7 @@
 //! - [`contract`]: the wire contract rendered as text, a C header and a Python module.
 //! - [`outputs`]: `silrig sim` and `silrig compare` and the files they write; [`derivative_csv`]:
 //!   `silrig plant derivative`.
+//! - [`export_fmu`]: `silrig export-fmu`, the built-in F-16 as an FMI 2.0 co-simulation FMU.
 //!
 //! Layers: the top; uses every crate below.
 
@@ -15,5 +16,6 @@ pub mod campaign;
 pub mod check;
 pub mod contract;
 pub mod derivative_csv;
+pub mod export_fmu;
 pub mod outputs;
 pub mod replay;

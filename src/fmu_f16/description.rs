@@ -1,0 +1,247 @@
+//! The FMU's `modelDescription.xml`, generated (never hand-written) from the variables ([`crate::variables`]) and
+//! the parameters' start values, with a GUID that is a hash of the rest of the text: the binary computes it from
+//! the start values it carries and refuses to be instantiated under another.
+
+use crate::variables::{
+    BOOLEAN_PARAMETERS, FIRST_INPUT_VR, FIRST_PARAMETER_VR, Parameters, REAL_PARAMETERS, inputs, outputs,
+};
+use silrig_model::f16_outputs::{HELD_OUTPUT, INPUTS, PLANT_NAME};
+use silrig_model::vehicle::{F16Vehicle, failsafe_command};
+
+/// The model identifier: the binary's file name in `binaries/<platform>/` and the FMU's name.
+pub const MODEL_IDENTIFIER: &str = "silrig_fmu_f16";
+
+/// The communication step the rig flies, s (the default experiment's step; one doStep is one tick).
+pub const DEFAULT_STEP_S: f64 = 0.01;
+
+/// The default experiment: its duration and step, s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Experiment {
+    /// Stop time, s.
+    pub stop_time_s: f64,
+    /// Communication step, s.
+    pub step_s: f64,
+}
+
+impl Default for Experiment {
+    /// 10 s at the rig's 0.01 s.
+    fn default() -> Self {
+        Self { stop_time_s: 10.0, step_s: DEFAULT_STEP_S }
+    }
+}
+
+/// The inputs' start values: what the built-in plant announces as its failsafe's hold values for these parameters
+/// (the level-flight trim surfaces with the initial throttle), so an importer holding them flies what the rig's
+/// failsafe flies. The error says why the parameters give no flight (no trim, outside the envelope).
+pub fn input_starts(p: &Parameters) -> Result<[f64; 4], String> {
+    p.check()?;
+    let model = p.model();
+    let initial = p.initial();
+    let vehicle = F16Vehicle::new(model, &initial, &p.actuators(), p.forcing(), DEFAULT_STEP_S)
+        .map_err(|e| format!("initial condition: {e}"))?;
+    let hold = failsafe_command(&model, &initial, vehicle.initial_command());
+    let s = &hold.surfaces;
+    Ok([s.aileron_deg, s.elevator_deg, s.rudder_deg, hold.throttle])
+}
+
+/// The name of the file in the FMU's `resources/` that carries the parameters' start values and the default
+/// experiment ([`start_file`]): the binary starts from them, and computes the GUID it accepts from them.
+pub const START_FILE: &str = "start_values.txt";
+
+/// Keys of the default experiment in the start file.
+const STOP_TIME_KEY: &str = "default_stop_time_s";
+const STEP_KEY: &str = "default_step_s";
+
+/// The text of [`START_FILE`]: the parameters' start values ([`Parameters::to_text`]) and the default experiment.
+pub fn start_file(p: &Parameters, e: &Experiment) -> String {
+    format!("{}{STOP_TIME_KEY} = {:?}\n{STEP_KEY} = {:?}\n", p.to_text(), e.stop_time_s, e.step_s)
+}
+
+/// Read [`start_file`]'s text back, bit for bit; the error names the line or the key.
+pub fn read_start_file(text: &str) -> Result<(Parameters, Experiment), String> {
+    let mut experiment = [None, None];
+    let mut rest = String::new();
+    for line in text.lines() {
+        let key = line.split('=').next().unwrap_or("").trim();
+        match [STOP_TIME_KEY, STEP_KEY].iter().position(|k| *k == key) {
+            Some(k) => {
+                let v: f64 = line
+                    .split_once('=')
+                    .map_or("", |(_, v)| v)
+                    .trim()
+                    .parse()
+                    .map_err(|_| format!("{key}: not a number"))?;
+                if !(v > 0.0 && v.is_finite()) {
+                    return Err(format!("{key} = {v}: must be above 0"));
+                }
+                experiment[k] = Some(v);
+            }
+            None => {
+                rest.push_str(line);
+                rest.push('\n');
+            }
+        }
+    }
+    let [Some(stop_time_s), Some(step_s)] = experiment else {
+        return Err(format!("{STOP_TIME_KEY} and {STEP_KEY} must both be given"));
+    };
+    Ok((Parameters::from_text(&rest)?, Experiment { stop_time_s, step_s }))
+}
+
+/// Text for an XML attribute value.
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// The description with `guid` in its place.
+fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid: &str) -> String {
+    let mut units: Vec<&str> = Vec::new();
+    let mut variables = String::new();
+    let mut add = |name: &str, vr: u32, causality: &str, variability: &str, description: &str, element: String| {
+        variables.push_str(&format!(
+            "    <ScalarVariable name=\"{}\" valueReference=\"{vr}\" causality=\"{causality}\" variability=\"{variability}\" description=\"{}\">\n      {element}\n    </ScalarVariable>\n",
+            escape(name),
+            escape(description)
+        ));
+    };
+    let outputs = outputs();
+    for (vr, (name, unit, in_trace)) in outputs.iter().enumerate() {
+        let shown = if *in_trace { "; a trace.csv column" } else { "" };
+        let what = format!("output of the built-in F-16, {unit}{shown}");
+        add(name, vr as u32, "output", "continuous", &what, format!("<Real unit=\"{}\"/>", escape(unit)));
+        units.push(unit);
+    }
+    for (k, (name, unit, (min, max))) in inputs().iter().enumerate() {
+        let rig = crate::variables::rig_input_name(name).unwrap_or(name);
+        let what = format!(
+            "{rig} command, {unit}, through the F-16's {rig} actuator (the rig's input `{rig}`); start: the failsafe's hold"
+        );
+        let start = input_starts[k];
+        let element = format!("<Real unit=\"{}\" min=\"{min:?}\" max=\"{max:?}\" start=\"{start:?}\"/>", escape(unit));
+        add(name, FIRST_INPUT_VR + k as u32, "input", "continuous", &what, element);
+        units.push(unit);
+    }
+    for (k, (param, v)) in REAL_PARAMETERS.iter().zip(p.reals).enumerate() {
+        let (min, max) = (param.min, param.max);
+        let element =
+            format!("<Real unit=\"{}\" min=\"{min:?}\" max=\"{max:?}\" start=\"{v:?}\"/>", escape(param.unit));
+        add(param.name, FIRST_PARAMETER_VR + k as u32, "parameter", "fixed", param.description, element);
+        units.push(param.unit);
+    }
+    for (k, ((name, description), v)) in BOOLEAN_PARAMETERS.iter().zip(p.booleans).enumerate() {
+        add(name, k as u32, "parameter", "fixed", description, format!("<Boolean start=\"{v}\"/>"));
+    }
+    // How the rig announces this plant beyond what FMI says: its name, which outputs `trace.csv` shows, the rig's
+    // name of each input, the output that reports its actuator's position, and whether its command is traced
+    // (`f16_signals` in silrig-flight), so an importer can announce the FMU exactly as the built-in plant.
+    let mut plant = format!("      <Plant name=\"{PLANT_NAME}\">\n");
+    for (name, _, in_trace) in &outputs {
+        plant.push_str(&format!("        <Output variable=\"{name}\" inTrace=\"{in_trace}\"/>\n"));
+    }
+    for (k, (name, _, _)) in inputs().iter().enumerate() {
+        let (signal, held) = (INPUTS[k].0, outputs[HELD_OUTPUT[k]].0);
+        plant.push_str(&format!(
+            "        <Input variable=\"{name}\" signal=\"{signal}\" heldOutput=\"{held}\" commandInTrace=\"{}\"/>\n",
+            k < 3
+        ));
+    }
+    plant.push_str("      </Plant>\n");
+    units.sort_unstable();
+    units.dedup();
+    let unit_definitions: String = units.iter().map(|u| format!("    <Unit name=\"{}\"/>\n", escape(u))).collect();
+    // ModelStructure indices are 1-based positions in ModelVariables; the outputs come first.
+    let unknowns: String = (1..=outputs.len()).map(|i| format!("      <Unknown index=\"{i}\"/>\n")).collect();
+    let Experiment { stop_time_s, step_s } = experiment;
+    format!(
+        r#"<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription
+  fmiVersion="2.0"
+  modelName="silrig_f16"
+  guid="{guid}"
+  description="The Stevens &amp; Lewis F-16 of silrig with its actuators, trimmed as silrig trims it: the built-in plant of `silrig run`, one doStep one tick"
+  generationTool="silrig-fmu-f16 {version}"
+  variableNamingConvention="flat"
+  numberOfEventIndicators="0">
+  <CoSimulation
+    modelIdentifier="{MODEL_IDENTIFIER}"
+    canHandleVariableCommunicationStepSize="false"
+    canGetAndSetFMUstate="true"
+    canSerializeFMUstate="true"
+    canNotUseMemoryManagementFunctions="true"
+    providesDirectionalDerivative="false"/>
+  <UnitDefinitions>
+{unit_definitions}  </UnitDefinitions>
+  <DefaultExperiment startTime="0.0" stopTime="{stop_time_s:?}" stepSize="{step_s:?}"/>
+  <VendorAnnotations>
+    <Tool name="silrig">
+{plant}    </Tool>
+  </VendorAnnotations>
+  <ModelVariables>
+{variables}  </ModelVariables>
+  <ModelStructure>
+    <Outputs>
+{unknowns}    </Outputs>
+    <InitialUnknowns>
+{unknowns}    </InitialUnknowns>
+  </ModelStructure>
+</fmiModelDescription>
+"#,
+        version = env!("CARGO_PKG_VERSION"),
+    )
+}
+
+/// 128-bit FNV-1a: a fixed, dependency-free hash (not for security: the GUID only tells descriptions apart).
+fn fnv1a_128(bytes: &[u8]) -> u128 {
+    const OFFSET: u128 = 0x6c62272e07bb014262b821756295c58d;
+    const PRIME: u128 = 0x0000000001000000000000000000013B;
+    bytes.iter().fold(OFFSET, |h, b| (h ^ u128::from(*b)).wrapping_mul(PRIME))
+}
+
+/// The GUID of the description of these parameters' start values and experiment: the hash of its text with the
+/// GUID left empty, as `{8-4-4-4-12}` hex.
+pub fn guid(p: &Parameters, experiment: &Experiment) -> Result<String, String> {
+    let h = fnv1a_128(render(p, experiment, &input_starts(p)?, "").as_bytes());
+    let hex = format!("{h:032x}");
+    Ok(format!("{{{}-{}-{}-{}-{}}}", &hex[..8], &hex[8..12], &hex[12..16], &hex[16..20], &hex[20..]))
+}
+
+/// `modelDescription.xml` for these parameters' start values and experiment; the error says why the parameters
+/// give no flight.
+pub fn model_description(p: &Parameters, experiment: &Experiment) -> Result<String, String> {
+    Ok(render(p, experiment, &input_starts(p)?, &guid(p, experiment)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_guid_follows_the_start_values() {
+        let p = Parameters::default();
+        let e = Experiment::default();
+        let xml = model_description(&p, &e).unwrap();
+        let g = guid(&p, &e).unwrap();
+        assert!(xml.contains(&format!("guid=\"{g}\"")), "{xml}");
+        assert_eq!(guid(&p, &e).unwrap(), g, "the same description, the same GUID");
+        let mut q = p;
+        q.reals[0] = 0.3;
+        assert_ne!(guid(&q, &e).unwrap(), g);
+        assert_ne!(guid(&p, &Experiment { stop_time_s: 20.0, step_s: 0.01 }).unwrap(), g);
+        assert_eq!(xml.matches("<ScalarVariable").count(), 28 + 4 + 35 + 3);
+        assert_eq!(read_start_file(&start_file(&q, &e)).unwrap(), (q, e));
+        let annotation =
+            "<Input variable=\"throttle_cmd\" signal=\"throttle\" heldOutput=\"throttle\" commandInTrace=\"false\"/>";
+        assert!(xml.contains(annotation), "{xml}");
+        assert!(xml.contains("<Input variable=\"elevator\" signal=\"elevator\" heldOutput=\"elevator_deg\""), "{xml}");
+    }
+
+    #[test]
+    fn a_flight_condition_with_no_trim_gives_no_description() {
+        let mut p = Parameters::default();
+        p.booleans[2] = true;
+        // Far too slow for level flight: the trim's alpha is beyond the data.
+        p.reals[8] = 30.0;
+        let e = model_description(&p, &Experiment::default()).unwrap_err();
+        assert!(e.starts_with("initial condition: "), "{e}");
+    }
+}
