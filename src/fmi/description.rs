@@ -144,6 +144,9 @@ pub struct ModelDescription {
     pub default_step_s: Option<f64>,
     /// Every variable, in document order.
     pub variables: Vec<Variable>,
+    /// The plant name a silrig vendor annotation gives (`<VendorAnnotations><Tool name="silrig"><Plant
+    /// name=".."/>`), if any.
+    pub silrig_plant_name: Option<String>,
 }
 
 impl ModelDescription {
@@ -221,7 +224,15 @@ impl ModelDescription {
                     .collect::<Result<_, _>>()?,
             },
         };
-        Ok(Self { version, model_name, token, co_simulation, default_step_s, variables })
+        let silrig_plant_name = child("VendorAnnotations")
+            .into_iter()
+            .flat_map(|v| v.children())
+            .filter(|t| t.has_tag_name("Tool") && t.attribute("name") == Some("silrig"))
+            .flat_map(|t| t.children())
+            .find(|p| p.has_tag_name("Plant"))
+            .and_then(|p| p.attribute("name"))
+            .map(str::to_string);
+        Ok(Self { version, model_name, token, co_simulation, default_step_s, variables, silrig_plant_name })
     }
 
     /// The variable called `name`.
@@ -378,6 +389,7 @@ mod tests {
   <UnitDefinitions><Unit name="deg"/></UnitDefinitions>
   <TypeDefinitions><SimpleType name="Angle"><Real unit="deg" min="-30" max="30"/></SimpleType></TypeDefinitions>
   <DefaultExperiment stopTime="10" stepSize="0.01"/>
+  <VendorAnnotations><Tool name="other"/><Tool name="silrig"><Plant name="toy_plant"/></Tool></VendorAnnotations>
   <ModelVariables>
     <ScalarVariable name="k" valueReference="0" causality="parameter" variability="fixed"><Real start="2"/></ScalarVariable>
     <ScalarVariable name="u" valueReference="1" causality="input"><Real declaredType="Angle" start="0"/></ScalarVariable>
@@ -395,6 +407,7 @@ mod tests {
         assert_eq!((d.model_name.as_str(), d.token.as_str()), ("toy", "{abc}"));
         assert!(d.co_simulation.can_get_and_set_state && d.co_simulation.can_serialize_state);
         assert_eq!(d.default_step_s, Some(0.01));
+        assert_eq!(d.silrig_plant_name.as_deref(), Some("toy_plant"));
         let u = d.variable("u").unwrap();
         assert_eq!(
             (u.causality, u.unit.as_deref(), u.min, u.max, u.start),

@@ -104,20 +104,39 @@ fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid
             escape(description)
         ));
     };
+    // How the rig announces this plant beyond what FMI says (`f16_signals` in silrig-flight), as a silrig
+    // annotation on each variable an importer would otherwise announce differently: outputs `trace.csv` does not
+    // show, the output that reports each input's actuator, and the throttle command, which FMI cannot call
+    // `throttle` (the output of its position has that name) and whose command is not traced.
+    let signal = |attributes: String| {
+        format!("\n      <Annotations><Tool name=\"silrig\"><Signal {attributes}/></Tool></Annotations>")
+    };
     let outputs = outputs();
+    let inputs = inputs();
     for (vr, (name, unit, in_trace)) in outputs.iter().enumerate() {
         let shown = if *in_trace { "; a trace.csv column" } else { "" };
         let what = format!("output of the built-in F-16, {unit}{shown}");
-        add(name, vr as u32, "output", "continuous", &what, format!("<Real unit=\"{}\"/>", escape(unit)));
+        let mut element = format!("<Real unit=\"{}\"/>", escape(unit));
+        if !in_trace {
+            element += &signal("trace=\"false\"".into());
+        }
+        if let Some(k) = HELD_OUTPUT.iter().position(|h| *h == vr) {
+            element += &signal(format!("position_of=\"{}\"", inputs[k].0));
+        }
+        add(name, vr as u32, "output", "continuous", &what, element);
         units.push(unit);
     }
-    for (k, (name, unit, (min, max))) in inputs().iter().enumerate() {
+    for (k, (name, unit, (min, max))) in inputs.iter().enumerate() {
         let rig = crate::variables::rig_input_name(name).unwrap_or(name);
         let what = format!(
             "{rig} command, {unit}, through the F-16's {rig} actuator (the rig's input `{rig}`); start: the failsafe's hold"
         );
         let start = input_starts[k];
-        let element = format!("<Real unit=\"{}\" min=\"{min:?}\" max=\"{max:?}\" start=\"{start:?}\"/>", escape(unit));
+        let mut element =
+            format!("<Real unit=\"{}\" min=\"{min:?}\" max=\"{max:?}\" start=\"{start:?}\"/>", escape(unit));
+        if rig != *name || k >= 3 {
+            element += &signal(format!("name=\"{}\" trace=\"{}\"", INPUTS[k].0, k < 3));
+        }
         add(name, FIRST_INPUT_VR + k as u32, "input", "continuous", &what, element);
         units.push(unit);
     }
@@ -131,21 +150,6 @@ fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid
     for (k, ((name, description), v)) in BOOLEAN_PARAMETERS.iter().zip(p.booleans).enumerate() {
         add(name, k as u32, "parameter", "fixed", description, format!("<Boolean start=\"{v}\"/>"));
     }
-    // How the rig announces this plant beyond what FMI says: its name, which outputs `trace.csv` shows, the rig's
-    // name of each input, the output that reports its actuator's position, and whether its command is traced
-    // (`f16_signals` in silrig-flight), so an importer can announce the FMU exactly as the built-in plant.
-    let mut plant = format!("      <Plant name=\"{PLANT_NAME}\">\n");
-    for (name, _, in_trace) in &outputs {
-        plant.push_str(&format!("        <Output variable=\"{name}\" inTrace=\"{in_trace}\"/>\n"));
-    }
-    for (k, (name, _, _)) in inputs().iter().enumerate() {
-        let (signal, held) = (INPUTS[k].0, outputs[HELD_OUTPUT[k]].0);
-        plant.push_str(&format!(
-            "        <Input variable=\"{name}\" signal=\"{signal}\" heldOutput=\"{held}\" commandInTrace=\"{}\"/>\n",
-            k < 3
-        ));
-    }
-    plant.push_str("      </Plant>\n");
     units.sort_unstable();
     units.dedup();
     let unit_definitions: String = units.iter().map(|u| format!("    <Unit name=\"{}\"/>\n", escape(u))).collect();
@@ -173,8 +177,7 @@ fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid
 {unit_definitions}  </UnitDefinitions>
   <DefaultExperiment startTime="0.0" stopTime="{stop_time_s:?}" stepSize="{step_s:?}"/>
   <VendorAnnotations>
-    <Tool name="silrig">
-{plant}    </Tool>
+    <Tool name="silrig"><Plant name="{PLANT_NAME}"/></Tool>
   </VendorAnnotations>
   <ModelVariables>
 {variables}  </ModelVariables>
@@ -229,10 +232,11 @@ mod tests {
         assert_ne!(guid(&p, &Experiment { stop_time_s: 20.0, step_s: 0.01 }).unwrap(), g);
         assert_eq!(xml.matches("<ScalarVariable").count(), 28 + 4 + 35 + 3);
         assert_eq!(read_start_file(&start_file(&q, &e)).unwrap(), (q, e));
-        let annotation =
-            "<Input variable=\"throttle_cmd\" signal=\"throttle\" heldOutput=\"throttle\" commandInTrace=\"false\"/>";
-        assert!(xml.contains(annotation), "{xml}");
-        assert!(xml.contains("<Input variable=\"elevator\" signal=\"elevator\" heldOutput=\"elevator_deg\""), "{xml}");
+        assert!(xml.contains("<Signal name=\"throttle\" trace=\"false\"/>"), "{xml}");
+        assert!(xml.contains("<Signal position_of=\"throttle_cmd\"/>"), "{xml}");
+        assert!(xml.contains("<Signal position_of=\"elevator\"/>"), "{xml}");
+        assert_eq!(xml.matches("<Signal trace=\"false\"/>").count(), 12, "the states are not traced");
+        assert!(xml.contains("<Tool name=\"silrig\"><Plant name=\"f16\"/></Tool>"), "{xml}");
     }
 
     #[test]

@@ -6,7 +6,8 @@
 //! is the FMU's: setting the inputs, `doStep` and reading the outputs. Checkpoints go through the FMU's own
 //! serialized state where its description offers it; where it does not, the run's events say so.
 //!
-//! How variables become signals: a signal's name is the variable's, with every character other than an ASCII
+//! How variables become signals: the plant's name is the model's (`modelName`, or a vendor annotation's
+//! `<Tool name="silrig"><Plant name=".."/>`); a signal's name is the variable's, with every character other than an ASCII
 //! letter, digit or '_' turned into '_' (`body.w[1]` is `body_w_1_`); an input's range is its min and max (the
 //! whole finite range of a double where the FMU declares none) and its failsafe holds its start value; the output
 //! named `<input>_<unit>` (`aileron_deg` for an input `aileron` in deg) reports that input's actuator. A variable
@@ -73,7 +74,8 @@ pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Res
     let outputs: Vec<&Variable> =
         d.variables.iter().filter(|v| v.causality == Causality::Output).filter(real).collect();
     let inputs: Vec<&Variable> = d.variables.iter().filter(|v| v.causality == Causality::Input).filter(real).collect();
-    let mut signals = PlantSignals { plant: signal_name(&d.model_name), outputs: Vec::new(), inputs: Vec::new() };
+    let plant = d.silrig_plant_name.clone().unwrap_or_else(|| signal_name(&d.model_name));
+    let mut signals = PlantSignals { plant, outputs: Vec::new(), inputs: Vec::new() };
     if !valid_name(&signals.plant) {
         signals.plant = d.co_simulation.model_identifier.clone();
     }
@@ -242,7 +244,12 @@ impl FmuPlant {
 /// Fly the scenario's FMU as the run's plant, to the end of the scenario (or SIGTERM), and write the report.
 pub fn run_fmu_plant(args: &ProcessArgs, scenario: Scenario, path: &Path) -> anyhow::Result<ProcessReport> {
     let mut plant = FmuPlant::open(path, &scenario)?;
-    let mut session = PlantSession::open(args.clone(), scenario, &plant.map.signals.clone())?;
+    let mut outputs = vec![0.0; plant.map.output_refs.len()];
+    plant.outputs(&mut outputs).map_err(anyhow::Error::msg)?;
+    // The actuators start where the FMU says they are (an input's position output at t = 0), else at the hold.
+    let signals = plant.map.signals.clone();
+    let initial = signals.inputs.iter().map(|i| i.held_output.map_or(i.hold, |k| outputs[k])).collect();
+    let mut session = PlantSession::open_at(args.clone(), scenario, &signals, initial)?;
     let checkpoints = plant.can_checkpoint();
     session.event(
         "plant-fmu",
@@ -258,7 +265,6 @@ pub fn run_fmu_plant(args: &ProcessArgs, scenario: Scenario, path: &Path) -> any
         };
         session.checkpoint_used(outcome);
     }
-    let mut outputs = vec![0.0; plant.map.output_refs.len()];
     let error = loop {
         if let Err(e) = plant.outputs(&mut outputs) {
             break Some(e);

@@ -60,6 +60,8 @@ struct SavedPlant {
 struct ExternalModel {
     signals: PlantSignals,
     latest: Rc<RefCell<Latest>>,
+    /// What the actuators hold before the first command.
+    initial_inputs: Vec<f64>,
 }
 
 impl PlantModel for ExternalModel {
@@ -80,7 +82,7 @@ impl PlantModel for ExternalModel {
     }
 
     fn initial_inputs(&self) -> Vec<f64> {
-        self.signals.hold()
+        self.initial_inputs.clone()
     }
 
     fn step(&mut self, _inputs: &[f64], _last: bool) -> Result<ActuatorFlags, String> {
@@ -163,18 +165,36 @@ impl PlantSession {
     /// the logger. A second plant for the run, an announcement that breaks the rules and peers that never come are
     /// errors naming the problem.
     pub fn open(args: ProcessArgs, scenario: Scenario, plant: &PlantSignals) -> Result<Self, SessionError> {
+        Self::open_at(args, scenario, plant, plant.hold())
+    }
+
+    /// [`Self::open`], with the actuators holding `initial_inputs` (one per input) until the first command, not
+    /// the hold values: where a model's actuators start (an FMU reports them in its outputs at t = 0).
+    pub fn open_at(
+        args: ProcessArgs,
+        scenario: Scenario,
+        plant: &PlantSignals,
+        initial_inputs: Vec<f64>,
+    ) -> Result<Self, SessionError> {
         signals::install_termination_flag();
         let info = PlantInfo::new(plant).map_err(|e| SessionError::Plant(format!("the plant's announcement: {e}")))?;
-        let chain = SignalChain::new(&scenario, plant, &plant.hold())
+        if initial_inputs.len() != plant.inputs.len() || initial_inputs.iter().any(|v| !v.is_finite()) {
+            return Err(SessionError::Usage(format!(
+                "{} initial inputs given (all finite); the plant announced {}",
+                initial_inputs.len(),
+                plant.inputs.len()
+            )));
+        }
+        let chain = SignalChain::new(&scenario, plant, &initial_inputs)
             .map_err(|(key, problem)| SessionError::Setup(format!("the scenario: `{key}`: {problem}")))?;
         let latest = Rc::new(RefCell::new(Latest {
             outputs: vec![0.0; plant.outputs.len()],
             tick: 0,
             t_s: 0.0,
             saved: None,
-            positions: plant.hold(),
+            positions: initial_inputs.clone(),
         }));
-        let model = ExternalModel { signals: plant.clone(), latest: latest.clone() };
+        let model = ExternalModel { signals: plant.clone(), latest: latest.clone(), initial_inputs };
         let lp =
             PlantLoop::setup(&args, scenario, Box::new(model)).map_err(|e| SessionError::Setup(format!("{e:#}")))?;
         let ports = PlantPorts::connect(&args, &info).map_err(|e| {
