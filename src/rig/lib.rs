@@ -7,7 +7,7 @@
 //! - [`plant_model`]: what the plant process flies; [`f16_plant`]: the F-16 as a [`plant_model::PlantModel`];
 //!   [`plant_session`]: the plant's side of the contract for a model of the user's own (announce, then outputs
 //!   in, inputs out, tick by tick), with the same loop around it; [`fmu_plant`]: a co-simulation FMU flown
-//!   through that session.
+//!   through that session; [`plant_process`]: which of the two `silrig-plant` flies.
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
@@ -29,6 +29,7 @@ pub mod logger;
 pub mod loop_faults;
 pub mod plant;
 pub mod plant_model;
+pub mod plant_process;
 pub mod plant_session;
 pub mod report;
 pub mod session;

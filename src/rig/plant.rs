@@ -662,13 +662,8 @@ impl PlantLoop {
     }
 }
 
-/// Run the plant process to the end of the scenario (or SIGTERM) and write its report.
-pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
-    signals::install_termination_flag();
-    let scenario = args.scenario()?;
-    if let Some(fmu) = scenario.plant.fmu.clone() {
-        return super::fmu_plant::run_fmu_plant(args, scenario, &fmu);
-    }
+/// Fly the built-in F-16 as the plant process to the end of the scenario (or SIGTERM) and write its report.
+pub fn run_f16_plant(args: &ProcessArgs, scenario: Scenario) -> anyhow::Result<ProcessReport> {
     let model = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
     let mut plant = PlantLoop::setup(args, scenario, model)?;
     let mut ports = PlantPorts::connect(args, &plant.info)?;
