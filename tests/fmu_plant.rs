@@ -427,3 +427,19 @@ fn silrig_check_judges_the_airframe_fmu_and_its_recording_replays_bit_identical(
     r.finish();
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn what_a_killed_plant_unpacked_is_removed_by_the_next_fmu_opened() {
+    // The folder a SIGKILLed plant (or an FMU's segfault) left: its process is gone, nothing dropped it.
+    let mut child = Command::new("true").spawn().unwrap();
+    let dead_pid = child.id();
+    child.wait().unwrap();
+    let left = std::env::temp_dir().join(format!("silrig-fmu-{dead_pid}-0"));
+    std::fs::create_dir_all(left.join("binaries")).unwrap();
+    let dir = common::temp_dir("fmu-plant", "leftover-files");
+    let unknown = scenario(&dir, "unknown", 1.0, "nope = 1.0");
+    // A refused run still opens the FMU, and that open cleans up.
+    refused("leftover", &["--mode", "lockstep", "--plant-fmu", &fmu("misbehave"), &unknown]);
+    assert!(!left.exists(), "{} is still there", left.display());
+    std::fs::remove_dir_all(dir).unwrap();
+}

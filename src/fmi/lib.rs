@@ -1,7 +1,8 @@
 //! silrig-fmi: co-simulation FMUs (FMI 2.0 and 3.0) opened, instantiated and stepped, for the rig's plant
 //! process (and anything else that flies a `.fmu`).
 //!
-//! - [`Fmu::open`]: unpack the archive into a private folder (removed when the [`Fmu`] is dropped), read
+//! - [`Fmu::open`]: unpack the archive into a private folder (removed when the [`Fmu`] is dropped, or by the next
+//!   open when its process was killed), read
 //!   [`description::ModelDescription`], and load the Linux x86-64 binary; each step that fails names the file and
 //!   what is wrong (not a zip, no `modelDescription.xml`, FMI 1.0, model exchange only, no binary for this
 //!   platform, a missing function).
@@ -125,6 +126,7 @@ impl Fmu {
     /// Unpack `path` into a private folder, read its description and load its binary.
     pub fn open(path: &Path) -> Result<Self, FmiError> {
         let file = path.display().to_string();
+        remove_dead_unpacks();
         let folder = unpack_folder();
         let fmu = Self::open_into(path, &file, &folder);
         if fmu.is_err() {
@@ -201,6 +203,20 @@ fn unpack_folder() -> PathBuf {
     static NEXT: AtomicU32 = AtomicU32::new(0);
     let n = NEXT.fetch_add(1, Ordering::Relaxed);
     std::env::temp_dir().join(format!("silrig-fmu-{}-{n}", std::process::id()))
+}
+
+/// Remove the unpack folders of processes that no longer run: a plant killed by a fault or by its FMU's own crash
+/// never dropped its [`Fmu`]. Folders of live processes, and those this user cannot remove, stay.
+fn remove_dead_unpacks() {
+    let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) else { return };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some((pid, n)) = name.strip_prefix("silrig-fmu-").and_then(|rest| rest.split_once('-')) else { continue };
+        let numbers = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+        if numbers(pid) && numbers(n) && !Path::new("/proc").join(pid).exists() {
+            let _ = std::fs::remove_dir_all(entry.path());
+        }
+    }
 }
 
 fn unpack(path: &Path, file: &str, folder: &Path) -> Result<(), FmiError> {
