@@ -499,7 +499,7 @@ pub fn fly(s: &Scenario) -> Result<(Trace, Option<LeftEnvelope>), SetupError> {
 /// Run a scenario's closed loop to the end and return its trace: N + 1 rows, t = 0 to the duration.
 pub fn run(s: &Scenario) -> Result<Trace, SimError> {
     let mut plant = PlantRunner::new(s)?;
-    let mut controller = AttitudeController::new(s.controller.clone(), plant.vehicle.model().tables());
+    let mut controller = AttitudeController::new(s.controller.gains.clone(), plant.vehicle.model().tables());
     let setpoint = setpoint_rad(s);
     let dt = s.timing.dt_s;
     let steps = s.timing.ticks();
