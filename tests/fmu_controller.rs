@@ -214,7 +214,7 @@ fn the_pid_fmu_flies_the_f16_as_the_c_example_does() {
 
 #[test]
 fn renamed_variables_fly_the_same_through_controller_map() {
-    let dir = common::temp_dir(SUITE, "renamed");
+    let dir = common::temp_dir(SUITE, "renamed-files");
     let renamed = renamed_pid(&dir, &[("theta_deg", "pitch"), ("elevator", "elev_cmd"), ("theta_deg_sp", "theta_ref")]);
     let scenario = scenario_with(
         &dir,
@@ -244,7 +244,7 @@ fn renamed_variables_fly_the_same_through_controller_map() {
 fn a_relative_fmu_path_and_parameters_by_name_reach_the_controller() {
     // Without roll gains the PID never moves the aileron, so the airframe cannot roll to its 10 deg: the parameters
     // reached the FMU. The FMU is named relative to the scenario file.
-    let dir = common::temp_dir(SUITE, "parameters");
+    let dir = common::temp_dir(SUITE, "parameters-files");
     std::fs::copy(fmu("pid"), dir.join("pid.fmu")).unwrap();
     let scenario = scenario_with(
         &dir,
@@ -302,7 +302,7 @@ fn a_killed_fmu_controller_resumes_from_its_fmu_state() {
 
 #[test]
 fn silrig_check_judges_a_controller_fmu() {
-    let dir = common::temp_dir(SUITE, "check");
+    let dir = common::temp_dir(SUITE, "check-files");
     let suite = dir.join("suite.toml");
     std::fs::write(
         &suite,
@@ -336,7 +336,7 @@ fn silrig_check_judges_a_controller_fmu() {
 
 #[test]
 fn mapping_mistakes_are_refused_before_the_run_naming_the_file() {
-    let dir = common::temp_dir(SUITE, "mapping");
+    let dir = common::temp_dir(SUITE, "mapping-files");
     let pid = fmu("pid");
     let cases: [(&str, &[&str]); 6] = [
         (
@@ -383,7 +383,11 @@ fn mapping_mistakes_are_refused_before_the_run_naming_the_file() {
         "{stderr}"
     );
     // A `[controller] fmu` beside --controller-cmd is a contradiction, said as such.
-    let both = scenario_with(&dir, "both", &robust(), &format!("[controller]\nfmu = \"{pid}\""));
+    let both = scenario_with(&dir, "both", &robust(), "");
+    let text = std::fs::read_to_string(&both)
+        .unwrap()
+        .replace("\n[controller]\n", &format!("\n[controller]\nfmu = \"{pid}\"\n"));
+    std::fs::write(&both, text).unwrap();
     let stderr = refused("both", &["--mode", "lockstep", "--controller-cmd", "true", &both]);
     assert!(stderr.contains("the scenario's controller is the FMU") && stderr.contains(&pid), "{stderr}");
     std::fs::remove_dir_all(dir).unwrap();
@@ -393,7 +397,7 @@ fn mapping_mistakes_are_refused_before_the_run_naming_the_file() {
 fn a_mapping_mistake_against_a_plant_known_only_when_it_joins_fails_the_controller_naming_the_file() {
     // A plant of the user's own announces its signals only when it runs: the controller FMU is bound then, and a
     // mistake ends the controller with the same message while the plant flies its failsafe.
-    let dir = common::temp_dir(SUITE, "late-mapping");
+    let dir = common::temp_dir(SUITE, "late-mapping-files");
     let scenario = scenario_with(
         &dir,
         "late",
@@ -416,5 +420,23 @@ fn a_mapping_mistake_against_a_plant_known_only_when_it_joins_fails_the_controll
         r.stdout
     );
     r.finish();
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn the_single_process_loop_says_a_controller_fmu_flies_in_the_rig() {
+    // `silrig sim` flies our controller in one process: a scenario naming an FMU must not quietly fly ours.
+    let dir = common::temp_dir(SUITE, "sim-files");
+    let path = scenario_with(&dir, "fmu", &robust(), "");
+    let text =
+        std::fs::read_to_string(&path).unwrap().replace("\n[controller]\n", "\n[controller]\nfmu = \"pid.fmu\"\n");
+    std::fs::write(&path, text).unwrap();
+    let o = Command::new(SILRIG).args(["sim", &path]).arg("--out").arg(dir.join("out")).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("controller.fmu") && stderr.contains("pid.fmu") && stderr.contains("silrig run"),
+        "{stderr}"
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -251,9 +251,15 @@ impl<'de> Deserialize<'de> for ControllerOptions {
             .transpose()
             .map_err(|e| D::Error::custom(format!("controller.parameters: {e}")))?
             .unwrap_or_default();
-        let gains = toml::Value::Table(table)
-            .try_into::<ControllerGains>()
-            .map_err(|e| D::Error::custom(format!("controller: {e}")))?;
+        // A `[controller]` that only names an FMU leaves our controller's gains at their defaults (unused); one
+        // that gives any gain gives them as before.
+        let gains = if table.is_empty() {
+            ControllerGains::default()
+        } else {
+            toml::Value::Table(table)
+                .try_into::<ControllerGains>()
+                .map_err(|e| D::Error::custom(format!("controller: {e}")))?
+        };
         Ok(Self { gains, fmu, map, parameters })
     }
 }
@@ -701,6 +707,10 @@ mod tests {
         let typo = text.replace("fmu = \"pid.fmu\"", "fmu = \"pid.fmu\"\nswitching_gain = 3");
         let e = Scenario::from_toml(&typo, "typo").unwrap_err().to_string();
         assert!(e.contains("switching_gain"), "{e}");
+        // Naming only the FMU leaves the gains at their defaults.
+        let only = "name = \"x\"\n[timing]\ndt_s = 0.01\nduration_s = 1.0\n[controller]\nfmu = \"pid.fmu\"\n";
+        let s = Scenario::from_toml(only, "only").unwrap();
+        assert_eq!(s.controller.gains, ControllerGains::default());
         let bad = text.replace("pitch = \"theta_deg\"", "pitch = \"theta deg\"");
         let e = Scenario::from_toml(&bad, "bad").unwrap_err().to_string();
         assert!(e.contains("controller.map.pitch"), "{e}");
