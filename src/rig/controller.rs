@@ -7,8 +7,8 @@
 //! is [`AttitudeLaw`], the same [`silrig_model::control::AttitudeController`] as `silrig sim`, served by
 //! [`run_controller`].
 //!
-//! A controller FMU (`[controller] fmu`) is one more [`Controller`], `super::fmu_controller::FmuController`, which
-//! [`run_controller`] serves in place of ours.
+//! A controller FMU (`[controller] fmu`) is one more [`Controller`], `fmu_controller::FmuController`, served the
+//! same way; `controller_process` picks which one `silrig-controller` flies.
 //!
 //! With a fault plan the session asks for the controller's checkpoint every few ticks; restarted with `--resume`,
 //! ours restores its RBF weights, so it need not re-learn them.
@@ -162,13 +162,9 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
     }
 }
 
-/// Run the scenario's controller until SIGTERM and write its report: ours (the paper's, with the scenario's gains),
-/// or the controller FMU its `[controller] fmu` names ([`super::fmu_controller`]).
+/// Run our controller (the paper's, from the scenario) until SIGTERM and write its report.
 pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let scenario = args.scenario()?;
-    if let Some(path) = scenario.controller.fmu.clone() {
-        return super::fmu_controller::run_fmu_controller(args, scenario, &path);
-    }
     let law = AttitudeLaw::new(&scenario);
     serve(args, scenario, Box::new(law))
 }
