@@ -440,3 +440,19 @@ fn the_single_process_loop_says_a_controller_fmu_flies_in_the_rig() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn a_controller_fmu_run_replays_bit_identically() {
+    // The recorded scenario names the FMU by its absolute path, so `silrig replay` flies the same FMU again.
+    let pid = fmu("pid");
+    let r = run("replay", &["--mode", "lockstep", "--duration-s", "3", "--controller-fmu", &pid, &robust()]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let o = Command::new(SILRIG).arg("replay").arg(&r.out).output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    let replay: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(r.out.join("replay/replay.json")).unwrap()).unwrap();
+    let text = replay.to_string();
+    assert!(text.contains("err_theta_deg"), "the FMU's diagnostics were not compared: {text}");
+    r.finish();
+}

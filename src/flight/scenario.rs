@@ -708,7 +708,8 @@ mod tests {
         let e = Scenario::from_toml(&typo, "typo").unwrap_err().to_string();
         assert!(e.contains("switching_gain"), "{e}");
         // Naming only the FMU leaves the gains at their defaults.
-        let only = "name = \"x\"\n[timing]\ndt_s = 0.01\nduration_s = 1.0\n[controller]\nfmu = \"pid.fmu\"\n";
+        let only = "name = \"x\"\n[timing]\ndt_s = 0.01\nduration_s = 1.0\ncommand_timing = \"next-tick\"\n\
+                    [controller]\nfmu = \"pid.fmu\"\n";
         let s = Scenario::from_toml(only, "only").unwrap();
         assert_eq!(s.controller.gains, ControllerGains::default());
         let bad = text.replace("pitch = \"theta_deg\"", "pitch = \"theta deg\"");
