@@ -3,7 +3,8 @@
 //! the airframe FMU plant and the built-in F-16 in lockstep and settles, with the very trace the C example
 //! (`examples/c/pid_attitude.c`, the same law and gains) gives on the same plant; renamed variables fly the same
 //! through `[controller.map]`; `[controller.parameters]` reach it; killed and restarted in realtime it resumes from
-//! its own serialized state; `silrig check --controller-fmu` judges it. Every mapping mistake is refused with a
+//! its own serialized state; `silrig check --controller-fmu` judges it; its run replays bit-identically; an FMI 3.0
+//! FMU (`tests/fmu/lag3`) flies as a controller through its map and parameters. Every mapping mistake is refused with a
 //! message naming the FMU file, the variable and what the plant or the FMU has: before any process starts when
 //! the plant is known (the F-16, an FMU plant), else by the controller when the plant announces itself.
 //! Each test has its own run id and folder (`common::Run`); no timing figure is asserted as a bound.
@@ -455,4 +456,30 @@ fn a_controller_fmu_run_replays_bit_identically() {
     let text = replay.to_string();
     assert!(text.contains("err_theta_deg"), "the FMU's diagnostics were not compared: {text}");
     r.finish();
+}
+
+#[test]
+fn an_fmi3_fmu_flies_as_a_controller_through_its_map() {
+    // tests/fmu/lag3 (FMI 3.0: y' = (gain u - y) / tau) as a controller of the F-16: u reads theta_deg, y commands
+    // the elevator. Not a good controller, but every value of its output is the command the plant got.
+    let dir = common::temp_dir(SUITE, "fmi3-files");
+    let scenario = scenario_with(
+        &dir,
+        "lag",
+        &robust(),
+        "[controller.map]\nu = \"theta_deg\"\ny = \"elevator\"\n[controller.parameters]\ngain = -0.2\ntau = 0.1",
+    );
+    let r = run("fmi3", &["--mode", "lockstep", "--duration-s", "1", "--controller-fmu", &fmu("lag3"), &scenario]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let detail = r.event("controller", "controller-fmu").unwrap()["detail"].as_str().unwrap().to_string();
+    assert!(detail.contains("FMI 3.0"), "{detail}");
+    let (header, rows) = r.trace();
+    let (y, elevator, theta) =
+        (column(&header, "y"), column(&header, "elevator_cmd_deg"), column(&header, "theta_deg"));
+    assert!(rows.iter().all(|row| row[y] == row[elevator]), "the FMU's y is not the elevator command");
+    // Its first step, integrated exactly by the FMU from y = 0 with u = theta at tick 0: the parameters reached it.
+    let expected = -0.2 * rows[0][theta] * (1.0 - (-0.01f64 / 0.1).exp());
+    assert!((rows[0][y] - expected).abs() < 1e-12, "y after one step: {} against {expected}", rows[0][y]);
+    r.finish();
+    std::fs::remove_dir_all(dir).unwrap();
 }
