@@ -294,10 +294,12 @@ fn a_killed_fmu_controller_resumes_from_its_fmu_state() {
     assert!(r.event("plant", "controller-recovered").is_some());
     let (header, rows) = r.trace();
     assert_eq!(rows.len(), 301, "the logger lost rows");
-    // The restored integrators carry the trim: the elevator command never jumps more than 1 deg in a tick.
-    let elevator = column(&header, "elevator_cmd_deg");
-    let jump = rows.windows(2).map(|w| (w[1][elevator] - w[0][elevator]).abs()).fold(0.0, f64::max);
-    assert!(jump < 1.0, "the elevator command jumped {jump} deg in a tick");
+    // From the kill on (the failsafe, the restart, the blend into the restored FMU's commands) the elevator command
+    // never moves more than 0.5 deg in a tick (0.15 measured; the take-off transient at 0.26 s moves 0.93).
+    let (t, elevator) = (column(&header, "t_s"), column(&header, "elevator_cmd_deg"));
+    let jump =
+        rows.windows(2).filter(|w| w[0][t] >= 1.4).map(|w| (w[1][elevator] - w[0][elevator]).abs()).fold(0.0, f64::max);
+    assert!(jump < 0.5, "the elevator command jumped {jump} deg in a tick after the kill");
     r.finish();
 }
 
