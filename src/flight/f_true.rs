@@ -41,7 +41,7 @@ const COLUMNS: [&str; 12] = [
 /// disturbance of `scenario`; `None` if the trace lacks one of the loop columns it needs.
 pub fn from_trace(trace: &Trace, scenario: &Scenario) -> Option<[Vec<f64>; 3]> {
     let index: Vec<usize> = COLUMNS.iter().map(|c| trace.index(c)).collect::<Option<_>>()?;
-    let controller = AttitudeController::new(scenario.controller.clone(), scenario.plant.model().tables());
+    let controller = AttitudeController::new(scenario.controller.gains.clone(), scenario.plant.model().tables());
     let dt = scenario.timing.dt_s;
     let mask = scenario.disturbance.channel_mask();
     let row = |k: usize| -> [f64; 12] { std::array::from_fn(|i| trace.rows[k][index[i]]) };
@@ -105,10 +105,10 @@ mod tests {
         // mean: the recovered f_true must be that f. The attitude and air data held fixed keep T(phi, theta) and g
         // constant, so the rows' body rates are T^-1 x2.
         let mut scenario = Scenario::embedded_default();
-        scenario.controller = ControllerGains::default();
+        scenario.controller.gains = ControllerGains::default();
         scenario.disturbance.amplitude_radps2 = 0.3;
         let dt = scenario.timing.dt_s;
-        let controller = AttitudeController::new(scenario.controller.clone(), &F16_TABLES);
+        let controller = AttitudeController::new(scenario.controller.gains.clone(), &F16_TABLES);
         let m0 =
             Measurement { euler_rad: [0.0, 0.1, 0.0], body_rates_radps: [0.0; 3], vt_fps: 500.0, alt_ft: 20_000.0 };
         let g = controller.control_effectiveness(&m0);

@@ -38,9 +38,9 @@ pub struct Scenario {
     /// Plant options.
     #[serde(default)]
     pub plant: PlantOptions,
-    /// Controller gains.
+    /// Controller gains (our controller's), or the controller FMU the controller process flies instead.
     #[serde(default)]
-    pub controller: ControllerGains,
+    pub controller: ControllerOptions,
     /// Actuator limits and lags by input name (`[actuators.<input>]`): for the F-16 any of its four, the book's for
     /// those not given; for a plant of your own, the rig's actuator model on exactly the inputs named.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
@@ -193,6 +193,74 @@ impl Default for PlantOptions {
             parameters: BTreeMap::new(),
             fmu: None,
         }
+    }
+}
+
+/// `[controller]`: our controller's gains (the keys of [`ControllerGains`], which it dereferences to), or a
+/// controller FMU flown in its place with the keys `fmu`, `[controller.map]` and `[controller.parameters]`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ControllerOptions {
+    /// The paper's controller's gains (what `silrig-controller` flies without an FMU).
+    #[serde(flatten)]
+    pub gains: ControllerGains,
+    /// A co-simulation FMU (FMI 2.0 or 3.0) the controller process flies in place of ours; a relative path is
+    /// relative to the scenario file's folder.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fmu: Option<std::path::PathBuf>,
+    /// FMU variable name = plant signal name, for the variables whose names differ from the plant's signals (an
+    /// FMU input takes the plant output, or the set point `<output>_sp`, it is mapped to; an FMU output commands
+    /// the plant input it is mapped to).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub map: BTreeMap<String, String>,
+    /// The controller FMU's parameters by variable name, set before its initialization.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: BTreeMap<String, f64>,
+}
+
+impl std::ops::Deref for ControllerOptions {
+    type Target = ControllerGains;
+    fn deref(&self) -> &ControllerGains {
+        &self.gains
+    }
+}
+
+impl std::ops::DerefMut for ControllerOptions {
+    fn deref_mut(&mut self) -> &mut ControllerGains {
+        &mut self.gains
+    }
+}
+
+// By hand, not with `#[serde(flatten)]`: a flattened struct never sees the keys it does not know, so a misspelt
+// gain would pass silently. The FMU's keys are taken out and the rest must be exactly the gains' keys.
+impl<'de> Deserialize<'de> for ControllerOptions {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let mut table = toml::Table::deserialize(deserializer)?;
+        let mut take = |key: &str| table.remove(key);
+        let fmu = take("fmu")
+            .map(|v| v.try_into::<std::path::PathBuf>())
+            .transpose()
+            .map_err(|e| D::Error::custom(format!("controller.fmu: {e}")))?;
+        let map = take("map")
+            .map(|v| v.try_into::<BTreeMap<String, String>>())
+            .transpose()
+            .map_err(|e| D::Error::custom(format!("controller.map: {e}")))?
+            .unwrap_or_default();
+        let parameters = take("parameters")
+            .map(|v| v.try_into::<BTreeMap<String, f64>>())
+            .transpose()
+            .map_err(|e| D::Error::custom(format!("controller.parameters: {e}")))?
+            .unwrap_or_default();
+        // A `[controller]` that only names an FMU leaves our controller's gains at their defaults (unused); one
+        // that gives any gain gives them as before.
+        let gains = if table.is_empty() {
+            ControllerGains::default()
+        } else {
+            toml::Value::Table(table)
+                .try_into::<ControllerGains>()
+                .map_err(|e| D::Error::custom(format!("controller: {e}")))?
+        };
+        Ok(Self { gains, fmu, map, parameters })
     }
 }
 
@@ -431,6 +499,10 @@ impl Scenario {
             let beside = path.parent().unwrap_or(Path::new("")).join(&*fmu);
             *fmu = std::path::absolute(&beside).unwrap_or(beside);
         }
+        if let Some(fmu) = scenario.controller.fmu.as_mut().filter(|f| f.is_relative()) {
+            let beside = path.parent().unwrap_or(Path::new("")).join(&*fmu);
+            *fmu = std::path::absolute(&beside).unwrap_or(beside);
+        }
         Ok(scenario)
     }
 
@@ -546,6 +618,17 @@ impl Scenario {
         for (name, v) in &self.plant.parameters {
             finite(&format!("plant.parameters.{name}"), *v)?;
         }
+        for (name, v) in &self.controller.parameters {
+            finite(&format!("controller.parameters.{name}"), *v)?;
+        }
+        for (variable, signal) in &self.controller.map {
+            if !crate::signals::valid_name(signal) {
+                return err(
+                    &format!("controller.map.{variable}"),
+                    format!("{signal:?} is not a signal name (1 to 31 ASCII letters, digits and '_')"),
+                );
+            }
+        }
         let t = &self.timing;
         if !(t.dt_s >= 1e-4 && t.dt_s <= 0.1) {
             return err("timing.dt_s", format!("must be within 0.0001..0.1 s (10 kHz to 10 Hz), got {}", t.dt_s));
@@ -593,5 +676,44 @@ impl Scenario {
         }
         self.validate_dispersions()?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn controller_options_without_an_fmu_write_exactly_the_gains() {
+        // The effective scenario a run writes down, and every dispersion applied through TOML, must not change
+        // because the gains now sit inside `ControllerOptions`.
+        let s = Scenario::embedded_default();
+        assert_eq!(toml::to_string(&s.controller).unwrap(), toml::to_string(&s.controller.gains).unwrap());
+    }
+
+    #[test]
+    fn controller_fmu_keys_round_trip_and_unknown_keys_are_still_refused() {
+        // The default scenario's [controller] table, with the FMU's keys added to it.
+        assert!(DEFAULT_SCENARIO_TOML.contains("\n[controller]\n"));
+        let text = DEFAULT_SCENARIO_TOML.replace(
+            "\n[controller]\n",
+            "\n[controller]\nfmu = \"pid.fmu\"\nmap = { pitch = \"theta_deg\" }\nparameters = { kp_phi = 1.5 }\n",
+        );
+        let s = Scenario::from_toml(&text, "test").unwrap();
+        assert_eq!(s.controller.fmu.as_deref(), Some(Path::new("pid.fmu")));
+        assert_eq!(s.controller.map["pitch"], "theta_deg");
+        assert_eq!(s.controller.parameters["kp_phi"], 1.5);
+        assert_eq!(Scenario::from_toml(&s.to_toml(), "again").unwrap(), s);
+        let typo = text.replace("fmu = \"pid.fmu\"", "fmu = \"pid.fmu\"\nswitching_gain = 3");
+        let e = Scenario::from_toml(&typo, "typo").unwrap_err().to_string();
+        assert!(e.contains("switching_gain"), "{e}");
+        // Naming only the FMU leaves the gains at their defaults.
+        let only = "name = \"x\"\n[timing]\ndt_s = 0.01\nduration_s = 1.0\ncommand_timing = \"next-tick\"\n\
+                    [controller]\nfmu = \"pid.fmu\"\n";
+        let s = Scenario::from_toml(only, "only").unwrap();
+        assert_eq!(s.controller.gains, ControllerGains::default());
+        let bad = text.replace("pitch = \"theta_deg\"", "pitch = \"theta deg\"");
+        let e = Scenario::from_toml(&bad, "bad").unwrap_err().to_string();
+        assert!(e.contains("controller.map.pitch"), "{e}");
     }
 }

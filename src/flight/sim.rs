@@ -498,8 +498,19 @@ pub fn fly(s: &Scenario) -> Result<(Trace, Option<LeftEnvelope>), SetupError> {
 
 /// Run a scenario's closed loop to the end and return its trace: N + 1 rows, t = 0 to the duration.
 pub fn run(s: &Scenario) -> Result<Trace, SimError> {
+    // This loop flies our controller: a scenario that names another must not quietly fly ours instead.
+    if let Some(fmu) = &s.controller.fmu {
+        return Err(SimError::Setup(SetupError::NotForF16 {
+            key: "controller.fmu".into(),
+            problem: format!(
+                "{} is a controller of your own: it flies in the rig (`silrig run`, `silrig check`), not in place \
+                 of ours in one process",
+                fmu.display()
+            ),
+        }));
+    }
     let mut plant = PlantRunner::new(s)?;
-    let mut controller = AttitudeController::new(s.controller.clone(), plant.vehicle.model().tables());
+    let mut controller = AttitudeController::new(s.controller.gains.clone(), plant.vehicle.model().tables());
     let setpoint = setpoint_rad(s);
     let dt = s.timing.dt_s;
     let steps = s.timing.ticks();

@@ -81,6 +81,13 @@ pub struct LaunchOptions {
     /// `[plant.parameters]` set its parameters by variable name. Same as the scenario key `[plant] fmu`.
     #[arg(long, value_name = "FILE.fmu", conflicts_with_all = ["plant_cmd", "plant"])]
     pub plant_fmu: Option<PathBuf>,
+    /// Fly a co-simulation FMU (FMI 2.0 or 3.0, with a Linux x86-64 binary) as the controller: silrig-controller
+    /// loads it, feeds its Real inputs the plant's outputs of the same name (an input `<output>_sp` the scenario's
+    /// set point of that output), commands the plant's inputs with its Real outputs of the same name and logs all
+    /// its Real outputs as diagnostics; `[controller.map]` renames, `[controller.parameters]` sets its parameters.
+    /// Same as the scenario key `[controller] fmu`.
+    #[arg(long, value_name = "FILE.fmu", conflicts_with_all = ["controller_cmd", "controller", "bridge_listen"])]
+    pub controller_fmu: Option<PathBuf>,
     /// builtin (silrig-plant, or --plant-cmd) or external: wait for a plant started by hand (in a debugger, in a
     /// simulation tool) with the variables printed and written to <out>/plant.env.
     #[arg(long, value_enum, default_value = "builtin", conflicts_with = "plant_cmd")]
@@ -312,6 +319,29 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         // Every problem of the file, its variables and the parameters is said here, before any process starts.
         silrig_rig::fmu_plant::FmuPlant::check(&fmu, &scenario)?;
         scenario.plant.fmu = Some(fmu);
+    }
+    if let Some(fmu) = &opts.controller_fmu {
+        scenario.controller.fmu = Some(fmu.clone());
+    }
+    if let Some(fmu) = scenario.controller.fmu.take() {
+        anyhow::ensure!(
+            opts.controller_cmd.is_none() && opts.controller == ControllerKind::Builtin && opts.bridge_listen.is_none(),
+            "the scenario's controller is the FMU {}: it flies in silrig-controller, not with --controller-cmd, \
+             --controller external or --bridge-listen",
+            fmu.display()
+        );
+        let fmu = std::path::absolute(&fmu).map_err(|e| anyhow::anyhow!("--controller-fmu {}: {e}", fmu.display()))?;
+        // The file and `[controller]` are checked here; against the plant's signals too when they are known before
+        // it runs (the F-16, an FMU plant), else when the plant announces them.
+        let plant = if let Some(plant_fmu) = &scenario.plant.fmu {
+            Some(silrig_rig::fmu_plant::FmuPlant::check(plant_fmu, &scenario)?.signals)
+        } else if opts.plant_cmd.is_none() && opts.plant == PlantKind::Builtin {
+            Some(silrig_flight::f16_signals::f16_signals([0.0; 4]))
+        } else {
+            None
+        };
+        silrig_rig::fmu_controller::FmuController::check(&fmu, &scenario, plant.as_ref())?;
+        scenario.controller.fmu = Some(fmu);
     }
     if opts.mode == RigMode::Lockstep
         && let Some(f) = scenario.faults.iter().find(|f| !f.action().is_plant_model_fault())
@@ -577,6 +607,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     let plant_launch = if plant_external { None } else { Some(opts.plant_cmd.clone()) };
     let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone(), plant_launch)?;
     sup.plant_fmu = scenario.plant.fmu.clone();
+    sup.controller_fmu = scenario.controller.fmu.clone();
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
     let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
     let supervised = supervise(&mut sup, &mut faults, &scenario, &mut bridge, live.as_mut());

@@ -393,6 +393,8 @@ pub(crate) struct Supervisor {
     plant_external: bool,
     /// The FMU silrig-plant flies, if it flies one: named when the plant process dies of a signal.
     pub(crate) plant_fmu: Option<PathBuf>,
+    /// The controller FMU silrig-controller flies, if any: named when the controller dies of a signal.
+    pub(crate) controller_fmu: Option<PathBuf>,
     args: ProcessArgs,
     events: EventLog,
     restart: SupervisionOptions,
@@ -428,6 +430,7 @@ impl Supervisor {
             plant_cmd: plant.clone().flatten(),
             plant_external: plant.is_none(),
             plant_fmu: None,
+            controller_fmu: None,
             args,
             events,
             restart,
@@ -605,16 +608,16 @@ impl Supervisor {
             };
             let tail = stderr_tail(&self.args.out, role);
             let when = if self.plant_ticking() { "before the end of the run" } else { "before the plant's first tick" };
-            let fmu = match (&self.plant_fmu, role, status.code()) {
-                // A crash in an FMU's code takes the plant process with it: say which FMU it was flying.
-                (Some(fmu), Role::Plant, None) => {
-                    format!(
-                        " while flying the FMU {} (a crash in the FMU's code ends the plant process)",
-                        fmu.display()
-                    )
-                }
-                _ => String::new(),
-            };
+            let fmu = match (role, status.code()) {
+                // A crash in an FMU's code takes its process with it: say which FMU it was flying.
+                (Role::Plant, None) => self.plant_fmu.as_ref(),
+                (Role::Controller, None) => self.controller_fmu.as_ref(),
+                _ => None,
+            }
+            .map(|fmu| {
+                format!(" while flying the FMU {} (a crash in the FMU's code ends the {role} process)", fmu.display())
+            })
+            .unwrap_or_default();
             self.on_death(i, format!("{role}: {how} {when}{fmu}{tail}"));
         }
         Ok(())

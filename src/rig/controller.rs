@@ -7,6 +7,9 @@
 //! is [`AttitudeLaw`], the same [`silrig_model::control::AttitudeController`] as `silrig sim`, served by
 //! [`run_controller`].
 //!
+//! A controller FMU (`[controller] fmu`) is one more [`Controller`], `fmu_controller::FmuController`, served the
+//! same way; `controller_process` picks which one `silrig-controller` flies.
+//!
 //! With a fault plan the session asks for the controller's checkpoint every few ticks; restarted with `--resume`,
 //! ours restores its RBF weights, so it need not re-learn them.
 
@@ -37,6 +40,12 @@ pub trait Controller {
     /// (an input left alone stays there); write the diagnostics of this step into `diagnostics` (one per name).
     fn step(&mut self, sample: &PlantSample, dt_s: f64, command: &mut [f64], diagnostics: &mut [f64]);
 
+    /// Why the controller cannot go on after its last step (an FMU's failed call), asked after every step: `Some`
+    /// ends the session with that error, and that step's command is not sent.
+    fn failure(&mut self) -> Option<String> {
+        None
+    }
+
     /// The state a restarted controller should resume from, as text (`None`: nothing worth saving).
     fn checkpoint(&self) -> Option<String> {
         None
@@ -64,7 +73,7 @@ impl AttitudeLaw {
     pub fn new(scenario: &Scenario) -> Self {
         let tables = silrig_model::plant::F16Model::new(scenario.plant.xcg).tables();
         Self {
-            controller: AttitudeController::new(scenario.controller.clone(), tables),
+            controller: AttitudeController::new(scenario.controller.gains.clone(), tables),
             setpoint: setpoint_rad(scenario),
             outputs: None,
             surfaces: [0, 1, 2],
@@ -120,19 +129,22 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
         let sample = match session.next_sample() {
             Ok(Next::Sample(sample)) => sample,
             Ok(Next::Stop(_)) => break None,
-            Err(e) => break Some(e),
+            Err(e) => break Some(e.into()),
         };
         if !std::mem::replace(&mut connected, true)
             && let Err(e) = law.connect(session.plant()?)
         {
-            break Some(SessionError::Plant(e));
+            break Some(SessionError::Plant(e).into());
         }
         let mut command = session.held_command();
         law.step(&sample, dt_s, &mut command, &mut diagnostics);
+        if let Some(why) = law.failure() {
+            break Some(anyhow::anyhow!(why));
+        }
         match session.send(&command, &diagnostics) {
             // Refused: the session said why in the run's events and the plant holds; the next sample may do.
             Ok(()) | Err(SessionError::CommandRefused { .. }) => {}
-            Err(e) => break Some(e),
+            Err(e) => break Some(e.into()),
         }
         if session.checkpoint_due()
             && let Some(text) = law.checkpoint()
@@ -145,7 +157,7 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
     }
     let report = session.finish()?;
     match error {
-        Some(e) => Err(e.into()),
+        Some(e) => Err(e),
         None => Ok(report),
     }
 }

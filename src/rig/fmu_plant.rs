@@ -16,6 +16,7 @@
 //! of `trace.csv` (an input's command out of it), `position_of` names the input whose actuator an output reports.
 
 use super::ProcessArgs;
+use super::fmu_variables::{can_checkpoint, from_hex, to_hex};
 use super::plant_session::{PlantSession, PlantTick};
 use super::report::ProcessReport;
 use silrig_flight::scenario::Scenario;
@@ -23,6 +24,8 @@ use silrig_flight::signals::{InputSignal, OutputSignal, PlantSignals, valid_name
 use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
 use silrig_fmi::{Fmu, Instance};
 use std::path::Path;
+
+pub use super::fmu_variables::signal_name;
 
 /// The plant's signals of an FMU, and where each lives in it.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,12 +38,6 @@ pub struct FmuSignals {
     pub input_refs: Vec<u32>,
     /// `[plant.parameters]`: value references and the values set before initialization.
     pub parameters: Vec<(u32, f64)>,
-}
-
-/// The signal name of an FMU variable: its name with every character other than an ASCII letter, digit or '_'
-/// turned into '_'.
-pub fn signal_name(variable: &str) -> String {
-    variable.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect()
 }
 
 /// Map an FMU's variables to the plant's signals, and `[plant.parameters]` to its parameters. Errors name the
@@ -98,43 +95,7 @@ pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Res
     signals
         .check(silrig_wire::wire::MAX_OUTPUTS, silrig_wire::wire::MAX_INPUTS)
         .map_err(|e| bad(format!("its variables as the plant's signals: {e}")))?;
-    let mut parameters = Vec::new();
-    for (name, value) in &scenario.plant.parameters {
-        let variable = d.variable(name).or_else(|| d.variables.iter().find(|v| signal_name(&v.name) == *name));
-        let settable: Vec<String> = d
-            .variables
-            .iter()
-            .filter(|v| v.kind == ValueKind::Real && matches!(v.causality, Causality::Parameter | Causality::Input))
-            .map(|v| v.name.clone())
-            .collect();
-        let Some(v) = variable else {
-            return Err(bad(format!(
-                "`plant.parameters.{name}`: no variable of that name; its Real parameters and inputs: {}",
-                settable.join(", ")
-            )));
-        };
-        if v.kind != ValueKind::Real {
-            return Err(bad(format!("`plant.parameters.{name}`: variable {:?} is not a Real (Float64)", v.name)));
-        }
-        if !matches!(v.causality, Causality::Parameter | Causality::Input) || v.variability == "constant" {
-            return Err(bad(format!(
-                "`plant.parameters.{name}`: variable {:?} has causality {} (variability {}): only a parameter's \
-                 value or an input's start value can be set; settable: {}",
-                v.name,
-                v.causality.label(),
-                v.variability,
-                settable.join(", ")
-            )));
-        }
-        if v.min.is_some_and(|m| *value < m) || v.max.is_some_and(|m| *value > m) {
-            return Err(bad(format!(
-                "`plant.parameters.{name}` = {value} is outside the variable's range {}..{}",
-                v.min.unwrap_or(f64::NEG_INFINITY),
-                v.max.unwrap_or(f64::INFINITY)
-            )));
-        }
-        parameters.push((v.value_reference, *value));
-    }
+    let parameters = super::fmu_variables::parameters(file, d, "plant.parameters", &scenario.plant.parameters)?;
     Ok(FmuSignals {
         output_refs: outputs.iter().map(|v| v.value_reference).collect(),
         input_refs: inputs.iter().map(|v| v.value_reference).collect(),
@@ -195,12 +156,7 @@ impl FmuPlant {
 
     /// Whether a restarted plant can resume from the FMU's state, or why not.
     pub fn can_checkpoint(&self) -> Result<(), String> {
-        let cs = &self.fmu.description.co_simulation;
-        match (cs.can_get_and_set_state, cs.can_serialize_state) {
-            (true, true) => Ok(()),
-            (false, _) => Err("the FMU cannot get and set its state (canGetAndSetFMUstate is not true)".into()),
-            (true, false) => Err("the FMU cannot serialize its state (canSerializeFMUstate is not true)".into()),
-        }
+        can_checkpoint(&self.fmu.description)
     }
 
     /// Its outputs now, in the announced order.
@@ -220,21 +176,14 @@ impl FmuPlant {
     /// The FMU's state after the last step, as checkpoint text.
     pub fn checkpoint(&mut self) -> Result<String, String> {
         let bytes = self.instance.save_state().map_err(|e| e.to_string())?;
-        let state_hex = bytes.iter().map(|b| format!("{b:02x}")).collect();
+        let state_hex = to_hex(&bytes);
         serde_json::to_string(&SavedFmu { tick: self.tick, state_hex }).map_err(|e| e.to_string())
     }
 
     /// Put back the state a checkpoint holds.
     pub fn restore(&mut self, text: &str) -> Result<(), String> {
         let saved: SavedFmu = serde_json::from_str(text).map_err(|e| format!("not an FMU plant's checkpoint: {e}"))?;
-        let hex = saved.state_hex.as_bytes();
-        if !hex.len().is_multiple_of(2) || !hex.iter().all(u8::is_ascii_hexdigit) {
-            return Err("its FMU state is not hex bytes".into());
-        }
-        let bytes: Vec<u8> = hex
-            .chunks(2)
-            .map(|pair| u8::from_str_radix(std::str::from_utf8(pair).unwrap_or("zz"), 16).unwrap_or(0))
-            .collect();
+        let bytes = from_hex(&saved.state_hex)?;
         self.instance.restore_state(&bytes).map_err(|e| e.to_string())?;
         self.tick = saved.tick;
         Ok(())

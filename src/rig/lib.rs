@@ -7,7 +7,9 @@
 //! - [`plant_model`]: what the plant process flies; [`f16_plant`]: the F-16 as a [`plant_model::PlantModel`];
 //!   [`plant_session`]: the plant's side of the contract for a model of the user's own (announce, then outputs
 //!   in, inputs out, tick by tick), with the same loop around it; [`fmu_plant`]: a co-simulation FMU flown
-//!   through that session; [`plant_process`]: which of the two `silrig-plant` flies.
+//!   through that session; [`plant_process`]: which of the two `silrig-plant` flies; [`fmu_controller`]: a
+//!   co-simulation FMU as the controller, one more [`controller::Controller`]; [`controller_process`]: which
+//!   controller `silrig-controller` flies; [`fmu_variables`]: what the FMU plant and controller share.
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
@@ -22,9 +24,12 @@
 //! `silrig-launch`, above.
 
 pub mod controller;
+pub mod controller_process;
 pub mod events;
 pub mod f16_plant;
+pub mod fmu_controller;
 pub mod fmu_plant;
+pub mod fmu_variables;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;

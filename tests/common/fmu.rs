@@ -1,6 +1,7 @@
 //! The FMUs this repository builds from C, for the tests that fly or break them: `airframe` (the example vehicle,
-//! `examples/fmu/airframe`), `misbehave` (the importer's error fixture, `tests/fmu/misbehave`) and `lag3` (a
-//! first-order lag in FMI 3.0, `tests/fmu/lag3`), each built by `examples/fmu/build.sh` with the system `cc` against
+//! `examples/fmu/airframe`), `misbehave` (the importer's error fixture, `tests/fmu/misbehave`), `lag3` (a
+//! first-order lag in FMI 3.0, `tests/fmu/lag3`) and `pid` (the example PID as a controller FMU,
+//! `examples/fmu/pid`), each built by `examples/fmu/build.sh` with the system `cc` against
 //! the FMI headers of the test venv's `fmpy`.
 
 use std::path::{Path, PathBuf};
@@ -37,7 +38,8 @@ pub fn fmu_source(name: &str) -> PathBuf {
         "airframe" => Path::new(ROOT).join("examples/fmu/airframe"),
         "misbehave" => Path::new(ROOT).join("tests/fmu/misbehave"),
         "lag3" => Path::new(ROOT).join("tests/fmu/lag3"),
-        other => panic!("no FMU named {other}: airframe, misbehave or lag3"),
+        "pid" => Path::new(ROOT).join("examples/fmu/pid"),
+        other => panic!("no FMU named {other}: airframe, misbehave, lag3 or pid"),
     }
 }
 
@@ -53,7 +55,7 @@ pub fn run_build_sh(src: &Path, out: &Path) -> std::process::Output {
         .expect("sh runs")
 }
 
-/// Build FMU `name` ("airframe", "misbehave" or "lag3", the FMI 3.0 one) into `out_dir/<name>.fmu` and return that path.
+/// Build FMU `name` ("airframe", "misbehave", "lag3", the FMI 3.0 one, or "pid", the controller) into `out_dir/<name>.fmu` and return that path.
 pub fn build_fmu(name: &str, out_dir: &Path) -> PathBuf {
     build(&fmu_source(name), &out_dir.join(format!("{name}.fmu")))
 }

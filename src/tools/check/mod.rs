@@ -30,6 +30,9 @@ pub struct CheckOptions {
     /// `silrig run --controller-cmd`).
     #[arg(long, value_name = "CMD")]
     pub controller_cmd: Option<String>,
+    /// Judge a co-simulation FMU as the controller in every case (as with `silrig run --controller-fmu`).
+    #[arg(long, value_name = "FILE.fmu", conflicts_with = "controller_cmd")]
+    pub controller_fmu: Option<PathBuf>,
     /// Fly your own vehicle model: this command runs in place of silrig-plant in every case (as with `silrig run
     /// --plant-cmd`).
     #[arg(long, value_name = "CMD")]
@@ -87,6 +90,9 @@ impl CheckOptions {
         cmd += &format!(" --case {case}");
         if let Some(c) = &self.controller_cmd {
             cmd += &format!(" --controller-cmd {}", shell_quote(c));
+        }
+        if let Some(f) = &self.controller_fmu {
+            cmd += &format!(" --controller-fmu {}", shell_quote(&f.display().to_string()));
         }
         if let Some(c) = &self.plant_cmd {
             cmd += &format!(" --plant-cmd {}", shell_quote(c));
@@ -146,6 +152,7 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         controller_cmd: opts.controller_cmd.clone(),
         plant_cmd: opts.plant_cmd.clone(),
         plant_fmu: opts.plant_fmu.clone(),
+        controller_fmu: opts.controller_fmu.clone(),
         plant: silrig_launch::launcher::PlantKind::Builtin,
         controller: ControllerKind::Builtin,
         // Not used: the controller is always one the launcher starts.
@@ -246,7 +253,11 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
         suite: suite.name.clone(),
         suite_file: suite.path.as_ref().map(|p| p.display().to_string()),
         description: suite.description.clone(),
-        controller: opts.controller_cmd.clone().unwrap_or_else(|| "silrig-controller".into()),
+        controller: match (&opts.controller_cmd, &opts.controller_fmu) {
+            (Some(cmd), _) => cmd.clone(),
+            (None, Some(fmu)) => format!("the FMU {} in silrig-controller", fmu.display()),
+            (None, None) => "silrig-controller".into(),
+        },
         out_dir: out.display().to_string(),
         started_unix_s,
         wall_s: started.elapsed().as_secs_f64(),

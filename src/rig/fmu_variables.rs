@@ -1,0 +1,110 @@
+//! What an FMU as the plant ([`super::fmu_plant`]) and an FMU as the controller ([`super::fmu_controller`]) share:
+//! a variable's signal name, a scenario's parameters table checked against the FMU's variables and set by value
+//! reference, whether its state can be checkpointed, and that state as hex text.
+
+use silrig_fmi::description::{Causality, ModelDescription, ValueKind};
+
+/// The signal name of an FMU variable: its name with every character other than an ASCII letter, digit or '_'
+/// turned into '_'.
+pub fn signal_name(variable: &str) -> String {
+    variable.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect()
+}
+
+/// A scenario's parameters table (`table` is its key, `plant.parameters` or `controller.parameters`) as value
+/// references and values to set before initialization: each must name a Real parameter, or an input whose start
+/// value it sets, within the variable's range. Errors name the FMU, the key and what the FMU has.
+pub fn parameters<'a>(
+    file: &str,
+    d: &ModelDescription,
+    table: &str,
+    given: impl IntoIterator<Item = (&'a String, &'a f64)>,
+) -> Result<Vec<(u32, f64)>, String> {
+    let bad = |problem: String| format!("FMU {file}: {problem}");
+    let settable = || -> String {
+        d.variables
+            .iter()
+            .filter(|v| v.kind == ValueKind::Real && matches!(v.causality, Causality::Parameter | Causality::Input))
+            .map(|v| v.name.clone())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut out = Vec::new();
+    for (name, value) in given {
+        let variable = d.variable(name).or_else(|| d.variables.iter().find(|v| signal_name(&v.name) == *name));
+        let Some(v) = variable else {
+            return Err(bad(format!(
+                "`{table}.{name}`: no variable of that name; its Real parameters and inputs: {}",
+                settable()
+            )));
+        };
+        if v.kind != ValueKind::Real {
+            return Err(bad(format!("`{table}.{name}`: variable {:?} is not a Real (Float64)", v.name)));
+        }
+        if !matches!(v.causality, Causality::Parameter | Causality::Input) || v.variability == "constant" {
+            return Err(bad(format!(
+                "`{table}.{name}`: variable {:?} has causality {} (variability {}): only a parameter's value or an \
+                 input's start value can be set; settable: {}",
+                v.name,
+                v.causality.label(),
+                v.variability,
+                settable()
+            )));
+        }
+        if v.min.is_some_and(|m| *value < m) || v.max.is_some_and(|m| *value > m) {
+            return Err(bad(format!(
+                "`{table}.{name}` = {value} is outside the variable's range {}..{}",
+                v.min.unwrap_or(f64::NEG_INFINITY),
+                v.max.unwrap_or(f64::INFINITY)
+            )));
+        }
+        out.push((v.value_reference, *value));
+    }
+    Ok(out)
+}
+
+/// Whether a restarted process can resume from the FMU's serialized state, or why not.
+pub fn can_checkpoint(d: &ModelDescription) -> Result<(), String> {
+    let cs = &d.co_simulation;
+    match (cs.can_get_and_set_state, cs.can_serialize_state) {
+        (true, true) => Ok(()),
+        (false, _) => Err("the FMU cannot get and set its state (canGetAndSetFMUstate is not true)".into()),
+        (true, false) => Err("the FMU cannot serialize its state (canSerializeFMUstate is not true)".into()),
+    }
+}
+
+/// Bytes as lower-case hex, two digits each (an FMU's serialized state inside a JSON checkpoint).
+pub fn to_hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// [`to_hex`]'s text back as bytes; an error when it is not hex bytes (a torn or edited checkpoint).
+pub fn from_hex(hex: &str) -> Result<Vec<u8>, String> {
+    let hex = hex.as_bytes();
+    if !hex.len().is_multiple_of(2) || !hex.iter().all(u8::is_ascii_hexdigit) {
+        return Err("its FMU state is not hex bytes".into());
+    }
+    Ok(hex
+        .chunks(2)
+        .map(|pair| u8::from_str_radix(std::str::from_utf8(pair).expect("ASCII hex digits"), 16).expect("hex digits"))
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hex_round_trips_and_refuses_what_is_not_hex() {
+        let bytes = [0u8, 1, 0x7f, 0x80, 0xff];
+        assert_eq!(to_hex(&bytes), "00017f80ff");
+        assert_eq!(from_hex(&to_hex(&bytes)).unwrap(), bytes);
+        assert!(from_hex("abc").is_err());
+        assert!(from_hex("zz").is_err());
+    }
+
+    #[test]
+    fn signal_names_keep_letters_digits_and_underscores() {
+        assert_eq!(signal_name("body.w[1]"), "body_w_1_");
+        assert_eq!(signal_name("err_phi_deg"), "err_phi_deg");
+    }
+}
