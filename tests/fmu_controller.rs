@@ -23,19 +23,8 @@ fn run(test: &str, args: &[&str]) -> Run {
     Run::start(SILRIG, SUITE, "c", test, args)
 }
 
-/// FMU `name` built once per test process into its own folder.
 fn fmu(name: &str) -> String {
-    let dir = std::env::temp_dir().join(format!("silrig-fmu-controller-{}-fmus", std::process::id()));
-    let path = dir.join(format!("{name}.fmu"));
-    if !path.exists() {
-        std::fs::create_dir_all(&dir).unwrap();
-        // Built beside, then renamed: tests running in parallel never see half an FMU.
-        let own = dir.join(format!("{name}-{:?}", std::thread::current().id()).replace(['(', ')'], ""));
-        std::fs::create_dir_all(&own).unwrap();
-        let built = common::fmu::build_fmu(name, &own);
-        std::fs::rename(built, &path).unwrap();
-    }
-    path.display().to_string()
+    common::fmu::cached_fmu(SUITE, name)
 }
 
 /// The PID FMU with some of its variables renamed in its modelDescription.xml (same C code, same value references):
@@ -91,7 +80,7 @@ fn robust() -> String {
 }
 
 fn column(header: &[String], name: &str) -> usize {
-    header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name} in {header:?}"))
+    Run::column(header, name)
 }
 
 /// The largest |difference| between two traces over the columns they share (t_s included), and the column where it
@@ -122,14 +111,8 @@ fn scenario_with(dir: &Path, name: &str, base: &str, extra: &str) -> String {
     path.display().to_string()
 }
 
-/// `silrig run` refused before any process started: exit 2, no run folder left; its stderr.
 fn refused(test: &str, args: &[&str]) -> String {
-    let r = run(test, args);
-    assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
-    assert!(!r.out.exists(), "a refused run left {}", r.out.display());
-    let stderr = r.stderr.clone();
-    r.finish();
-    stderr
+    Run::refused(SILRIG, SUITE, "c", test, args)
 }
 
 #[test]

@@ -23,19 +23,8 @@ fn run(test: &str, args: &[&str]) -> Run {
     Run::start(SILRIG, "fmu-plant", "f", test, args)
 }
 
-/// FMU `name` built once per test process into its own folder.
 fn fmu(name: &str) -> String {
-    let dir = std::env::temp_dir().join(format!("silrig-fmu-plant-{}-fmus", std::process::id()));
-    let path = dir.join(format!("{name}.fmu"));
-    if !path.exists() {
-        std::fs::create_dir_all(&dir).unwrap();
-        // Built beside, then renamed: tests running in parallel never see half an FMU.
-        let own = dir.join(format!("{name}-{:?}", std::thread::current().id()).replace(['(', ')'], ""));
-        std::fs::create_dir_all(&own).unwrap();
-        let built = common::fmu::build_fmu(name, &own);
-        std::fs::rename(built, &path).unwrap();
-    }
-    path.display().to_string()
+    common::fmu::cached_fmu("fmu-plant", name)
 }
 
 fn python_pid() -> String {
@@ -65,7 +54,7 @@ fn scenario(dir: &Path, name: &str, duration_s: f64, parameters: &str) -> String
 }
 
 fn column(header: &[String], name: &str) -> usize {
-    header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name} in {header:?}"))
+    Run::column(header, name)
 }
 
 #[test]
@@ -211,14 +200,8 @@ fn pack(dir: &Path, name: &str, files: &[(&str, Vec<u8>)]) -> String {
     out.display().to_string()
 }
 
-/// `silrig run` refused before any process started: exit 2, the message on stderr, no run folder left.
 fn refused(test: &str, args: &[&str]) -> String {
-    let r = run(test, args);
-    assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
-    assert!(!r.out.exists(), "a refused run left {}", r.out.display());
-    let stderr = r.stderr.clone();
-    r.finish();
-    stderr
+    Run::refused(SILRIG, "fmu-plant", "f", test, args)
 }
 
 #[test]

@@ -89,3 +89,18 @@ fn build(src: &Path, out: &Path) -> PathBuf {
     assert!(out.exists(), "build.sh succeeded but wrote no {}", out.display());
     out.to_path_buf()
 }
+
+/// FMU `name` built once per test process (of test suite `suite`) into a folder of its own, shared by its tests:
+/// built beside and renamed into place, so tests running in parallel never see half an FMU.
+pub fn cached_fmu(suite: &str, name: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("silrig-{suite}-{}-fmus", std::process::id()));
+    let path = dir.join(format!("{name}.fmu"));
+    if !path.exists() {
+        std::fs::create_dir_all(&dir).unwrap();
+        let own = dir.join(format!("{name}-{:?}", std::thread::current().id()).replace(['(', ')'], ""));
+        std::fs::create_dir_all(&own).unwrap();
+        let built = build_fmu(name, &own);
+        std::fs::rename(built, &path).unwrap();
+    }
+    path.display().to_string()
+}

@@ -158,6 +158,21 @@ impl Run {
         self.events().into_iter().find(|e| e["process"] == process && e["kind"] == kind)
     }
 
+    /// `silrig run ARGS` that must be refused before any process starts: exit 2, no run folder left; its stderr.
+    pub fn refused(silrig: &str, suite: &str, id_prefix: &str, test: &str, args: &[&str]) -> String {
+        let r = Run::start(silrig, suite, id_prefix, test, args);
+        assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
+        assert!(!r.out.exists(), "a refused run left {}", r.out.display());
+        let stderr = r.stderr.clone();
+        r.finish();
+        stderr
+    }
+
+    /// The index of trace column `name` in `header`.
+    pub fn column(header: &[String], name: &str) -> usize {
+        header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name} in {header:?}"))
+    }
+
     /// The trace: header and rows.
     pub fn trace(&self) -> (Vec<String>, Vec<Vec<f64>>) {
         let text = std::fs::read_to_string(self.out.join("trace.csv")).unwrap();
