@@ -3,9 +3,8 @@
 //! and RK4 integrates the step with their positions held, with the very code `silrig sim` and the plant process
 //! fly ([`silrig_model::vehicle::F16Vehicle`]), so the outputs are the built-in plant's, bit for bit.
 //!
-//! - [`variables`]: the variables (the rig's outputs and inputs, the parameters named after their scenario keys)
-//!   and the parameters' start values as text.
-//! - [`description`]: `modelDescription.xml`, generated, with a GUID hashed from its content.
+//! - [`variables`], [`description`]: what the FMU is (from `silrig-fmu-f16-description`, which `silrig export-fmu`
+//!   shares).
 //! - [`instance`]: one instance in safe Rust (FMI's phases, values, stepping, saved and serialised states).
 //! - `ffi`: the `fmi2*` C functions of the shared library, the crate's only unsafe code.
 //!
@@ -13,8 +12,8 @@
 
 #![deny(unsafe_code)]
 
-pub mod description;
 #[allow(unsafe_code)]
 mod ffi;
 pub mod instance;
-pub mod variables;
+
+pub use silrig_fmu_f16_description::{description, variables};

@@ -6,8 +6,10 @@
 
 use anyhow::Context;
 use silrig_flight::scenario::Scenario;
-use silrig_fmu_f16::description::{Experiment, MODEL_IDENTIFIER, START_FILE, guid, model_description, start_file};
-use silrig_fmu_f16::variables::Parameters;
+use silrig_fmu_f16_description::description::{
+    Experiment, MODEL_IDENTIFIER, START_FILE, guid, model_description, start_file,
+};
+use silrig_fmu_f16_description::variables::Parameters;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
