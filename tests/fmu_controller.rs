@@ -47,28 +47,8 @@ fn renamed_pid(dir: &Path, renames: &[(&str, &str)]) -> String {
     out.display().to_string()
 }
 
-/// examples/c/pid_attitude.c compiled once per test process against libsilrig_client.so.
 fn c_pid() -> String {
-    let exe = std::env::temp_dir().join(format!("silrig-fmu-controller-{}-pid_attitude", std::process::id()));
-    if !exe.exists() {
-        let lib_dir = common::client_lib(SILRIG).parent().unwrap().to_path_buf();
-        let partial = exe.with_extension(format!("{:?}", std::thread::current().id()).replace(['(', ')'], ""));
-        let o = Command::new("cc")
-            .args(["-std=c11", "-O2", "-I"])
-            .arg(format!("{ROOT}/examples/c"))
-            .arg(format!("{ROOT}/examples/c/pid_attitude.c"))
-            .arg("-L")
-            .arg(&lib_dir)
-            .args(["-lsilrig_client", "-lm"])
-            .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
-            .arg("-o")
-            .arg(&partial)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "cc: {}", String::from_utf8_lossy(&o.stderr));
-        std::fs::rename(partial, &exe).unwrap();
-    }
-    exe.display().to_string()
+    common::c_pid(SILRIG, SUITE)
 }
 
 fn airframe_scenario() -> String {

@@ -89,32 +89,17 @@ fn the_example_airframe_fmu_flies_lockstep_with_the_python_pid_unchanged() {
 
 #[test]
 fn the_c_example_pid_flies_the_airframe_fmu() {
-    let lib_dir = common::client_lib(SILRIG).parent().unwrap().to_path_buf();
-    let exe = std::env::temp_dir().join(format!("silrig-fmu-plant-{}-pid_attitude", std::process::id()));
-    let o = Command::new("cc")
-        .args(["-std=c11", "-O2", "-I"])
-        .arg(format!("{ROOT}/examples/c"))
-        .arg(format!("{ROOT}/examples/c/pid_attitude.c"))
-        .arg("-L")
-        .arg(&lib_dir)
-        .args(["-lsilrig_client", "-lm"])
-        .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
-        .arg("-o")
-        .arg(&exe)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "cc: {}", String::from_utf8_lossy(&o.stderr));
+    let exe = common::c_pid(SILRIG, "fmu-plant");
     let plant = fmu("airframe");
     let r = run(
         "airframe-c",
-        &["--mode", "lockstep", "--plant-fmu", &plant, "--controller-cmd", exe.to_str().unwrap(), &airframe_scenario()],
+        &["--mode", "lockstep", "--plant-fmu", &plant, "--controller-cmd", &exe, &airframe_scenario()],
     );
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     let (header, rows) = r.trace();
     let last = rows.last().unwrap();
     let (phi, theta) = (last[column(&header, "phi_deg")], last[column(&header, "theta_deg")]);
     assert!((phi - 10.0).abs() < 0.5 && (theta - 5.0).abs() < 0.5, "not settled on the set points: {phi} {theta}");
-    let _ = std::fs::remove_file(exe);
     r.finish();
 }
 

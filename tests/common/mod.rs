@@ -28,6 +28,33 @@ pub fn client_lib(silrig: &str) -> &'static Path {
     })
 }
 
+/// `examples/c/pid_attitude.c` compiled once per test process (of suite `suite`) against `libsilrig_client.so`
+/// beside `silrig`, built beside and renamed into place for tests running in parallel.
+#[allow(dead_code)]
+pub fn c_pid(silrig: &str, suite: &str) -> String {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let exe = std::env::temp_dir().join(format!("silrig-{suite}-{}-pid_attitude", std::process::id()));
+    if !exe.exists() {
+        let lib_dir = client_lib(silrig).parent().unwrap().to_path_buf();
+        let partial = exe.with_extension(format!("{:?}", std::thread::current().id()).replace(['(', ')'], ""));
+        let o = Command::new("cc")
+            .args(["-std=c11", "-O2", "-I"])
+            .arg(format!("{root}/examples/c"))
+            .arg(format!("{root}/examples/c/pid_attitude.c"))
+            .arg("-L")
+            .arg(&lib_dir)
+            .args(["-lsilrig_client", "-lm"])
+            .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
+            .arg("-o")
+            .arg(&partial)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "cc: {}", String::from_utf8_lossy(&o.stderr));
+        std::fs::rename(partial, &exe).unwrap();
+    }
+    exe.display().to_string()
+}
+
 /// The Python of `target/test-venv` (which `.ci/run` creates), with `package` installed there if `module` does not
 /// import yet.
 #[allow(dead_code)]
