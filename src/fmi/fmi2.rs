@@ -119,18 +119,16 @@ impl Instance {
             ));
         }
         let calls = Calls::new(ctx, 2, &STATE_CALLS);
-        let mut instance =
-            Self { f, component, calls, _callbacks: callbacks, _log_env: log_env, _log: log, initialized: false };
-        // SAFETY: a live component.
-        let status = unsafe { (instance.f.setup_experiment)(instance.component, 0, 0.0, 0.0, 0, 0.0) };
-        instance.calls.check(status, || "fmi2SetupExperiment".into())?;
-        Ok(instance)
+        Ok(Self { f, component, calls, _callbacks: callbacks, _log_env: log_env, _log: log, initialized: false })
     }
 
     pub(crate) fn enter_initialization(&mut self, start_time_s: f64) -> Result<(), FmiError> {
-        self.calls.usable("fmi2EnterInitializationMode")?;
-        // The start time was given to fmi2SetupExperiment at instantiation; FMI 2 has no second place for it.
-        let _ = start_time_s;
+        self.calls.usable("fmi2SetupExperiment")?;
+        // FMI 2 takes the start time in fmi2SetupExperiment, which may follow the start values set after
+        // instantiation; no tolerance, no stop time.
+        // SAFETY: a live component.
+        let status = unsafe { (self.f.setup_experiment)(self.component, 0, 0.0, start_time_s, 0, 0.0) };
+        self.calls.check(status, || format!("fmi2SetupExperiment at t = {start_time_s} s"))?;
         // SAFETY: a live component.
         let status = unsafe { (self.f.enter_initialization_mode)(self.component) };
         self.calls.check(status, || "fmi2EnterInitializationMode".into())

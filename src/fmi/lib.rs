@@ -178,16 +178,21 @@ impl Fmu {
         &self.file
     }
 
-    /// Create an instance named `name`, set up for a run from `start_time_s`, not yet initialized.
+    /// The .fmu as given, and what it is: `airframe.fmu (FMI 2.0, model airframe)`.
+    pub fn label(&self) -> String {
+        format!("{} ({}, model {})", self.file, self.description.version.label(), self.description.model_name)
+    }
+
+    /// Create an instance named `name`, not yet initialized (set start values and parameters, then
+    /// [`Instance::enter_initialization`]).
     pub fn instantiate(&self, name: &str) -> Result<Instance, FmiError> {
-        let log = Log::default();
         let resources = self.folder.join("resources");
-        let ctx = CallContext { file: self.file.clone(), log: log.clone() };
+        let ctx = CallContext { file: self.file.clone(), log: Log::default() };
         let inner = match &self.api {
             Api::V2(f) => Inner::V2(fmi2::Instance::new(f.clone(), name, &self.description.token, &resources, ctx)?),
             Api::V3(f) => Inner::V3(fmi3::Instance::new(f.clone(), name, &self.description.token, &resources, ctx)?),
         };
-        Ok(Instance { inner, log })
+        Ok(Instance { inner })
     }
 }
 
@@ -299,7 +304,6 @@ enum Inner {
 /// One instance of an FMU, in co-simulation.
 pub struct Instance {
     inner: Inner,
-    log: Log,
 }
 
 impl Instance {
@@ -357,11 +361,6 @@ impl Instance {
             Inner::V2(i) => i.restore_state(saved),
             Inner::V3(i) => i.restore_state(saved),
         }
-    }
-
-    /// Take what the FMU logged since the last failed call (`" (the FMU logged: ...)"`, or empty).
-    pub fn take_log(&self) -> String {
-        self.log.take_joined()
     }
 }
 

@@ -308,7 +308,7 @@ impl FmuController {
             Ok(()) => "checkpoints through its own state".to_string(),
             Err(why) => format!("{why}, so a restarted controller starts it fresh"),
         };
-        let mut text = format!("flying {} ({}, model {}): {resumes}", self.fmu.file(), d.version.label(), d.model_name);
+        let mut text = format!("flying {}: {resumes}", self.fmu.label());
         if self.map.outputs.len() > self.map.diagnostics.len() {
             let left: Vec<&str> =
                 self.map.outputs[self.map.diagnostics.len()..].iter().map(|o| o.variable.as_str()).collect();

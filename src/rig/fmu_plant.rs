@@ -148,12 +148,6 @@ impl FmuPlant {
         fmu_signals(fmu.file(), &fmu.description, scenario)
     }
 
-    /// The FMU as given, and what it is (`FMI 2.0, model airframe`).
-    pub fn describe_fmu(&self) -> String {
-        let d = &self.fmu.description;
-        format!("{} ({}, model {})", self.fmu.file(), d.version.label(), d.model_name)
-    }
-
     /// Whether a restarted plant can resume from the FMU's state, or why not.
     pub fn can_checkpoint(&self) -> Result<(), String> {
         can_checkpoint(&self.fmu.description)
@@ -203,8 +197,8 @@ pub fn run_fmu_plant(args: &ProcessArgs, scenario: Scenario, path: &Path) -> any
     session.event(
         "plant-fmu",
         match &checkpoints {
-            Ok(()) => format!("flying {}: checkpoints through its own state", plant.describe_fmu()),
-            Err(why) => format!("flying {}: {why}, so a restarted plant flies again from tick 0", plant.describe_fmu()),
+            Ok(()) => format!("flying {}: checkpoints through its own state", plant.fmu.label()),
+            Err(why) => format!("flying {}: {why}, so a restarted plant flies again from tick 0", plant.fmu.label()),
         },
     );
     if let Some(text) = session.restored_checkpoint() {
