@@ -193,8 +193,8 @@ fn sim(config: Option<&Path>, out: Option<PathBuf>) -> anyhow::Result<ExitCode> 
     let run = silrig::outputs::simulate(&scenario, &out)?;
     print!("{}", run.summary.to_text());
     print_written(run.files);
-    if let Some(exit) = run.left_envelope {
-        eprintln!("error: {exit}; the files above hold the flight up to the sample before");
+    if let Some(why) = run.ended_early {
+        eprintln!("error: {why}; the files above hold the flight up to there");
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)

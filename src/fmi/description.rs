@@ -127,6 +127,9 @@ pub struct CoSimulation {
     pub can_get_and_set_state: bool,
     /// Whether that state can be serialized to bytes (what a checkpoint on disk needs).
     pub can_serialize_state: bool,
+    /// `canBeInstantiatedOnlyOncePerProcess`: its binary keeps state outside its instances (globals), so one
+    /// process must never hold two of its instances at once.
+    pub one_instance_per_process: bool,
 }
 
 /// The parts of `modelDescription.xml` the rig uses.
@@ -206,6 +209,7 @@ impl ModelDescription {
                 .ok_or_else(|| bad("<CoSimulation> has no modelIdentifier".into()))?,
             can_get_and_set_state: flag(["canGetAndSetFMUstate", "canGetAndSetFMUState"]),
             can_serialize_state: flag(["canSerializeFMUstate", "canSerializeFMUState"]),
+            one_instance_per_process: flag(["canBeInstantiatedOnlyOncePerProcess", "canBeInstantiatedOnlyOncePerProcess"]),
         };
         let default_step_s = child("DefaultExperiment").and_then(|d| d.attribute("stepSize")).and_then(number);
         let units = declared_units(&root);

@@ -196,6 +196,12 @@ impl Fmu {
     }
 }
 
+// One unpacked FMU serves the instances of many threads (a sweep's workers): it must stay shareable.
+const _: () = {
+    const fn shareable<T: Send + Sync>() {}
+    shareable::<Fmu>()
+};
+
 impl Drop for Fmu {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.folder);

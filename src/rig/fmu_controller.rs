@@ -34,6 +34,7 @@ use silrig_fmi::{Fmu, Instance};
 use silrig_wire::wire::{ControllerInfo, MAX_DIAGNOSTICS, PlantSample};
 use std::cell::RefCell;
 use std::path::Path;
+use std::sync::Arc;
 
 /// The suffix of an FMU input that takes a set point: `theta_deg_sp` takes `[setpoint] theta_deg`.
 pub const SETPOINT_SUFFIX: &str = "_sp";
@@ -248,7 +249,7 @@ pub struct FmuController {
     // Dropped before `fmu`: the instance is freed before its folder is removed. In a cell because
     // `Controller::checkpoint` takes `&self` and getting an FMU's state is a call that may change it.
     instance: RefCell<Instance>,
-    fmu: Fmu,
+    fmu: Arc<Fmu>,
     /// Its variables and how they meet `[controller]`.
     pub map: ControllerMap,
     setpoint: Setpoint,
@@ -264,7 +265,12 @@ pub struct FmuController {
 impl FmuController {
     /// Open the FMU at `path`, check it against the scenario's `[controller]`, set its parameters and initialize it.
     pub fn open(path: &Path, scenario: &Scenario) -> anyhow::Result<Self> {
-        let fmu = Fmu::open(path)?;
+        Self::new(Arc::new(Fmu::open(path)?), scenario)
+    }
+
+    /// [`Self::open`] for an FMU already unpacked: one instance of it, checked, with its parameters set and
+    /// initialized (what each case of an in-process sweep flies).
+    pub fn new(fmu: Arc<Fmu>, scenario: &Scenario) -> anyhow::Result<Self> {
         let map =
             ControllerMap::describe(fmu.file(), &fmu.description, &scenario.controller).map_err(anyhow::Error::msg)?;
         let mut instance = fmu.instantiate("controller")?;

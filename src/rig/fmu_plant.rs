@@ -17,13 +17,16 @@
 
 use super::ProcessArgs;
 use super::fmu_variables::{can_checkpoint, from_hex, to_hex};
+use super::plant_model::{ActuatorFlags, PlantModel};
 use super::plant_session::{PlantSession, PlantTick};
 use super::report::ProcessReport;
 use silrig_flight::scenario::Scenario;
+use silrig_flight::signal_chain::SignalChain;
 use silrig_flight::signals::{InputSignal, OutputSignal, PlantSignals, valid_name, valid_unit};
 use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
 use silrig_fmi::{Fmu, Instance};
 use std::path::Path;
+use std::sync::Arc;
 
 pub use super::fmu_variables::signal_name;
 
@@ -108,7 +111,7 @@ pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Res
 pub struct FmuPlant {
     // Dropped before `fmu`: the instance is freed before its folder is removed.
     instance: Instance,
-    fmu: Fmu,
+    fmu: Arc<Fmu>,
     /// Its signals and references.
     pub map: FmuSignals,
     tick: u64,
@@ -125,7 +128,12 @@ struct SavedFmu {
 impl FmuPlant {
     /// Open the FMU at `path`, map its signals, set `[plant.parameters]` and initialize it.
     pub fn open(path: &Path, scenario: &Scenario) -> anyhow::Result<Self> {
-        let fmu = Fmu::open(path)?;
+        Self::new(Arc::new(Fmu::open(path)?), scenario)
+    }
+
+    /// [`Self::open`] for an FMU already unpacked: one instance of it, mapped, with `[plant.parameters]` set and
+    /// initialized (what each case of an in-process sweep flies).
+    pub fn new(fmu: Arc<Fmu>, scenario: &Scenario) -> anyhow::Result<Self> {
         let map = Self::describe(&fmu, scenario).map_err(anyhow::Error::msg)?;
         let mut instance = fmu.instantiate("plant")?;
         if !map.parameters.is_empty() {
@@ -228,4 +236,115 @@ pub fn run_fmu_plant(args: &ProcessArgs, scenario: Scenario, path: &Path) -> any
         }
     };
     session.finish(error.as_deref())
+}
+
+/// An FMU with the rig's actuators and sensors around it, as one [`PlantModel`]: what the in-process loop
+/// ([`super::in_process`]) flies. The same steps as [`run_fmu_plant`] takes through its [`PlantSession`], in the
+/// same order (the chain's actuators move under the command, the FMU steps with their positions, its outputs are
+/// read, refused when not finite, and measured once per tick), so both give the same trace.
+pub struct FmuModel {
+    plant: FmuPlant,
+    chain: SignalChain,
+    initial_inputs: Vec<f64>,
+    /// The FMU's last valid outputs, before the sensors.
+    raw_outputs: Vec<f64>,
+    /// The outputs of the current tick as the sensors report them.
+    measured: Vec<f64>,
+    tick: u64,
+    ticks: u64,
+    /// Outputs with NaN or infinity refused so far (the last valid ones stood in), and the first one's output.
+    pub outputs_refused: (u64, Option<String>),
+}
+
+impl FmuModel {
+    /// The FMU initialized at t = 0 under `scenario`, its actuators where its outputs say they are.
+    pub fn new(mut plant: FmuPlant, scenario: &Scenario) -> anyhow::Result<Self> {
+        let mut outputs = vec![0.0; plant.map.output_refs.len()];
+        plant.outputs(&mut outputs).map_err(anyhow::Error::msg)?;
+        let signals = &plant.map.signals;
+        let initial_inputs: Vec<f64> =
+            signals.inputs.iter().map(|i| i.held_output.map_or(i.hold, |k| outputs[k])).collect();
+        if let Some((input, value)) = signals.inputs.iter().zip(&initial_inputs).find(|(_, v)| !v.is_finite()) {
+            anyhow::bail!("FMU {}: input {}'s actuator starts at {value}", plant.fmu.file(), input.name);
+        }
+        let chain = SignalChain::new(scenario, signals, &initial_inputs)
+            .map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
+        let n = outputs.len();
+        let mut model = Self {
+            plant,
+            chain,
+            initial_inputs,
+            raw_outputs: vec![0.0; n],
+            measured: vec![0.0; n],
+            tick: 0,
+            ticks: scenario.timing.ticks(),
+            outputs_refused: (0, None),
+        };
+        model.take_outputs(&outputs);
+        model.measure();
+        Ok(model)
+    }
+
+    fn take_outputs(&mut self, outputs: &[f64]) {
+        match outputs.iter().position(|v| !v.is_finite()) {
+            None => self.raw_outputs.copy_from_slice(outputs),
+            Some(k) => {
+                let first = || format!("output {} is {} at tick {}", self.plant.map.signals.outputs[k].name, outputs[k], self.tick);
+                let (count, first_seen) = &mut self.outputs_refused;
+                *count += 1;
+                first_seen.get_or_insert_with(first);
+            }
+        }
+    }
+
+    fn measure(&mut self) {
+        self.measured.copy_from_slice(&self.raw_outputs);
+        let t_s = self.t_s();
+        self.chain.measure(t_s, &mut self.measured);
+    }
+}
+
+impl PlantModel for FmuModel {
+    fn signals(&self) -> &PlantSignals {
+        &self.plant.map.signals
+    }
+
+    fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    fn t_s(&self) -> f64 {
+        self.tick as f64 * self.plant.dt_s
+    }
+
+    fn outputs(&self) -> Vec<f64> {
+        self.measured.clone()
+    }
+
+    fn initial_inputs(&self) -> Vec<f64> {
+        self.initial_inputs.clone()
+    }
+
+    /// As the session does, the FMU steps on the last tick too: the end-of-run sample's actuator positions are
+    /// its outputs after that step.
+    fn step(&mut self, inputs: &[f64], last: bool) -> Result<ActuatorFlags, String> {
+        let hits = self.chain.actuate(self.t_s(), inputs);
+        self.plant.step(self.chain.positions())?;
+        let mut outputs = vec![0.0; self.raw_outputs.len()];
+        self.plant.outputs(&mut outputs)?;
+        self.take_outputs(&outputs);
+        if !last && self.tick < self.ticks {
+            self.tick += 1;
+        }
+        self.measure();
+        Ok(ActuatorFlags { saturated: hits.position, rate_limited: hits.rate })
+    }
+
+    fn checkpoint(&self) -> Option<String> {
+        None
+    }
+
+    fn restore(&mut self, _saved: &str, _ticks: u64) -> Result<u64, String> {
+        Err("a flight in one process is never restarted".into())
+    }
 }

@@ -30,6 +30,7 @@ pub mod f16_plant;
 pub mod fmu_controller;
 pub mod fmu_plant;
 pub mod fmu_variables;
+pub mod in_process;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;

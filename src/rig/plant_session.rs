@@ -266,7 +266,11 @@ impl PlantSession {
                 let step_exec_ns = monotonic_ns().saturating_sub(handed_out_ns);
                 self.lp.end_tick(&self.ports, Ok(actuators), step_exec_ns, held);
                 // The end-of-run sample repeats the last tick with these outputs (the positions its command set).
-                self.set_tick(self.lp.sim_tick());
+                // Only then: the sensors measure once per tick, so their noise is a function of the tick alone
+                // (as the in-process loop draws it).
+                if self.lp.sim_tick() >= self.lp.scenario().timing.ticks() {
+                    self.set_tick(self.lp.sim_tick());
+                }
                 if let Some(ended) = self.lp.next_tick(&mut self.ports).map_err(fail)? {
                     self.ended = Some(ended);
                     let _ = self.ports.announce_finished();

@@ -6,16 +6,21 @@ use anyhow::Context;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::sim::LeftEnvelope;
 use silrig_flight::summary::Summary;
+use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
+use silrig_rig::in_process::Models;
 use silrig_plot::plot_title;
 use std::path::{Path, PathBuf};
 
-/// Write trace, summary, scenario and figures into `out_dir` (created if needed); returns the paths written.
+/// Write trace, summary, scenario and figures into `out_dir` (created if needed); returns the paths written. The
+/// closed-loop figures need the F-16's trace columns; a plant of the user's own (`plant`) gets the figure of every
+/// one of its signals instead.
 pub fn write_run(
     out_dir: &Path,
     scenario: &Scenario,
     trace: &Trace,
     summary: &Summary,
+    plant: Option<&PlantSignals>,
 ) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let trace_path = out_dir.join("trace.csv");
@@ -27,9 +32,41 @@ pub fn write_run(
     std::fs::write(&scenario_path, scenario.to_toml())
         .with_context(|| format!("writing {}", scenario_path.display()))?;
     let mut files = vec![trace_path, summary_path, scenario_path];
-    let f_true = silrig_flight::f_true::from_trace(trace, scenario);
-    files.extend(silrig_plot::plot_closed_loop(trace, f_true.as_ref(), out_dir, &plot_title(scenario))?);
+    if silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) {
+        let f_true = silrig_flight::f_true::from_trace(trace, scenario);
+        files.extend(silrig_plot::plot_closed_loop(trace, f_true.as_ref(), out_dir, &plot_title(scenario))?);
+    } else if let Some(plant) = plant {
+        let title = format!("{}, plant {}: every signal, commands in orange", scenario.name, plant.plant);
+        let setpoint = |name: &str| scenario.setpoint.get(name);
+        files.extend(silrig_plot::plot_signals(trace, Some(plant), &setpoint, out_dir, "signals", &title)?);
+    }
     Ok(files)
+}
+
+/// A scenario flown in one process.
+#[derive(Debug)]
+pub struct OneProcessFlight {
+    /// Its trace, as `silrig run --mode lockstep` writes it.
+    pub trace: Trace,
+    /// The plant's signals when the generic loop flew it (the figures of a plant of the user's own come from them).
+    pub plant: Option<PlantSignals>,
+    /// When (s) and why it ended before the scenario's end; the trace holds it up to there.
+    pub ended_early: Option<(f64, String)>,
+}
+
+/// Fly `scenario` in one process: the built-in F-16 against our controller by the reference loop
+/// ([`silrig_flight::sim`]), a scenario with an FMU by the rig's generic loop ([`silrig_rig::in_process`]) with
+/// `models` (opened from this scenario, or from the one it was sampled from: the same FMU files). An error says
+/// why it could not start.
+pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<OneProcessFlight, String> {
+    if !models.has_fmu() {
+        let (trace, left) = silrig_flight::sim::fly(scenario).map_err(|e| e.to_string())?;
+        let ended_early = left.map(|exit| (exit.t_s, exit.to_string()));
+        return Ok(OneProcessFlight { trace, plant: None, ended_early });
+    }
+    let flown = models.fly(scenario).map_err(|e| e.to_string())?;
+    let ended_early = flown.ended_early.map(|e| (e.t_s, e.to_string()));
+    Ok(OneProcessFlight { trace: flown.trace, plant: Some(flown.plant), ended_early })
 }
 
 /// What [`simulate`] flew and wrote.
@@ -39,17 +76,19 @@ pub struct Simulated {
     pub summary: Summary,
     /// The files written.
     pub files: Vec<PathBuf>,
-    /// Set when the flight left the model's envelope: the files hold it up to there.
-    pub left_envelope: Option<LeftEnvelope>,
+    /// Set when the flight ended before the scenario's end (the F-16 left its envelope, an FMU failed): why; the
+    /// files hold it up to there.
+    pub ended_early: Option<String>,
 }
 
-/// `silrig sim`: fly the scenario's closed loop in one process and write its run into `out_dir` (as far as it
-/// flew, if it left the model's envelope).
+/// `silrig sim`: fly the scenario's closed loop in one process (its FMUs too) and write its run into `out_dir` (as
+/// far as it flew, if it ended early).
 pub fn simulate(scenario: &Scenario, out_dir: &Path) -> anyhow::Result<Simulated> {
-    let (trace, left_envelope) = silrig_flight::sim::fly(scenario)?;
-    let summary = silrig_flight::summary::summarize(&trace, scenario);
-    let files = write_run(out_dir, scenario, &trace, &summary)?;
-    Ok(Simulated { summary, files, left_envelope })
+    let models = Models::open(scenario)?;
+    let flight = fly_one_process(&models, scenario).map_err(anyhow::Error::msg)?;
+    let summary = silrig_flight::summary::summarize(&flight.trace, scenario);
+    let files = write_run(out_dir, scenario, &flight.trace, &summary, flight.plant.as_ref())?;
+    Ok(Simulated { summary, files, ended_early: flight.ended_early.map(|(_, why)| why) })
 }
 
 /// What [`compare`] produced.
@@ -73,7 +112,7 @@ pub fn compare(scenarios: &[Scenario], out_dir: &Path) -> anyhow::Result<Compari
         let (trace, left) = silrig_flight::sim::fly(scenario)?;
         left_envelope.extend(left.map(|exit| (scenario.name.clone(), exit)));
         let summary = silrig_flight::summary::summarize(&trace, scenario);
-        write_run(&out_dir.join(&scenario.name), scenario, &trace, &summary)?;
+        write_run(&out_dir.join(&scenario.name), scenario, &trace, &summary, None)?;
         summaries.push(summary);
         traces.push((scenario.name.clone(), trace));
     }

@@ -1,4 +1,4 @@
-//! One case of a campaign: sample i of the scenario's dispersions flown in the single-process loop and judged by the
+//! One case of a campaign: sample i of the scenario's dispersions flown in one process (its FMUs too) and judged by the
 //! scenario's criteria. A pure function of (scenario, seed, index), so a case flown alone (`silrig sim --sample I`)
 //! gives the numbers it gave inside any sweep, on any machine or shard.
 
@@ -8,7 +8,10 @@ use silrig_flight::dispersion;
 use silrig_flight::judge::judge_flight;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::summary::{Summary, summarize};
+use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
+use silrig_rig::in_process::Models;
+use crate::outputs::{OneProcessFlight, fly_one_process};
 
 /// How a case ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -72,10 +75,14 @@ fn finite(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
-/// The first tick at which the flight leaves what the model knows: alpha or |beta| beyond the aerodynamic tables
-/// (which only extrapolate there), or a state that is no longer a number. Returns when, and what.
+/// The first tick at which the flight leaves what the F-16's model knows: alpha or |beta| beyond the aerodynamic
+/// tables (which only extrapolate there), or a state that is no longer a number. Returns when, and what. A trace
+/// without the F-16's columns (a plant of the user's own) has no such bounds: None.
 pub fn departure(trace: &Trace) -> Option<(f64, String)> {
     use silrig_model::plant::aero::{ALPHA_DATA_DEG, BETA_DATA_MAX_DEG};
+    if !silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) {
+        return None;
+    }
     let [t, alpha, beta] = ["t_s", "alpha_deg", "beta_deg"].map(|c| trace.index(c).expect("loop columns"));
     // The state columns run from t_s to alt_ft; the command columns after them are NaN without a command.
     let states = trace.index("alt_ft").expect("loop columns") + 1;
@@ -126,12 +133,21 @@ pub struct Flight {
     pub scenario: Scenario,
     /// Its trace.
     pub trace: Trace,
+    /// The plant's signals when it is not the built-in F-16's reference loop (for its figures).
+    pub plant: Option<PlantSignals>,
     /// Its control-quality figures.
     pub summary: Summary,
 }
 
-/// Fly case `index` of `scenario`'s dispersions under `seed`; returns the result and, when flown, the flight.
-pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index: u64) -> (CaseResult, Option<Flight>) {
+/// Fly case `index` of `scenario`'s dispersions under `seed` with `scenario`'s `models`; returns the result and,
+/// when flown, the flight.
+pub fn fly_with_trace(
+    models: &Models,
+    scenario: &Scenario,
+    criteria: &Criteria,
+    seed: u64,
+    index: u64,
+) -> (CaseResult, Option<Flight>) {
     let sampled = dispersion::sample(&scenario.dispersions, seed, index);
     let values: Vec<f64> = sampled.iter().map(|(_, v)| *v).collect();
     let infeasible = |reason: String| CaseResult {
@@ -147,28 +163,33 @@ pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index
         Ok(s) => s,
         Err(e) => return (infeasible(format!("sampled scenario out of range: {e}")), None),
     };
-    let (trace, left_envelope) = match silrig_flight::sim::fly(&case) {
+    let OneProcessFlight { trace, plant, ended_early } = match fly_one_process(models, &case) {
         Ok(flight) => flight,
-        Err(e) => return (infeasible(e.to_string()), None),
+        Err(e) => return (infeasible(e), None),
     };
     let summary = summarize(&trace, &case);
     let judgements = judge_flight(criteria, &case, Some(&trace), Some(&summary));
-    // A flight that left the model's envelope ended there; if it had not left the data before, that is when.
-    let departed = departure(&trace).or_else(|| left_envelope.map(|e| (e.t_s, e.error.to_string())));
+    // A flight that left the model's envelope (or whose FMU failed) ended there; if it had not left the data
+    // before, that is when.
+    let departed = departure(&trace).or(ended_early);
     let mut failed: Vec<String> = judgements.iter().filter(|j| !j.passed).map(|j| j.criterion.clone()).collect();
     // A departure fails the case whatever the criteria say: past it the model has no data.
     if let Some((t, why)) = &departed {
         failed.insert(0, format!("departed at {t:.2} s: {why};"));
     }
-    let columns = ["t_s", "phi_deg", "theta_deg", "psi_deg"].map(|c| trace.index(c).expect("loop columns"));
-    // Up to the first row that is no longer a number (a departed flight): nothing past it can be drawn.
-    let envelope = trace
-        .rows
-        .iter()
-        .step_by(ENVELOPE_STEP)
-        .map(|r| columns.map(|c| r[c] as f32))
-        .take_while(|r| r.iter().all(|v| v.is_finite()))
-        .collect();
+    // Up to the first row that is no longer a number (a departed flight): nothing past it can be drawn. A plant
+    // without the attitude's columns has no envelope to draw.
+    let columns = ["t_s", "phi_deg", "theta_deg", "psi_deg"].map(|c| trace.index(c));
+    let envelope = match columns {
+        [Some(t), Some(phi), Some(theta), Some(psi)] => trace
+            .rows
+            .iter()
+            .step_by(ENVELOPE_STEP)
+            .map(|r| [t, phi, theta, psi].map(|c| r[c] as f32))
+            .take_while(|r| r.iter().all(|v| v.is_finite()))
+            .collect(),
+        _ => Vec::new(),
+    };
     let result = CaseResult {
         index,
         values,
@@ -178,10 +199,10 @@ pub fn fly_with_trace(scenario: &Scenario, criteria: &Criteria, seed: u64, index
         judgements,
         envelope,
     };
-    (result, Some(Flight { scenario: case, trace, summary }))
+    (result, Some(Flight { scenario: case, trace, plant, summary }))
 }
 
 /// Fly case `index` (the result only).
-pub fn fly(scenario: &Scenario, criteria: &Criteria, seed: u64, index: u64) -> CaseResult {
-    fly_with_trace(scenario, criteria, seed, index).0
+pub fn fly(models: &Models, scenario: &Scenario, criteria: &Criteria, seed: u64, index: u64) -> CaseResult {
+    fly_with_trace(models, scenario, criteria, seed, index).0
 }

@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 
 use silrig_flight::criteria::Criteria;
 use silrig_flight::scenario::Scenario;
+use silrig_rig::in_process::Models;
 
 /// `silrig sweep`: every case on this machine, or (with a subcommand) a sweep split over many.
 #[derive(Debug, Clone, clap::Args)]
@@ -69,7 +70,7 @@ pub struct SweepOptions {
 /// Largest number of cases in one sweep.
 pub const MAX_RUNS: u64 = 10_000_000;
 
-/// A scenario ready to sweep: loaded, with dispersions and criteria.
+/// A scenario ready to sweep: loaded, with dispersions and criteria, its FMUs (if any) unpacked once.
 pub struct Campaign {
     /// The nominal scenario (with its dispersions).
     pub scenario: Scenario,
@@ -79,18 +80,22 @@ pub struct Campaign {
     pub parameters: Vec<String>,
     /// The file as the user named it (for the commands printed).
     pub config: String,
+    /// The plant and controller every case flies (new instances per case).
+    pub models: Models,
 }
 
 impl Campaign {
-    /// Load `config` and check it can be swept.
+    /// Load `config` (FMU paths taken relative to it) and check it can be swept.
     pub fn load(config: &Path) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(config).with_context(|| format!("reading {}", config.display()))?;
-        Self::from_text(&text, &config.display().to_string())
+        Self::from_scenario(Scenario::load(config)?, &config.display().to_string())
     }
 
     /// A campaign from a scenario's text; `config` names it in errors and printed commands.
     pub fn from_text(text: &str, config: &str) -> anyhow::Result<Self> {
-        let scenario = Scenario::from_toml(text, config)?;
+        Self::from_scenario(Scenario::from_toml(text, config)?, config)
+    }
+
+    fn from_scenario(scenario: Scenario, config: &str) -> anyhow::Result<Self> {
         anyhow::ensure!(
             !scenario.dispersions.is_empty(),
             "{config}: no [dispersions]: a sweep needs at least one dispersed key"
@@ -99,7 +104,23 @@ impl Campaign {
             anyhow::anyhow!("{config}: no [criteria]: a sweep judges every case by them (e.g. settled, alpha_max_deg)")
         })?;
         let parameters = scenario.dispersions.keys().cloned().collect();
-        Ok(Self { scenario, criteria, parameters, config: config.to_string() })
+        let models = Models::open(&scenario)?;
+        Ok(Self { scenario, criteria, parameters, config: config.to_string(), models })
+    }
+
+    /// The worker threads that may fly its cases: `jobs`, or one when an FMU's binary allows a single instance
+    /// per process (said on stderr).
+    pub fn threads(&self, jobs: usize) -> usize {
+        match self.models.one_instance_per_process() {
+            Some(fmu) if jobs > 1 => {
+                eprintln!(
+                    "silrig sweep: {fmu} can be instantiated only once per process \
+                     (canBeInstantiatedOnlyOncePerProcess): flying its cases on one thread, not {jobs}"
+                );
+                1
+            }
+            _ => jobs,
+        }
     }
 
     /// Fly the cases `indices` under `seed` on `jobs` threads, reporting progress on stderr; results in index order.
@@ -114,7 +135,7 @@ impl Campaign {
                 indices
                     .into_par_iter()
                     .map(|i| {
-                        let r = case::fly(&self.scenario, &self.criteria, seed, i);
+                        let r = case::fly(&self.models, &self.scenario, &self.criteria, seed, i);
                         done.fetch_add(1, Ordering::Relaxed);
                         r
                     })
@@ -222,7 +243,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
     check_runs(runs)?;
     let campaign = Campaign::load(config)?;
     let seed = opts.seed.unwrap_or(campaign.scenario.seed);
-    let jobs = jobs(opts.jobs)?;
+    let jobs = campaign.threads(jobs(opts.jobs)?);
     let out =
         opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("sweep-{}-{seed}", campaign.scenario.name)));
     anyhow::ensure!(
@@ -241,7 +262,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
 /// `silrig sim CONFIG --sample I`: fly case I alone, with its trace, summary and plots in `out`; returns the text
 /// (the sampled values, the summary, each criterion as `cases.csv` has it) and the files written.
 pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow::Result<(String, Vec<PathBuf>)> {
-    let (result, flight) = case::fly_with_trace(&campaign.scenario, &campaign.criteria, seed, index);
+    let (result, flight) = case::fly_with_trace(&campaign.models, &campaign.scenario, &campaign.criteria, seed, index);
     let mut text = format!("case {index} of {} (seed {seed}): {}\n", campaign.config, result.outcome.label());
     for (key, value) in campaign.parameters.iter().zip(&result.values) {
         text += &format!("  {key} = {value}\n");
@@ -250,11 +271,11 @@ pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow
     let case_json = out.join("case.json");
     std::fs::write(&case_json, serde_json::to_string_pretty(&result)? + "\n")
         .with_context(|| format!("writing {}", case_json.display()))?;
-    let Some(case::Flight { scenario, trace, summary }) = flight else {
+    let Some(case::Flight { scenario, trace, plant, summary }) = flight else {
         text += &format!("  infeasible: {}\n", result.reason);
         return Ok((text, vec![case_json]));
     };
-    let mut files = crate::outputs::write_run(out, &scenario, &trace, &summary)?;
+    let mut files = crate::outputs::write_run(out, &scenario, &trace, &summary, plant.as_ref())?;
     files.push(case_json);
     text += &summary.to_text();
     if !result.reason.is_empty() {

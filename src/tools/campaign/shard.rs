@@ -133,7 +133,9 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
     );
     let text = std::fs::read_to_string(&opts.config).with_context(|| format!("reading {}", opts.config.display()))?;
     let config = opts.config.display().to_string();
-    let campaign = Campaign::from_text(&text, &config)?;
+    let campaign = Campaign::load(&opts.config)?;
+    // Workers run from any folder: a plan that names FMUs carries the scenario with their paths made absolute.
+    let text = if campaign.models.has_fmu() { campaign.scenario.to_toml() } else { text };
     anyhow::ensure!(
         !opts.out.join(MANIFEST).exists(),
         "{} already holds a sweep plan ({MANIFEST}); choose another --out or move it away: nothing is overwritten",
@@ -195,7 +197,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<(PathBuf, ShardResult)> {
     let manifest = Manifest::load(&opts.dir)?;
     let k = shard_index(opts, &manifest)?;
     let campaign = manifest.campaign()?;
-    let jobs = super::jobs(opts.jobs)?;
+    let jobs = campaign.threads(super::jobs(opts.jobs)?);
     let range = manifest.range(k);
     let cases = campaign.fly(manifest.seed, range.clone(), jobs)?;
     let result = ShardResult {

@@ -1,0 +1,236 @@
+//! The closed loop of any plant and any controller the rig flies in one process, with no clock and no transport:
+//! the built-in F-16 or an FMU ([`super::fmu_plant::FmuModel`]) against our controller or a controller FMU, tick
+//! by tick in lockstep. `silrig sim` and `silrig sweep` fly scenarios that name an FMU here, so a user's models get
+//! Monte Carlo at in-process speed.
+//!
+//! It keeps the three-process lockstep rig's rules, so both give the same `trace.csv`: tick k's sample goes to the
+//! controller, whose command starts from where each actuator is (the sample's held outputs, else the hold value)
+//! and is checked as the controller's session checks it (NaN, infinity or out of range: refused, the plant holds
+//! its last valid command, the trace shows the last valid command sent); the plant applies the answer to tick k
+//! (`same-tick`) or k-1 (`next-tick`), steps, and row k takes the actuator positions from the sample after the
+//! step. The F-16 against our controller gives `silrig_flight::sim::run`'s trace exactly (tested).
+//!
+//! [`Models`] opens a scenario's FMUs once (unpacking is the slow part) and flies any number of flights of it, each
+//! with fresh instances, from any number of threads unless an FMU says its binary allows one instance per process.
+
+use super::controller::{AttitudeLaw, Controller};
+use super::f16_plant::F16Plant;
+use super::fmu_controller::FmuController;
+use super::fmu_plant::{FmuModel, FmuPlant};
+use super::plant_model::PlantModel;
+use silrig_flight::scenario::Scenario;
+use silrig_flight::signals::PlantSignals;
+use silrig_flight::trace::Trace;
+use silrig_fmi::Fmu;
+use silrig_wire::wire::{self, CommandSample, MAX_INPUTS, PlantSample, WireSample};
+use std::collections::VecDeque;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Which side ended a flight before the scenario's end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EndedBy {
+    /// The plant could not step (the F-16 left its envelope, an FMU's call failed).
+    Plant,
+    /// The controller could not go on (a controller FMU's call failed).
+    Controller,
+}
+
+/// Why a flight ended before the scenario's end.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EndedEarly {
+    /// Which side.
+    pub by: EndedBy,
+    /// The tick it happened at.
+    pub tick: u64,
+    /// Its simulated time, s.
+    pub t_s: f64,
+    /// What it said.
+    pub why: String,
+}
+
+impl std::fmt::Display for EndedEarly {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let side = match self.by {
+            EndedBy::Plant => "the plant",
+            EndedBy::Controller => "the controller",
+        };
+        write!(f, "{side} stopped at t = {:.2} s (tick {}): {}", self.t_s, self.tick, self.why)
+    }
+}
+
+/// A flight flown in one process.
+#[derive(Debug, Clone)]
+pub struct Flown {
+    /// The plant's signals (what the trace's columns come from).
+    pub plant: PlantSignals,
+    /// `trace.csv`: one row per tick flown.
+    pub trace: Trace,
+    /// Set when it ended before the scenario's end; the trace holds it up to there.
+    pub ended_early: Option<EndedEarly>,
+    /// Commands the controller's session would refuse (NaN, infinity, out of range), and the first reason.
+    pub commands_refused: (u64, Option<String>),
+}
+
+/// Fly `plant` against `controller` under `scenario` from tick 0 to its end. An error: the controller cannot
+/// connect to the plant (a signal it needs is missing).
+pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn Controller) -> Result<Flown, String> {
+    let signals = plant.signals().clone();
+    controller.connect(&signals)?;
+    let names = controller.diagnostic_names();
+    let mut trace = Trace::new(signals.trace_columns(&names));
+    let (dt_s, ticks) = (scenario.timing.dt_s, scenario.timing.ticks());
+    trace.rows.reserve(ticks as usize + 1);
+    let delay = scenario.timing.command_delay_ticks() as usize;
+    let inputs = signals.inputs.len();
+    let hold = signals.hold();
+    let mut applied = plant.initial_inputs();
+    // Answers not yet acting, oldest first: a valid command, or None for a refused one (the plant holds).
+    let mut answers: VecDeque<Option<Vec<f64>>> = VecDeque::with_capacity(delay + 1);
+    let mut last_sent: Option<Vec<f64>> = None;
+    let mut commands_refused = (0, None);
+    let mut diagnostics = vec![0.0; names.len()];
+    let mut ended_early = None;
+    let mut outputs = plant.outputs();
+    for tick in 0..=ticks {
+        let t_s = plant.t_s();
+        let mut sample = PlantSample { t_sim_s: t_s, ..PlantSample::with_outputs(&outputs) };
+        sample.header.tick = tick;
+        let mut command: Vec<f64> = signals
+            .inputs
+            .iter()
+            .map(|i| i.held_output.map(|o| outputs[o]).filter(|v| v.is_finite()).unwrap_or(i.hold))
+            .collect();
+        controller.step(&sample, dt_s, &mut command, &mut diagnostics);
+        if let Some(why) = controller.failure() {
+            ended_early = Some(EndedEarly { by: EndedBy::Controller, tick, t_s, why });
+            break;
+        }
+        let mut sent = CommandSample { answers_tick: tick, ..CommandSample::zeroed() };
+        sent.inputs_len = inputs as u32;
+        sent.inputs[..inputs].copy_from_slice(&command);
+        sent.diagnostics_len = diagnostics.len() as u32;
+        sent.diagnostics[..diagnostics.len()].copy_from_slice(&diagnostics);
+        let refused = sent.validate().map_err(|e| e.to_string()).and_then(|()| wire::check_command(&signals, &sent));
+        // The trace shows what the session sends: the command, or for a refused one the last valid command (the
+        // hold values before any) and no diagnostics.
+        let (shown, shown_diagnostics) = match refused {
+            Ok(()) => {
+                last_sent = Some(command.clone());
+                answers.push_back(Some(command));
+                (last_sent.clone().expect("just set"), diagnostics.clone())
+            }
+            Err(reason) => {
+                commands_refused.0 += 1;
+                commands_refused.1.get_or_insert(format!("tick {tick}: {reason}"));
+                answers.push_back(None);
+                (last_sent.clone().unwrap_or_else(|| hold.clone()), vec![f64::NAN; diagnostics.len()])
+            }
+        };
+        if answers.len() > delay
+            && let Some(Some(valid)) = answers.pop_front()
+        {
+            applied.copy_from_slice(&valid);
+        }
+        let stepped = plant.step(&applied, tick >= ticks);
+        let next = plant.outputs();
+        trace.rows.push(signals.trace_row(t_s, &outputs, Some(&shown), Some(&next), 0, &shown_diagnostics));
+        if let Err(why) = stepped {
+            ended_early = Some(EndedEarly { by: EndedBy::Plant, tick, t_s, why });
+            break;
+        }
+        outputs = next;
+    }
+    debug_assert!(inputs <= MAX_INPUTS);
+    Ok(Flown { plant: signals, trace, ended_early, commands_refused })
+}
+
+/// A scenario's plant and controller, their FMUs unpacked once, ready to fly any number of times.
+pub struct Models {
+    plant_fmu: Option<Arc<Fmu>>,
+    controller_fmu: Option<Arc<Fmu>>,
+}
+
+/// Why a flight could not start (not a verdict on the controller: the case is infeasible).
+#[derive(Debug, thiserror::Error)]
+#[error("{0:#}")]
+pub struct SetupError(pub anyhow::Error);
+
+impl Models {
+    /// Unpack and load the FMUs `scenario` names (`[plant] fmu`, `[controller] fmu`); the built-in F-16 and our
+    /// controller need nothing.
+    pub fn open(scenario: &Scenario) -> anyhow::Result<Self> {
+        let open = |path: &Option<std::path::PathBuf>| -> anyhow::Result<Option<Arc<Fmu>>> {
+            path.as_deref().map(|p: &Path| Ok(Arc::new(Fmu::open(p)?))).transpose()
+        };
+        Ok(Self { plant_fmu: open(&scenario.plant.fmu)?, controller_fmu: open(&scenario.controller.fmu)? })
+    }
+
+    /// Whether the scenario flies an FMU (otherwise `silrig_flight::sim` flies it, the reference loop).
+    pub fn has_fmu(&self) -> bool {
+        self.plant_fmu.is_some() || self.controller_fmu.is_some()
+    }
+
+    /// The FMU whose binary allows one instance per process (`canBeInstantiatedOnlyOncePerProcess`), if any:
+    /// its flights must be flown one after the other.
+    pub fn one_instance_per_process(&self) -> Option<String> {
+        [&self.plant_fmu, &self.controller_fmu]
+            .into_iter()
+            .flatten()
+            .find(|f| f.description.co_simulation.one_instance_per_process)
+            .map(|f| f.label())
+    }
+
+    /// Fly `scenario` (this scenario, or a sample of its dispersions: the same FMU files) with fresh instances.
+    pub fn fly(&self, scenario: &Scenario) -> Result<Flown, SetupError> {
+        let setup = |e: anyhow::Error| SetupError(e);
+        let mut plant: Box<dyn PlantModel> = match &self.plant_fmu {
+            Some(fmu) => Box::new(
+                FmuPlant::new(fmu.clone(), scenario).and_then(|p| FmuModel::new(p, scenario)).map_err(setup)?,
+            ),
+            None => Box::new(F16Plant::new(scenario).map_err(|e| setup(e.into()))?),
+        };
+        let mut controller: Box<dyn Controller> = match &self.controller_fmu {
+            Some(fmu) => Box::new(FmuController::new(fmu.clone(), scenario).map_err(setup)?),
+            None => Box::new(AttitudeLaw::new(scenario)),
+        };
+        fly(scenario, plant.as_mut(), controller.as_mut()).map_err(|e| setup(anyhow::anyhow!(e)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use silrig_flight::fault::parse_fault_flag;
+
+    /// The generic loop flying the F-16 against our controller is the reference loop, bit for bit.
+    fn same_as_sim(scenario: &Scenario) {
+        let reference = silrig_flight::sim::run(scenario).expect("the scenario flies");
+        let flown = Models::open(scenario).unwrap().fly(scenario).unwrap();
+        assert!(flown.ended_early.is_none(), "{:?}", flown.ended_early);
+        assert_eq!(flown.trace.columns, reference.columns);
+        assert_eq!(flown.trace.rows.len(), reference.rows.len());
+        for (k, (a, b)) in flown.trace.rows.iter().zip(&reference.rows).enumerate() {
+            let same = a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()));
+            assert!(same, "row {k} differs:\n{a:?}\n{b:?}");
+        }
+    }
+
+    #[test]
+    fn the_f16_against_our_controller_flies_as_the_reference_loop() {
+        same_as_sim(&Scenario::embedded_default());
+    }
+
+    #[test]
+    fn so_it_does_with_a_command_delay_and_plant_model_faults() {
+        let mut s = Scenario::embedded_default();
+        s.timing.duration_s = 4.0;
+        s.timing.command_timing = silrig_flight::scenario::CommandTiming::NextTick;
+        s.timing.transport_delay_ticks = 1;
+        for flag in ["plant:sensor-noise@1s,channel=p_radps,std=0.01,for=2s", "plant:actuator-stuck@2s,surface=aileron,for=1s"] {
+            s.faults.push(parse_fault_flag(flag).unwrap());
+        }
+        s.validate().unwrap();
+        same_as_sim(&s);
+    }
+}
