@@ -52,6 +52,9 @@ enum Command {
         /// With --sample: the sweep's seed (default: the scenario's).
         #[arg(long, requires = "sample")]
         seed: Option<u64>,
+        /// The plant or controller as an FMU, in place of the scenario's.
+        #[command(flatten)]
+        fmus: silrig::rig::in_process::FmuFlags,
     },
     /// Monte Carlo: fly N dispersed cases of a scenario ([dispersions]) in parallel, judge each by its [criteria],
     /// and write cases.csv, sweep.json and the pass rate with the worst cases.
@@ -146,8 +149,10 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Trim { airspeed_mps, altitude_ft, xcg, json } => trim(airspeed_mps, altitude_ft, xcg, json),
         Command::Plant { command: PlantCommand::Derivative } => plant_derivative(),
-        Command::Sim { config, out, sample: Some(index), seed } => sim_sample(config.as_deref(), out, index, seed),
-        Command::Sim { config, out, .. } => sim(config.as_deref(), out),
+        Command::Sim { config, out, sample: Some(index), seed, fmus } => {
+            sim_sample(config.as_deref(), out, index, seed, &fmus)
+        }
+        Command::Sim { config, out, fmus, .. } => sim(config.as_deref(), out, &fmus),
         Command::Sweep(SweepCommand { action: None, local }) => sweep(&local),
         Command::Sweep(SweepCommand { action: Some(SweepAction::Plan(opts)), .. }) => plan_sweep(&opts),
         Command::Sweep(SweepCommand { action: Some(SweepAction::Run(opts)), .. }) => fly_shard(&opts),
@@ -187,12 +192,20 @@ fn plant_derivative() -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn sim(config: Option<&Path>, out: Option<PathBuf>) -> anyhow::Result<ExitCode> {
-    let scenario = load_scenario(config, None)?;
+fn sim(
+    config: Option<&Path>,
+    out: Option<PathBuf>,
+    fmus: &silrig::rig::in_process::FmuFlags,
+) -> anyhow::Result<ExitCode> {
+    let mut scenario = load_scenario(config, None)?;
+    fmus.apply(&mut scenario)?;
     let out = out.unwrap_or_else(|| Path::new("out").join(&scenario.name));
     let run = silrig::outputs::simulate(&scenario, &out)?;
     print!("{}", run.summary.to_text());
     print_written(run.files);
+    for refused in &run.refusals {
+        eprintln!("warning: {refused}");
+    }
     if let Some(why) = run.ended_early {
         eprintln!("error: {why}; the files above hold the flight up to there");
         return Ok(ExitCode::FAILURE);
@@ -200,9 +213,15 @@ fn sim(config: Option<&Path>, out: Option<PathBuf>) -> anyhow::Result<ExitCode> 
     Ok(ExitCode::SUCCESS)
 }
 
-fn sim_sample(config: Option<&Path>, out: Option<PathBuf>, index: u64, seed: Option<u64>) -> anyhow::Result<ExitCode> {
+fn sim_sample(
+    config: Option<&Path>,
+    out: Option<PathBuf>,
+    index: u64,
+    seed: Option<u64>,
+    fmus: &silrig::rig::in_process::FmuFlags,
+) -> anyhow::Result<ExitCode> {
     let path = config.ok_or_else(|| anyhow::anyhow!("--sample needs the sweep's scenario file"))?;
-    let campaign = silrig::campaign::Campaign::load(path)?;
+    let campaign = silrig::campaign::Campaign::load(path, fmus)?;
     let seed = seed.unwrap_or(campaign.scenario.seed);
     let out = out.unwrap_or_else(|| Path::new("out").join(format!("{}-sample-{index}", campaign.scenario.name)));
     let (text, files) = silrig::campaign::fly_one(&campaign, seed, index, &out)?;

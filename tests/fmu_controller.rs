@@ -390,24 +390,6 @@ fn a_mapping_mistake_against_a_plant_known_only_when_it_joins_fails_the_controll
 }
 
 #[test]
-fn the_single_process_loop_says_a_controller_fmu_flies_in_the_rig() {
-    // `silrig sim` flies our controller in one process: a scenario naming an FMU must not quietly fly ours.
-    let dir = common::temp_dir(SUITE, "sim-files");
-    let path = scenario_with(&dir, "fmu", &robust(), "");
-    let text =
-        std::fs::read_to_string(&path).unwrap().replace("\n[controller]\n", "\n[controller]\nfmu = \"pid.fmu\"\n");
-    std::fs::write(&path, text).unwrap();
-    let o = Command::new(SILRIG).args(["sim", &path]).arg("--out").arg(dir.join("out")).output().unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert!(
-        stderr.contains("controller.fmu") && stderr.contains("pid.fmu") && stderr.contains("silrig run"),
-        "{stderr}"
-    );
-    std::fs::remove_dir_all(dir).unwrap();
-}
-
-#[test]
 fn a_controller_fmu_run_replays_bit_identically() {
     // The recorded scenario names the FMU by its absolute path, so `silrig replay` flies the same FMU again.
     let pid = fmu("pid");

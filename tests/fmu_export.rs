@@ -284,3 +284,22 @@ fn flown_back_through_plant_fmu_the_export_gives_the_built_in_trace_byte_for_byt
     flown.finish();
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn in_one_process_the_export_gives_the_built_in_sim_trace_byte_for_byte() {
+    // `silrig sim --plant-fmu` flies the FMU through the generic in-process loop, the built-in F-16 through the
+    // reference loop (silrig_flight::sim): two loops, two plants, one trace.
+    let dir = temp_dir("fmu-export", "in-process-files");
+    let (builtin_scenario, fmu_scenario) = robust_undisturbed(&dir);
+    let (fmu, _) = export(&dir, "f16.fmu", Some(&builtin_scenario));
+    let sim = |out: &str, args: &[&str]| {
+        let o = Command::new(SILRIG).arg("sim").args(args).arg("--out").arg(dir.join(out)).output().unwrap();
+        assert!(o.status.success(), "{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        std::fs::read(dir.join(out).join("trace.csv")).unwrap()
+    };
+    let builtin = sim("builtin", &[&builtin_scenario]);
+    let flown = sim("fmu", &["--plant-fmu", fmu.to_str().unwrap(), &fmu_scenario]);
+    assert_eq!(String::from_utf8_lossy(&builtin).lines().count(), 1002);
+    assert!(builtin == flown, "trace.csv differs between the built-in F-16 and its FMU in one process");
+    std::fs::remove_dir_all(dir).unwrap();
+}

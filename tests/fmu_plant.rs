@@ -348,22 +348,6 @@ fn a_do_step_slower_than_the_period_is_counted_as_overruns() {
 }
 
 #[test]
-fn the_single_process_loop_says_an_fmu_flies_in_the_rig() {
-    let dir = common::temp_dir("fmu-plant", "sim-files");
-    let path = dir.join("fmu.toml");
-    let toy = std::fs::read_to_string(format!("{ROOT}/tests/scenarios/toy.toml")).unwrap();
-    std::fs::write(&path, format!("{toy}\n[plant]\nfmu = \"airframe.fmu\"\n")).unwrap();
-    let o = Command::new(SILRIG).args(["sim"]).arg(&path).arg("--out").arg(dir.join("out")).output().unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert!(
-        stderr.contains("plant.fmu") && stderr.contains("airframe.fmu") && stderr.contains("silrig run"),
-        "{stderr}"
-    );
-    std::fs::remove_dir_all(dir).unwrap();
-}
-
-#[test]
 fn silrig_check_judges_the_airframe_fmu_and_its_recording_replays_bit_identical() {
     let plant = fmu("airframe");
     let dir = common::temp_dir("fmu-plant", "check-files");

@@ -209,7 +209,10 @@ impl ModelDescription {
                 .ok_or_else(|| bad("<CoSimulation> has no modelIdentifier".into()))?,
             can_get_and_set_state: flag(["canGetAndSetFMUstate", "canGetAndSetFMUState"]),
             can_serialize_state: flag(["canSerializeFMUstate", "canSerializeFMUState"]),
-            one_instance_per_process: flag(["canBeInstantiatedOnlyOncePerProcess", "canBeInstantiatedOnlyOncePerProcess"]),
+            one_instance_per_process: flag([
+                "canBeInstantiatedOnlyOncePerProcess",
+                "canBeInstantiatedOnlyOncePerProcess",
+            ]),
         };
         let default_step_s = child("DefaultExperiment").and_then(|d| d.attribute("stepSize")).and_then(number);
         let units = declared_units(&root);

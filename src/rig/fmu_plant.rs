@@ -289,7 +289,9 @@ impl FmuModel {
         match outputs.iter().position(|v| !v.is_finite()) {
             None => self.raw_outputs.copy_from_slice(outputs),
             Some(k) => {
-                let first = || format!("output {} is {} at tick {}", self.plant.map.signals.outputs[k].name, outputs[k], self.tick);
+                let first = || {
+                    format!("output {} is {} at tick {}", self.plant.map.signals.outputs[k].name, outputs[k], self.tick)
+                };
                 let (count, first_seen) = &mut self.outputs_refused;
                 *count += 1;
                 first_seen.get_or_insert_with(first);

@@ -24,7 +24,7 @@ use silrig_flight::trace::Trace;
 use silrig_fmi::Fmu;
 use silrig_wire::wire::{self, CommandSample, MAX_INPUTS, PlantSample, WireSample};
 use std::collections::VecDeque;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Which side ended a flight before the scenario's end.
@@ -70,6 +70,22 @@ pub struct Flown {
     pub ended_early: Option<EndedEarly>,
     /// Commands the controller's session would refuse (NaN, infinity, out of range), and the first reason.
     pub commands_refused: (u64, Option<String>),
+    /// Plant outputs with NaN or infinity, refused (the last valid ones stood in), and the first one.
+    pub outputs_refused: (u64, Option<String>),
+}
+
+impl Flown {
+    /// What the rig would refuse in this flight, as sentences (empty: nothing).
+    pub fn refusals(&self) -> Vec<String> {
+        let mut said = Vec::new();
+        if let (n @ 1.., Some(first)) = &self.commands_refused {
+            said.push(format!("{n} command(s) refused (first at {first})"));
+        }
+        if let (n @ 1.., Some(first)) = &self.outputs_refused {
+            said.push(format!("{n} plant sample(s) with outputs refused (first: {first})"));
+        }
+        said
+    }
 }
 
 /// Fly `plant` against `controller` under `scenario` from tick 0 to its end. An error: the controller cannot
@@ -142,7 +158,47 @@ pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn
         outputs = next;
     }
     debug_assert!(inputs <= MAX_INPUTS);
-    Ok(Flown { plant: signals, trace, ended_early, commands_refused })
+    Ok(Flown { plant: signals, trace, ended_early, commands_refused, outputs_refused: (0, None) })
+}
+
+/// `--plant-fmu` and `--controller-fmu` of the commands that fly in one process (`silrig sim`, `silrig sweep`).
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct FmuFlags {
+    /// Fly this co-simulation FMU (FMI 2.0 or 3.0, Linux x86-64 binary) as the plant, in one process: the same as
+    /// the scenario key `[plant] fmu` (and as `silrig run --plant-fmu`).
+    #[arg(long, value_name = "FILE.fmu")]
+    pub plant_fmu: Option<PathBuf>,
+    /// Fly this co-simulation FMU as the controller, in one process: the same as the scenario key
+    /// `[controller] fmu` (and as `silrig run --controller-fmu`).
+    #[arg(long, value_name = "FILE.fmu")]
+    pub controller_fmu: Option<PathBuf>,
+}
+
+impl FmuFlags {
+    /// Put the FMUs given into `scenario`, by their absolute paths (a scenario written down means the same files
+    /// wherever it is read).
+    pub fn apply(&self, scenario: &mut Scenario) -> anyhow::Result<()> {
+        let absolute =
+            |flag: &str, p: &Path| std::path::absolute(p).map_err(|e| anyhow::anyhow!("--{flag} {}: {e}", p.display()));
+        if let Some(p) = &self.plant_fmu {
+            scenario.plant.fmu = Some(absolute("plant-fmu", p)?);
+        }
+        if let Some(p) = &self.controller_fmu {
+            scenario.controller.fmu = Some(absolute("controller-fmu", p)?);
+        }
+        Ok(())
+    }
+
+    /// The flags as a command line repeats them (` --plant-fmu FILE`), empty when none was given.
+    pub fn to_args(&self) -> String {
+        let mut args = String::new();
+        for (flag, path) in [("plant-fmu", &self.plant_fmu), ("controller-fmu", &self.controller_fmu)] {
+            if let Some(p) = path {
+                args += &format!(" --{flag} {}", p.display());
+            }
+        }
+        args
+    }
 }
 
 /// A scenario's plant and controller, their FMUs unpacked once, ready to fly any number of times.
@@ -184,17 +240,24 @@ impl Models {
     /// Fly `scenario` (this scenario, or a sample of its dispersions: the same FMU files) with fresh instances.
     pub fn fly(&self, scenario: &Scenario) -> Result<Flown, SetupError> {
         let setup = |e: anyhow::Error| SetupError(e);
-        let mut plant: Box<dyn PlantModel> = match &self.plant_fmu {
-            Some(fmu) => Box::new(
-                FmuPlant::new(fmu.clone(), scenario).and_then(|p| FmuModel::new(p, scenario)).map_err(setup)?,
-            ),
-            None => Box::new(F16Plant::new(scenario).map_err(|e| setup(e.into()))?),
-        };
         let mut controller: Box<dyn Controller> = match &self.controller_fmu {
             Some(fmu) => Box::new(FmuController::new(fmu.clone(), scenario).map_err(setup)?),
             None => Box::new(AttitudeLaw::new(scenario)),
         };
-        fly(scenario, plant.as_mut(), controller.as_mut()).map_err(|e| setup(anyhow::anyhow!(e)))
+        let connect = |e: String| setup(anyhow::anyhow!(e));
+        match &self.plant_fmu {
+            Some(fmu) => {
+                let plant = FmuPlant::new(fmu.clone(), scenario).map_err(setup)?;
+                let mut model = FmuModel::new(plant, scenario).map_err(setup)?;
+                let mut flown = fly(scenario, &mut model, controller.as_mut()).map_err(connect)?;
+                flown.outputs_refused = model.outputs_refused.clone();
+                Ok(flown)
+            }
+            None => {
+                let mut plant = F16Plant::new(scenario).map_err(|e| setup(e.into()))?;
+                fly(scenario, &mut plant, controller.as_mut()).map_err(connect)
+            }
+        }
     }
 }
 
@@ -227,7 +290,9 @@ mod tests {
         s.timing.duration_s = 4.0;
         s.timing.command_timing = silrig_flight::scenario::CommandTiming::NextTick;
         s.timing.transport_delay_ticks = 1;
-        for flag in ["plant:sensor-noise@1s,channel=p_radps,std=0.01,for=2s", "plant:actuator-stuck@2s,surface=aileron,for=1s"] {
+        for flag in
+            ["plant:sensor-noise@1s,channel=p_radps,std=0.01,for=2s", "plant:actuator-stuck@2s,surface=aileron,for=1s"]
+        {
             s.faults.push(parse_fault_flag(flag).unwrap());
         }
         s.validate().unwrap();

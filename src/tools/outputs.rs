@@ -4,12 +4,12 @@
 
 use anyhow::Context;
 use silrig_flight::scenario::Scenario;
+use silrig_flight::signals::PlantSignals;
 use silrig_flight::sim::LeftEnvelope;
 use silrig_flight::summary::Summary;
-use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
-use silrig_rig::in_process::Models;
 use silrig_plot::plot_title;
+use silrig_rig::in_process::Models;
 use std::path::{Path, PathBuf};
 
 /// Write trace, summary, scenario and figures into `out_dir` (created if needed); returns the paths written. The
@@ -52,6 +52,8 @@ pub struct OneProcessFlight {
     pub plant: Option<PlantSignals>,
     /// When (s) and why it ended before the scenario's end; the trace holds it up to there.
     pub ended_early: Option<(f64, String)>,
+    /// What the rig refused on the way (commands, plant outputs), as sentences.
+    pub refusals: Vec<String>,
 }
 
 /// Fly `scenario` in one process: the built-in F-16 against our controller by the reference loop
@@ -62,11 +64,12 @@ pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<OneProces
     if !models.has_fmu() {
         let (trace, left) = silrig_flight::sim::fly(scenario).map_err(|e| e.to_string())?;
         let ended_early = left.map(|exit| (exit.t_s, exit.to_string()));
-        return Ok(OneProcessFlight { trace, plant: None, ended_early });
+        return Ok(OneProcessFlight { trace, plant: None, ended_early, refusals: Vec::new() });
     }
     let flown = models.fly(scenario).map_err(|e| e.to_string())?;
+    let refusals = flown.refusals();
     let ended_early = flown.ended_early.map(|e| (e.t_s, e.to_string()));
-    Ok(OneProcessFlight { trace: flown.trace, plant: Some(flown.plant), ended_early })
+    Ok(OneProcessFlight { trace: flown.trace, plant: Some(flown.plant), ended_early, refusals })
 }
 
 /// What [`simulate`] flew and wrote.
@@ -79,6 +82,8 @@ pub struct Simulated {
     /// Set when the flight ended before the scenario's end (the F-16 left its envelope, an FMU failed): why; the
     /// files hold it up to there.
     pub ended_early: Option<String>,
+    /// What the rig refused on the way (commands, plant outputs), as sentences.
+    pub refusals: Vec<String>,
 }
 
 /// `silrig sim`: fly the scenario's closed loop in one process (its FMUs too) and write its run into `out_dir` (as
@@ -88,7 +93,7 @@ pub fn simulate(scenario: &Scenario, out_dir: &Path) -> anyhow::Result<Simulated
     let flight = fly_one_process(&models, scenario).map_err(anyhow::Error::msg)?;
     let summary = silrig_flight::summary::summarize(&flight.trace, scenario);
     let files = write_run(out_dir, scenario, &flight.trace, &summary, flight.plant.as_ref())?;
-    Ok(Simulated { summary, files, ended_early: flight.ended_early.map(|(_, why)| why) })
+    Ok(Simulated { summary, files, ended_early: flight.ended_early.map(|(_, why)| why), refusals: flight.refusals })
 }
 
 /// What [`compare`] produced.

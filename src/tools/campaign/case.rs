@@ -2,16 +2,16 @@
 //! scenario's criteria. A pure function of (scenario, seed, index), so a case flown alone (`silrig sim --sample I`)
 //! gives the numbers it gave inside any sweep, on any machine or shard.
 
+use crate::outputs::{OneProcessFlight, fly_one_process};
 use serde::{Deserialize, Serialize};
 use silrig_flight::criteria::{Criteria, Judgement};
 use silrig_flight::dispersion;
 use silrig_flight::judge::judge_flight;
 use silrig_flight::scenario::Scenario;
-use silrig_flight::summary::{Summary, summarize};
 use silrig_flight::signals::PlantSignals;
+use silrig_flight::summary::{Summary, summarize};
 use silrig_flight::trace::Trace;
 use silrig_rig::in_process::Models;
-use crate::outputs::{OneProcessFlight, fly_one_process};
 
 /// How a case ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -51,7 +51,8 @@ pub struct CaseFigures {
     pub rate_limit_fraction: f64,
     /// A sustained oscillation at the end.
     pub limit_cycle: bool,
-    /// When the aircraft left the aerodynamic data (alpha or beta beyond the tables, or a non-finite state), s.
+    /// When the aircraft left the aerodynamic data (alpha or beta beyond the tables, or a non-finite state), or
+    /// the plant or controller stopped (an FMU's failed call), s.
     pub departed_at_s: Option<f64>,
 }
 
@@ -163,7 +164,7 @@ pub fn fly_with_trace(
         Ok(s) => s,
         Err(e) => return (infeasible(format!("sampled scenario out of range: {e}")), None),
     };
-    let OneProcessFlight { trace, plant, ended_early } = match fly_one_process(models, &case) {
+    let OneProcessFlight { trace, plant, ended_early, refusals } = match fly_one_process(models, &case) {
         Ok(flight) => flight,
         Err(e) => return (infeasible(e), None),
     };
@@ -177,6 +178,8 @@ pub fn fly_with_trace(
     if let Some((t, why)) = &departed {
         failed.insert(0, format!("departed at {t:.2} s: {why};"));
     }
+    // What the rig refuses (a NaN command or output) is a fault of the controller or the plant under test.
+    failed.extend(refusals.into_iter().map(|r| format!("{r};")));
     // Up to the first row that is no longer a number (a departed flight): nothing past it can be drawn. A plant
     // without the attitude's columns has no envelope to draw.
     let columns = ["t_s", "phi_deg", "theta_deg", "psi_deg"].map(|c| trace.index(c));

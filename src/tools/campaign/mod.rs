@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 
 use silrig_flight::criteria::Criteria;
 use silrig_flight::scenario::Scenario;
-use silrig_rig::in_process::Models;
+use silrig_rig::in_process::{FmuFlags, Models};
 
 /// `silrig sweep`: every case on this machine, or (with a subcommand) a sweep split over many.
 #[derive(Debug, Clone, clap::Args)]
@@ -65,6 +65,9 @@ pub struct SweepOptions {
     /// Output folder (default: out/sweep-<scenario>-<seed>); must not hold a sweep already.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// The plant or controller as an FMU, in place of the scenario's.
+    #[command(flatten)]
+    pub fmus: FmuFlags,
 }
 
 /// Largest number of cases in one sweep.
@@ -80,19 +83,31 @@ pub struct Campaign {
     pub parameters: Vec<String>,
     /// The file as the user named it (for the commands printed).
     pub config: String,
+    /// `--plant-fmu`, `--controller-fmu` as given, repeated in the commands printed.
+    pub flags: String,
     /// The plant and controller every case flies (new instances per case).
     pub models: Models,
 }
 
 impl Campaign {
-    /// Load `config` (FMU paths taken relative to it) and check it can be swept.
-    pub fn load(config: &Path) -> anyhow::Result<Self> {
-        Self::from_scenario(Scenario::load(config)?, &config.display().to_string())
+    /// Load `config` (FMU paths taken relative to it), with the FMUs of `fmus` in place of its own, and check it
+    /// can be swept.
+    pub fn load(config: &Path, fmus: &FmuFlags) -> anyhow::Result<Self> {
+        let mut scenario = Scenario::load(config)?;
+        fmus.apply(&mut scenario)?;
+        let mut campaign = Self::from_scenario(scenario, &config.display().to_string())?;
+        campaign.flags = fmus.to_args();
+        Ok(campaign)
     }
 
     /// A campaign from a scenario's text; `config` names it in errors and printed commands.
     pub fn from_text(text: &str, config: &str) -> anyhow::Result<Self> {
         Self::from_scenario(Scenario::from_toml(text, config)?, config)
+    }
+
+    /// The scenario as a command names it: the file and the FMU flags given with it.
+    pub fn command_config(&self) -> String {
+        format!("{}{}", self.config, self.flags)
     }
 
     fn from_scenario(scenario: Scenario, config: &str) -> anyhow::Result<Self> {
@@ -105,7 +120,7 @@ impl Campaign {
         })?;
         let parameters = scenario.dispersions.keys().cloned().collect();
         let models = Models::open(&scenario)?;
-        Ok(Self { scenario, criteria, parameters, config: config.to_string(), models })
+        Ok(Self { scenario, criteria, parameters, config: config.to_string(), flags: String::new(), models })
     }
 
     /// The worker threads that may fly its cases: `jobs`, or one when an FMU's binary allows a single instance
@@ -208,7 +223,7 @@ pub fn write_outputs(
     let summary = report::summarize(
         cases,
         &campaign.scenario.name,
-        &campaign.config,
+        &campaign.command_config(),
         seed,
         &campaign.parameters,
         &campaign.criteria,
@@ -241,7 +256,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
         anyhow::bail!("silrig sweep needs a scenario file and --runs N (or a subcommand: plan, run, merge, slurm)");
     };
     check_runs(runs)?;
-    let campaign = Campaign::load(config)?;
+    let campaign = Campaign::load(config, &opts.fmus)?;
     let seed = opts.seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(jobs(opts.jobs)?);
     let out =
@@ -263,7 +278,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
 /// (the sampled values, the summary, each criterion as `cases.csv` has it) and the files written.
 pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow::Result<(String, Vec<PathBuf>)> {
     let (result, flight) = case::fly_with_trace(&campaign.models, &campaign.scenario, &campaign.criteria, seed, index);
-    let mut text = format!("case {index} of {} (seed {seed}): {}\n", campaign.config, result.outcome.label());
+    let mut text = format!("case {index} of {} (seed {seed}): {}\n", campaign.command_config(), result.outcome.label());
     for (key, value) in campaign.parameters.iter().zip(&result.values) {
         text += &format!("  {key} = {value}\n");
     }
@@ -281,9 +296,10 @@ pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow
     if !result.reason.is_empty() {
         text += &format!("  failed: {}\n", result.reason);
     }
+    let width = result.judgements.iter().map(|j| j.criterion.len()).max().unwrap_or(0).max(26);
     for j in &result.judgements {
         text += &format!(
-            "  {:<26} {:<34} {:<28} {}\n",
+            "  {:<width$} {:<34} {:<28} {}\n",
             j.criterion,
             j.measured,
             j.limit,

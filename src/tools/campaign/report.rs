@@ -37,7 +37,7 @@ pub struct WorstCase {
     pub reproduce: String,
 }
 
-/// A flown case that left the aerodynamic data.
+/// A flown case that left the model's data (the F-16's aerodynamic tables) or whose plant or controller stopped.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DepartedCase {
     /// Sample index.
@@ -80,7 +80,7 @@ pub struct SweepSummary {
     pub failed: u64,
     /// Cases that could not be flown.
     pub infeasible: u64,
-    /// Flown cases that left the aerodynamic data (each also failed).
+    /// Flown cases that left the model's data or stopped (each also failed).
     pub departed: u64,
     /// passed / (passed + failed): the pass rate of the cases that could be flown.
     pub pass_rate: f64,
@@ -245,7 +245,7 @@ impl SweepSummary {
         let _ = writeln!(
             out,
             "  passed {} of {} flown: {:.1} % (95 % Wilson interval {:.1} .. {:.1} %); {} departed (left the \
-             aerodynamic data); {} infeasible (not flown)",
+             model's data or stopped); {} infeasible (not flown)",
             self.passed,
             flown,
             self.pass_rate * 100.0,
@@ -268,7 +268,10 @@ impl SweepSummary {
             }
         }
         if !self.departed_cases.is_empty() {
-            let _ = writeln!(out, "  departed (left the aerodynamic data; the worst cases above are of the others):");
+            let _ = writeln!(
+                out,
+                "  departed (left the model's data or stopped; the worst cases above are of the others):"
+            );
         }
         for c in self.departed_cases.iter().take(3) {
             let _ = writeln!(out, "    case {:<6} {}   {}", c.index, c.reason, c.reproduce);

@@ -120,6 +120,9 @@ pub struct PlanOptions {
     /// The sweep folder, readable and writable by every worker (a shared file system on a cluster).
     #[arg(long)]
     pub out: PathBuf,
+    /// The plant or controller as an FMU, in place of the scenario's (every worker must reach the file).
+    #[command(flatten)]
+    pub fmus: silrig_rig::in_process::FmuFlags,
 }
 
 /// `silrig sweep plan`: check the scenario, write the manifest.
@@ -132,8 +135,8 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
         opts.shards
     );
     let text = std::fs::read_to_string(&opts.config).with_context(|| format!("reading {}", opts.config.display()))?;
-    let config = opts.config.display().to_string();
-    let campaign = Campaign::load(&opts.config)?;
+    let campaign = Campaign::load(&opts.config, &opts.fmus)?;
+    let config = campaign.command_config();
     // Workers run from any folder: a plan that names FMUs carries the scenario with their paths made absolute.
     let text = if campaign.models.has_fmu() { campaign.scenario.to_toml() } else { text };
     anyhow::ensure!(

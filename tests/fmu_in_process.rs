@@ -1,0 +1,235 @@
+//! FMUs in one process (`silrig sim`, `silrig sweep` with `[plant] fmu`, `[controller] fmu` or `--plant-fmu`,
+//! `--controller-fmu`): the generic in-process loop gives the three-process lockstep rig's `trace.csv` byte for byte,
+//! with the rig's actuators, sensor noise and actuator faults around an FMU plant, for the airframe FMU under the
+//! PID FMU and for the built-in F-16 under the PID FMU. A sweep disperses FMU parameters by variable name and each
+//! of its cases is the case `silrig sim --sample` flies alone; planned in shards from another folder, its shards give
+//! the same cases. A case whose FMU fails is a failed case naming the FMU's error, a case with NaN outputs fails
+//! saying they were refused, and a sampled parameter outside the FMU's declared range is an infeasible case saying so:
+//! never a crashed sweep. The FMUs are built from C by `examples/fmu/build.sh`.
+
+mod common;
+
+use common::Run;
+use std::path::Path;
+use std::process::{Command, Output};
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+const SUITE: &str = "fmu-in-process";
+
+fn fmu(name: &str) -> String {
+    common::fmu::cached_fmu(SUITE, name)
+}
+
+fn silrig(args: &[&str], cwd: &Path) -> Output {
+    Command::new(SILRIG).args(args).current_dir(cwd).output().unwrap()
+}
+
+fn said(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// `silrig sim ARGS --out DIR/sim` must succeed; its trace.csv.
+fn sim_trace(dir: &Path, args: &[&str]) -> Vec<u8> {
+    let out = dir.join("sim");
+    let o = silrig(&[&["sim"], args, &["--out", out.to_str().unwrap()]].concat(), dir);
+    assert!(o.status.success(), "{}", said(&o));
+    std::fs::read(out.join("trace.csv")).unwrap()
+}
+
+/// `silrig run --mode lockstep ARGS` must succeed; its trace.csv.
+fn rig_trace(test: &str, args: &[&str]) -> Vec<u8> {
+    let r = Run::start(SILRIG, SUITE, "i", test, &[&["--mode", "lockstep"], args].concat());
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let trace = std::fs::read(r.out.join("trace.csv")).unwrap();
+    r.finish();
+    trace
+}
+
+fn same_bytes(a: &[u8], b: &[u8], what: &str) {
+    if a != b {
+        let (a, b) = (String::from_utf8_lossy(a), String::from_utf8_lossy(b));
+        let first = a.lines().zip(b.lines()).position(|(x, y)| x != y);
+        panic!(
+            "{what}: the traces differ (first at line {first:?}; {} and {} lines)",
+            a.lines().count(),
+            b.lines().count()
+        );
+    }
+}
+
+#[test]
+fn an_fmu_plant_and_controller_fly_in_one_process_as_in_the_lockstep_rig_with_actuators_and_faults() {
+    let dir = common::temp_dir(SUITE, "both");
+    let (plant, pid) = (fmu("airframe"), fmu("pid"));
+    let airframe = std::fs::read_to_string(format!("{ROOT}/examples/fmu/airframe.toml")).unwrap();
+    // The rig's own servo on the rudder, sensor noise on the roll rate and a stuck aileron: the chain around the FMU.
+    let path = dir.join("chain.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "{airframe}\n[actuators.rudder]\nmin = -20.0\nmax = 20.0\nrate_limit_per_s = 60.0\nlag_time_constant_s = 0.05\n\
+             [[faults]]\nat_s = 2.0\ntarget = \"plant\"\naction = \"sensor-noise\"\nchannel = \"p_dps\"\nstd = 0.5\nduration_s = 3.0\n\
+             [[faults]]\nat_s = 4.0\ntarget = \"plant\"\naction = \"actuator-stuck\"\nsurface = \"aileron\"\nduration_s = 1.0\n"
+        ),
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let flags = ["--plant-fmu", &plant, "--controller-fmu", &pid, path];
+    let in_process = sim_trace(&dir, &flags);
+    same_bytes(&in_process, &rig_trace("both-rig", &flags), "airframe FMU under the PID FMU");
+    let text = String::from_utf8_lossy(&in_process);
+    assert_eq!(text.lines().count(), 1002, "a header and 1001 rows");
+    assert!(text.lines().next().unwrap().starts_with("t_s,phi_deg"), "{}", &text[..200]);
+    // A plant of the user's own gets the figure of all its signals.
+    assert!(dir.join("sim/signals.png").is_file());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn the_f16_under_a_controller_fmu_flies_in_one_process_as_in_the_lockstep_rig() {
+    let dir = common::temp_dir(SUITE, "f16");
+    let pid = fmu("pid");
+    let robust = format!("{ROOT}/configs/robust.toml");
+    let flags = ["--controller-fmu", &pid, &robust];
+    same_bytes(&sim_trace(&dir, &flags), &rig_trace("f16-rig", &flags), "the F-16 under the PID FMU");
+    // The F-16's own figures, not the generic one.
+    assert!(dir.join("sim/fig1_states.png").is_file() && !dir.join("sim/signals.png").exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// examples/fmu/airframe_sweep.toml in `dir`, naming the FMUs beside it (relative paths, as a user writes them).
+fn sweep_config(dir: &Path) -> String {
+    std::fs::copy(fmu("airframe"), dir.join("airframe.fmu")).unwrap();
+    std::fs::copy(fmu("pid"), dir.join("pid.fmu")).unwrap();
+    std::fs::copy(format!("{ROOT}/examples/fmu/airframe_sweep.toml"), dir.join("airframe_sweep.toml")).unwrap();
+    dir.join("airframe_sweep.toml").display().to_string()
+}
+
+/// cases.csv's rows, split into fields (a reason is quoted and may hold commas).
+fn cases(csv: &Path) -> Vec<Vec<String>> {
+    let split = |line: &str| {
+        let (mut fields, mut field, mut quoted) = (Vec::new(), String::new(), false);
+        for ch in line.chars() {
+            match ch {
+                '"' => quoted = !quoted,
+                ',' if !quoted => fields.push(std::mem::take(&mut field)),
+                _ => field.push(ch),
+            }
+        }
+        fields.push(field);
+        fields
+    };
+    std::fs::read_to_string(csv).unwrap().lines().map(split).collect()
+}
+
+#[test]
+fn a_sweep_disperses_fmu_parameters_and_each_case_is_the_case_flown_alone_and_in_shards() {
+    let dir = common::temp_dir(SUITE, "sweep");
+    let config = sweep_config(&dir);
+    let out = dir.join("local");
+    let o = silrig(&["sweep", &config, "--runs", "120", "--jobs", "2", "--out", out.to_str().unwrap()], Path::new("/"));
+    assert!(o.status.success(), "{}", said(&o));
+    let text = said(&o);
+    assert!(text.contains("flew 120 cases"), "{text}");
+    let local = cases(&out.join("cases.csv"));
+    let header = &local[0];
+    let col = |name: &str| header.iter().position(|c| c == name).unwrap_or_else(|| panic!("no {name} in {header:?}"));
+    // The FMU's parameters were dispersed: every case flew other values, and the outcomes follow from them.
+    let (mass, servo, outcome) = (col("plant.parameters.mass_kg"), col("plant.parameters.servo_tau_s"), col("outcome"));
+    let masses: std::collections::BTreeSet<&str> = local[1..].iter().map(|r| r[mass].as_str()).collect();
+    assert_eq!(masses.len(), 120);
+    let servos: std::collections::BTreeSet<&str> = local[1..].iter().map(|r| r[servo].as_str()).collect();
+    assert_eq!(servos.len(), 4, "{servos:?}");
+    let passed = local[1..].iter().filter(|r| r[outcome] == "pass").count();
+    assert!(
+        passed > 0 && passed < 120,
+        "{passed} of 120 passed: the example's criteria should split the cases\n{text}"
+    );
+    // A failed case flown alone gives the figures it had inside the sweep.
+    let failed = local[1..].iter().find(|r| r[outcome] == "fail").unwrap();
+    let index = failed[0].clone();
+    let alone = dir.join("alone");
+    let o = silrig(&["sim", &config, "--sample", &index, "--out", alone.to_str().unwrap()], Path::new("/"));
+    assert!(o.status.success(), "{}", said(&o));
+    let case: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(alone.join("case.json")).unwrap()).unwrap();
+    assert_eq!(case["outcome"], "fail");
+    let settle = col("outputs.phi_deg.settled");
+    let figure =
+        case["judgements"].as_array().unwrap().iter().find(|j| j["criterion"] == "outputs.phi_deg.settled").unwrap();
+    assert_eq!(figure["value"].as_f64().unwrap().to_string(), failed[settle], "{case}");
+    // Planned from the repository, flown from another folder: the plan carries the FMUs' absolute paths.
+    let plan = dir.join("plan");
+    let o = silrig(
+        &["sweep", "plan", &config, "--runs", "120", "--shards", "2", "--out", plan.to_str().unwrap()],
+        Path::new(ROOT),
+    );
+    assert!(o.status.success(), "{}", said(&o));
+    for k in ["0", "1"] {
+        let o = silrig(&["sweep", "run", plan.to_str().unwrap(), "--index", k], Path::new("/"));
+        assert!(o.status.success(), "shard {k}: {}", said(&o));
+    }
+    let o = silrig(&["sweep", "merge", plan.to_str().unwrap()], Path::new("/"));
+    assert!(o.status.success(), "{}", said(&o));
+    assert_eq!(cases(&plan.join("cases.csv")), local, "the shards' cases differ from the local sweep's");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_failing_fmu_fails_its_case_and_a_parameter_it_rejects_makes_it_infeasible_never_a_crashed_sweep() {
+    let dir = common::temp_dir(SUITE, "misbehave");
+    let misbehave = fmu("misbehave");
+    // misbehave is a lag y' = u - y; as its own controller (mapped u <- y, y -> u) it closes a loop with itself.
+    // `fault` 1: doStep fails at 0.5 s; 5: y reads NaN from 0.5 s on; 7: outside the variable's declared range.
+    let path = dir.join("misbehave.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "name = \"misbehave\"\nseed = 3\n[timing]\ndt_s = 0.01\nduration_s = 1.0\ncommand_timing = \"same-tick\"\n\
+             [plant]\nfmu = \"{misbehave}\"\n[plant.parameters]\nfault = 0.0\nfault_time_s = 0.5\n\
+             [controller]\nfmu = \"{misbehave}\"\n[controller.map]\nu = \"y\"\ny = \"u\"\n\
+             [dispersions]\n\"plant.parameters.fault\" = {{ dist = \"choice\", values = [0.0, 1.0, 5.0, 7.0] }}\n\
+             [criteria.outputs.y]\nabs_max = {{ after_s = 0.0, max = 1000.0 }}\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = silrig(&["sweep", path.to_str().unwrap(), "--runs", "24", "--out", out.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", said(&o));
+    let all = cases(&out.join("cases.csv"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let text = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    let fault = all[0].iter().position(|c| c == "plant.parameters.fault").unwrap();
+    let outcome = all[0].iter().position(|c| c == "outcome").unwrap();
+    let rows = |f: &str| all[1..].iter().filter(move |r| r[fault] == f).collect::<Vec<_>>();
+    for f in ["0", "1", "5", "7"] {
+        assert!(!rows(f).is_empty(), "no case drew fault {f}: {text}");
+    }
+    assert!(rows("0").iter().all(|r| r[outcome] == "pass"), "{text}");
+    assert!(rows("1").iter().all(|r| r[outcome] == "fail"), "{text}");
+    assert!(rows("5").iter().all(|r| r[outcome] == "fail"), "{text}");
+    assert!(rows("7").iter().all(|r| r[outcome] == "infeasible"), "{text}");
+    let reason = all[0].iter().position(|c| c == "reason").unwrap();
+    let first = |f: &str| rows(f)[0][reason].clone();
+    assert!(first("1").contains("fault 1 at t = 0.5 s: fmi2DoStep returns fmi2Error"), "{}", first("1"));
+    assert!(first("5").contains("outputs refused") && first("5").contains("output y is NaN"), "{}", first("5"));
+    assert!(first("7").contains("`plant.parameters.fault` = 7 is outside the variable's range 0..6"), "{}", first("7"));
+    assert_eq!(json["infeasible"].as_u64().unwrap() as usize, rows("7").len(), "{json}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn an_fmu_that_cannot_be_opened_is_a_clear_error_of_sim_and_sweep() {
+    let dir = common::temp_dir(SUITE, "missing");
+    let o = silrig(&["sim", "--plant-fmu", "nowhere.fmu", "--out", "x"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("nowhere.fmu") && said(&o).contains("cannot be read"), "{}", said(&o));
+    let config = format!("{ROOT}/examples/fmu/airframe_sweep.toml");
+    let o = silrig(&["sweep", &config, "--runs", "3", "--plant-fmu", "nowhere.fmu"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("nowhere.fmu"), "{}", said(&o));
+    assert!(!dir.join("out").exists(), "nothing is written");
+    std::fs::remove_dir_all(dir).unwrap();
+}
