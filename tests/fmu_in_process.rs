@@ -221,7 +221,7 @@ fn a_failing_fmu_fails_its_case_and_a_parameter_it_rejects_makes_it_infeasible_n
 }
 
 #[test]
-fn an_fmu_that_cannot_be_opened_is_a_clear_error_of_sim_and_sweep() {
+fn an_fmu_that_cannot_be_opened_or_a_key_it_does_not_read_is_a_clear_error_of_sim_and_sweep() {
     let dir = common::temp_dir(SUITE, "missing");
     let o = silrig(&["sim", "--plant-fmu", "nowhere.fmu", "--out", "x"], &dir);
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
@@ -230,6 +230,12 @@ fn an_fmu_that_cannot_be_opened_is_a_clear_error_of_sim_and_sweep() {
     let o = silrig(&["sweep", &config, "--runs", "3", "--plant-fmu", "nowhere.fmu"], &dir);
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
     assert!(said(&o).contains("nowhere.fmu"), "{}", said(&o));
+    // The F-16's keys do not reach an FMU plant: dispersing them would fly one plant in every case.
+    let airframe = fmu("airframe");
+    let robust = format!("{ROOT}/configs/sweep-robust.toml");
+    let o = silrig(&["sweep", &robust, "--runs", "3", "--plant-fmu", &airframe], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("does not read `") && said(&o).contains("plant.parameters.<variable>"), "{}", said(&o));
     assert!(!dir.join("out").exists(), "nothing is written");
     std::fs::remove_dir_all(dir).unwrap();
 }

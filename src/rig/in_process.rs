@@ -237,6 +237,32 @@ impl Models {
             .map(|f| f.label())
     }
 
+    /// Whether a dispersion of `key` reaches what flies: an FMU plant reads `[plant.parameters]`, not the F-16's
+    /// keys (`plant.xcg`, `initial.*`, `disturbance.*`), and a controller FMU `[controller.parameters]`, not our
+    /// gains. The error names the key and what to disperse instead.
+    pub fn check_dispersed(&self, key: &str) -> Result<(), String> {
+        let unread = |fmu: &Arc<Fmu>, side: &str| {
+            format!(
+                "the {side} is the FMU {}: it does not read `{key}`; disperse its parameters as                  `{side}.parameters.<variable>`",
+                fmu.file()
+            )
+        };
+        if let Some(fmu) = &self.plant_fmu
+            && (key.starts_with("plant.") && !key.starts_with("plant.parameters.")
+                || key.starts_with("initial.")
+                || key.starts_with("disturbance."))
+        {
+            return Err(unread(fmu, "plant"));
+        }
+        if let Some(fmu) = &self.controller_fmu
+            && key.starts_with("controller.")
+            && !key.starts_with("controller.parameters.")
+        {
+            return Err(unread(fmu, "controller"));
+        }
+        Ok(())
+    }
+
     /// Fly `scenario` (this scenario, or a sample of its dispersions: the same FMU files) with fresh instances.
     pub fn fly(&self, scenario: &Scenario) -> Result<Flown, SetupError> {
         let setup = |e: anyhow::Error| SetupError(e);

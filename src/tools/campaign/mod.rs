@@ -120,6 +120,9 @@ impl Campaign {
         })?;
         let parameters = scenario.dispersions.keys().cloned().collect();
         let models = Models::open(&scenario)?;
+        for key in scenario.dispersions.keys() {
+            models.check_dispersed(key).map_err(|e| anyhow::anyhow!("{config}: dispersions.\"{key}\": {e}"))?;
+        }
         Ok(Self { scenario, criteria, parameters, config: config.to_string(), flags: String::new(), models })
     }
 
