@@ -250,6 +250,8 @@ pub struct FmuModel {
     raw_outputs: Vec<f64>,
     /// The outputs of the current tick as the sensors report them.
     measured: Vec<f64>,
+    /// The FMU's outputs as read after a step.
+    read: Vec<f64>,
     tick: u64,
     ticks: u64,
     /// Outputs with NaN or infinity refused so far (the last valid ones stood in), and the first one's output.
@@ -276,6 +278,7 @@ impl FmuModel {
             initial_inputs,
             raw_outputs: vec![0.0; n],
             measured: vec![0.0; n],
+            read: vec![0.0; n],
             tick: 0,
             ticks: scenario.timing.ticks(),
             outputs_refused: (0, None),
@@ -332,9 +335,10 @@ impl PlantModel for FmuModel {
     fn step(&mut self, inputs: &[f64], last: bool) -> Result<ActuatorFlags, String> {
         let hits = self.chain.actuate(self.t_s(), inputs);
         self.plant.step(self.chain.positions())?;
-        let mut outputs = vec![0.0; self.raw_outputs.len()];
-        self.plant.outputs(&mut outputs)?;
-        self.take_outputs(&outputs);
+        let mut read = std::mem::take(&mut self.read);
+        self.plant.outputs(&mut read)?;
+        self.take_outputs(&read);
+        self.read = read;
         if !last && self.tick < self.ticks {
             self.tick += 1;
         }

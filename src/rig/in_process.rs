@@ -101,22 +101,24 @@ pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn
     let inputs = signals.inputs.len();
     let hold = signals.hold();
     let mut applied = plant.initial_inputs();
-    // Answers not yet acting, oldest first: a valid command, or None for a refused one (the plant holds).
-    let mut answers: VecDeque<Option<Vec<f64>>> = VecDeque::with_capacity(delay + 1);
-    let mut last_sent: Option<Vec<f64>> = None;
+    // Answers not yet acting, oldest first: whether valid, and the command (buffers recycled through `spare`).
+    let mut answers: VecDeque<(bool, Vec<f64>)> = VecDeque::with_capacity(delay + 1);
+    let mut spare: Vec<Vec<f64>> = Vec::new();
+    // The last valid command sent: what the session repeats for a refused one (the hold values before any).
+    let mut last_sent = hold.clone();
     let mut commands_refused = (0, None);
     let mut diagnostics = vec![0.0; names.len()];
+    let no_diagnostics = vec![f64::NAN; names.len()];
+    let mut command = vec![0.0; inputs];
     let mut ended_early = None;
     let mut outputs = plant.outputs();
     for tick in 0..=ticks {
         let t_s = plant.t_s();
         let mut sample = PlantSample { t_sim_s: t_s, ..PlantSample::with_outputs(&outputs) };
         sample.header.tick = tick;
-        let mut command: Vec<f64> = signals
-            .inputs
-            .iter()
-            .map(|i| i.held_output.map(|o| outputs[o]).filter(|v| v.is_finite()).unwrap_or(i.hold))
-            .collect();
+        for (c, i) in command.iter_mut().zip(&signals.inputs) {
+            *c = i.held_output.map(|o| outputs[o]).filter(|v| v.is_finite()).unwrap_or(i.hold);
+        }
         controller.step(&sample, dt_s, &mut command, &mut diagnostics);
         if let Some(why) = controller.failure() {
             ended_early = Some(EndedEarly { by: EndedBy::Controller, tick, t_s, why });
@@ -128,29 +130,30 @@ pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn
         sent.diagnostics_len = diagnostics.len() as u32;
         sent.diagnostics[..diagnostics.len()].copy_from_slice(&diagnostics);
         let refused = sent.validate().map_err(|e| e.to_string()).and_then(|()| wire::check_command(&signals, &sent));
-        // The trace shows what the session sends: the command, or for a refused one the last valid command (the
-        // hold values before any) and no diagnostics.
-        let (shown, shown_diagnostics) = match refused {
-            Ok(()) => {
-                last_sent = Some(command.clone());
-                answers.push_back(Some(command));
-                (last_sent.clone().expect("just set"), diagnostics.clone())
-            }
-            Err(reason) => {
-                commands_refused.0 += 1;
-                commands_refused.1.get_or_insert(format!("tick {tick}: {reason}"));
-                answers.push_back(None);
-                (last_sent.clone().unwrap_or_else(|| hold.clone()), vec![f64::NAN; diagnostics.len()])
-            }
-        };
+        let valid = refused.is_ok();
+        if let Err(reason) = refused {
+            commands_refused.0 += 1;
+            commands_refused.1.get_or_insert(format!("tick {tick}: {reason}"));
+        } else {
+            last_sent.copy_from_slice(&command);
+        }
+        let mut answer = spare.pop().unwrap_or_else(|| vec![0.0; inputs]);
+        answer.copy_from_slice(&command);
+        answers.push_back((valid, answer));
         if answers.len() > delay
-            && let Some(Some(valid)) = answers.pop_front()
+            && let Some((valid, answer)) = answers.pop_front()
         {
-            applied.copy_from_slice(&valid);
+            if valid {
+                applied.copy_from_slice(&answer);
+            }
+            spare.push(answer);
         }
         let stepped = plant.step(&applied, tick >= ticks);
         let next = plant.outputs();
-        trace.rows.push(signals.trace_row(t_s, &outputs, Some(&shown), Some(&next), 0, &shown_diagnostics));
+        // The trace shows what the session sends: the command, or for a refused one the last valid command and no
+        // diagnostics.
+        let shown_diagnostics = if valid { &diagnostics } else { &no_diagnostics };
+        trace.rows.push(signals.trace_row(t_s, &outputs, Some(&last_sent), Some(&next), 0, shown_diagnostics));
         if let Err(why) = stepped {
             ended_early = Some(EndedEarly { by: EndedBy::Plant, tick, t_s, why });
             break;
