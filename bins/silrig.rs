@@ -327,10 +327,7 @@ fn check(opts: &silrig::check::CheckOptions) -> anyhow::Result<ExitCode> {
     if verdict.interrupted {
         return Ok(ExitCode::from(130));
     }
-    if !verdict.passed {
-        return Ok(ExitCode::FAILURE);
-    }
-    Ok(ExitCode::SUCCESS)
+    Ok(ExitCode::from(silrig::check::exit_status(verdict.outcome())))
 }
 
 fn replay(opts: &silrig::replay::ReplayOptions) -> anyhow::Result<ExitCode> {

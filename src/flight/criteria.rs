@@ -161,13 +161,16 @@ impl OutputCriteria {
     }
 }
 
-/// A time budget: an absolute time, or a multiple of the OS floor (the p99 wake-up lateness of a bare timer loop
-/// measured beside the same run).
+/// A time budget, judged on the steady state (after the first second): an absolute time, a fraction of the
+/// scenario's period, or a multiple of the OS floor (the p99 wake-up lateness of a bare timer loop measured beside
+/// the same run); the tightest of those given holds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Budget {
     /// At most this many µs.
     pub max_us: Option<f64>,
+    /// At most this fraction of the scenario's period (`timing.dt_s`): 0.1 is 1 ms at 100 Hz.
+    pub max_period_fraction: Option<f64>,
     /// At most this multiple of the OS floor's p99.
     pub max_os_floor_ratio: Option<f64>,
 }
@@ -206,13 +209,49 @@ pub struct Judgement {
     /// On failure: what went wrong, in words, and where to look.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub why_failed: Option<String>,
+    /// Neither pass nor fail: the figure missed its limit by no more than the machine's own disturbance during the
+    /// run explains; why, with the figures (`passed` is false, `why_failed` None).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inconclusive: Option<String>,
     /// The measured figure as a number in the limit's unit, larger being worse (for ranking cases); None where
     /// nothing was measured, or the figure never settled (infinite).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub value: Option<f64>,
 }
 
+/// What a judgement says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Outcome {
+    /// The limit was met.
+    Pass,
+    /// It was not.
+    Fail,
+    /// The machine disturbed the measurement too much to tell.
+    Inconclusive,
+}
+
+impl Outcome {
+    /// As the verdict's table shows it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Outcome::Pass => "pass",
+            Outcome::Fail => "FAIL",
+            Outcome::Inconclusive => "inconclusive",
+        }
+    }
+}
+
 impl Judgement {
+    /// Pass, fail or inconclusive.
+    pub fn outcome(&self) -> Outcome {
+        match (self.passed, &self.inconclusive) {
+            (true, _) => Outcome::Pass,
+            (false, Some(_)) => Outcome::Inconclusive,
+            (false, None) => Outcome::Fail,
+        }
+    }
+
     /// With the measured figure as a number (non-finite values are kept out: JSON has no infinity).
     pub(crate) fn with_value(mut self, value: f64) -> Self {
         self.value = value.is_finite().then_some(value);

@@ -15,8 +15,14 @@ pub fn judgement(criterion: &str, measured: String, limit: String, failure: Opti
         limit,
         passed: failure.is_none(),
         why_failed: failure,
+        inconclusive: None,
         value: None,
     }
+}
+
+/// A judgement that cannot say pass or fail, and why (the machine, not what is judged).
+pub fn inconclusive(criterion: &str, measured: String, limit: String, why: String) -> Judgement {
+    Judgement { passed: false, inconclusive: Some(why), ..judgement(criterion, measured, limit, None) }
 }
 
 /// A judgement that could not be made because the run left no evidence for it: a failure, saying why.

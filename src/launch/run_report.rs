@@ -57,7 +57,8 @@ pub struct RigReport {
     pub notes: Vec<String>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
     pub leftovers: Vec<String>,
-    /// The plant's per-tick distributions split into warm-up (the first second) and steady state.
+    /// The plant's per-tick distributions and the controller's compute time split into warm-up (the first second)
+    /// and steady state.
     #[serde(default)]
     pub phases: Vec<PhaseSplit>,
 }
@@ -90,18 +91,20 @@ fn per_tick_values_us(out: &Path, realtime: bool) -> Vec<(String, Vec<f64>)> {
         .collect()
 }
 
-/// The plant's wake-up lateness (realtime) and step execution time split at the end of the warm-up, from the
-/// per-tick columns of the logger's `timing.csv` (ticks by simulated time: tick * dt < 1 s is warm-up).
+/// The plant's wake-up lateness (realtime), its step execution time and the controller's compute time split at the
+/// end of the warm-up, from the per-tick columns of the logger's `timing.csv` (ticks by simulated time: tick * dt <
+/// 1 s is warm-up).
 pub fn phase_splits(out: &Path, dt_s: f64, realtime: bool) -> Vec<PhaseSplit> {
     let Ok(text) = std::fs::read_to_string(out.join("timing.csv")) else { return Vec::new() };
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
     let column = |name: &str| header.iter().position(|c| *c == name);
-    let (Some(tick), Some(wake), Some(exec)) = (column("tick"), column("wake_lateness_ns"), column("step_exec_ns"))
+    let (Some(tick), Some(wake), Some(exec), Some(compute)) =
+        (column("tick"), column("wake_lateness_ns"), column("step_exec_ns"), column("compute_ns"))
     else {
         return Vec::new();
     };
-    let mut columns = vec![("plant.step_exec", exec)];
+    let mut columns = vec![("plant.step_exec", exec), ("controller.compute", compute)];
     if realtime {
         columns.insert(0, ("plant.wake_lateness", wake));
     }
@@ -195,7 +198,7 @@ pub(crate) fn write_plots(
         .flat_map(|p| &p.latencies)
         .filter(|l| {
             l.summary.count > 0
-                && !["step_exec", "compute", "checkpoint_write"].iter().any(|work| l.name.ends_with(work))
+                && !["step_exec", "compute", "checkpoint_write", "_steady"].iter().any(|work| l.name.ends_with(work))
         })
         .map(|l| (l.name.clone(), l.percentile_points.clone()))
         .collect();
@@ -446,6 +449,11 @@ impl RigReport {
     /// A latency summary by name, from any process.
     pub fn latency(&self, name: &str) -> Option<&silrig_wire::timing::LatencySummary> {
         self.processes.iter().flat_map(|p| &p.latencies).find(|l| l.name == name).map(|l| &l.summary)
+    }
+
+    /// The steady state (after the first second) of a distribution [`Self::phases`] splits, when it has values.
+    pub fn steady(&self, name: &str) -> Option<&silrig_wire::timing::LatencySummary> {
+        self.phases.iter().find(|p| p.name == name).map(|p| &p.steady).filter(|s| s.count > 0)
     }
 }
 

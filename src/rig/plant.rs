@@ -50,6 +50,7 @@ const STEP_EXEC: usize = 1;
 const SENSE_TO_ACTUATE: usize = 2;
 const IPC_CONTROLLER_TO_PLANT: usize = 3;
 const CHECKPOINT_WRITE: usize = 4;
+const SENSE_TO_ACTUATE_STEADY: usize = 5;
 
 /// Publish stamps kept to measure sense-to-actuate of commands answering recent ticks.
 const PUBLISH_STAMPS: usize = 16;
@@ -207,6 +208,7 @@ impl PlantLoop {
                     "checkpoint_write",
                     "serialising the checkpoint a restarted plant resumes from and handing it to the writer thread (realtime)",
                 ),
+                ("sense_to_actuate_steady", "sense_to_actuate of the ticks after the first second (what check judges)"),
             ],
         );
         rec.declare(&[
@@ -559,6 +561,7 @@ impl PlantLoop {
     /// Drain the command queue: count, time and keep the newest valid commands.
     fn take_commands(&mut self, ports: &PlantPorts) -> anyhow::Result<()> {
         let tick = self.sim_tick;
+        let steady_from = silrig_wire::timing::WARM_UP_NS / self.scenario.timing.period_ns();
         ports.commands.drain(|r| {
             let invalid = match &r.invalid {
                 Some(e) => Some(e.to_string()),
@@ -583,6 +586,9 @@ impl PlantLoop {
             if answers <= tick && tick - answers < PUBLISH_STAMPS as u64 {
                 let sent = self.publish_ns[(answers % PUBLISH_STAMPS as u64) as usize];
                 self.rec.record(SENSE_TO_ACTUATE, r.t_recv_ns as i64 - sent as i64);
+                if answers >= steady_from {
+                    self.rec.record(SENSE_TO_ACTUATE_STEADY, r.t_recv_ns as i64 - sent as i64);
+                }
             }
             if self.received.len() == 8 {
                 self.received.pop_front();

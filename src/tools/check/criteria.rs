@@ -4,9 +4,9 @@
 
 use silrig_flight::criteria::Budget;
 use silrig_flight::criteria::positive;
-pub use silrig_flight::criteria::{Criteria, Judgement};
+pub use silrig_flight::criteria::{Criteria, Judgement, Outcome};
 use silrig_flight::fault::FaultAction;
-use silrig_flight::judge::{judge_flight, judgement, no_evidence};
+use silrig_flight::judge::{inconclusive, judge_flight, judgement, no_evidence};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::trace::Trace;
@@ -59,11 +59,16 @@ impl RigCriteria for Criteria {
         for (key, budget) in [("compute_p99", &self.compute_p99), ("sense_to_actuate_p99", &self.sense_to_actuate_p99)]
         {
             let Some(b) = budget else { continue };
-            if b.max_us.is_none() && b.max_os_floor_ratio.is_none() {
-                return Err(format!("`criteria.{key}` needs `max_us`, `max_os_floor_ratio` or both"));
+            if b.max_us.is_none() && b.max_period_fraction.is_none() && b.max_os_floor_ratio.is_none() {
+                return Err(format!(
+                    "`criteria.{key}` needs one or more of `max_us`, `max_period_fraction` and `max_os_floor_ratio`"
+                ));
             }
             if let Some(us) = b.max_us {
                 positive(&format!("{key}.max_us"), us)?;
+            }
+            if let Some(f) = b.max_period_fraction {
+                positive(&format!("{key}.max_period_fraction"), f)?;
             }
             if let Some(r) = b.max_os_floor_ratio {
                 positive(&format!("{key}.max_os_floor_ratio"), r)?;
@@ -113,10 +118,17 @@ impl RigCriteria for Criteria {
             out.push(no_invalid_command(report));
         }
         if let Some(b) = &self.compute_p99 {
-            out.push(budget(report, "compute_p99", "controller.compute", b));
+            out.push(budget(report, scenario, "compute_p99", "controller.compute", "controller.compute", b));
         }
         if let Some(b) = &self.sense_to_actuate_p99 {
-            out.push(budget(report, "sense_to_actuate_p99", "plant.sense_to_actuate", b));
+            out.push(budget(
+                report,
+                scenario,
+                "sense_to_actuate_p99",
+                "plant.sense_to_actuate",
+                "plant.sense_to_actuate_steady",
+                b,
+            ));
         }
         if let Some(n) = self.deadline_misses_max {
             out.push(deadline_misses(report, n));
@@ -211,12 +223,57 @@ fn no_invalid_command(report: &RigReport) -> Judgement {
     judgement("no_invalid_command", format!("{n} invalid"), limit, failure)
 }
 
-fn budget(report: &RigReport, criterion: &str, latency: &str, b: &Budget) -> Judgement {
-    let floor = report.timer_baseline.as_ref().map(|t| t.lateness.p99_us);
+/// What the machine itself added to every latency during a realtime run, µs: the p99 of the plant's own wake-up
+/// lateness (it sleeps to absolute deadlines: nothing but the OS makes it late) and of the OS floor's timer loop
+/// beside the run, whichever is larger, over the steady state. None in lockstep.
+fn machine_noise_us(report: &RigReport) -> Option<(f64, String)> {
+    let plant = report.steady("plant.wake_lateness").map(|l| l.p99_us);
+    let floor = report.timer_baseline.as_ref().and_then(|b| b.lateness_steady.as_ref().or(Some(&b.lateness)));
+    let floor = floor.filter(|l| l.count > 0).map(|l| l.p99_us);
+    let noise = plant.into_iter().chain(floor).fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))?;
+    let said = |v: Option<f64>| v.map_or("not measured".to_string(), |v| format!("{v:.1} us"));
+    Some((
+        noise,
+        format!(
+            "p99 of the plant's own wake-up lateness {}, of the OS floor beside the run {}",
+            said(plant),
+            said(floor)
+        ),
+    ))
+}
+
+/// A p99 against its limit when the machine added `noise_us` (its own p99 wake-up lateness) to every latency:
+/// within the limit passes; over it by more than the noise fails; over it by no more than the noise cannot be told
+/// apart from a stall of the machine.
+fn budget_outcome(p99_us: f64, limit_us: f64, noise_us: Option<f64>) -> Outcome {
+    match noise_us {
+        _ if p99_us <= limit_us => Outcome::Pass,
+        Some(noise) if p99_us - noise <= limit_us => Outcome::Inconclusive,
+        _ => Outcome::Fail,
+    }
+}
+
+/// A timing budget on the steady state of a latency (`steady`, else the whole run's `latency` for a run too short
+/// to have one). Over its limit by no more than the machine's own noise ([`machine_noise_us`]), it is
+/// inconclusive: a stall of the machine, not what is judged, may have made the difference.
+fn budget(
+    report: &RigReport,
+    scenario: &Scenario,
+    criterion: &str,
+    latency: &str,
+    steady: &str,
+    b: &Budget,
+) -> Judgement {
+    let floor = report.timer_baseline.as_ref().map(|t| t.lateness_steady.as_ref().unwrap_or(&t.lateness).p99_us);
     let mut limits = Vec::new();
     let mut limit_us = f64::INFINITY;
     if let Some(us) = b.max_us {
         limits.push(format!("{us:.1} us"));
+        limit_us = limit_us.min(us);
+    }
+    if let Some(f) = b.max_period_fraction {
+        let us = f * scenario.timing.dt_s * 1e6;
+        limits.push(format!("{f} of the period ({us:.1} us)"));
         limit_us = limit_us.min(us);
     }
     if let Some(r) = b.max_os_floor_ratio {
@@ -228,12 +285,17 @@ fn budget(report: &RigReport, criterion: &str, latency: &str, b: &Budget) -> Jud
             None => limits.push(format!("{r}x OS floor p99 (not measured)")),
         }
     }
-    let limit = limits.join(" and ");
-    let Some(l) = report.latency(latency).filter(|l| l.count > 0) else {
-        return no_evidence(criterion, limit, &format!("no `{latency}` values were recorded"));
+    let limit = format!("p99 after 1 s: {}", limits.join(" and "));
+    let (l, phase) = match report.steady(steady).or_else(|| report.latency(steady)).filter(|l| l.count > 0) {
+        Some(l) => (l, "steady"),
+        None => match report.latency(latency).filter(|l| l.count > 0) {
+            Some(l) => (l, "whole run"),
+            None => return no_evidence(criterion, limit, &format!("no `{latency}` values were recorded")),
+        },
     };
-    let ratio = floor.map(|f| format!(" = {:.2}x OS floor", l.p99_us / f)).unwrap_or_default();
-    let measured = format!("{:.1} us{ratio}", l.p99_us);
+    // The OS-floor ratio is context beside the figure, whatever the budget is.
+    let ratio = floor.map(|f| format!(", {:.1}x OS floor", l.p99_us / f)).unwrap_or_default();
+    let measured = format!("{:.1} us ({phase}{ratio})", l.p99_us);
     if b.max_os_floor_ratio.is_some() && floor.is_none() {
         return judgement(
             criterion,
@@ -242,19 +304,43 @@ fn budget(report: &RigReport, criterion: &str, latency: &str, b: &Budget) -> Jud
             Some("the OS floor was not measured beside this run (the timer-baseline loop wrote no report)".into()),
         );
     }
+    let noise = machine_noise_us(report);
+    match budget_outcome(l.p99_us, limit_us, noise.as_ref().map(|n| n.0)) {
+        Outcome::Pass => return judgement(criterion, measured, limit, None),
+        Outcome::Fail | Outcome::Inconclusive => {}
+    }
     let what = if latency == "controller.compute" {
         "the controller's compute time per tick"
     } else {
         "the time from the plant publishing a sample to the controller's answer arriving at the plant"
     };
-    let failure = (l.p99_us > limit_us).then(|| {
-        format!(
-            "{what} exceeded its budget in more than 1 % of the ticks (p99 {:.1} us against {limit_us:.1} us, max \
-             {:.1} us over {} ticks); latency.png in the run folder shows the whole distribution",
-            l.p99_us, l.max_us, l.count
-        )
-    });
-    judgement(criterion, measured, limit, failure)
+    let over = format!(
+        "{what} exceeded its budget in more than 1 % of the ticks after the first second (p99 {:.1} us against \
+         {limit_us:.1} us, max {:.1} us over {} ticks)",
+        l.p99_us, l.max_us, l.count
+    );
+    match noise {
+        Some((_, figures))
+            if budget_outcome(l.p99_us, limit_us, noise.as_ref().map(|n| n.0)) == Outcome::Inconclusive =>
+        {
+            inconclusive(
+                criterion,
+                measured,
+                limit,
+                format!(
+                    "{over}, but by no more than the machine itself added to every wake-up during the run ({figures}): \
+                 the machine, not the controller, may have made the difference. Fly it again on a quieter machine \
+                 (silrig check re-flies it up to --retries times)"
+                ),
+            )
+        }
+        _ => judgement(
+            criterion,
+            measured,
+            limit,
+            Some(format!("{over}; latency.png in the run folder shows the whole distribution")),
+        ),
+    }
 }
 
 fn deadline_misses(report: &RigReport, max: u64) -> Judgement {
@@ -428,4 +514,21 @@ fn deterministic(runs: &[RunEvidence]) -> Judgement {
         );
     }
     judgement("deterministic", format!("identical over {rows} ticks"), limit, None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_timing_miss_within_the_machines_own_noise_is_inconclusive_a_larger_one_fails() {
+        // The flake of issue 27: sense-to-actuate p99 892 us against 650 us while the machine stalled by 300 us.
+        assert_eq!(budget_outcome(892.0, 650.0, Some(300.0)), Outcome::Inconclusive);
+        assert_eq!(budget_outcome(121.9, 1000.0, Some(300.0)), Outcome::Pass);
+        // A controller that computes for 15 ms fails whatever the machine did.
+        assert_eq!(budget_outcome(15_278.0, 1000.0, Some(300.0)), Outcome::Fail);
+        // Lockstep, or no floor measured: no noise figure, so nothing is excused.
+        assert_eq!(budget_outcome(1001.0, 1000.0, None), Outcome::Fail);
+        assert_eq!(budget_outcome(1000.0, 1000.0, None), Outcome::Pass);
+    }
 }

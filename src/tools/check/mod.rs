@@ -9,6 +9,7 @@ pub mod verdict;
 
 use anyhow::Context;
 use criteria::{RigCriteria, RunEvidence};
+use silrig_flight::criteria::Outcome;
 use silrig_flight::trace::Trace;
 use silrig_launch::launcher::{self, ControllerKind, LaunchOptions};
 use silrig_launch::program::{find_program, split_command};
@@ -43,9 +44,23 @@ pub struct CheckOptions {
     /// Output folder (default: out/check-<suite>-<UTC time>); must not hold a check already.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Fly a case whose verdict is inconclusive (the machine disturbed a timing figure) again, up to this many
+    /// more times, before it stays inconclusive (0..=10).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=10))]
+    pub retries: u32,
     /// Loop and watchdog tuning, passed on to every run.
     #[command(flatten)]
     pub process: ProcessOptions,
+}
+
+/// The exit status of a verdict: 0 pass, 1 a criterion failed, 3 nothing failed but a timing figure stayed
+/// inconclusive (2 is nothing judged, [`CheckError`]; 130 interrupted).
+pub fn exit_status(outcome: Outcome) -> u8 {
+    match outcome {
+        Outcome::Pass => 0,
+        Outcome::Fail => 1,
+        Outcome::Inconclusive => 3,
+    }
 }
 
 /// Why a check could not judge anything (exit status 2).
@@ -163,7 +178,8 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
     }
 }
 
-/// Fly one case (twice for determinism) and judge it.
+/// Fly one case (twice for determinism) and judge it; fly it again while its answer is inconclusive, up to
+/// `--retries` more times.
 fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict, CheckError> {
     let setup = |problem: anyhow::Error| CheckError::Setup { case: case.name.clone(), problem };
     let started = std::time::Instant::now();
@@ -174,25 +190,43 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
         .with_context(|| format!("writing {}", scenario_path.display()))
         .map_err(setup)?;
     let runs = case.criteria.runs();
-    let mut evidence = Vec::new();
     let mut run_dirs = Vec::new();
-    for i in 1..=runs {
-        let dir = if runs == 1 { case_dir.clone() } else { case_dir.join(format!("run-{i}")) };
-        let report = launcher::run(&launch_options(opts, case, &scenario_path, dir.clone())).map_err(setup)?;
-        let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
-        run_dirs.push(dir.display().to_string());
-        evidence.push(RunEvidence { report, trace });
-        if signals::termination_requested() {
-            break;
+    let mut attempts = 0;
+    let judgements = loop {
+        attempts += 1;
+        // The first flight goes where it always has; a retry into a folder of its own beside it.
+        let attempt_dir =
+            if attempts == 1 { case_dir.clone() } else { case_dir.join(format!("retry-{}", attempts - 1)) };
+        let mut evidence = Vec::new();
+        for i in 1..=runs {
+            let dir = if runs == 1 { attempt_dir.clone() } else { attempt_dir.join(format!("run-{i}")) };
+            let report = launcher::run(&launch_options(opts, case, &scenario_path, dir.clone())).map_err(setup)?;
+            let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
+            run_dirs.push(dir.display().to_string());
+            evidence.push(RunEvidence { report, trace });
+            if signals::termination_requested() {
+                break;
+            }
         }
-    }
-    let judgements = case.criteria.judge(&case.scenario, &evidence);
+        let judgements = case.criteria.judge(&case.scenario, &evidence);
+        let outcome = verdict::case_outcome(&judgements);
+        if outcome != Outcome::Inconclusive || attempts > opts.retries || signals::termination_requested() {
+            break judgements;
+        }
+        eprintln!(
+            "silrig check: case {} inconclusive (the machine disturbed a timing figure): flying it again ({} of {})",
+            case.name, attempts, opts.retries
+        );
+    };
+    let outcome = verdict::case_outcome(&judgements);
     Ok(CaseVerdict {
         name: case.name.clone(),
         why: case.why.clone(),
         mode: case.mode.label().into(),
         faults: case.fault_flags.clone(),
-        passed: judgements.iter().all(|j| j.passed),
+        passed: outcome == Outcome::Pass,
+        inconclusive: outcome == Outcome::Inconclusive,
+        attempts,
         wall_s: started.elapsed().as_secs_f64(),
         run_dirs,
         reproduce: opts.reproduce(&case.name),
@@ -241,7 +275,11 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
         eprintln!(
             "silrig check: case {} {} in {:.1} s",
             case.name,
-            if verdict.passed { "passed" } else { "FAILED" },
+            match verdict.outcome() {
+                Outcome::Pass => "passed",
+                Outcome::Fail => "FAILED",
+                Outcome::Inconclusive => "INCONCLUSIVE",
+            },
             verdict.wall_s
         );
         cases.push(verdict);
@@ -264,6 +302,7 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
         interrupted: signals::termination_requested(),
         cases_in_suite: suite.cases.len(),
         passed: false,
+        inconclusive: false,
         cases,
     }
     .concluded();

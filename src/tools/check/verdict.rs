@@ -3,6 +3,7 @@
 
 use super::criteria::Judgement;
 use serde::{Deserialize, Serialize};
+use silrig_flight::criteria::Outcome;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -24,6 +25,12 @@ pub struct CaseVerdict {
     pub faults: Vec<String>,
     /// Whether every criterion passed.
     pub passed: bool,
+    /// No criterion failed and one or more were inconclusive (in its last flight).
+    #[serde(default)]
+    pub inconclusive: bool,
+    /// How many times it was flown: more than once when a flight was inconclusive (`--retries`).
+    #[serde(default = "one")]
+    pub attempts: u32,
     /// Wall time of the case, s.
     pub wall_s: f64,
     /// The run folders (plots, report, trace), one per run.
@@ -57,8 +64,38 @@ pub struct Verdict {
     pub cases_in_suite: usize,
     /// True only if every selected case ran and passed.
     pub passed: bool,
+    /// Every selected case ran, none failed, and one or more were inconclusive: exit status 3.
+    #[serde(default)]
+    pub inconclusive: bool,
     /// The cases, in suite order.
     pub cases: Vec<CaseVerdict>,
+}
+
+fn one() -> u32 {
+    1
+}
+
+impl CaseVerdict {
+    /// The case's answer: fail if a criterion failed, else inconclusive if one was, else pass.
+    pub fn outcome(&self) -> Outcome {
+        match (self.passed, self.inconclusive) {
+            (true, _) => Outcome::Pass,
+            (false, true) => Outcome::Inconclusive,
+            (false, false) => Outcome::Fail,
+        }
+    }
+}
+
+/// A case's answer from its criteria's.
+pub fn case_outcome(judgements: &[Judgement]) -> Outcome {
+    let outcomes = judgements.iter().map(Judgement::outcome);
+    if outcomes.clone().any(|o| o == Outcome::Fail) {
+        Outcome::Fail
+    } else if outcomes.clone().any(|o| o == Outcome::Inconclusive) {
+        Outcome::Inconclusive
+    } else {
+        Outcome::Pass
+    }
 }
 
 /// Seconds since the Unix epoch.
@@ -101,18 +138,32 @@ fn xml_escape(text: &str) -> String {
 }
 
 impl Verdict {
-    /// Set `passed`: every selected case ran and passed.
+    /// Set `passed` (every selected case ran and passed) and `inconclusive` (every one ran, none failed, one or
+    /// more inconclusive).
     pub fn concluded(mut self) -> Self {
-        self.passed =
-            !self.interrupted && self.cases.len() == self.cases_in_suite && self.cases.iter().all(|c| c.passed);
+        let whole = !self.interrupted && self.cases.len() == self.cases_in_suite;
+        self.passed = whole && self.cases.iter().all(|c| c.passed);
+        self.inconclusive = whole
+            && !self.passed
+            && self.cases.iter().all(|c| c.outcome() != Outcome::Fail)
+            && self.cases.iter().any(|c| c.inconclusive);
         self
     }
 
-    /// Criteria judged, and how many failed.
-    pub fn counts(&self) -> (usize, usize) {
+    /// The check's answer.
+    pub fn outcome(&self) -> Outcome {
+        match (self.passed, self.inconclusive) {
+            (true, _) => Outcome::Pass,
+            (false, true) => Outcome::Inconclusive,
+            (false, false) => Outcome::Fail,
+        }
+    }
+
+    /// Criteria judged, how many failed and how many were inconclusive.
+    pub fn counts(&self) -> (usize, usize, usize) {
         let all = self.cases.iter().flat_map(|c| &c.judgements);
-        let failed = all.clone().filter(|j| !j.passed).count();
-        (all.count(), failed)
+        let of = |o: Outcome| all.clone().filter(|j| j.outcome() == o).count();
+        (all.clone().count(), of(Outcome::Fail), of(Outcome::Inconclusive))
     }
 
     /// The table a person reads, each failure explained with the command that reproduces it, and the verdict.
@@ -138,7 +189,7 @@ impl Verdict {
         for case in &self.cases {
             for (i, j) in case.judgements.iter().enumerate() {
                 let name = if i == 0 { case.name.as_str() } else { "" };
-                let result = if j.passed { "pass" } else { "FAIL" };
+                let result = j.outcome().label();
                 let _ = writeln!(
                     out,
                     "{name:<w_case$}  {:<w_crit$}  {:<w_meas$}  {:<w_lim$}  {result}",
@@ -148,27 +199,30 @@ impl Verdict {
         }
         for case in self.cases.iter().filter(|c| !c.passed) {
             let why = if case.why.is_empty() { String::new() } else { format!(": {}", case.why) };
-            let _ = writeln!(out, "\nFAILED {}{why}", case.name);
+            let (heading, flown) = match case.outcome() {
+                Outcome::Inconclusive => ("INCONCLUSIVE", format!(" (flown {} times)", case.attempts)),
+                _ => ("FAILED", String::new()),
+            };
+            let _ = writeln!(out, "\n{heading} {}{why}{flown}", case.name);
             for j in case.judgements.iter().filter(|j| !j.passed) {
-                let _ = writeln!(out, "  {}: {}", j.criterion, j.why_failed.as_deref().unwrap_or("failed"));
+                let said = j.why_failed.as_deref().or(j.inconclusive.as_deref()).unwrap_or("failed");
+                let _ = writeln!(out, "  {}: {said}", j.criterion);
             }
             let _ = writeln!(out, "  run folder: {}", case.run_dirs.join(", "));
             let _ = writeln!(out, "  reproduce:  {}", case.reproduce);
         }
-        let (criteria, failed) = self.counts();
-        let failed_cases = self.cases.iter().filter(|c| !c.passed).count();
+        let (criteria, failed, inconclusive) = self.counts();
+        let passed_cases = self.cases.iter().filter(|c| c.passed).count();
         let _ = writeln!(out);
         if self.interrupted {
             let _ = writeln!(out, "interrupted after {} of {} cases", self.cases.len(), self.cases_in_suite);
         }
         let _ = writeln!(
             out,
-            "verdict: {}: {} of {} cases passed, {} of {} criteria failed, {:.1} s",
-            if self.passed { "PASS" } else { "FAIL" },
-            self.cases.len() - failed_cases,
+            "verdict: {}: {passed_cases} of {} cases passed, {failed} of {criteria} criteria failed, {inconclusive} \
+             inconclusive, {:.1} s",
+            self.outcome().label().to_uppercase(),
             self.cases_in_suite,
-            failed,
-            criteria,
             self.wall_s
         );
         let _ = writeln!(out, "wrote {}/{JSON_FILE} and {}/{JUNIT_FILE}", self.out_dir, self.out_dir);
@@ -178,19 +232,20 @@ impl Verdict {
     /// JUnit XML: one `<testsuite>` per case, one `<testcase>` per criterion, a `<failure>` with the explanation
     /// and the reproducing command.
     pub fn to_junit(&self) -> String {
-        let (tests, failures) = self.counts();
+        let (tests, failures, skipped) = self.counts();
         let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
         let _ = writeln!(
             out,
-            "<testsuites name=\"silrig check {}\" tests=\"{tests}\" failures=\"{failures}\" errors=\"0\" time=\"{:.3}\">",
+            "<testsuites name=\"silrig check {}\" tests=\"{tests}\" failures=\"{failures}\" errors=\"0\" skipped=\"{skipped}\" time=\"{:.3}\">",
             xml_escape(&self.suite),
             self.wall_s
         );
         for case in &self.cases {
-            let failed = case.judgements.iter().filter(|j| !j.passed).count();
+            let of = |o: Outcome| case.judgements.iter().filter(|j| j.outcome() == o).count();
+            let (failed, skipped) = (of(Outcome::Fail), of(Outcome::Inconclusive));
             let _ = writeln!(
                 out,
-                "  <testsuite name=\"{}.{}\" tests=\"{}\" failures=\"{failed}\" errors=\"0\" skipped=\"0\" time=\"{:.3}\" timestamp=\"{}\">",
+                "  <testsuite name=\"{}.{}\" tests=\"{}\" failures=\"{failed}\" errors=\"0\" skipped=\"{skipped}\" time=\"{:.3}\" timestamp=\"{}\">",
                 xml_escape(&self.suite),
                 xml_escape(&case.name),
                 case.judgements.len(),
@@ -218,6 +273,13 @@ impl Verdict {
                 );
                 if j.passed {
                     let _ = writeln!(out, "/>");
+                } else if let Some(why) = &j.inconclusive {
+                    // A CI test reporter's third state: neither passed nor failed.
+                    let _ = writeln!(
+                        out,
+                        ">\n      <skipped message=\"{}\"/>\n    </testcase>",
+                        xml_escape(&format!("inconclusive: measured {}, limit {}: {why}", j.measured, j.limit))
+                    );
                 } else {
                     let why = j.why_failed.as_deref().unwrap_or("failed");
                     let _ = writeln!(
@@ -263,6 +325,65 @@ mod tests {
         // 2000-02-29 12:34:56 UTC, a leap day.
         assert_eq!(utc_stamp(Some(951_827_696)), "20000229-123456");
         assert_eq!(utc_iso(1_795_000_000), "2026-11-18T11:06:40");
+    }
+
+    fn case(name: &str, judgements: Vec<Judgement>) -> CaseVerdict {
+        let outcome = case_outcome(&judgements);
+        CaseVerdict {
+            name: name.into(),
+            why: String::new(),
+            mode: "realtime".into(),
+            faults: Vec::new(),
+            passed: outcome == Outcome::Pass,
+            inconclusive: outcome == Outcome::Inconclusive,
+            attempts: 3,
+            wall_s: 1.0,
+            run_dirs: vec!["out/x".into()],
+            reproduce: "silrig check --case x".into(),
+            judgements,
+        }
+    }
+
+    fn verdict(cases: Vec<CaseVerdict>) -> Verdict {
+        Verdict {
+            suite: "s".into(),
+            suite_file: None,
+            description: String::new(),
+            controller: "c".into(),
+            out_dir: "out".into(),
+            started_unix_s: 0,
+            wall_s: 1.0,
+            interrupted: false,
+            cases_in_suite: cases.len(),
+            passed: false,
+            inconclusive: false,
+            cases,
+        }
+        .concluded()
+    }
+
+    #[test]
+    fn an_inconclusive_criterion_is_neither_pass_nor_fail_in_every_form_and_a_failure_outranks_it() {
+        use silrig_flight::judge::{inconclusive, judgement};
+        let pass = judgement("run_completed", "10 s".into(), "10 s".into(), None);
+        let unsure = inconclusive("sense_to_actuate_p99", "900 us".into(), "650 us".into(), "the machine stalled".into());
+        let fail = judgement("settled", "never".into(), "8 s".into(), Some("never settled".into()));
+        let v = verdict(vec![case("a", vec![pass.clone(), unsure.clone()]), case("b", vec![pass.clone()])]);
+        assert_eq!(v.outcome(), Outcome::Inconclusive);
+        assert_eq!(super::super::exit_status(v.outcome()), 3);
+        assert_eq!(v.counts(), (3, 0, 1));
+        let text = v.to_text();
+        assert!(text.contains("INCONCLUSIVE a (flown 3 times)") && text.contains("the machine stalled"), "{text}");
+        assert!(text.contains("verdict: INCONCLUSIVE: 1 of 2 cases passed, 0 of 3 criteria failed, 1 inconclusive"));
+        let junit = v.to_junit();
+        assert!(junit.contains("failures=\"0\" errors=\"0\" skipped=\"1\""), "{junit}");
+        assert!(junit.contains("<skipped message=\"inconclusive: measured 900 us, limit 650 us: the machine stalled\"/>"));
+        let json: serde_json::Value = serde_json::from_str(&serde_json::to_string(&v).unwrap()).unwrap();
+        assert_eq!(json["inconclusive"], true);
+        assert_eq!(json["cases"][0]["judgements"][1]["inconclusive"], "the machine stalled");
+        // One failure anywhere makes the whole check fail.
+        let v = verdict(vec![case("a", vec![unsure, fail]), case("b", vec![pass])]);
+        assert_eq!((v.outcome(), super::super::exit_status(v.outcome())), (Outcome::Fail, 1));
     }
 
     #[test]
