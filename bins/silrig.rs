@@ -322,6 +322,12 @@ fn top(run_id: &silrig::ipc::RunId, count: Option<u64>) -> anyhow::Result<ExitCo
 }
 
 fn check(opts: &silrig::check::CheckOptions) -> anyhow::Result<ExitCode> {
+    if let Some(n) = opts.repeat {
+        let (repeated, file) = silrig::check::repeat::run(opts, n)?;
+        print!("{}", repeated.to_text());
+        println!("wrote {}", file.display());
+        return Ok(ExitCode::from(silrig::check::exit_status(repeated.outcome())));
+    }
     let verdict = silrig::check::run(opts)?;
     print!("{}", verdict.to_text());
     if verdict.interrupted {

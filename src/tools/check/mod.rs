@@ -4,6 +4,7 @@
 //! [`verdict`].
 
 pub mod criteria;
+pub mod repeat;
 pub mod suite;
 pub mod verdict;
 
@@ -48,6 +49,10 @@ pub struct CheckOptions {
     /// more times, before it stays inconclusive (0..=10).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=10))]
     pub retries: u32,
+    /// A flake benchmark: fly the whole suite this many times (each into `<out>/repeat-<k>`) and report how often
+    /// each criterion's answer changed (1..=1000).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeat: Option<u32>,
     /// Loop and watchdog tuning, passed on to every run.
     #[command(flatten)]
     pub process: ProcessOptions,

@@ -280,7 +280,8 @@ mod tests {
                 .contains("needs a fault a process comes back from")
         );
         assert!(
-            err(&case("[cases.criteria]\ncompute_p99 = {}\n")).contains("needs one or more of `max_us`, `max_period_fraction` and `max_os_floor_ratio`")
+            err(&case("[cases.criteria]\ncompute_p99 = {}\n"))
+                .contains("needs one or more of `max_us`, `max_period_fraction` and `max_os_floor_ratio`")
         );
         assert!(err(&case("faults = [\"plant:explode@1s\"]\n[cases.criteria]\n")).contains("case `c`: `faults[0]`"));
         assert!(

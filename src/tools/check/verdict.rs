@@ -366,7 +366,8 @@ mod tests {
     fn an_inconclusive_criterion_is_neither_pass_nor_fail_in_every_form_and_a_failure_outranks_it() {
         use silrig_flight::judge::{inconclusive, judgement};
         let pass = judgement("run_completed", "10 s".into(), "10 s".into(), None);
-        let unsure = inconclusive("sense_to_actuate_p99", "900 us".into(), "650 us".into(), "the machine stalled".into());
+        let unsure =
+            inconclusive("sense_to_actuate_p99", "900 us".into(), "650 us".into(), "the machine stalled".into());
         let fail = judgement("settled", "never".into(), "8 s".into(), Some("never settled".into()));
         let v = verdict(vec![case("a", vec![pass.clone(), unsure.clone()]), case("b", vec![pass.clone()])]);
         assert_eq!(v.outcome(), Outcome::Inconclusive);
@@ -377,7 +378,9 @@ mod tests {
         assert!(text.contains("verdict: INCONCLUSIVE: 1 of 2 cases passed, 0 of 3 criteria failed, 1 inconclusive"));
         let junit = v.to_junit();
         assert!(junit.contains("failures=\"0\" errors=\"0\" skipped=\"1\""), "{junit}");
-        assert!(junit.contains("<skipped message=\"inconclusive: measured 900 us, limit 650 us: the machine stalled\"/>"));
+        assert!(
+            junit.contains("<skipped message=\"inconclusive: measured 900 us, limit 650 us: the machine stalled\"/>")
+        );
         let json: serde_json::Value = serde_json::from_str(&serde_json::to_string(&v).unwrap()).unwrap();
         assert_eq!(json["inconclusive"], true);
         assert_eq!(json["cases"][0]["judgements"][1]["inconclusive"], "the machine stalled");
