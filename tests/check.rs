@@ -61,8 +61,37 @@ impl Check {
             .collect()
     }
 
+    /// The criteria of a case that failed (not those inconclusive).
     fn failed(&self, case: &str) -> BTreeSet<String> {
-        self.judgements(case).into_iter().filter(|(_, passed)| !passed).map(|(c, _)| c).collect()
+        let inconclusive = self.inconclusive(case);
+        self.judgements(case)
+            .into_iter()
+            .filter(|(c, passed)| !passed && !inconclusive.contains(c))
+            .map(|(c, _)| c)
+            .collect()
+    }
+
+    /// The criteria of a case that were inconclusive (the machine disturbed a timing figure).
+    fn inconclusive(&self, case: &str) -> BTreeSet<String> {
+        let judgements = self.case(case)["judgements"].as_array().unwrap();
+        judgements
+            .iter()
+            .filter(|j| j["inconclusive"].is_string())
+            .map(|j| j["criterion"].as_str().unwrap().into())
+            .collect()
+    }
+
+    /// The exit status the verdict calls for: 1 when a criterion failed, else 3 when one was inconclusive, else 0.
+    fn expected_code(&self) -> i32 {
+        let names: Vec<String> =
+            self.verdict["cases"].as_array().unwrap().iter().map(|c| c["name"].as_str().unwrap().into()).collect();
+        if names.iter().any(|c| !self.failed(c).is_empty()) {
+            1
+        } else if names.iter().any(|c| !self.inconclusive(c).is_empty()) {
+            3
+        } else {
+            0
+        }
     }
 
     fn measured(&self, case: &str, criterion: &str) -> String {
@@ -111,7 +140,7 @@ impl Check {
             .iter()
             .flat_map(|c| c["judgements"].as_array().unwrap())
             .collect();
-        let failed = all.iter().filter(|j| j["passed"] == false).count() as u64;
+        let failed = all.iter().filter(|j| j["passed"] == false && !j["inconclusive"].is_string()).count() as u64;
         let n = all.len() as u64;
         assert_eq!(self.junit_counts(), (n, failed, n, failed));
     }
@@ -171,8 +200,7 @@ fn the_default_suite_passes_with_our_controller() {
             }
         }
     }
-    let timing_failed = cases.iter().any(|case| !c.failed(case).is_empty());
-    assert_eq!(c.code, Some(if timing_failed { 1 } else { 0 }), "{}{}", c.stdout, c.stderr);
+    assert_eq!(c.code, Some(c.expected_code()), "{}{}", c.stdout, c.stderr);
     assert_eq!(c.measured("lockstep-determinism", "deterministic"), "identical over 1001 ticks");
     assert!(c.measured("realtime-deadline", "sense_to_actuate_p99").contains("x OS floor"));
     assert!(c.stdout.contains("verdict: "), "{}", c.stdout);
@@ -319,4 +347,79 @@ fn a_malformed_suite_or_an_unrunnable_controller_is_no_verdict() {
         c.finish();
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_sweep_case_judges_the_pass_rate_and_names_the_worst_cases() {
+    // configs/check-dispersed.toml: 200 dispersed cases of the default scenario, in one process, passes with ours.
+    let c = check("dispersed", &["configs/check-dispersed.toml"]);
+    assert_eq!(c.code, Some(0), "{}{}", c.stdout, c.stderr);
+    assert_eq!(c.judgements("dispersed-robust"), [("pass_rate".to_string(), true)]);
+    let measured = c.measured("dispersed-robust", "pass_rate");
+    assert!(measured.contains("% lower bound (") && measured.contains("of 200 passed, 95 % Wilson"), "{measured}");
+    assert_eq!(c.case("dispersed-robust")["mode"], "sweep");
+    for file in ["cases.csv", "sweep.json", "scatter.png", "envelope.png"] {
+        assert!(c.out.join("dispersed-robust").join(file).is_file(), "{file} missing");
+    }
+    c.junit_agrees();
+    std::fs::remove_dir_all(&c.dir).unwrap();
+
+    // The same dispersions against criteria most cases miss: the case fails on its pass rate and says which criterion
+    // failed most, with the command that flies its worst case alone.
+    let dir = temp_dir("dispersed-tight-files");
+    let text = std::fs::read_to_string(format!("{ROOT}/configs/check-dispersed.toml"))
+        .unwrap()
+        .replace("settled = { within_s = 8.0, band_deg = 1.0 }", "settled = { within_s = 3.0, band_deg = 0.2 }")
+        .replace("runs = 200", "runs = 40");
+    std::fs::write(dir.join("tight.toml"), text).unwrap();
+    let c = check("dispersed-tight", &[dir.join("tight.toml").to_str().unwrap()]);
+    assert_eq!(c.code, Some(1), "{}{}", c.stdout, c.stderr);
+    let why = c.case("dispersed-robust")["judgements"][0]["why_failed"].as_str().unwrap().to_string();
+    assert!(
+        why.contains("settled failed in") && why.contains("--sample") && why.contains("case-scenario.toml"),
+        "{why}"
+    );
+    // The reproducing command flies that case alone.
+    let command = why.split('`').nth(1).unwrap().to_string();
+    let words: Vec<&str> = command.split_whitespace().collect();
+    assert_eq!(words[..2], ["silrig", "sim"]);
+    let o = Command::new(SILRIG).args(&words[1..]).arg("--out").arg(dir.join("alone")).output().unwrap();
+    assert!(o.status.success(), "{command}: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains(": fail"), "{}", String::from_utf8_lossy(&o.stdout));
+    std::fs::remove_dir_all(&c.dir).unwrap();
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_malformed_sweep_case_is_refused_naming_the_key() {
+    let dir = temp_dir("sweep-errors");
+    let refused = |name: &str, body: &str| {
+        let path = dir.join(format!("{name}.toml"));
+        std::fs::write(&path, format!("name = \"s\"\n[[cases]]\nname = \"c\"\n{body}")).unwrap();
+        let o = Command::new(SILRIG).args(["check", path.to_str().unwrap()]).current_dir(&dir).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        assert!(!dir.join("out").exists());
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let sweep = "[cases.sweep]\nruns = 10\npass_rate_min = 0.9\n[cases.dispersions]\n\"plant.xcg\" = { dist = \"uniform\", min = 0.3, max = 0.38 }\n";
+    let flight = "[cases.criteria]\nalpha_max_deg = 15.0\n";
+    assert!(refused("realtime", &format!("{sweep}{flight}")).contains("set `mode = \"lockstep\"`"));
+    let lockstep = "mode = \"lockstep\"\n";
+    assert!(
+        refused(
+            "rig",
+            &format!("{lockstep}{sweep}[cases.criteria]\nevery_tick_answered = true\nalpha_max_deg = 15.0\n")
+        )
+        .contains("criteria.every_tick_answered")
+    );
+    assert!(refused("rate", &format!("{lockstep}{}{flight}", sweep.replace("0.9", "1.5"))).contains("pass_rate_min"));
+    assert!(
+        refused("key", &format!("{lockstep}{}{flight}", sweep.replace("plant.xcg", "plant.wingspan")))
+            .contains("dispersions.\"plant.wingspan\"")
+    );
+    assert!(
+        refused("no-sweep", &format!("{lockstep}[cases.dispersions]\n\"plant.xcg\" = {{ dist = \"uniform\", min = 0.3, max = 0.38 }}\n{flight}"))
+            .contains("add `[cases.sweep]`")
+    );
+    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -110,7 +110,9 @@ impl Campaign {
         format!("{}{}", self.config, self.flags)
     }
 
-    fn from_scenario(scenario: Scenario, config: &str) -> anyhow::Result<Self> {
+    /// A campaign of `scenario` (with its dispersions and criteria); `config` names it in errors and printed
+    /// commands.
+    pub fn from_scenario(scenario: Scenario, config: &str) -> anyhow::Result<Self> {
         anyhow::ensure!(
             !scenario.dispersions.is_empty(),
             "{config}: no [dispersions]: a sweep needs at least one dispersed key"
@@ -247,7 +249,7 @@ fn check_runs(runs: u64) -> anyhow::Result<()> {
 }
 
 /// Worker threads: as asked (1..=1024), or one per core.
-fn jobs(asked: Option<usize>) -> anyhow::Result<usize> {
+pub fn jobs(asked: Option<usize>) -> anyhow::Result<usize> {
     let jobs = asked.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     anyhow::ensure!((1..=1024).contains(&jobs), "--jobs must be within 1..=1024, got {jobs}");
     Ok(jobs)

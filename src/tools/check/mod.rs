@@ -194,6 +194,9 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
     std::fs::write(&scenario_path, case.scenario.to_toml())
         .with_context(|| format!("writing {}", scenario_path.display()))
         .map_err(setup)?;
+    if let Some(sweep) = &case.sweep {
+        return sweep_case(opts, case, sweep, &scenario_path, &case_dir, started).map_err(setup);
+    }
     let runs = case.criteria.runs();
     let mut run_dirs = Vec::new();
     let mut attempts = 0;
@@ -239,6 +242,85 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
     })
 }
 
+/// Fly a sweep case: its dispersed cases in one process (as `silrig sweep`, with `cases.csv`, `sweep.json` and the
+/// figures in the case's folder), judged on the 95 % Wilson lower bound of the pass rate.
+fn sweep_case(
+    opts: &CheckOptions,
+    case: &Case,
+    sweep: &suite::SweepCase,
+    scenario_path: &Path,
+    case_dir: &Path,
+    started: std::time::Instant,
+) -> anyhow::Result<CaseVerdict> {
+    anyhow::ensure!(
+        opts.controller_cmd.is_none() && opts.plant_cmd.is_none(),
+        "a sweep case flies in one process: our controller, or an FMU (--controller-fmu, --plant-fmu); a controller \
+         or plant of your own in another process (--controller-cmd, --plant-cmd) is not swept yet"
+    );
+    let mut scenario = case.scenario.clone();
+    let fmus = silrig_rig::in_process::FmuFlags {
+        plant_fmu: opts.plant_fmu.clone(),
+        controller_fmu: opts.controller_fmu.clone(),
+    };
+    fmus.apply(&mut scenario)?;
+    let campaign = crate::campaign::Campaign::from_scenario(scenario, &scenario_path.display().to_string())?;
+    let seed = sweep.seed.unwrap_or(campaign.scenario.seed);
+    let jobs = campaign.threads(crate::campaign::jobs(None)?);
+    let cases = campaign.fly(seed, 0..sweep.runs, jobs)?;
+    let (summary, mut files) = crate::campaign::write_outputs(&campaign, seed, &cases, case_dir)?;
+    files.extend(crate::campaign::write_plots(&campaign, &summary, &cases, case_dir)?);
+    let flown = summary.passed + summary.failed;
+    let (low, high) = summary.pass_rate_95;
+    let measured = format!(
+        "{:.1} % lower bound ({} of {flown} passed, 95 % Wilson {:.1} .. {:.1} %; {} infeasible)",
+        low * 100.0,
+        summary.passed,
+        low * 100.0,
+        high * 100.0,
+        summary.infeasible
+    );
+    let limit = format!("at least {:.1} % over {} cases", sweep.pass_rate_min * 100.0, sweep.runs);
+    let failure = (low < sweep.pass_rate_min).then(|| {
+        let mut most: Vec<&(String, u64)> = summary.failures_by_criterion.iter().filter(|(_, n)| *n > 0).collect();
+        most.sort_by(|a, b| b.1.cmp(&a.1));
+        let worst: Vec<String> = most
+            .iter()
+            .take(3)
+            .map(|(name, n)| {
+                let case = summary.worst.iter().find(|(w, _)| w == name).and_then(|(_, w)| w.first());
+                let example = case.map(|c| format!(", worst case {}: `{}`", c.index, c.reproduce)).unwrap_or_default();
+                format!("{name} failed in {n} of {flown}{example}")
+            })
+            .collect();
+        format!(
+            "with 95 % confidence the pass rate may be as low as {:.1} %, below the {:.1} % asked: {}. cases.csv and \
+             the figures in the case's folder show every case",
+            low * 100.0,
+            sweep.pass_rate_min * 100.0,
+            if worst.is_empty() {
+                "no criterion failed, too few cases were flown".to_string()
+            } else {
+                worst.join("; ")
+            }
+        )
+    });
+    let judgements = vec![silrig_flight::judge::judgement("pass_rate", measured, limit, failure)];
+    let outcome = verdict::case_outcome(&judgements);
+    Ok(CaseVerdict {
+        name: case.name.clone(),
+        why: case.why.clone(),
+        mode: "sweep".into(),
+        faults: case.fault_flags.clone(),
+        passed: outcome == Outcome::Pass,
+        inconclusive: false,
+        attempts: 1,
+        wall_s: started.elapsed().as_secs_f64(),
+        run_dirs: vec![case_dir.display().to_string()],
+        reproduce: opts.reproduce(&case.name),
+        judgements,
+    })
+}
+
 /// Run the suite and write the verdict's files. An `Err` means nothing could be judged (exit status 2); a verdict
 /// with failed cases is `Ok` (exit status 1).
 pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
@@ -273,8 +355,11 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
             i + 1,
             suite.cases.len(),
             case.name,
-            case.mode.label(),
-            if case.criteria.runs() > 1 { ", flown twice" } else { "" }
+            match case.sweep {
+                Some(sweep) => format!("a sweep of {} dispersed cases in one process", sweep.runs),
+                None => case.mode.label().to_string(),
+            },
+            if case.sweep.is_none() && case.criteria.runs() > 1 { ", flown twice" } else { "" }
         );
         let verdict = run_case(opts, case, &out)?;
         eprintln!(

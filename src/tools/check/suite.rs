@@ -3,9 +3,11 @@
 
 use super::criteria::{Criteria, RigCriteria};
 use serde::Deserialize;
+use silrig_flight::dispersion::Distribution;
 use silrig_flight::fault::{Fault, parse_fault_flag};
 use silrig_flight::scenario::Scenario;
 use silrig_rig::RigMode;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// The embedded default suite (what `silrig check` runs without a suite file).
@@ -45,8 +47,33 @@ struct CaseFile {
     /// Faults in the `--fault` syntax of `silrig run`.
     #[serde(default)]
     faults: Vec<String>,
+    /// A dispersed case: this many cases of the scenario's dispersions, judged on the pass rate.
+    #[serde(default)]
+    sweep: Option<SweepCase>,
+    /// Dispersions added to the scenario's own (`[cases.dispersions]`, as a scenario's `[dispersions]`).
+    #[serde(default)]
+    dispersions: BTreeMap<String, Distribution>,
     criteria: Criteria,
 }
+
+/// `[cases.sweep]`: a case that is a Monte Carlo sweep of its scenario's dispersions, flown in one process like
+/// `silrig sweep`, each dispersed case judged by `[cases.criteria]` (flight criteria only) and the whole case by
+/// its pass rate.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepCase {
+    /// Dispersed cases to fly (1..=100,000).
+    pub runs: u64,
+    /// Seed of the dispersions (default: the scenario's `seed`).
+    #[serde(default)]
+    pub seed: Option<u64>,
+    /// The 95 % Wilson lower bound of the pass rate must be at least this (0..1]: 0.9 asks for 90 % with
+    /// 95 % confidence.
+    pub pass_rate_min: f64,
+}
+
+/// Most dispersed cases a sweep case may fly (a check is a gate, not the campaign itself).
+pub const MAX_SWEEP_CASE_RUNS: u64 = 100_000;
 
 fn realtime() -> RigMode {
     RigMode::Realtime
@@ -78,8 +105,10 @@ pub struct Case {
     pub mode: RigMode,
     /// The fault flags as written (for the reproducing command and the report).
     pub fault_flags: Vec<String>,
-    /// What the run must meet.
+    /// What the run must meet (a sweep case: each of its dispersed cases).
     pub criteria: Criteria,
+    /// A sweep case's runs, seed and pass-rate bound (its scenario carries the dispersions and the criteria).
+    pub sweep: Option<SweepCase>,
 }
 
 /// A suite that cannot be run, with where the problem is.
@@ -169,8 +198,18 @@ impl Suite {
                 return Err(case_err("a second case of this name".into()));
             }
             let scenario_path = c.scenario.as_ref().or(file.scenario.as_ref()).map(|p| dir.join(p));
-            let scenario = case_scenario(c, scenario_path.as_deref()).map_err(case_err)?;
-            c.criteria.validate(c.mode, &scenario).map_err(case_err)?;
+            let mut scenario = case_scenario(c, scenario_path.as_deref()).map_err(case_err)?;
+            match &c.sweep {
+                Some(sweep) => sweep_scenario(c, sweep, &mut scenario).map_err(case_err)?,
+                None if !c.dispersions.is_empty() => {
+                    return Err(case_err(
+                        "`dispersions` are flown by a sweep case: add `[cases.sweep]` with `runs` and \
+                         `pass_rate_min`"
+                            .into(),
+                    ));
+                }
+                None => c.criteria.validate(c.mode, &scenario).map_err(case_err)?,
+            }
             cases.push(Case {
                 name: c.name.clone(),
                 why: c.why.clone(),
@@ -178,6 +217,7 @@ impl Suite {
                 mode: c.mode,
                 fault_flags: c.faults.clone(),
                 criteria: c.criteria.clone(),
+                sweep: c.sweep,
             });
         }
         Ok(Suite { name: file.name, description: file.description, path: path.map(Path::to_path_buf), cases })
@@ -198,6 +238,34 @@ fn valid_name(name: &str) -> bool {
     !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
 }
 
+/// A sweep case's scenario: its criteria become the scenario's `[criteria]` (flight criteria only, as a sweep's),
+/// and it must have dispersions; the case flies in lockstep. Errors name the key.
+fn sweep_scenario(c: &CaseFile, sweep: &SweepCase, scenario: &mut Scenario) -> Result<(), String> {
+    if c.mode != RigMode::Lockstep {
+        return Err(
+            "a sweep case flies its dispersed cases in one process, in lockstep: set `mode = \"lockstep\"`".into()
+        );
+    }
+    if !(1..=MAX_SWEEP_CASE_RUNS).contains(&sweep.runs) {
+        return Err(format!("`sweep.runs` must be within 1..={MAX_SWEEP_CASE_RUNS}, got {}", sweep.runs));
+    }
+    if !(sweep.pass_rate_min > 0.0 && sweep.pass_rate_min <= 1.0) {
+        return Err(format!("`sweep.pass_rate_min` must be within (0, 1], got {}", sweep.pass_rate_min));
+    }
+    if scenario.dispersions.is_empty() {
+        return Err("a sweep case needs dispersions: `[cases.dispersions]`, or a scenario with `[dispersions]`".into());
+    }
+    if !c.criteria.has_flight_criteria() {
+        return Err(
+            "a sweep case judges each dispersed case by flight criteria (settled, alpha_max_deg, outputs, ...): \
+                    `[cases.criteria]` names none"
+                .into(),
+        );
+    }
+    scenario.criteria = Some(c.criteria.clone());
+    scenario.validate().map_err(|(key, problem)| format!("`{key}`: {problem}"))
+}
+
 /// The case's scenario: the file (or the embedded default), the `set` overrides, the duration, the faults; validated
 /// as `silrig run` would validate it. Errors name the key.
 fn case_scenario(c: &CaseFile, path: Option<&Path>) -> Result<Scenario, String> {
@@ -212,6 +280,10 @@ fn case_scenario(c: &CaseFile, path: Option<&Path>) -> Result<Scenario, String> 
         toml::from_str(&text).map_err(|e| format!("`scenario`: {origin}: {}", e.to_string().trim_end()))?;
     if let Some(set) = &c.set {
         merge(&mut table, set);
+    }
+    if !c.dispersions.is_empty() {
+        let dispersions = toml::Table::try_from(&c.dispersions).map_err(|e| format!("`dispersions`: {e}"))?;
+        merge(&mut table, &toml::Table::from_iter([("dispersions".to_string(), toml::Value::Table(dispersions))]));
     }
     if let Some(d) = c.duration_s {
         let timing = table.entry("timing").or_insert_with(|| toml::Value::Table(toml::Table::new()));
