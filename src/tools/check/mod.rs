@@ -282,7 +282,7 @@ fn sweep_case(
     let limit = format!("at least {:.1} % over {} cases", sweep.pass_rate_min * 100.0, sweep.runs);
     let failure = (low < sweep.pass_rate_min).then(|| {
         let mut most: Vec<&(String, u64)> = summary.failures_by_criterion.iter().filter(|(_, n)| *n > 0).collect();
-        most.sort_by(|a, b| b.1.cmp(&a.1));
+        most.sort_by_key(|(_, n)| std::cmp::Reverse(*n));
         let worst: Vec<String> = most
             .iter()
             .take(3)
