@@ -239,3 +239,32 @@ fn an_fmu_that_cannot_be_opened_or_a_key_it_does_not_read_is_a_clear_error_of_si
     assert!(!dir.join("out").exists(), "nothing is written");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn a_check_suites_sweep_case_flies_a_controller_fmu_in_one_process() {
+    let dir = common::temp_dir(SUITE, "check-sweep");
+    let pid = fmu("pid");
+    let out = dir.join("out");
+    let o = silrig(
+        &["check", "configs/check-dispersed.toml", "--controller-fmu", &pid, "--out", out.to_str().unwrap()],
+        Path::new(ROOT),
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
+    let verdict: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("check.json")).unwrap()).unwrap();
+    assert_eq!(verdict["controller"].as_str().unwrap(), format!("the FMU {pid} in silrig-controller"));
+    let measured = verdict["cases"][0]["judgements"][0]["measured"].as_str().unwrap();
+    assert!(measured.contains("of 200 passed"), "{measured}");
+    // The cases flew the FMU, not our controller: the same dispersions give other figures.
+    let csv = std::fs::read_to_string(out.join("dispersed-robust/cases.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 201);
+    let ours = dir.join("ours");
+    let o = silrig(&["check", "configs/check-dispersed.toml", "--out", ours.to_str().unwrap()], Path::new(ROOT));
+    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
+    let ours = std::fs::read_to_string(ours.join("dispersed-robust/cases.csv")).unwrap();
+    let values =
+        |csv: &str| csv.lines().map(|l| l.split(',').take(2).collect::<Vec<_>>().join(",")).collect::<Vec<_>>();
+    assert_eq!(values(&csv)[..5], values(&ours)[..5], "the same dispersed values");
+    assert_ne!(csv, ours, "the FMU's figures are not our controller's");
+    std::fs::remove_dir_all(dir).unwrap();
+}
