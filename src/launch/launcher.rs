@@ -8,7 +8,7 @@
 use super::fault_schedule::FaultSchedule;
 use super::run_report::{ProcessLife, RigReport, write_plots};
 use crate::floor::{timer_baseline, timer_baseline::BaselineArgs, timer_baseline::BaselineReport};
-use crate::program::{find_program, split_command};
+use crate::program::check_command;
 use crate::supervision::{ChildProcess, ControllerLaunch, SupervisionOptions, Supervisor};
 use anyhow::Context;
 use silrig_flight::fault::Fault;
@@ -366,13 +366,9 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
             .map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
     }
     for (flag, cmd) in [("controller-cmd", &opts.controller_cmd), ("plant-cmd", &opts.plant_cmd)] {
-        let Some(cmd) = cmd else { continue };
-        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--{flag}: {e}"))?;
-        anyhow::ensure!(
-            find_program(&words[0]).is_some(),
-            "--{flag}: cannot find `{}` (not an executable file, and not on PATH)",
-            words[0]
-        );
+        if let Some(cmd) = cmd {
+            check_command(flag, cmd).map_err(anyhow::Error::msg)?;
+        }
     }
     let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
     let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));

@@ -1,0 +1,134 @@
+//! One case of a campaign flown through the three-process lockstep rig (`silrig sweep --controller-cmd CMD`): a
+//! user's controller in a process of its own (C, Python, anything that speaks the contract) against the case's
+//! sampled scenario, flown exactly as `silrig run --mode lockstep --controller-cmd CMD` flies that scenario, and
+//! judged by [`case::judge`] like a case flown in one process. Each case is a rig of its own (its own run id, so its
+//! own iceoryx2 namespace and claims), so several fly side by side on a sweep's worker threads; a sweep's case runs
+//! in a scratch folder ([`Scratch`]) removed once it is judged, so a sweep of any length leaves no run folders.
+
+use super::case::{self, CaseResult, Flight};
+use crate::outputs::Flown;
+use silrig_flight::trace::Trace;
+use silrig_launch::launcher::{self, LaunchOptions};
+use silrig_rig::signals;
+use silrig_wire::ipc::RunId;
+use std::path::{Path, PathBuf};
+
+/// The case's scenario as the rig is given it, in the case's run folder.
+pub const CASE_SCENARIO: &str = "case-scenario.toml";
+
+/// A sweep stopped by SIGINT or SIGTERM: it writes nothing (a sweep's outputs hold every case or none).
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted by {0}: the cases flown so far are not written (a sweep's outputs hold every case or none)")]
+pub struct Interrupted(&'static str);
+
+/// Stop when the user asked to: launcher::run routes SIGINT and SIGTERM to a flag, so a sweep must look at it.
+pub fn check_interrupted() -> Result<(), Interrupted> {
+    match signals::termination_signal() {
+        Some(signal) => Err(Interrupted(signals::name(signal))),
+        None => Ok(()),
+    }
+}
+
+/// The options `silrig run --mode lockstep --quiet --controller-cmd CMD --run-id ID --out DIR CONFIG` is given, parsed
+/// as the command line parses them: every other flag at its default, so a case is that run, byte for byte. No
+/// restarts (the default): a controller that dies fails its case.
+fn launch_options(cmd: &str, config: &Path, out: &Path, run_id: Option<&RunId>) -> anyhow::Result<LaunchOptions> {
+    #[derive(clap::Parser)]
+    struct Run {
+        #[command(flatten)]
+        launch: LaunchOptions,
+    }
+    let mut argv = vec!["silrig-run".to_string(), "--mode".into(), "lockstep".into(), "--quiet".into()];
+    argv.extend(["--controller-cmd".into(), cmd.into(), "--out".into(), out.display().to_string()]);
+    if let Some(id) = run_id {
+        argv.extend(["--run-id".into(), id.to_string()]);
+    }
+    argv.push(config.display().to_string());
+    Ok(<Run as clap::Parser>::try_parse_from(argv)?.launch)
+}
+
+/// Fly case `index` of `campaign` under `seed` with the controller `cmd` through the lockstep rig in `run_dir`
+/// (created; it must not hold a run), as `run_id` (None: a fresh one); returns the result and, when flown, the
+/// flight. A rig that could not be set up makes the case infeasible; a controller that crashed, exited or never
+/// answered fails it, the rig's failures as its reason. Err only when the user stopped the sweep.
+pub fn fly(
+    campaign: &super::Campaign,
+    cmd: &str,
+    seed: u64,
+    index: u64,
+    run_dir: &Path,
+    run_id: Option<&RunId>,
+) -> Result<(CaseResult, Option<Flight>), Interrupted> {
+    check_interrupted()?;
+    let (values, scenario) = match case::sample(&campaign.scenario, seed, index) {
+        Ok(sampled) => sampled,
+        Err(infeasible) => return Ok((infeasible, None)),
+    };
+    // The built-in F-16 is trimmed in the plant's process, which would fail the case with only its stderr to say
+    // why: a case that cannot be trimmed is infeasible, as in one process, with the same reason.
+    if scenario.plant.fmu.is_none()
+        && let Err(e) = silrig_flight::sim::PlantRunner::new(&scenario)
+    {
+        return Ok((case::infeasible(index, values, e.to_string()), None));
+    }
+    let config = run_dir.join(CASE_SCENARIO);
+    let report = std::fs::create_dir_all(run_dir)
+        .and_then(|()| std::fs::write(&config, scenario.to_toml()))
+        .map_err(anyhow::Error::from)
+        .and_then(|()| launch_options(cmd, &config, run_dir, run_id))
+        .and_then(|opts| launcher::run(&opts));
+    let report = match report {
+        Ok(report) => report,
+        Err(e) => {
+            return Ok((case::infeasible(index, values, format!("the rig could not be set up: {e:#}")), None));
+        }
+    };
+    check_interrupted()?;
+    // A controller that died before the plant's first tick leaves no trace: the case is judged on none (every
+    // criterion fails, its figures are empty), with the rig's failures as the reason.
+    let trace = Trace::load(&run_dir.join("trace.csv")).unwrap_or_else(|_| Trace::new(Vec::new()));
+    // The plant flies on in failsafe when the controller dies, to the scenario's end: the flight did not end
+    // early, but every failure of the rig fails the case.
+    let flown = Flown { trace, plant: None, ended_early: None, refusals: report.failures };
+    let (result, flight) = case::judge(&campaign.criteria, index, values, scenario, flown);
+    Ok((result, Some(flight)))
+}
+
+/// A sweep's scratch folder: one run folder per case in flight, each removed once its case is judged, and the
+/// folder itself when the sweep ends (however it ends).
+pub struct Scratch {
+    dir: PathBuf,
+    /// The sweep's run id; case i flies as `<it>-<i in hex>`, unique on this machine while the sweep runs.
+    run_id: RunId,
+}
+
+impl Scratch {
+    /// A fresh scratch folder in the system's temporary folder, named by a fresh run id.
+    pub fn new() -> anyhow::Result<Self> {
+        let run_id = launcher::fresh_run_id();
+        let dir = std::env::temp_dir().join(format!("silrig-sweep-{run_id}"));
+        std::fs::create_dir_all(&dir)?;
+        Ok(Self { dir, run_id })
+    }
+
+    /// Fly case `index` in a run folder of its own, judge it and remove the folder.
+    pub fn fly(
+        &self,
+        campaign: &super::Campaign,
+        cmd: &str,
+        seed: u64,
+        index: u64,
+    ) -> Result<CaseResult, Interrupted> {
+        let run_id = RunId::new(&format!("{}-{index:x}", self.run_id)).expect("a run id and a hex number make one");
+        let run_dir = self.dir.join(format!("case-{index}"));
+        let flown = fly(campaign, cmd, seed, index, &run_dir, Some(&run_id));
+        let _ = std::fs::remove_dir_all(&run_dir);
+        Ok(flown?.0)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
