@@ -104,7 +104,12 @@ impl Campaign {
     pub fn load(config: &Path, fmus: &FmuFlags, controller_cmd: Option<&str>) -> anyhow::Result<Self> {
         let mut scenario = Scenario::load(config)?;
         fmus.apply(&mut scenario)?;
-        let mut campaign = Self::from_scenario(scenario, &config.display().to_string())?;
+        let name = config.display().to_string();
+        if let Some(cmd) = controller_cmd {
+            // Before the FMUs are opened, so that this is what is said.
+            check_controller_cmd(cmd, &scenario, &name)?;
+        }
+        let mut campaign = Self::from_scenario(scenario, &name)?;
         campaign.flags = fmus.to_args();
         if let Some(cmd) = controller_cmd {
             campaign.fly_controller_cmd(cmd)?;
@@ -113,18 +118,9 @@ impl Campaign {
         Ok(campaign)
     }
 
-    /// Fly every case through the lockstep rig with the controller `cmd`: refused up front when its program cannot
-    /// be found, or when the scenario's controller is an FMU (which flies in silrig-controller, in place of `cmd`).
+    /// Fly every case through the lockstep rig with the controller `cmd` ([`check_controller_cmd`]).
     pub fn fly_controller_cmd(&mut self, cmd: &str) -> anyhow::Result<()> {
-        silrig_launch::program::check_command("controller-cmd", cmd).map_err(anyhow::Error::msg)?;
-        if let Some(fmu) = &self.scenario.controller.fmu {
-            anyhow::bail!(
-                "--controller-cmd flies your controller in place of ours, but {} names the controller FMU {} \
-                 (--controller-fmu or its [controller] fmu): sweep one controller at a time",
-                self.config,
-                fmu.display()
-            );
-        }
+        check_controller_cmd(cmd, &self.scenario, &self.config)?;
         self.controller_cmd = Some(cmd.to_string());
         Ok(())
     }
@@ -208,6 +204,20 @@ impl Campaign {
         });
         Ok(results?)
     }
+}
+
+/// Refuse the controller command `cmd` up front when its program cannot be found, or when `scenario` (named
+/// `config`) flies a controller FMU, which takes the controller's place in silrig-controller just as `cmd` would.
+fn check_controller_cmd(cmd: &str, scenario: &Scenario, config: &str) -> anyhow::Result<()> {
+    silrig_launch::program::check_command("controller-cmd", cmd).map_err(anyhow::Error::msg)?;
+    if let Some(fmu) = &scenario.controller.fmu {
+        anyhow::bail!(
+            "--controller-cmd flies your controller in place of ours, but {config} flies the controller FMU {} \
+             (--controller-fmu or its [controller] fmu): sweep one controller at a time (a plant FMU may stay)",
+            fmu.display()
+        );
+    }
+    Ok(())
 }
 
 /// Progress on stderr until `done` reaches `total`: a bar redrawn in place on a terminal, a plain line every few

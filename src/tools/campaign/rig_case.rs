@@ -87,9 +87,16 @@ pub fn fly(
     // A controller that died before the plant's first tick leaves no trace: the case is judged on none (every
     // criterion fails, its figures are empty), with the rig's failures as the reason.
     let trace = Trace::load(&run_dir.join("trace.csv")).unwrap_or_else(|_| Trace::new(Vec::new()));
-    // The plant flies on in failsafe when the controller dies, to the scenario's end: the flight did not end
-    // early, but every failure of the rig fails the case.
-    let flown = Flown { trace, plant: None, ended_early: None, refusals: report.failures };
+    // A rig that failed fails the case. When its trace stops short of the scenario's end (in lockstep the plant
+    // gives up on a controller that no longer answers), the flight stopped there: a departure, as an FMU's failed
+    // call is in one process.
+    let last_t_s = trace.column("t_s").and_then(|t| t.last().copied());
+    let short = last_t_s.is_none_or(|t| t + scenario.timing.dt_s / 2.0 < scenario.timing.duration_s);
+    let (ended_early, refusals) = match report.failures {
+        failures if short && !failures.is_empty() => (Some((last_t_s.unwrap_or(0.0), failures.join("; "))), vec![]),
+        failures => (None, failures),
+    };
+    let flown = Flown { trace, plant: None, ended_early, refusals };
     let (result, flight) = case::judge(&campaign.criteria, index, values, scenario, flown);
     Ok((result, Some(flight)))
 }
