@@ -119,13 +119,7 @@ impl Scratch {
     }
 
     /// Fly case `index` in a run folder of its own, judge it and remove the folder.
-    pub fn fly(
-        &self,
-        campaign: &super::Campaign,
-        cmd: &str,
-        seed: u64,
-        index: u64,
-    ) -> Result<CaseResult, Interrupted> {
+    pub fn fly(&self, campaign: &super::Campaign, cmd: &str, seed: u64, index: u64) -> Result<CaseResult, Interrupted> {
         let run_id = RunId::new(&format!("{}-{index:x}", self.run_id)).expect("a run id and a hex number make one");
         let run_dir = self.dir.join(format!("case-{index}"));
         let flown = fly(campaign, cmd, seed, index, &run_dir, Some(&run_id));

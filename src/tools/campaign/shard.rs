@@ -78,7 +78,8 @@ impl Manifest {
         shards: u64,
         controller_cmd: Option<String>,
     ) -> Self {
-        let mut parts = vec![config.clone(), scenario_toml.clone(), seed.to_string(), runs.to_string(), shards.to_string()];
+        let mut parts =
+            vec![config.clone(), scenario_toml.clone(), seed.to_string(), runs.to_string(), shards.to_string()];
         // Only when there is one, so the plans written before the field existed keep their fingerprints.
         parts.extend(controller_cmd.clone());
         let fingerprint = fnv1a(&parts.iter().map(String::as_str).collect::<Vec<_>>());
@@ -112,8 +113,14 @@ impl Manifest {
             .with_context(|| format!("reading {} (write it with `silrig sweep plan`)", path.display()))?;
         let m: Manifest =
             serde_json::from_str(&text).with_context(|| format!("{}: not a sweep manifest", path.display()))?;
-        let expected =
-            Manifest::new(m.config.clone(), m.scenario_toml.clone(), m.seed, m.runs, m.shards, m.controller_cmd.clone());
+        let expected = Manifest::new(
+            m.config.clone(),
+            m.scenario_toml.clone(),
+            m.seed,
+            m.runs,
+            m.shards,
+            m.controller_cmd.clone(),
+        );
         anyhow::ensure!(
             expected.fingerprint == m.fingerprint,
             "{}: edited after planning (its fingerprint does not match)",
