@@ -141,14 +141,12 @@ pub struct Flight {
 }
 
 /// Case `index` of `scenario`'s dispersions under `seed`: its sampled values (in the dispersions' key order) and its
-/// scenario, or the infeasible result when the sampled scenario is out of range.
-pub fn sample(scenario: &Scenario, seed: u64, index: u64) -> Result<(Vec<f64>, Scenario), CaseResult> {
+/// scenario, or why it is infeasible (the sampled scenario is out of range).
+pub fn sample(scenario: &Scenario, seed: u64, index: u64) -> (Vec<f64>, Result<Scenario, String>) {
     let sampled = dispersion::sample(&scenario.dispersions, seed, index);
     let values: Vec<f64> = sampled.iter().map(|(_, v)| *v).collect();
-    match scenario.with_values(&sampled) {
-        Ok(case) => Ok((values, case)),
-        Err(e) => Err(infeasible(index, values, format!("sampled scenario out of range: {e}"))),
-    }
+    let case = scenario.with_values(&sampled).map_err(|e| format!("sampled scenario out of range: {e}"));
+    (values, case)
 }
 
 /// The result of a case that could not be flown, and why.
@@ -214,9 +212,10 @@ pub fn fly_with_trace(
     seed: u64,
     index: u64,
 ) -> (CaseResult, Option<Flight>) {
-    let (values, case) = match sample(scenario, seed, index) {
-        Ok(sampled) => sampled,
-        Err(infeasible) => return (infeasible, None),
+    let (values, case) = sample(scenario, seed, index);
+    let case = match case {
+        Ok(case) => case,
+        Err(reason) => return (infeasible(index, values, reason), None),
     };
     let flown = match fly_one_process(models, &case) {
         Ok(flown) => flown,

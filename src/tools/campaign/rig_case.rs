@@ -60,9 +60,10 @@ pub fn fly(
     run_id: Option<&RunId>,
 ) -> Result<(CaseResult, Option<Flight>), Interrupted> {
     check_interrupted()?;
-    let (values, scenario) = match case::sample(&campaign.scenario, seed, index) {
-        Ok(sampled) => sampled,
-        Err(infeasible) => return Ok((infeasible, None)),
+    let (values, scenario) = case::sample(&campaign.scenario, seed, index);
+    let scenario = match scenario {
+        Ok(scenario) => scenario,
+        Err(reason) => return Ok((case::infeasible(index, values, reason), None)),
     };
     // The built-in F-16 is trimmed in the plant's process, which would fail the case with only its stderr to say
     // why: a case that cannot be trimmed is infeasible, as in one process, with the same reason.
