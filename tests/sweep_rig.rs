@@ -2,8 +2,8 @@
 //! lockstep rig. The same bytes with one rig or two side by side and through a plan's shards; a case flown alone
 //! (`silrig sim --sample I --controller-cmd`) is the sweep's case, and its trace is a lone `silrig run --mode
 //! lockstep` of its scenario byte for byte; a controller that crashes in some cases fails those cases with the
-//! rig's reason and the sweep goes on; a command that cannot run, or one beside a controller FMU, is refused. Every
-//! sweep leaves no run folder, scratch folder or shared memory behind.
+//! rig's reason and the sweep goes on, as does one that never answers; a command that cannot run, or one beside a
+//! controller FMU, is refused. Every sweep leaves no run folder, scratch folder or shared memory behind.
 
 mod common;
 
@@ -172,6 +172,15 @@ fn a_controller_that_crashes_fails_its_cases_with_the_reason_and_the_sweep_goes_
     let summary: Value = serde_json::from_str(&read(&dir.join("sweep/sweep.json"))).unwrap();
     assert_eq!(summary["runs"], 8);
     assert!(csv.lines().any(|l| l.contains(",pass,")), "the cases below the threshold fly: {csv}");
+
+    // A controller that takes samples and never answers: the plant gives up on it, and the case fails saying so.
+    let silent = format!("python3 {ROOT}/tests/clients/misbehaving.py never");
+    let out = dir.join("silent").display().to_string();
+    ok(&["sweep", config.to_str().unwrap(), "--runs", "3", "--jobs", "2", "--controller-cmd", &silent, "--out", &out]);
+    let csv = read(&dir.join("silent/cases.csv"));
+    for line in csv.lines().skip(2) {
+        assert!(line.contains(",fail,\"departed at ") && line.contains("no command for tick 0"), "{line}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
