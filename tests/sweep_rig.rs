@@ -3,7 +3,8 @@
 //! (`silrig sim --sample I --controller-cmd`) is the sweep's case, and its trace is a lone `silrig run --mode
 //! lockstep` of its scenario byte for byte; a controller that crashes in some cases fails those cases with the
 //! rig's reason and the sweep goes on, as does one that never answers; a command that cannot run, or one beside a
-//! controller FMU, is refused. Every sweep leaves no run folder, scratch folder or shared memory behind.
+//! controller FMU, is refused, while a plant FMU sweeps under it. Every sweep leaves no run folder, scratch folder
+//! or shared memory behind.
 
 mod common;
 
@@ -209,5 +210,28 @@ fn a_controller_command_that_cannot_run_or_flies_beside_a_controller_fmu_is_refu
         stderr.contains("flies the controller FMU") && stderr.contains("sweep one controller at a time"),
         "{stderr}"
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_plant_fmu_sweeps_under_a_controller_command() {
+    let dir = common::temp_dir(SUITE, "plant-fmu");
+    let fmu = common::fmu::cached_fmu(SUITE, "airframe");
+    std::fs::copy(&fmu, dir.join("airframe.fmu")).unwrap();
+    // examples/fmu/airframe_sweep.toml without its controller FMU (and the gain dispersed on it), shortened to 4 s.
+    let text = std::fs::read_to_string(Path::new(ROOT).join("examples/fmu/airframe_sweep.toml")).unwrap();
+    let (head, rest) = text.split_once("[controller]").unwrap();
+    let (_, tail) = rest.split_once("[dispersions]").unwrap();
+    let tail = tail.lines().filter(|l| !l.starts_with("\"controller.")).collect::<Vec<_>>().join("\n");
+    let config = dir.join("airframe_sweep.toml");
+    std::fs::write(&config, format!("{}[dispersions]{tail}\n", head.replace("duration_s = 10.0", "duration_s = 4.0")))
+        .unwrap();
+    let pid = python_pid();
+    let out = dir.join("sweep").display().to_string();
+    let stdout =
+        ok(&["sweep", config.to_str().unwrap(), "--runs", "4", "--jobs", "2", "--controller-cmd", &pid, "--out", &out]);
+    let csv = read(&dir.join("sweep/cases.csv"));
+    assert_eq!(csv.lines().count(), 5, "{stdout}");
+    assert!(csv.lines().skip(1).all(|l| l.contains(",pass,") || l.contains(",fail,")), "every case flown: {csv}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -90,7 +90,7 @@ pub struct Campaign {
     pub parameters: Vec<String>,
     /// The file as the user named it (for the commands printed).
     pub config: String,
-    /// `--plant-fmu`, `--controller-fmu` as given, repeated in the commands printed.
+    /// `--plant-fmu`, `--controller-fmu`, `--controller-cmd` as given, repeated in the commands printed.
     pub flags: String,
     /// The plant and controller every case flies (new instances per case).
     pub models: Models,
@@ -112,7 +112,7 @@ impl Campaign {
         let mut campaign = Self::from_scenario(scenario, &name)?;
         campaign.flags = fmus.to_args();
         if let Some(cmd) = controller_cmd {
-            campaign.fly_controller_cmd(cmd)?;
+            campaign.controller_cmd = Some(cmd.to_string());
             campaign.flags += &format!(" --controller-cmd {}", crate::check::shell_quote(cmd));
         }
         Ok(campaign)
