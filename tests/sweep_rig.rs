@@ -132,6 +132,7 @@ fn a_sweep_of_the_python_pid_is_the_same_on_one_rig_two_and_shards_and_a_case_is
         "--mode",
         "lockstep",
         "--quiet",
+        "--no-figures",
         "--controller-cmd",
         &pid,
         "--run-id",
@@ -142,6 +143,9 @@ fn a_sweep_of_the_python_pid_is_the_same_on_one_rig_two_and_shards_and_a_case_is
     ]);
     common::no_shared_memory_left(&run_id);
     assert!(read(&dir.join("lone/trace.csv")) == read(&dir.join("case-3/trace.csv")), "the traces differ");
+    // The case alone draws its figures; a run asked for none (as a sweep's runs are) has the same trace.
+    assert!(dir.join("case-3/fig1_states.png").exists());
+    assert!(!dir.join("lone/fig1_states.png").exists() && dir.join("lone/report.json").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

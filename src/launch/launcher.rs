@@ -52,6 +52,10 @@ pub struct LaunchOptions {
     /// No live status line while the run goes.
     #[arg(long)]
     pub quiet: bool,
+    /// Draw no figures (the trace, report and timing files are written as ever): for runs judged from their files
+    /// alone, such as the cases of `silrig sweep --controller-cmd`, where drawing them would take as long as flying.
+    #[arg(long)]
+    pub no_figures: bool,
     /// Loop and watchdog tuning, passed on to every process.
     #[command(flatten)]
     pub process: ProcessOptions,
@@ -735,7 +739,9 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         phases: super::run_report::phase_splits(&out, scenario.timing.dt_s, opts.mode == RigMode::Realtime),
     };
     // A full disk must not cost the user the report: it is printed whatever happens to the files.
-    if let Err(e) = write_plots(&report, &out, &scenario) {
+    if !opts.no_figures
+        && let Err(e) = write_plots(&report, &out, &scenario)
+    {
         report.failures.push(format!("silrig run: the figures: {e:#}"));
         remove_empty_figures(&out);
     }

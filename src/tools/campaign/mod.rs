@@ -343,7 +343,7 @@ pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow
                 "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
                 out.display()
             );
-            rig_case::fly(campaign, cmd, seed, index, out, None)?
+            rig_case::fly(campaign, cmd, seed, index, out, None, true)?
         }
         None => case::fly_with_trace(&campaign.models, &campaign.scenario, &campaign.criteria, seed, index),
     };

@@ -30,9 +30,16 @@ pub fn check_interrupted() -> Result<(), Interrupted> {
 }
 
 /// The options `silrig run --mode lockstep --quiet --controller-cmd CMD --run-id ID --out DIR CONFIG` is given, parsed
-/// as the command line parses them: every other flag at its default, so a case is that run, byte for byte. No
-/// restarts (the default): a controller that dies fails its case.
-fn launch_options(cmd: &str, config: &Path, out: &Path, run_id: Option<&RunId>) -> anyhow::Result<LaunchOptions> {
+/// as the command line parses them: every other flag at its default, so a case is that run, byte for byte (with
+/// `--no-figures` when the run's folder is thrown away once judged: the figures change nothing in it but the
+/// time). No restarts (the default): a controller that dies fails its case.
+fn launch_options(
+    cmd: &str,
+    config: &Path,
+    out: &Path,
+    run_id: Option<&RunId>,
+    figures: bool,
+) -> anyhow::Result<LaunchOptions> {
     #[derive(clap::Parser)]
     struct Run {
         #[command(flatten)]
@@ -43,13 +50,16 @@ fn launch_options(cmd: &str, config: &Path, out: &Path, run_id: Option<&RunId>) 
     if let Some(id) = run_id {
         argv.extend(["--run-id".into(), id.to_string()]);
     }
+    if !figures {
+        argv.push("--no-figures".into());
+    }
     argv.push(config.display().to_string());
     Ok(<Run as clap::Parser>::try_parse_from(argv)?.launch)
 }
 
 /// Fly case `index` of `campaign` under `seed` with the controller `cmd` through the lockstep rig in `run_dir`
-/// (created; it must not hold a run), as `run_id` (None: a fresh one); returns the result and, when flown, the
-/// flight. A rig that could not be set up makes the case infeasible; a controller that crashed, exited or never
+/// (created; it must not hold a run), as `run_id` (None: a fresh one), drawing the run's figures or not; returns the
+/// result and, when flown, the flight. A rig that could not be set up makes the case infeasible; a controller that crashed, exited or never
 /// answered fails it, the rig's failures as its reason. Err only when the user stopped the sweep.
 pub fn fly(
     campaign: &super::Campaign,
@@ -58,6 +68,7 @@ pub fn fly(
     index: u64,
     run_dir: &Path,
     run_id: Option<&RunId>,
+    figures: bool,
 ) -> Result<(CaseResult, Option<Flight>), Interrupted> {
     check_interrupted()?;
     let (values, scenario) = case::sample(&campaign.scenario, seed, index);
@@ -76,7 +87,7 @@ pub fn fly(
     let report = std::fs::create_dir_all(run_dir)
         .and_then(|()| std::fs::write(&config, scenario.to_toml()))
         .map_err(anyhow::Error::from)
-        .and_then(|()| launch_options(cmd, &config, run_dir, run_id))
+        .and_then(|()| launch_options(cmd, &config, run_dir, run_id, figures))
         .and_then(|opts| launcher::run(&opts));
     let report = match report {
         Ok(report) => report,
@@ -123,7 +134,7 @@ impl Scratch {
     pub fn fly(&self, campaign: &super::Campaign, cmd: &str, seed: u64, index: u64) -> Result<CaseResult, Interrupted> {
         let run_id = RunId::new(&format!("{}-{index:x}", self.run_id)).expect("a run id and a hex number make one");
         let run_dir = self.dir.join(format!("case-{index}"));
-        let flown = fly(campaign, cmd, seed, index, &run_dir, Some(&run_id));
+        let flown = fly(campaign, cmd, seed, index, &run_dir, Some(&run_id), false);
         let _ = std::fs::remove_dir_all(&run_dir);
         Ok(flown?.0)
     }

@@ -147,6 +147,8 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         floor: silrig_launch::launcher::FloorSource::Builtin,
         // The verdict table is what a CI log should show, not each case's live line.
         quiet: true,
+        // Each case's figures are what a user opens when it fails.
+        no_figures: false,
         process: opts.process.clone(),
         faults: Vec::new(),
         supervision: SupervisionOptions { restart: RestartMode::Never, max_restarts: 0, restart_backoff_ms: 200.0 },
