@@ -238,12 +238,12 @@ fn sim_sample(
 fn sweep(opts: &silrig::campaign::SweepOptions) -> anyhow::Result<ExitCode> {
     let run = silrig::campaign::sweep(opts)?;
     print!("{}", run.summary.to_text());
+    let rate = run.summary.runs as f64 / run.fly_s.max(1e-9);
+    // A sweep through the rig flies a few cases a second: a decimal tells --jobs 1 from 2.
+    let decimals = if rate < 100.0 { 1 } else { 0 };
     println!(
-        "flew {} cases in {:.2} s on {} thread(s): {:.0} cases/s",
-        run.summary.runs,
-        run.fly_s,
-        run.jobs,
-        run.summary.runs as f64 / run.fly_s.max(1e-9)
+        "flew {} cases in {:.2} s on {} thread(s): {rate:.decimals$} cases/s",
+        run.summary.runs, run.fly_s, run.jobs
     );
     print_written(run.files);
     Ok(ExitCode::SUCCESS)
