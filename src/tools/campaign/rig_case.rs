@@ -4,6 +4,14 @@
 //! judged by [`case::judge`] like a case flown in one process. Each case is a rig of its own (its own run id, so its
 //! own iceoryx2 namespace and claims), so several fly side by side on a sweep's worker threads; a sweep's case runs
 //! in a scratch folder ([`Scratch`]) removed once it is judged, so a sweep of any length leaves no run folders.
+//!
+//! Why `launcher::run` may run on several threads of one process: each run claims its own folder and run id (lock
+//! files holding this process's pid, which `remove_stale_claims` leaves alone since the pid is alive), waits for its
+//! own children by their handles (never `waitpid(-1)`), installs the same process-wide SIGINT/SIGTERM flag every
+//! time (which then stops every rig, and the sweep: [`Interrupted`]), and clears only runs whose nodes are all dead
+//! and older than a grace period. Its children die with the worker thread that forked them (PR_SET_PDEATHSIG),
+//! which outlives its run. Run ids are made here rather than by the launcher, whose fresh ids (pid and microseconds)
+//! two threads could draw alike.
 
 use super::case::{self, CaseResult, Flight};
 use crate::outputs::Flown;
