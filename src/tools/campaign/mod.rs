@@ -118,7 +118,8 @@ impl Campaign {
         Ok(campaign)
     }
 
-    /// Fly every case through the lockstep rig with the controller `cmd` ([`check_controller_cmd`]).
+    /// Fly every case through the lockstep rig with the controller `cmd`: refused when its program cannot be found,
+    /// or beside a controller FMU.
     pub fn fly_controller_cmd(&mut self, cmd: &str) -> anyhow::Result<()> {
         check_controller_cmd(cmd, &self.scenario, &self.config)?;
         self.controller_cmd = Some(cmd.to_string());
