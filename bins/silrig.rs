@@ -55,6 +55,10 @@ enum Command {
         /// The plant or controller as an FMU, in place of the scenario's.
         #[command(flatten)]
         fmus: silrig::rig::in_process::FmuFlags,
+        /// With --sample: fly the case through the lockstep rig with your controller, as `silrig sweep
+        /// --controller-cmd CMD` did (the rig's run, with its report, in the output folder).
+        #[arg(long, value_name = "CMD", requires = "sample")]
+        controller_cmd: Option<String>,
     },
     /// Monte Carlo: fly N dispersed cases of a scenario ([dispersions]) in parallel, judge each by its [criteria],
     /// and write cases.csv, sweep.json and the pass rate with the worst cases.
@@ -149,8 +153,8 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Trim { airspeed_mps, altitude_ft, xcg, json } => trim(airspeed_mps, altitude_ft, xcg, json),
         Command::Plant { command: PlantCommand::Derivative } => plant_derivative(),
-        Command::Sim { config, out, sample: Some(index), seed, fmus } => {
-            sim_sample(config.as_deref(), out, index, seed, &fmus)
+        Command::Sim { config, out, sample: Some(index), seed, fmus, controller_cmd } => {
+            sim_sample(config.as_deref(), out, index, seed, &fmus, controller_cmd.as_deref())
         }
         Command::Sim { config, out, fmus, .. } => sim(config.as_deref(), out, &fmus),
         Command::Sweep(SweepCommand { action: None, local }) => sweep(&local),
@@ -219,9 +223,10 @@ fn sim_sample(
     index: u64,
     seed: Option<u64>,
     fmus: &silrig::rig::in_process::FmuFlags,
+    controller_cmd: Option<&str>,
 ) -> anyhow::Result<ExitCode> {
     let path = config.ok_or_else(|| anyhow::anyhow!("--sample needs the sweep's scenario file"))?;
-    let campaign = silrig::campaign::Campaign::load(path, fmus)?;
+    let campaign = silrig::campaign::Campaign::load(path, fmus, controller_cmd)?;
     let seed = seed.unwrap_or(campaign.scenario.seed);
     let out = out.unwrap_or_else(|| Path::new("out").join(format!("{}-sample-{index}", campaign.scenario.name)));
     let (text, files) = silrig::campaign::fly_one(&campaign, seed, index, &out)?;
@@ -233,12 +238,12 @@ fn sim_sample(
 fn sweep(opts: &silrig::campaign::SweepOptions) -> anyhow::Result<ExitCode> {
     let run = silrig::campaign::sweep(opts)?;
     print!("{}", run.summary.to_text());
+    let rate = run.summary.runs as f64 / run.fly_s.max(1e-9);
+    // A sweep through the rig flies a few cases a second: a decimal tells --jobs 1 from 2.
+    let decimals = if rate < 100.0 { 1 } else { 0 };
     println!(
-        "flew {} cases in {:.2} s on {} thread(s): {:.0} cases/s",
-        run.summary.runs,
-        run.fly_s,
-        run.jobs,
-        run.summary.runs as f64 / run.fly_s.max(1e-9)
+        "flew {} cases in {:.2} s on {} thread(s): {rate:.decimals$} cases/s",
+        run.summary.runs, run.fly_s, run.jobs
     );
     print_written(run.files);
     Ok(ExitCode::SUCCESS)

@@ -1,9 +1,12 @@
 //! The sweep on a real Slurm: this test starts a one-node cluster of its own (munged if none runs, slurmctld and
 //! slurmd with a configuration and state in a temporary folder), plans a sweep, submits the array script
 //! `silrig sweep slurm` writes, merges the shards and compares the outputs with the same sweep on this machine,
-//! byte for byte. It stops what it started, by pid, even when it fails, and leaves a Slurm or munge that was already
-//! running alone (it reuses munged; with a slurmctld already running it does not run). `.ci/run` installs
-//! slurm-wlm and munge; elsewhere, without them, the test says so and passes only outside CI.
+//! byte for byte, then the same with a user's controller (`--controller-cmd`) flown through the lockstep rig. It
+//! stops what it started, by pid, even when it fails, and leaves a Slurm or munge that was already running alone
+//! (it reuses munged; with a slurmctld already running it does not run). `.ci/run` installs slurm-wlm and munge;
+//! elsewhere, without them, the test says so and passes only outside CI.
+
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -170,8 +173,31 @@ fn a_sweep_run_as_a_slurm_array_job_merges_into_the_single_machine_sweep() {
     }
     silrig(&["sweep", "merge", sweep]);
     silrig(&["sweep", CONFIG, "--runs", "60", "--out", local]);
+    same_outputs(&sweep_dir, &local_dir);
+
+    // A user's controller through the rig: the plan carries the command, the script runs it from here (a path
+    // relative to the repository), each task flies its cases through lockstep rigs.
+    common::client_lib(SILRIG);
+    let pid = "python3 examples/python/pid_attitude.py";
+    let rig_dir = cluster.dir.join("rig-sweep");
+    let rig_local = cluster.dir.join("rig-local");
+    let rig = rig_dir.to_str().unwrap();
+    silrig(&["sweep", "plan", CONFIG, "--runs", "6", "--shards", "2", "--controller-cmd", pid, "--out", rig]);
+    silrig(&["sweep", "slurm", rig]);
+    let submitted = cluster.slurm("sbatch", &["--wait", rig_dir.join("sweep.sbatch").to_str().unwrap()]);
+    let logs: String = (0..2)
+        .map(|k| std::fs::read_to_string(rig_dir.join(format!("logs/shard-{k}.log"))).unwrap_or_default())
+        .collect();
+    assert!(submitted.status.success(), "sbatch --wait (rig sweep): {logs}");
+    silrig(&["sweep", "merge", rig]);
+    silrig(&["sweep", CONFIG, "--runs", "6", "--controller-cmd", pid, "--out", rig_local.to_str().unwrap()]);
+    same_outputs(&rig_dir, &rig_local);
+}
+
+/// The merged sweep in `merged` is the single-machine sweep in `local`, byte for byte.
+fn same_outputs(merged: &Path, local: &Path) {
     for file in ["cases.csv", "sweep.json"] {
-        let (a, b) = (std::fs::read(sweep_dir.join(file)).unwrap(), std::fs::read(local_dir.join(file)).unwrap());
+        let (a, b) = (std::fs::read(merged.join(file)).unwrap(), std::fs::read(local.join(file)).unwrap());
         assert!(a == b, "{file}: the merged sweep differs from the single-machine sweep");
     }
 }

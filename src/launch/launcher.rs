@@ -8,7 +8,7 @@
 use super::fault_schedule::FaultSchedule;
 use super::run_report::{ProcessLife, RigReport, write_plots};
 use crate::floor::{timer_baseline, timer_baseline::BaselineArgs, timer_baseline::BaselineReport};
-use crate::program::{find_program, split_command};
+use crate::program::check_command;
 use crate::supervision::{ChildProcess, ControllerLaunch, SupervisionOptions, Supervisor};
 use anyhow::Context;
 use silrig_flight::fault::Fault;
@@ -52,6 +52,10 @@ pub struct LaunchOptions {
     /// No live status line while the run goes.
     #[arg(long)]
     pub quiet: bool,
+    /// Draw no figures (the trace, report and timing files are written as ever): for runs judged from their files
+    /// alone, such as the cases of `silrig sweep --controller-cmd`, where drawing them would take as long as flying.
+    #[arg(long)]
+    pub no_figures: bool,
     /// Loop and watchdog tuning, passed on to every process.
     #[command(flatten)]
     pub process: ProcessOptions,
@@ -366,13 +370,9 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
             .map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
     }
     for (flag, cmd) in [("controller-cmd", &opts.controller_cmd), ("plant-cmd", &opts.plant_cmd)] {
-        let Some(cmd) = cmd else { continue };
-        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--{flag}: {e}"))?;
-        anyhow::ensure!(
-            find_program(&words[0]).is_some(),
-            "--{flag}: cannot find `{}` (not an executable file, and not on PATH)",
-            words[0]
-        );
+        if let Some(cmd) = cmd {
+            check_command(flag, cmd).map_err(anyhow::Error::msg)?;
+        }
     }
     let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
     let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));
@@ -739,7 +739,9 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         phases: super::run_report::phase_splits(&out, scenario.timing.dt_s, opts.mode == RigMode::Realtime),
     };
     // A full disk must not cost the user the report: it is printed whatever happens to the files.
-    if let Err(e) = write_plots(&report, &out, &scenario) {
+    if !opts.no_figures
+        && let Err(e) = write_plots(&report, &out, &scenario)
+    {
         report.failures.push(format!("silrig run: the figures: {e:#}"));
         remove_empty_figures(&out);
     }

@@ -68,6 +68,16 @@ pub fn find_program(program: &str) -> Option<PathBuf> {
     std::env::split_paths(&path).map(|dir| dir.join(program)).find(|p| runnable(p))
 }
 
+/// A user's command (`--controller-cmd`, `--plant-cmd`) split into words, refused up front, naming `flag`, when it
+/// does not split or its program cannot be found.
+pub fn check_command(flag: &str, cmd: &str) -> Result<Vec<String>, String> {
+    let words = split_command(cmd).map_err(|e| format!("--{flag}: {e}"))?;
+    if find_program(&words[0]).is_none() {
+        return Err(format!("--{flag}: cannot find `{}` (not an executable file, and not on PATH)", words[0]));
+    }
+    Ok(words)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

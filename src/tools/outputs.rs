@@ -43,16 +43,18 @@ pub fn write_run(
     Ok(files)
 }
 
-/// A scenario flown in one process.
+/// A scenario flown, in one process ([`fly_one_process`]) or through the three-process rig (a sweep's case with
+/// `--controller-cmd`): what a case is judged on.
 #[derive(Debug)]
-pub struct OneProcessFlight {
+pub struct Flown {
     /// Its trace, as `silrig run --mode lockstep` writes it.
     pub trace: Trace,
     /// The plant's signals when the generic loop flew it (the figures of a plant of the user's own come from them).
     pub plant: Option<PlantSignals>,
     /// When (s) and why it ended before the scenario's end; the trace holds it up to there.
     pub ended_early: Option<(f64, String)>,
-    /// What the rig refused on the way (commands, plant outputs), as sentences.
+    /// What the rig refused or reported as failed on the way (commands, plant outputs, a process that died), as
+    /// sentences.
     pub refusals: Vec<String>,
 }
 
@@ -60,16 +62,16 @@ pub struct OneProcessFlight {
 /// ([`silrig_flight::sim`]), a scenario with an FMU by the rig's generic loop ([`silrig_rig::in_process`]) with
 /// `models` (opened from this scenario, or from the one it was sampled from: the same FMU files). An error says
 /// why it could not start.
-pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<OneProcessFlight, String> {
+pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<Flown, String> {
     if !models.has_fmu() {
         let (trace, left) = silrig_flight::sim::fly(scenario).map_err(|e| e.to_string())?;
         let ended_early = left.map(|exit| (exit.t_s, exit.to_string()));
-        return Ok(OneProcessFlight { trace, plant: None, ended_early, refusals: Vec::new() });
+        return Ok(Flown { trace, plant: None, ended_early, refusals: Vec::new() });
     }
     let flown = models.fly(scenario).map_err(|e| e.to_string())?;
     let refusals = flown.refusals();
     let ended_early = flown.ended_early.map(|e| (e.t_s, e.to_string()));
-    Ok(OneProcessFlight { trace: flown.trace, plant: Some(flown.plant), ended_early, refusals })
+    Ok(Flown { trace: flown.trace, plant: Some(flown.plant), ended_early, refusals })
 }
 
 /// What [`simulate`] flew and wrote.
@@ -82,7 +84,8 @@ pub struct Simulated {
     /// Set when the flight ended before the scenario's end (the F-16 left its envelope, an FMU failed): why; the
     /// files hold it up to there.
     pub ended_early: Option<String>,
-    /// What the rig refused on the way (commands, plant outputs), as sentences.
+    /// What the rig refused or reported as failed on the way (commands, plant outputs, a process that died), as
+    /// sentences.
     pub refusals: Vec<String>,
 }
 

@@ -2,7 +2,7 @@
 //! scenario's criteria. A pure function of (scenario, seed, index), so a case flown alone (`silrig sim --sample I`)
 //! gives the numbers it gave inside any sweep, on any machine or shard.
 
-use crate::outputs::{OneProcessFlight, fly_one_process};
+use crate::outputs::{Flown, fly_one_process};
 use serde::{Deserialize, Serialize};
 use silrig_flight::criteria::{Criteria, Judgement};
 use silrig_flight::dispersion;
@@ -140,34 +140,32 @@ pub struct Flight {
     pub summary: Summary,
 }
 
-/// Fly case `index` of `scenario`'s dispersions under `seed` with `scenario`'s `models`; returns the result and,
-/// when flown, the flight.
-pub fn fly_with_trace(
-    models: &Models,
-    scenario: &Scenario,
-    criteria: &Criteria,
-    seed: u64,
-    index: u64,
-) -> (CaseResult, Option<Flight>) {
+/// Case `index` of `scenario`'s dispersions under `seed`: its sampled values (in the dispersions' key order) and its
+/// scenario, or why it is infeasible (the sampled scenario is out of range).
+pub fn sample(scenario: &Scenario, seed: u64, index: u64) -> (Vec<f64>, Result<Scenario, String>) {
     let sampled = dispersion::sample(&scenario.dispersions, seed, index);
     let values: Vec<f64> = sampled.iter().map(|(_, v)| *v).collect();
-    let infeasible = |reason: String| CaseResult {
+    let case = scenario.with_values(&sampled).map_err(|e| format!("sampled scenario out of range: {e}"));
+    (values, case)
+}
+
+/// The result of a case that could not be flown, and why.
+pub fn infeasible(index: u64, values: Vec<f64>, reason: String) -> CaseResult {
+    CaseResult {
         index,
-        values: values.clone(),
+        values,
         outcome: Outcome::Infeasible,
         reason,
         figures: None,
         judgements: Vec::new(),
         envelope: Vec::new(),
-    };
-    let case = match scenario.with_values(&sampled) {
-        Ok(s) => s,
-        Err(e) => return (infeasible(format!("sampled scenario out of range: {e}")), None),
-    };
-    let OneProcessFlight { trace, plant, ended_early, refusals } = match fly_one_process(models, &case) {
-        Ok(flight) => flight,
-        Err(e) => return (infeasible(e), None),
-    };
+    }
+}
+
+/// Judge a flown case by `criteria`, the same way whichever loop flew it (so an in-process sweep and a sweep
+/// through the rig give comparable results); returns the result and the flight.
+pub fn judge(criteria: &Criteria, index: u64, values: Vec<f64>, case: Scenario, flown: Flown) -> (CaseResult, Flight) {
+    let Flown { trace, plant, ended_early, refusals } = flown;
     let summary = summarize(&trace, &case);
     let judgements = judge_flight(criteria, &case, Some(&trace), Some(&summary));
     // A flight that left the model's envelope (or whose FMU failed) ended there; if it had not left the data
@@ -202,7 +200,29 @@ pub fn fly_with_trace(
         judgements,
         envelope,
     };
-    (result, Some(Flight { scenario: case, trace, plant, summary }))
+    (result, Flight { scenario: case, trace, plant, summary })
+}
+
+/// Fly case `index` of `scenario`'s dispersions under `seed` in one process with `scenario`'s `models`; returns the
+/// result and, when flown, the flight.
+pub fn fly_with_trace(
+    models: &Models,
+    scenario: &Scenario,
+    criteria: &Criteria,
+    seed: u64,
+    index: u64,
+) -> (CaseResult, Option<Flight>) {
+    let (values, case) = sample(scenario, seed, index);
+    let case = match case {
+        Ok(case) => case,
+        Err(reason) => return (infeasible(index, values, reason), None),
+    };
+    let flown = match fly_one_process(models, &case) {
+        Ok(flown) => flown,
+        Err(e) => return (infeasible(index, values, e), None),
+    };
+    let (result, flight) = judge(criteria, index, values, case, flown);
+    (result, Some(flight))
 }
 
 /// Fly case `index` (the result only).

@@ -1,10 +1,12 @@
 //! Monte Carlo campaigns (`silrig sweep`): the scenario's dispersions sampled case by case
-//! ([`silrig_flight::dispersion`]), each case flown in the single-process loop and judged by the scenario's
-//! `[criteria]` ([`case`]), in parallel over the cores with a progress line, and summarised with the pass rate, its
-//! interval and the worst cases ([`report`]).
+//! ([`silrig_flight::dispersion`]), each case flown in the single-process loop ([`case`]), or with a user's
+//! controller command through the three-process lockstep rig ([`rig_case`]), judged by the scenario's `[criteria]`,
+//! in parallel over the cores with a progress line, and summarised with the pass rate, its interval and the worst
+//! cases ([`report`]).
 
 pub mod case;
 pub mod report;
+pub mod rig_case;
 pub mod shard;
 
 use anyhow::Context;
@@ -68,6 +70,11 @@ pub struct SweepOptions {
     /// The plant or controller as an FMU, in place of the scenario's.
     #[command(flatten)]
     pub fmus: FmuFlags,
+    /// Sweep your own controller: fly every case through the three-process lockstep rig with this command in place
+    /// of silrig-controller (as `silrig run --mode lockstep --controller-cmd CMD`), --jobs rigs side by side. A case
+    /// whose controller crashes, exits or never answers fails, with the rig's reason.
+    #[arg(long, value_name = "CMD")]
+    pub controller_cmd: Option<String>,
 }
 
 /// Largest number of cases in one sweep.
@@ -83,21 +90,40 @@ pub struct Campaign {
     pub parameters: Vec<String>,
     /// The file as the user named it (for the commands printed).
     pub config: String,
-    /// `--plant-fmu`, `--controller-fmu` as given, repeated in the commands printed.
+    /// `--plant-fmu`, `--controller-fmu`, `--controller-cmd` as given, repeated in the commands printed.
     pub flags: String,
     /// The plant and controller every case flies (new instances per case).
     pub models: Models,
+    /// `--controller-cmd`: the user's controller, every case flown through the lockstep rig with it.
+    pub controller_cmd: Option<String>,
 }
 
 impl Campaign {
-    /// Load `config` (FMU paths taken relative to it), with the FMUs of `fmus` in place of its own, and check it
-    /// can be swept.
-    pub fn load(config: &Path, fmus: &FmuFlags) -> anyhow::Result<Self> {
+    /// Load `config` (FMU paths taken relative to it), with the FMUs of `fmus` in place of its own and the
+    /// controller command `controller_cmd` (if any), and check it can be swept.
+    pub fn load(config: &Path, fmus: &FmuFlags, controller_cmd: Option<&str>) -> anyhow::Result<Self> {
         let mut scenario = Scenario::load(config)?;
         fmus.apply(&mut scenario)?;
-        let mut campaign = Self::from_scenario(scenario, &config.display().to_string())?;
+        let name = config.display().to_string();
+        if let Some(cmd) = controller_cmd {
+            // Before the FMUs are opened, so that this is what is said.
+            check_controller_cmd(cmd, &scenario, &name)?;
+        }
+        let mut campaign = Self::from_scenario(scenario, &name)?;
         campaign.flags = fmus.to_args();
+        if let Some(cmd) = controller_cmd {
+            campaign.controller_cmd = Some(cmd.to_string());
+            campaign.flags += &format!(" --controller-cmd {}", crate::check::shell_quote(cmd));
+        }
         Ok(campaign)
+    }
+
+    /// Fly every case through the lockstep rig with the controller `cmd`: refused when its program cannot be found,
+    /// or beside a controller FMU.
+    pub fn fly_controller_cmd(&mut self, cmd: &str) -> anyhow::Result<()> {
+        check_controller_cmd(cmd, &self.scenario, &self.config)?;
+        self.controller_cmd = Some(cmd.to_string());
+        Ok(())
     }
 
     /// A campaign from a scenario's text; `config` names it in errors and printed commands.
@@ -125,14 +151,22 @@ impl Campaign {
         for key in scenario.dispersions.keys() {
             models.check_dispersed(key).map_err(|e| anyhow::anyhow!("{config}: dispersions.\"{key}\": {e}"))?;
         }
-        Ok(Self { scenario, criteria, parameters, config: config.to_string(), flags: String::new(), models })
+        Ok(Self {
+            scenario,
+            criteria,
+            parameters,
+            config: config.to_string(),
+            flags: String::new(),
+            models,
+            controller_cmd: None,
+        })
     }
 
     /// The worker threads that may fly its cases: `jobs`, or one when an FMU's binary allows a single instance
-    /// per process (said on stderr).
+    /// per process (said on stderr) and the cases fly in this process (through the rig, each plant is a process).
     pub fn threads(&self, jobs: usize) -> usize {
         match self.models.one_instance_per_process() {
-            Some(fmu) if jobs > 1 => {
+            Some(fmu) if jobs > 1 && self.controller_cmd.is_none() => {
                 eprintln!(
                     "silrig sweep: {fmu} can be instantiated only once per process \
                      (canBeInstantiatedOnlyOncePerProcess): flying its cases on one thread, not {jobs}"
@@ -143,29 +177,50 @@ impl Campaign {
         }
     }
 
-    /// Fly the cases `indices` under `seed` on `jobs` threads, reporting progress on stderr; results in index order.
+    /// Fly the cases `indices` under `seed` on `jobs` threads (with a controller command, `jobs` rigs side by
+    /// side), reporting progress on stderr; results in index order.
     pub fn fly(&self, seed: u64, indices: std::ops::Range<u64>, jobs: usize) -> anyhow::Result<Vec<CaseResult>> {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().context("starting the worker threads")?;
+        let scratch = self.controller_cmd.as_ref().map(|_| rig_case::Scratch::new()).transpose()?;
         let total = indices.end - indices.start;
         let done = AtomicU64::new(0);
         let started = Instant::now();
         let results = std::thread::scope(|scope| {
             let progress = scope.spawn(|| report_progress(&done, total, started));
-            let results: Vec<CaseResult> = pool.install(|| {
+            let results: Result<Vec<CaseResult>, rig_case::Interrupted> = pool.install(|| {
                 indices
                     .into_par_iter()
                     .map(|i| {
-                        let r = case::fly(&self.models, &self.scenario, &self.criteria, seed, i);
+                        let r = match (&self.controller_cmd, &scratch) {
+                            (Some(cmd), Some(scratch)) => scratch.fly(self, cmd, seed, i),
+                            _ => Ok(case::fly(&self.models, &self.scenario, &self.criteria, seed, i)),
+                        };
                         done.fetch_add(1, Ordering::Relaxed);
                         r
                     })
                     .collect()
             });
+            // An interrupted sweep leaves cases unflown: the progress line ends all the same.
+            done.store(total, Ordering::Relaxed);
             progress.join().expect("the progress reporter does not panic");
             results
         });
-        Ok(results)
+        Ok(results?)
     }
+}
+
+/// Refuse the controller command `cmd` up front when its program cannot be found, or when `scenario` (named
+/// `config`) flies a controller FMU, which takes the controller's place in silrig-controller just as `cmd` would.
+fn check_controller_cmd(cmd: &str, scenario: &Scenario, config: &str) -> anyhow::Result<()> {
+    silrig_launch::program::check_command("controller-cmd", cmd).map_err(anyhow::Error::msg)?;
+    if let Some(fmu) = &scenario.controller.fmu {
+        anyhow::bail!(
+            "--controller-cmd flies your controller in place of ours, but {config} flies the controller FMU {} \
+             (--controller-fmu or its [controller] fmu): sweep one controller at a time (a plant FMU may stay)",
+            fmu.display()
+        );
+    }
+    Ok(())
 }
 
 /// Progress on stderr until `done` reaches `total`: a bar redrawn in place on a terminal, a plain line every few
@@ -261,7 +316,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
         anyhow::bail!("silrig sweep needs a scenario file and --runs N (or a subcommand: plan, run, merge, slurm)");
     };
     check_runs(runs)?;
-    let campaign = Campaign::load(config, &opts.fmus)?;
+    let campaign = Campaign::load(config, &opts.fmus, opts.controller_cmd.as_deref())?;
     let seed = opts.seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(jobs(opts.jobs)?);
     let out =
@@ -282,12 +337,23 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
 /// `silrig sim CONFIG --sample I`: fly case I alone, with its trace, summary and plots in `out`; returns the text
 /// (the sampled values, the summary, each criterion as `cases.csv` has it) and the files written.
 pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow::Result<(String, Vec<PathBuf>)> {
-    let (result, flight) = case::fly_with_trace(&campaign.models, &campaign.scenario, &campaign.criteria, seed, index);
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let (result, flight) = match &campaign.controller_cmd {
+        Some(cmd) => {
+            // The rig writes its run (trace, report, figures) into `out` itself.
+            anyhow::ensure!(
+                !out.join("trace.csv").exists(),
+                "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
+                out.display()
+            );
+            rig_case::fly(campaign, cmd, seed, index, out, None, true)?
+        }
+        None => case::fly_with_trace(&campaign.models, &campaign.scenario, &campaign.criteria, seed, index),
+    };
     let mut text = format!("case {index} of {} (seed {seed}): {}\n", campaign.command_config(), result.outcome.label());
     for (key, value) in campaign.parameters.iter().zip(&result.values) {
         text += &format!("  {key} = {value}\n");
     }
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let case_json = out.join("case.json");
     std::fs::write(&case_json, serde_json::to_string_pretty(&result)? + "\n")
         .with_context(|| format!("writing {}", case_json.display()))?;
@@ -295,7 +361,10 @@ pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow
         text += &format!("  infeasible: {}\n", result.reason);
         return Ok((text, vec![case_json]));
     };
-    let mut files = crate::outputs::write_run(out, &scenario, &trace, &summary, plant.as_ref())?;
+    let mut files = match &campaign.controller_cmd {
+        Some(_) => ["trace.csv", rig_case::CASE_SCENARIO, "report.json"].map(|f| out.join(f)).to_vec(),
+        None => crate::outputs::write_run(out, &scenario, &trace, &summary, plant.as_ref())?,
+    };
     files.push(case_json);
     text += &summary.to_text();
     if !result.reason.is_empty() {

@@ -32,6 +32,10 @@ pub struct Manifest {
     pub runs: u64,
     /// Shards the cases are split into.
     pub shards: u64,
+    /// `--controller-cmd`: every case flown through the lockstep rig with this command, run by each worker from the
+    /// folder it starts in (absent: our controller, in one process).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller_cmd: Option<String>,
     /// FNV-1a of all of the above: shard files carry it, so slices of different plans never merge.
     pub fingerprint: String,
 }
@@ -66,9 +70,20 @@ fn fnv1a(parts: &[&str]) -> String {
 }
 
 impl Manifest {
-    fn new(config: String, scenario_toml: String, seed: u64, runs: u64, shards: u64) -> Self {
-        let fingerprint = fnv1a(&[&config, &scenario_toml, &seed.to_string(), &runs.to_string(), &shards.to_string()]);
-        Self { config, scenario_toml, seed, runs, shards, fingerprint }
+    fn new(
+        config: String,
+        scenario_toml: String,
+        seed: u64,
+        runs: u64,
+        shards: u64,
+        controller_cmd: Option<String>,
+    ) -> Self {
+        let mut parts =
+            vec![config.clone(), scenario_toml.clone(), seed.to_string(), runs.to_string(), shards.to_string()];
+        // Only when there is one, so the plans written before the field existed keep their fingerprints.
+        parts.extend(controller_cmd.clone());
+        let fingerprint = fnv1a(&parts.iter().map(String::as_str).collect::<Vec<_>>());
+        Self { config, scenario_toml, seed, runs, shards, controller_cmd, fingerprint }
     }
 
     /// The cases of shard `k`: an even split, the first shards one case longer when it does not divide.
@@ -83,7 +98,12 @@ impl Manifest {
     }
 
     fn campaign(&self) -> anyhow::Result<Campaign> {
-        Campaign::from_text(&self.scenario_toml, &self.config)
+        let mut campaign = Campaign::from_text(&self.scenario_toml, &self.config)?;
+        // `config` names the command already (it is the planned campaign's `command_config`).
+        if let Some(cmd) = &self.controller_cmd {
+            campaign.fly_controller_cmd(cmd)?;
+        }
+        Ok(campaign)
     }
 
     /// Read `dir/manifest.json`.
@@ -93,7 +113,14 @@ impl Manifest {
             .with_context(|| format!("reading {} (write it with `silrig sweep plan`)", path.display()))?;
         let m: Manifest =
             serde_json::from_str(&text).with_context(|| format!("{}: not a sweep manifest", path.display()))?;
-        let expected = Manifest::new(m.config.clone(), m.scenario_toml.clone(), m.seed, m.runs, m.shards);
+        let expected = Manifest::new(
+            m.config.clone(),
+            m.scenario_toml.clone(),
+            m.seed,
+            m.runs,
+            m.shards,
+            m.controller_cmd.clone(),
+        );
         anyhow::ensure!(
             expected.fingerprint == m.fingerprint,
             "{}: edited after planning (its fingerprint does not match)",
@@ -123,6 +150,10 @@ pub struct PlanOptions {
     /// The plant or controller as an FMU, in place of the scenario's (every worker must reach the file).
     #[command(flatten)]
     pub fmus: silrig_rig::in_process::FmuFlags,
+    /// Sweep your own controller through the lockstep rig (as `silrig sweep --controller-cmd`); every worker runs
+    /// this command from the folder it starts in, so it must find the program and its files from there.
+    #[arg(long, value_name = "CMD")]
+    pub controller_cmd: Option<String>,
 }
 
 /// `silrig sweep plan`: check the scenario, write the manifest.
@@ -135,7 +166,7 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
         opts.shards
     );
     let text = std::fs::read_to_string(&opts.config).with_context(|| format!("reading {}", opts.config.display()))?;
-    let campaign = Campaign::load(&opts.config, &opts.fmus)?;
+    let campaign = Campaign::load(&opts.config, &opts.fmus, opts.controller_cmd.as_deref())?;
     let config = campaign.command_config();
     // Workers run from any folder: a plan that names FMUs carries the scenario with their paths made absolute.
     let text = if campaign.models.has_fmu() { campaign.scenario.to_toml() } else { text };
@@ -144,7 +175,8 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
         "{} already holds a sweep plan ({MANIFEST}); choose another --out or move it away: nothing is overwritten",
         opts.out.display()
     );
-    let manifest = Manifest::new(config, text, opts.seed.unwrap_or(campaign.scenario.seed), opts.runs, opts.shards);
+    let seed = opts.seed.unwrap_or(campaign.scenario.seed);
+    let manifest = Manifest::new(config, text, seed, opts.runs, opts.shards, campaign.controller_cmd.clone());
     std::fs::create_dir_all(opts.out.join(SHARDS_DIR)).with_context(|| format!("creating {}", opts.out.display()))?;
     silrig_flight::files::write_atomically(
         &opts.out.join(MANIFEST),
@@ -303,6 +335,11 @@ pub fn slurm_script(opts: &SlurmOptions) -> anyhow::Result<(PathBuf, String)> {
     let exe = std::env::current_exe()?;
     let name = manifest.campaign()?.scenario.name;
     let partition = opts.partition.as_ref().map(|p| format!("#SBATCH --partition={p}\n")).unwrap_or_default();
+    // A controller command names its program and files as seen from here (`python3 examples/...`): run it from here.
+    let chdir = match &manifest.controller_cmd {
+        Some(_) => format!("#SBATCH --chdir={}\n", std::env::current_dir()?.display()),
+        None => String::new(),
+    };
     let quote = |p: &Path| format!("'{}'", p.display().to_string().replace('\'', "'\\''"));
     let script = format!(
         "#!/bin/sh\n\
@@ -314,6 +351,7 @@ pub fn slurm_script(opts: &SlurmOptions) -> anyhow::Result<(PathBuf, String)> {
          #SBATCH --cpus-per-task={cpus}\n\
          #SBATCH --time={time}\n\
          {partition}\
+         {chdir}\
          #SBATCH --output={logs}/shard-%a.log\n\
          exec {exe} sweep run {dir} --jobs \"${{SLURM_CPUS_PER_TASK:-1}}\"\n",
         config = manifest.config,
@@ -341,7 +379,7 @@ mod tests {
     #[test]
     fn shards_cover_every_case_once_in_order() {
         for (runs, shards) in [(10, 3), (7, 7), (1000, 8), (5, 1)] {
-            let m = Manifest::new("c".into(), "t".into(), 1, runs, shards);
+            let m = Manifest::new("c".into(), "t".into(), 1, runs, shards, None);
             let all: Vec<u64> = (0..shards).flat_map(|k| m.range(k)).collect();
             assert_eq!(all, (0..runs).collect::<Vec<_>>(), "{runs} in {shards}");
             let sizes: Vec<u64> = (0..shards).map(|k| m.range(k).end - m.range(k).start).collect();

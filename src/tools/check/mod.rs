@@ -13,7 +13,7 @@ use criteria::{RigCriteria, RunEvidence};
 use silrig_flight::criteria::Outcome;
 use silrig_flight::trace::Trace;
 use silrig_launch::launcher::{self, ControllerKind, LaunchOptions};
-use silrig_launch::program::{find_program, split_command};
+use silrig_launch::program::check_command;
 use silrig_launch::supervision::{RestartMode, SupervisionOptions};
 use silrig_rig::{ProcessOptions, signals};
 use std::path::{Path, PathBuf};
@@ -146,7 +146,8 @@ fn default_process_options() -> ProcessOptions {
     <Defaults as clap::Parser>::parse_from(["silrig"]).process
 }
 
-fn shell_quote(text: &str) -> String {
+/// `text` as one word of a POSIX shell command: as is when it is plain, else single-quoted.
+pub fn shell_quote(text: &str) -> String {
     if !text.is_empty() && text.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:@".contains(c)) {
         text.to_string()
     } else {
@@ -166,6 +167,8 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         floor: silrig_launch::launcher::FloorSource::Builtin,
         // The verdict table is what a CI log should show, not each case's live line.
         quiet: true,
+        // Each case's figures are what a user opens when it fails.
+        no_figures: false,
         process: opts.process.clone(),
         faults: Vec::new(),
         supervision: SupervisionOptions { restart: RestartMode::Never, max_restarts: 0, restart_backoff_ms: 200.0 },
@@ -327,13 +330,7 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
     signals::install_termination_flag();
     let suite = opts.load_suite()?;
     if let Some(cmd) = &opts.controller_cmd {
-        let words = split_command(cmd).map_err(|e| CheckError::Usage(format!("--controller-cmd: {e}")))?;
-        if find_program(&words[0]).is_none() {
-            return Err(CheckError::Usage(format!(
-                "--controller-cmd: cannot find `{}` (not an executable file, and not on PATH)",
-                words[0]
-            )));
-        }
+        check_command("controller-cmd", cmd).map_err(CheckError::Usage)?;
     }
     let out = opts
         .out

@@ -1,0 +1,155 @@
+//! One case of a campaign flown through the three-process lockstep rig (`silrig sweep --controller-cmd CMD`): a
+//! user's controller in a process of its own (C, Python, anything that speaks the contract) against the case's
+//! sampled scenario, flown exactly as `silrig run --mode lockstep --controller-cmd CMD` flies that scenario, and
+//! judged by [`case::judge`] like a case flown in one process. Each case is a rig of its own (its own run id, so its
+//! own iceoryx2 namespace and claims), so several fly side by side on a sweep's worker threads; a sweep's case runs
+//! in a scratch folder ([`Scratch`]) removed once it is judged, so a sweep of any length leaves no run folders.
+//!
+//! Why `launcher::run` may run on several threads of one process: each run claims its own folder and run id (lock
+//! files holding this process's pid, which `remove_stale_claims` leaves alone since the pid is alive), waits for its
+//! own children by their handles (never `waitpid(-1)`), installs the same process-wide SIGINT/SIGTERM flag every
+//! time (which then stops every rig, and the sweep: [`Interrupted`]), and clears only runs whose nodes are all dead
+//! and older than a grace period. Its children die with the worker thread that forked them (PR_SET_PDEATHSIG),
+//! which outlives its run. Run ids are made here rather than by the launcher, whose fresh ids (pid and microseconds)
+//! two threads could draw alike.
+
+use super::case::{self, CaseResult, Flight};
+use crate::outputs::Flown;
+use silrig_flight::trace::Trace;
+use silrig_launch::launcher::{self, LaunchOptions};
+use silrig_rig::signals;
+use silrig_wire::ipc::RunId;
+use std::path::{Path, PathBuf};
+
+/// The case's scenario as the rig is given it, in the case's run folder.
+pub const CASE_SCENARIO: &str = "case-scenario.toml";
+
+/// A sweep stopped by SIGINT or SIGTERM: it writes nothing (a sweep's outputs hold every case or none).
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted by {0}: the cases flown so far are not written (a sweep's outputs hold every case or none)")]
+pub struct Interrupted(&'static str);
+
+/// Stop when the user asked to: launcher::run routes SIGINT and SIGTERM to a flag, so a sweep must look at it.
+pub fn check_interrupted() -> Result<(), Interrupted> {
+    match signals::termination_signal() {
+        Some(signal) => Err(Interrupted(signals::name(signal))),
+        None => Ok(()),
+    }
+}
+
+/// The options `silrig run --mode lockstep --quiet --controller-cmd CMD --run-id ID --out DIR CONFIG` is given, parsed
+/// as the command line parses them: every other flag at its default, so a case is that run, byte for byte (with
+/// `--no-figures` when the run's folder is thrown away once judged: the figures change nothing in it but the
+/// time). No restarts (the default): a controller that dies fails its case.
+fn launch_options(
+    cmd: &str,
+    config: &Path,
+    out: &Path,
+    run_id: Option<&RunId>,
+    figures: bool,
+) -> anyhow::Result<LaunchOptions> {
+    #[derive(clap::Parser)]
+    struct Run {
+        #[command(flatten)]
+        launch: LaunchOptions,
+    }
+    let mut argv = vec!["silrig-run".to_string(), "--mode".into(), "lockstep".into(), "--quiet".into()];
+    argv.extend(["--controller-cmd".into(), cmd.into(), "--out".into(), out.display().to_string()]);
+    if let Some(id) = run_id {
+        argv.extend(["--run-id".into(), id.to_string()]);
+    }
+    if !figures {
+        argv.push("--no-figures".into());
+    }
+    argv.push(config.display().to_string());
+    Ok(<Run as clap::Parser>::try_parse_from(argv)?.launch)
+}
+
+/// Fly case `index` of `campaign` under `seed` with the controller `cmd` through the lockstep rig in `run_dir`
+/// (created; it must not hold a run), as `run_id` (None: a fresh one), drawing the run's figures or not; returns the
+/// result and, when flown, the flight. A rig that could not be set up makes the case infeasible; a controller that crashed, exited or never
+/// answered fails it, the rig's failures as its reason. Err only when the user stopped the sweep.
+pub fn fly(
+    campaign: &super::Campaign,
+    cmd: &str,
+    seed: u64,
+    index: u64,
+    run_dir: &Path,
+    run_id: Option<&RunId>,
+    figures: bool,
+) -> Result<(CaseResult, Option<Flight>), Interrupted> {
+    check_interrupted()?;
+    let (values, scenario) = case::sample(&campaign.scenario, seed, index);
+    let scenario = match scenario {
+        Ok(scenario) => scenario,
+        Err(reason) => return Ok((case::infeasible(index, values, reason), None)),
+    };
+    // The built-in F-16 is trimmed in the plant's process, which would fail the case with only its stderr to say
+    // why: a case that cannot be trimmed is infeasible, as in one process, with the same reason.
+    if scenario.plant.fmu.is_none()
+        && let Err(e) = silrig_flight::sim::PlantRunner::new(&scenario)
+    {
+        return Ok((case::infeasible(index, values, e.to_string()), None));
+    }
+    let config = run_dir.join(CASE_SCENARIO);
+    let report = std::fs::create_dir_all(run_dir)
+        .and_then(|()| std::fs::write(&config, scenario.to_toml()))
+        .map_err(anyhow::Error::from)
+        .and_then(|()| launch_options(cmd, &config, run_dir, run_id, figures))
+        .and_then(|opts| launcher::run(&opts));
+    let report = match report {
+        Ok(report) => report,
+        Err(e) => {
+            return Ok((case::infeasible(index, values, format!("the rig could not be set up: {e:#}")), None));
+        }
+    };
+    check_interrupted()?;
+    // A controller that died before the plant's first tick leaves no trace: the case is judged on none (every
+    // criterion fails, its figures are empty), with the rig's failures as the reason.
+    let trace = Trace::load(&run_dir.join("trace.csv")).unwrap_or_else(|_| Trace::new(Vec::new()));
+    // A rig that failed fails the case. When its trace stops short of the scenario's end (in lockstep the plant
+    // gives up on a controller that no longer answers), the flight stopped there: a departure, as an FMU's failed
+    // call is in one process.
+    let last_t_s = trace.column("t_s").and_then(|t| t.last().copied());
+    let short = last_t_s.is_none_or(|t| t + scenario.timing.dt_s / 2.0 < scenario.timing.duration_s);
+    let (ended_early, refusals) = match report.failures {
+        failures if short && !failures.is_empty() => (Some((last_t_s.unwrap_or(0.0), failures.join("; "))), vec![]),
+        failures => (None, failures),
+    };
+    let flown = Flown { trace, plant: None, ended_early, refusals };
+    let (result, flight) = case::judge(&campaign.criteria, index, values, scenario, flown);
+    Ok((result, Some(flight)))
+}
+
+/// A sweep's scratch folder: one run folder per case in flight, each removed once its case is judged, and the
+/// folder itself when the sweep ends (however it ends).
+pub struct Scratch {
+    dir: PathBuf,
+    /// The sweep's run id; case i flies as `<it>-<i in hex>`, unique on this machine while the sweep runs.
+    run_id: RunId,
+}
+
+impl Scratch {
+    /// A fresh scratch folder in the system's temporary folder, named by a fresh run id.
+    pub fn new() -> anyhow::Result<Self> {
+        let run_id = launcher::fresh_run_id();
+        let dir = std::env::temp_dir().join(format!("silrig-sweep-{run_id}"));
+        std::fs::create_dir_all(&dir)?;
+        Ok(Self { dir, run_id })
+    }
+
+    /// Fly case `index` in a run folder of its own, judge it and remove the folder.
+    pub fn fly(&self, campaign: &super::Campaign, cmd: &str, seed: u64, index: u64) -> Result<CaseResult, Interrupted> {
+        let run_id = RunId::new(&format!("{}-{index:x}", self.run_id)).expect("a run id and a hex number make one");
+        let run_dir = self.dir.join(format!("case-{index}"));
+        let flown = fly(campaign, cmd, seed, index, &run_dir, Some(&run_id), false);
+        let _ = std::fs::remove_dir_all(&run_dir);
+        Ok(flown?.0)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}

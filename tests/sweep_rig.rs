@@ -1,0 +1,241 @@
+//! `silrig sweep --controller-cmd`: a sweep of a user's controller, each case flown through the three-process
+//! lockstep rig. The same bytes with one rig or two side by side and through a plan's shards; a case flown alone
+//! (`silrig sim --sample I --controller-cmd`) is the sweep's case, and its trace is a lone `silrig run --mode
+//! lockstep` of its scenario byte for byte; a controller that crashes in some cases fails those cases with the
+//! rig's reason and the sweep goes on, as does one that never answers; a command that cannot run, or one beside a
+//! controller FMU, is refused, while a plant FMU sweeps under it. Every sweep leaves no run folder, scratch folder
+//! or shared memory behind.
+
+mod common;
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+const SUITE: &str = "sweep_rig";
+
+/// The Python PID example (with libsilrig_client.so built for it).
+fn python_pid() -> String {
+    common::client_lib(SILRIG);
+    format!("python3 {ROOT}/examples/python/pid_attitude.py")
+}
+
+/// configs/sweep-robust.toml shortened to 2 s (its criteria's windows with it), the theta set point dispersed too,
+/// written into `dir`.
+fn short_config(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(Path::new(ROOT).join("configs/sweep-robust.toml")).unwrap();
+    let text = text
+        .replace("duration_s = 10.0", "duration_s = 2.0")
+        .replace("within_s = 8.0", "within_s = 1.5")
+        .replace("after_s = 8.0", "after_s = 1.5")
+        .replace(
+            "[dispersions]\n",
+            "[dispersions]\n\"setpoint.theta_deg\" = { dist = \"uniform\", min = 5.0, max = 15.0 }\n",
+        );
+    let path = dir.join("short.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// `silrig ARGS` from the repository root, to its end (5 minutes at most): (exit code, stdout, stderr). The rigs
+/// it flew (run ids `r<its pid>-...`) left no shared memory, and its scratch folders are gone.
+fn silrig(args: &[&str]) -> (Option<i32>, String, String) {
+    let child = Command::new(SILRIG)
+        .args(args)
+        .current_dir(ROOT)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let runs = format!("r{:x}-", child.id());
+    let o = common::wait_with_watchdog(child, Duration::from_secs(300));
+    let shm: Vec<String> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n.starts_with(&format!("sr_{runs}")))
+        .collect();
+    assert!(shm.is_empty(), "shared memory left behind: {shm:?}");
+    let tmp: Vec<String> = std::fs::read_dir(std::env::temp_dir())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n.starts_with(&format!("silrig_{runs}")) || n.starts_with(&format!("silrig-sweep-{runs}")))
+        .collect();
+    assert!(tmp.is_empty(), "run or scratch folders left behind: {tmp:?}");
+    (o.status.code(), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+}
+
+/// `silrig ARGS`, which must succeed.
+fn ok(args: &[&str]) -> String {
+    let (code, stdout, stderr) = silrig(args);
+    assert_eq!(code, Some(0), "silrig {args:?}:\n{stdout}{stderr}");
+    stdout
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn a_sweep_of_the_python_pid_is_the_same_on_one_rig_two_and_shards_and_a_case_is_a_lone_lockstep_run() {
+    let dir = common::temp_dir(SUITE, "same");
+    let config = short_config(&dir);
+    let config = config.to_str().unwrap();
+    let pid = python_pid();
+    let out = |name: &str| dir.join(name).display().to_string();
+    ok(&["sweep", config, "--runs", "8", "--jobs", "1", "--controller-cmd", &pid, "--out", &out("one")]);
+    let stdout = ok(&["sweep", config, "--runs", "8", "--jobs", "2", "--controller-cmd", &pid, "--out", &out("two")]);
+    let csv = read(&dir.join("one/cases.csv"));
+    assert_eq!(csv, read(&dir.join("two/cases.csv")), "one rig or two side by side: the same cases");
+    assert_eq!(read(&dir.join("one/sweep.json")), read(&dir.join("two/sweep.json")));
+    assert_eq!(csv.lines().count(), 9, "{csv}");
+    // Every case of this sweep is flown (the first one cannot be trimmed) and the worst cases are printed with the
+    // command that flies them alone, the controller's command quoted for a shell.
+    assert!(csv.lines().any(|l| l.contains(",pass,")), "{csv}");
+    assert!(csv.lines().any(|l| l.contains(",fail,")), "{csv}");
+    assert!(csv.lines().nth(1).unwrap().starts_with("0,infeasible,\"initial condition:"), "{csv}");
+    assert!(stdout.contains(&format!("--controller-cmd '{pid}' --sample ")), "{stdout}");
+    for stem in ["histograms", "scatter", "envelope"] {
+        assert!(dir.join("two").join(format!("{stem}.png")).exists(), "{stem} drawn");
+    }
+
+    // A plan carries the command to the workers; its merged shards are the same sweep.
+    ok(&["sweep", "plan", config, "--runs", "8", "--shards", "3", "--controller-cmd", &pid, "--out", &out("plan")]);
+    let manifest: Value = serde_json::from_str(&read(&dir.join("plan/manifest.json"))).unwrap();
+    assert_eq!(manifest["controller_cmd"], pid.as_str());
+    for k in ["0", "1", "2"] {
+        ok(&["sweep", "run", &out("plan"), "--index", k, "--jobs", "2"]);
+    }
+    ok(&["sweep", "merge", &out("plan")]);
+    assert_eq!(read(&dir.join("plan/cases.csv")), csv);
+    assert_eq!(read(&dir.join("plan/sweep.json")), read(&dir.join("one/sweep.json")));
+    let script = ok(&["sweep", "slurm", &out("plan")]);
+    assert!(read(&dir.join("plan/sweep.sbatch")).contains(&format!("#SBATCH --chdir={ROOT}\n")), "{script}");
+
+    // Case 3 flown alone is the sweep's case 3 (its shard holds it in full) ...
+    let shard: Value = serde_json::from_str(&read(&dir.join("plan/shards/shard-1-of-3.json"))).unwrap();
+    let in_sweep = shard["cases"].as_array().unwrap().iter().find(|c| c["index"] == 3).unwrap().clone();
+    let sim = ok(&["sim", config, "--sample", "3", "--controller-cmd", &pid, "--out", &out("case-3")]);
+    let alone: Value = serde_json::from_str(&read(&dir.join("case-3/case.json"))).unwrap();
+    assert_eq!(alone, in_sweep, "{sim}");
+    assert_ne!(alone["outcome"], "infeasible");
+    // ... and its trace is a lone `silrig run --mode lockstep` of its scenario, byte for byte.
+    let run_id = format!("sr{}-lone", std::process::id());
+    let scenario = out("case-3/case-scenario.toml");
+    let lone = out("lone");
+    ok(&[
+        "run",
+        "--mode",
+        "lockstep",
+        "--quiet",
+        "--no-figures",
+        "--controller-cmd",
+        &pid,
+        "--run-id",
+        &run_id,
+        "--out",
+        &lone,
+        &scenario,
+    ]);
+    common::no_shared_memory_left(&run_id);
+    assert!(read(&dir.join("lone/trace.csv")) == read(&dir.join("case-3/trace.csv")), "the traces differ");
+    // The case alone draws its figures; a run asked for none (as a sweep's runs are) has the same trace.
+    assert!(dir.join("case-3/fig1_states.png").exists());
+    assert!(!dir.join("lone/fig1_states.png").exists() && dir.join("lone/report.json").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_controller_that_crashes_fails_its_cases_with_the_reason_and_the_sweep_goes_on() {
+    let dir = common::temp_dir(SUITE, "crash");
+    let config = short_config(&dir);
+    common::client_lib(SILRIG);
+    let crashing = format!("python3 {ROOT}/tests/clients/crash_above.py 10");
+    let out = dir.join("sweep").display().to_string();
+    ok(&[
+        "sweep",
+        config.to_str().unwrap(),
+        "--runs",
+        "8",
+        "--jobs",
+        "2",
+        "--controller-cmd",
+        &crashing,
+        "--out",
+        &out,
+    ]);
+    let csv = read(&dir.join("sweep/cases.csv"));
+    let crashed: Vec<&str> = csv.lines().filter(|l| l.contains("crash_above: theta set point")).collect();
+    assert!(!crashed.is_empty() && crashed.len() < 7, "some cases crash, not all:\n{csv}");
+    for line in &crashed {
+        assert!(line.contains(",fail,\"departed at 0.50 s: controller: exit status 3"), "{line}");
+    }
+    let summary: Value = serde_json::from_str(&read(&dir.join("sweep/sweep.json"))).unwrap();
+    assert_eq!(summary["runs"], 8);
+    assert!(csv.lines().any(|l| l.contains(",pass,")), "the cases below the threshold fly: {csv}");
+
+    // A controller that takes samples and never answers: the plant gives up on it, and the case fails saying so.
+    let silent = format!("python3 {ROOT}/tests/clients/misbehaving.py never");
+    let out = dir.join("silent").display().to_string();
+    ok(&["sweep", config.to_str().unwrap(), "--runs", "3", "--jobs", "2", "--controller-cmd", &silent, "--out", &out]);
+    let csv = read(&dir.join("silent/cases.csv"));
+    for line in csv.lines().skip(2) {
+        assert!(line.contains(",fail,\"departed at ") && line.contains("no command for tick 0"), "{line}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_controller_command_that_cannot_run_or_flies_beside_a_controller_fmu_is_refused_with_nothing_written() {
+    let dir = common::temp_dir(SUITE, "refused");
+    let config = short_config(&dir);
+    let config = config.to_str().unwrap();
+    let out = dir.join("out").display().to_string();
+    let missing = "surely-no-such-controller --gain 2";
+    for args in [
+        vec!["sweep", config, "--runs", "4", "--controller-cmd", missing, "--out", &out],
+        vec!["sweep", "plan", config, "--runs", "4", "--shards", "2", "--controller-cmd", missing, "--out", &out],
+        vec!["sim", config, "--sample", "1", "--controller-cmd", missing, "--out", &out],
+    ] {
+        let (code, stdout, stderr) = silrig(&args);
+        assert_eq!(code, Some(2), "{args:?}: {stdout}{stderr}");
+        assert!(stderr.contains("--controller-cmd: cannot find `surely-no-such-controller`"), "{stderr}");
+        assert!(!Path::new(&out).exists(), "{args:?} wrote {out}");
+    }
+    let fmu = dir.join("controller.fmu").display().to_string();
+    let (code, _, stderr) =
+        silrig(&["sweep", config, "--runs", "4", "--controller-cmd", "python3 x.py", "--controller-fmu", &fmu]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("flies the controller FMU") && stderr.contains("sweep one controller at a time"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_plant_fmu_sweeps_under_a_controller_command() {
+    let dir = common::temp_dir(SUITE, "plant-fmu");
+    let fmu = common::fmu::cached_fmu(SUITE, "airframe");
+    std::fs::copy(&fmu, dir.join("airframe.fmu")).unwrap();
+    // examples/fmu/airframe_sweep.toml without its controller FMU (and the gain dispersed on it), shortened to 4 s.
+    let text = std::fs::read_to_string(Path::new(ROOT).join("examples/fmu/airframe_sweep.toml")).unwrap();
+    let (head, rest) = text.split_once("[controller]").unwrap();
+    let (_, tail) = rest.split_once("[dispersions]").unwrap();
+    let tail = tail.lines().filter(|l| !l.starts_with("\"controller.")).collect::<Vec<_>>().join("\n");
+    let config = dir.join("airframe_sweep.toml");
+    std::fs::write(&config, format!("{}[dispersions]{tail}\n", head.replace("duration_s = 10.0", "duration_s = 4.0")))
+        .unwrap();
+    let pid = python_pid();
+    let out = dir.join("sweep").display().to_string();
+    let stdout =
+        ok(&["sweep", config.to_str().unwrap(), "--runs", "4", "--jobs", "2", "--controller-cmd", &pid, "--out", &out]);
+    let csv = read(&dir.join("sweep/cases.csv"));
+    assert_eq!(csv.lines().count(), 5, "{stdout}");
+    assert!(csv.lines().skip(1).all(|l| l.contains(",pass,") || l.contains(",fail,")), "every case flown: {csv}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
