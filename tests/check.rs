@@ -423,3 +423,25 @@ fn a_malformed_sweep_case_is_refused_naming_the_key() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn a_sweep_case_flies_a_controller_of_your_own_through_the_lockstep_rig() {
+    client_lib();
+    let dir = temp_dir("dispersed-python-files");
+    let text = std::fs::read_to_string(format!("{ROOT}/configs/check-dispersed.toml"))
+        .unwrap()
+        .replace("runs = 200", "runs = 6")
+        .replace("pass_rate_min = 0.9", "pass_rate_min = 0.5");
+    std::fs::write(dir.join("six.toml"), text).unwrap();
+    let pid = "python3 examples/python/pid_attitude.py";
+    let c = check("dispersed-python", &[dir.join("six.toml").to_str().unwrap(), "--controller-cmd", pid]);
+    assert_eq!(c.code, Some(0), "{}{}", c.stdout, c.stderr);
+    let measured = c.measured("dispersed-robust", "pass_rate");
+    assert!(measured.contains("(6 of 6 passed"), "{measured}");
+    // Each case flew the Python controller in a rig of its own: the sweep's commands name it.
+    let sweep: Value =
+        serde_json::from_str(&std::fs::read_to_string(c.out.join("dispersed-robust/sweep.json")).unwrap()).unwrap();
+    assert!(sweep["config"].as_str().unwrap().ends_with(&format!("--controller-cmd '{pid}'")), "{sweep}");
+    std::fs::remove_dir_all(&c.dir).unwrap();
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -245,8 +245,9 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
     })
 }
 
-/// Fly a sweep case: its dispersed cases in one process (as `silrig sweep`, with `cases.csv`, `sweep.json` and the
-/// figures in the case's folder), judged on the 95 % Wilson lower bound of the pass rate.
+/// Fly a sweep case: its dispersed cases as `silrig sweep` flies them (in one process; through the lockstep rig
+/// with `--controller-cmd`), with `cases.csv`, `sweep.json` and the figures in the case's folder, judged on the
+/// 95 % Wilson lower bound of the pass rate.
 fn sweep_case(
     opts: &CheckOptions,
     case: &Case,
@@ -256,9 +257,9 @@ fn sweep_case(
     started: std::time::Instant,
 ) -> anyhow::Result<CaseVerdict> {
     anyhow::ensure!(
-        opts.controller_cmd.is_none() && opts.plant_cmd.is_none(),
-        "a sweep case flies in one process: our controller, or an FMU (--controller-fmu, --plant-fmu); a controller \
-         or plant of your own in another process (--controller-cmd, --plant-cmd) is not swept yet"
+        opts.plant_cmd.is_none(),
+        "a sweep case flies the built-in F-16 or a plant FMU (--plant-fmu); a plant process of your own \
+         (--plant-cmd) is not swept yet"
     );
     let mut scenario = case.scenario.clone();
     let fmus = silrig_rig::in_process::FmuFlags {
@@ -266,7 +267,13 @@ fn sweep_case(
         controller_fmu: opts.controller_fmu.clone(),
     };
     fmus.apply(&mut scenario)?;
-    let campaign = crate::campaign::Campaign::from_scenario(scenario, &scenario_path.display().to_string())?;
+    let mut campaign = crate::campaign::Campaign::from_scenario(scenario, &scenario_path.display().to_string())?;
+    // A controller of the user's own flies each dispersed case through the lockstep rig, as `silrig sweep
+    // --controller-cmd` does; the worst cases' commands name it.
+    if let Some(cmd) = &opts.controller_cmd {
+        campaign.fly_controller_cmd(cmd)?;
+        campaign.flags = format!(" --controller-cmd {}", shell_quote(cmd));
+    }
     let seed = sweep.seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(crate::campaign::jobs(None)?);
     let cases = campaign.fly(seed, 0..sweep.runs, jobs)?;
