@@ -312,7 +312,7 @@ mod tests {
     #[test]
     fn the_embedded_suite_and_the_shipped_suites_load() {
         let default = Suite::embedded_default();
-        assert_eq!(default.cases.len(), 6);
+        assert_eq!(default.cases.len(), 7);
         assert!(default.cases.iter().all(|c| !c.why.is_empty()), "every default case says why it is there");
         let paper =
             Suite::load(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/check-paper-gains.toml")))
