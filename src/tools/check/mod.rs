@@ -360,7 +360,11 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
             suite.cases.len(),
             case.name,
             match case.sweep {
-                Some(sweep) => format!("a sweep of {} dispersed cases in one process", sweep.runs),
+                Some(sweep) => format!(
+                    "a sweep of {} dispersed cases {}",
+                    sweep.runs,
+                    if opts.controller_cmd.is_some() { "through the lockstep rig" } else { "in one process" }
+                ),
                 None => case.mode.label().to_string(),
             },
             if case.sweep.is_none() && case.criteria.runs() > 1 { ", flown twice" } else { "" }
