@@ -22,7 +22,7 @@ use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
 use silrig_fmi::Fmu;
-use silrig_wire::wire::{self, CommandSample, MAX_INPUTS, PlantSample, WireSample};
+use silrig_wire::wire::{self, CommandSample, PlantSample, WireSample};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -160,7 +160,6 @@ pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn
         }
         outputs = next;
     }
-    debug_assert!(inputs <= MAX_INPUTS);
     Ok(Flown { plant: signals, trace, ended_early, commands_refused, outputs_refused: (0, None) })
 }
 
