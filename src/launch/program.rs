@@ -1,5 +1,6 @@
 //! Finding and naming the programs a run starts: the rig's own binaries beside the running executable, a user's
-//! `--controller-cmd` split into words as a shell would, and a program looked up on PATH.
+//! `--controller-cmd` split into words as a shell would (and a word quoted for one), and a program looked up on
+//! PATH.
 
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -102,5 +103,15 @@ mod tests {
         assert!(find_program("/bin/sh").is_some());
         assert!(find_program("surely-no-such-program-here").is_none());
         assert!(find_program("./no/such/file").is_none());
+    }
+}
+
+/// `text` as one word of a POSIX shell command: as is when it is plain, else single-quoted (the commands a check
+/// or a sweep prints to fly a case again).
+pub fn shell_quote(text: &str) -> String {
+    if !text.is_empty() && text.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:@".contains(c)) {
+        text.to_string()
+    } else {
+        format!("'{}'", text.replace('\'', "'\\''"))
     }
 }

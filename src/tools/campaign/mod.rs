@@ -113,7 +113,7 @@ impl Campaign {
         campaign.flags = fmus.to_args();
         if let Some(cmd) = controller_cmd {
             campaign.controller_cmd = Some(cmd.to_string());
-            campaign.flags += &format!(" --controller-cmd {}", crate::check::shell_quote(cmd));
+            campaign.flags += &format!(" --controller-cmd {}", silrig_launch::program::shell_quote(cmd));
         }
         Ok(campaign)
     }

@@ -13,7 +13,7 @@ use criteria::{RigCriteria, RunEvidence};
 use silrig_flight::criteria::Outcome;
 use silrig_flight::trace::Trace;
 use silrig_launch::launcher::{self, ControllerKind, LaunchOptions};
-use silrig_launch::program::check_command;
+use silrig_launch::program::{check_command, shell_quote};
 use silrig_launch::supervision::{RestartMode, SupervisionOptions};
 use silrig_rig::{ProcessOptions, signals};
 use std::path::{Path, PathBuf};
@@ -144,15 +144,6 @@ fn default_process_options() -> ProcessOptions {
         process: ProcessOptions,
     }
     <Defaults as clap::Parser>::parse_from(["silrig"]).process
-}
-
-/// `text` as one word of a POSIX shell command: as is when it is plain, else single-quoted.
-pub fn shell_quote(text: &str) -> String {
-    if !text.is_empty() && text.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:@".contains(c)) {
-        text.to_string()
-    } else {
-        format!("'{}'", text.replace('\'', "'\\''"))
-    }
 }
 
 /// The options of one `silrig run` of a case.
