@@ -107,9 +107,14 @@ fn check_report(r: &Value, ticks: u64, mode: Mode) {
         assert!(r["timer_baseline"]["lateness"]["count"].as_u64().unwrap() > 0);
         assert!(r["timer_baseline"]["lateness_steady"]["count"].as_u64().unwrap() > 0);
     }
-    // The plant's per-tick distributions split at 1 s of simulated time: ticks 0..=99 are the warm-up.
+    // The plant's per-tick distributions and the controller's compute time split at 1 s of simulated time: ticks
+    // 0..=99 are the warm-up.
     let phases: Vec<&str> = r["phases"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
-    assert_eq!(phases, if realtime { vec!["plant.wake_lateness", "plant.step_exec"] } else { vec!["plant.step_exec"] });
+    let mut expected = vec!["plant.step_exec", "controller.compute"];
+    if realtime {
+        expected.insert(0, "plant.wake_lateness");
+    }
+    assert_eq!(phases, expected);
     for p in r["phases"].as_array().unwrap() {
         assert_eq!((p["warm_up"]["count"].as_u64(), p["steady"]["count"].as_u64()), (Some(100), Some(ticks - 100)));
     }
