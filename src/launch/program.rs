@@ -79,6 +79,16 @@ pub fn check_command(flag: &str, cmd: &str) -> Result<Vec<String>, String> {
     Ok(words)
 }
 
+/// `text` as one word of a POSIX shell command: as is when it is plain, else single-quoted (the commands a check
+/// or a sweep prints to fly a case again).
+pub fn shell_quote(text: &str) -> String {
+    if !text.is_empty() && text.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:@".contains(c)) {
+        text.to_string()
+    } else {
+        format!("'{}'", text.replace('\'', "'\\''"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -103,15 +113,5 @@ mod tests {
         assert!(find_program("/bin/sh").is_some());
         assert!(find_program("surely-no-such-program-here").is_none());
         assert!(find_program("./no/such/file").is_none());
-    }
-}
-
-/// `text` as one word of a POSIX shell command: as is when it is plain, else single-quoted (the commands a check
-/// or a sweep prints to fly a case again).
-pub fn shell_quote(text: &str) -> String {
-    if !text.is_empty() && text.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=:@".contains(c)) {
-        text.to_string()
-    } else {
-        format!("'{}'", text.replace('\'', "'\\''"))
     }
 }

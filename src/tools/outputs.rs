@@ -46,7 +46,7 @@ pub fn write_run(
 /// A scenario flown, in one process ([`fly_one_process`]) or through the three-process rig (a sweep's case with
 /// `--controller-cmd`): what a case is judged on.
 #[derive(Debug)]
-pub struct Flown {
+pub struct FlownScenario {
     /// Its trace, as `silrig run --mode lockstep` writes it.
     pub trace: Trace,
     /// The plant's signals when the generic loop flew it (the figures of a plant of the user's own come from them).
@@ -62,16 +62,16 @@ pub struct Flown {
 /// ([`silrig_flight::sim`]), a scenario with an FMU by the rig's generic loop ([`silrig_rig::in_process`]) with
 /// `models` (opened from this scenario, or from the one it was sampled from: the same FMU files). An error says
 /// why it could not start.
-pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<Flown, String> {
+pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<FlownScenario, String> {
     if !models.has_fmu() {
         let (trace, left) = silrig_flight::sim::fly(scenario).map_err(|e| e.to_string())?;
         let ended_early = left.map(|exit| (exit.t_s, exit.to_string()));
-        return Ok(Flown { trace, plant: None, ended_early, refusals: Vec::new() });
+        return Ok(FlownScenario { trace, plant: None, ended_early, refusals: Vec::new() });
     }
     let flown = models.fly(scenario).map_err(|e| e.to_string())?;
     let refusals = flown.refusals();
     let ended_early = flown.ended_early.map(|e| (e.t_s, e.to_string()));
-    Ok(Flown { trace: flown.trace, plant: Some(flown.plant), ended_early, refusals })
+    Ok(FlownScenario { trace: flown.trace, plant: Some(flown.plant), ended_early, refusals })
 }
 
 /// What [`simulate`] flew and wrote.

@@ -2,7 +2,7 @@
 //! scenario's criteria. A pure function of (scenario, seed, index), so a case flown alone (`silrig sim --sample I`)
 //! gives the numbers it gave inside any sweep, on any machine or shard.
 
-use crate::outputs::{Flown, fly_one_process};
+use crate::outputs::{FlownScenario, fly_one_process};
 use serde::{Deserialize, Serialize};
 use silrig_flight::criteria::{Criteria, Judgement};
 use silrig_flight::dispersion;
@@ -164,8 +164,14 @@ pub fn infeasible(index: u64, values: Vec<f64>, reason: String) -> CaseResult {
 
 /// Judge a flown case by `criteria`, the same way whichever loop flew it (so an in-process sweep and a sweep
 /// through the rig give comparable results); returns the result and the flight.
-pub fn judge(criteria: &Criteria, index: u64, values: Vec<f64>, case: Scenario, flown: Flown) -> (CaseResult, Flight) {
-    let Flown { trace, plant, ended_early, refusals } = flown;
+pub fn judge(
+    criteria: &Criteria,
+    index: u64,
+    values: Vec<f64>,
+    case: Scenario,
+    flown: FlownScenario,
+) -> (CaseResult, Flight) {
+    let FlownScenario { trace, plant, ended_early, refusals } = flown;
     let summary = summarize(&trace, &case);
     let judgements = judge_flight(criteria, &case, Some(&trace), Some(&summary));
     // A flight that left the model's envelope (or whose FMU failed) ended there; if it had not left the data

@@ -14,7 +14,7 @@
 //! two threads could draw alike.
 
 use super::case::{self, CaseResult, Flight};
-use crate::outputs::Flown;
+use crate::outputs::FlownScenario;
 use silrig_flight::trace::Trace;
 use silrig_launch::launcher::{self, LaunchOptions};
 use silrig_rig::signals;
@@ -116,7 +116,7 @@ pub fn fly(
         failures if short && !failures.is_empty() => (Some((last_t_s.unwrap_or(0.0), failures.join("; "))), vec![]),
         failures => (None, failures),
     };
-    let flown = Flown { trace, plant: None, ended_early, refusals };
+    let flown = FlownScenario { trace, plant: None, ended_early, refusals };
     let (result, flight) = case::judge(&campaign.criteria, index, values, scenario, flown);
     Ok((result, Some(flight)))
 }
