@@ -102,8 +102,9 @@ impl Check {
     /// Every run of the check left no shared memory behind; then the folder goes.
     fn finish(self) {
         for case in self.verdict["cases"].as_array().into_iter().flatten() {
-            // A sweep case's folder holds its cases.csv, not a run: its rigs' folders went as each case was judged.
-            if case["mode"] == "sweep" {
+            // A sweep case's folder holds its cases.csv, not a run: its rigs' folders went as each case was judged;
+            // a case flown in one process (--in-process) opened no shared memory.
+            if case["mode"] == "sweep" || case["mode"] == "lockstep, one process" {
                 continue;
             }
             for dir in case["run_dirs"].as_array().unwrap() {
@@ -449,4 +450,27 @@ fn a_sweep_case_flies_a_controller_of_your_own_through_the_lockstep_rig() {
     assert!(sweep["config"].as_str().unwrap().ends_with(&format!("--controller-cmd '{pid}'")), "{sweep}");
     std::fs::remove_dir_all(&c.dir).unwrap();
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn in_process_flies_a_lockstep_case_in_one_process_with_the_rigs_trace_and_judgements() {
+    let one = check("in-process", &["--case", "sensor-noise-bias", "--in-process"]);
+    assert_eq!(one.code, Some(0), "{}{}", one.stdout, one.stderr);
+    assert_eq!(one.case("sensor-noise-bias")["mode"], "lockstep, one process");
+    assert!(one.case("sensor-noise-bias")["reproduce"].as_str().unwrap().ends_with("--in-process"));
+    one.junit_agrees();
+    let rig = check("in-process-rig", &["--case", "sensor-noise-bias"]);
+    assert_eq!(rig.code, Some(0), "{}{}", rig.stdout, rig.stderr);
+    let trace = |c: &Check| std::fs::read(c.out.join("sensor-noise-bias/trace.csv")).unwrap();
+    assert!(trace(&one) == trace(&rig), "the trace flown in one process is not the lockstep rig's");
+    let judged = |c: &Check| -> Vec<(String, String)> {
+        c.judgements("sensor-noise-bias")
+            .into_iter()
+            .filter(|(criterion, _)| criterion != "run_completed")
+            .map(|(criterion, _)| (criterion.clone(), c.measured("sensor-noise-bias", &criterion)))
+            .collect()
+    };
+    assert_eq!(judged(&one), judged(&rig));
+    one.finish();
+    rig.finish();
 }

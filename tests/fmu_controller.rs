@@ -3,7 +3,8 @@
 //! the airframe FMU plant and the built-in F-16 in lockstep and settles, with the very trace the C example
 //! (`examples/c/pid_attitude.c`, the same law and gains) gives on the same plant; renamed variables fly the same
 //! through `[controller.map]`; `[controller.parameters]` reach it; killed and restarted in realtime it resumes from
-//! its own serialized state; `silrig check --controller-fmu` judges it; its run replays bit-identically; an FMI 3.0
+//! its own serialized state, and it flies on when a restarted plant resumes from an earlier tick; `silrig check
+//! --controller-fmu` judges it; its run replays bit-identically; an FMI 3.0
 //! FMU (`tests/fmu/lag3`) flies as a controller through its map and parameters. Every mapping mistake is refused with a
 //! message naming the FMU file, the variable and what the plant or the FMU has: before any process starts when
 //! the plant is known (the F-16, an FMU plant), else by the controller when the plant announces itself.
@@ -263,6 +264,28 @@ fn a_killed_fmu_controller_resumes_from_its_fmu_state() {
     let jump =
         rows.windows(2).filter(|w| w[0][t] >= 1.4).map(|w| (w[1][elevator] - w[0][elevator]).abs()).fold(0.0, f64::max);
     assert!(jump < 0.5, "the elevator command jumped {jump} deg in a tick after the kill");
+    r.finish();
+}
+
+#[test]
+fn a_controller_fmu_flies_on_when_the_plant_resumes_from_an_earlier_tick() {
+    // The restarted plant resumes from its checkpoint, a tick or more before the controller's time: the FMU's own
+    // time goes on (an FMU refuses a communication point before it), and the run ends clean.
+    let r = run(
+        "plant-restart",
+        &[
+            "--duration-s",
+            "3",
+            "--controller-fmu",
+            &fmu("pid"),
+            "--fault",
+            "plant:kill@1.5s,restart_after=0.3s",
+            &robust(),
+        ],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.event("launcher", "process-restarted").is_some(), "{}", r.stdout);
+    assert!(!r.stdout.contains("fmi2DoStep"), "{}", r.stdout);
     r.finish();
 }
 

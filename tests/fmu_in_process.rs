@@ -265,3 +265,74 @@ fn a_check_suites_sweep_case_flies_a_controller_fmu_in_one_process() {
     assert_ne!(csv, ours, "the FMU's figures are not our controller's");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A check's `judgements` of one case: (criterion, measured, passed).
+fn judgements(out: &Path, case: &str) -> Vec<(String, String, bool)> {
+    let verdict: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("check.json")).unwrap()).unwrap();
+    let case = verdict["cases"].as_array().unwrap().iter().find(|c| c["name"] == case).unwrap().clone();
+    case["judgements"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| (j["criterion"].as_str().unwrap().into(), j["measured"].as_str().unwrap().into(), j["passed"] == true))
+        .collect()
+}
+
+#[test]
+fn check_in_process_flies_a_lockstep_case_of_two_fmus_as_the_rig_does_and_refuses_what_needs_the_rig() {
+    let dir = common::temp_dir(SUITE, "check-in-process");
+    let (plant, pid) = (fmu("airframe"), fmu("pid"));
+    let suite = format!("{ROOT}/examples/fmu/airframe_check.toml");
+    let flags = ["--case", "lockstep-steps", "--plant-fmu", &plant, "--controller-fmu", &pid];
+    let (one, rig) = (dir.join("one"), dir.join("rig"));
+    let o = silrig(&[&["check", &suite, "--in-process"], &flags[..], &["--out", one.to_str().unwrap()]].concat(), &dir);
+    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
+    assert!(said(&o).contains("lockstep, in one process"), "{}", said(&o));
+    let o = silrig(&[&["check", &suite], &flags[..], &["--out", rig.to_str().unwrap()]].concat(), &dir);
+    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
+    // Both flights of the determinism pair, byte for byte the rig's.
+    for run in ["run-1", "run-2"] {
+        let trace = |out: &Path| std::fs::read(out.join("lockstep-steps").join(run).join("trace.csv")).unwrap();
+        same_bytes(&trace(&one), &trace(&rig), &format!("check --in-process {run}"));
+    }
+    // The same criteria, the same figures (run_completed says where it flew).
+    let (a, b) = (judgements(&one, "lockstep-steps"), judgements(&rig, "lockstep-steps"));
+    assert_eq!(a.len(), b.len(), "{a:?}\n{b:?}");
+    for (x, y) in a.iter().zip(&b).filter(|(x, _)| x.0 != "run_completed") {
+        assert_eq!(x, y);
+    }
+    assert!(a.iter().all(|j| j.2), "{a:?}");
+    assert!(a.iter().any(|j| j.0 == "deterministic" && j.1 == "identical over 1001 ticks"), "{a:?}");
+    // The reproduce command keeps the flag.
+    let verdict = std::fs::read_to_string(one.join("check.json")).unwrap();
+    assert!(verdict.contains("--in-process"), "{verdict}");
+
+    // A lockstep case with a criterion only the rig's processes measure is refused before anything flies.
+    let rig_only = dir.join("rig-only.toml");
+    std::fs::write(
+        &rig_only,
+        format!(
+            "name = \"rig-only\"\nscenario = \"{ROOT}/examples/fmu/airframe.toml\"\n[[cases]]\nname = \"timed\"\n\
+             why = \"compute time\"\nmode = \"lockstep\"\n[cases.criteria]\ncompute_p99 = {{ max_us = 1000.0 }}\n"
+        ),
+    )
+    .unwrap();
+    let refused = dir.join("refused");
+    let o = silrig(
+        &["check", rig_only.to_str().unwrap(), "--in-process", "--plant-fmu", &plant, "--controller-fmu", &pid]
+            .iter()
+            .copied()
+            .chain(["--out", refused.to_str().unwrap()])
+            .collect::<Vec<_>>(),
+        &dir,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("case `timed`: `criteria.compute_p99`"), "{}", said(&o));
+    assert!(!refused.join("timed").exists(), "nothing flew");
+    // A controller of your own is a process: not with --in-process.
+    let o = silrig(&["check", "--in-process", "--controller-cmd", "python3 x.py"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("--in-process") && said(&o).contains("--controller-cmd"), "{}", said(&o));
+    std::fs::remove_dir_all(dir).unwrap();
+}

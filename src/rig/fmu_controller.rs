@@ -259,6 +259,9 @@ pub struct FmuController {
     input_values: Vec<f64>,
     output_values: Vec<f64>,
     last_tick: u64,
+    /// The FMU's time after its last step, s (None before the first, and after a restore: the next sample's tick
+    /// says).
+    fmu_time_s: Option<f64>,
     failure: Option<String>,
 }
 
@@ -291,6 +294,7 @@ impl FmuController {
             setpoint: scenario.setpoint.clone(),
             binding: None,
             last_tick: 0,
+            fmu_time_s: None,
             failure: None,
         })
     }
@@ -336,7 +340,12 @@ impl FmuController {
         if !self.input_refs.is_empty() {
             instance.set_reals(&self.input_refs, &self.input_values).map_err(|e| e.to_string())?;
         }
-        instance.do_step(sample.header.tick as f64 * dt_s, dt_s).map_err(|e| e.to_string())?;
+        // A plant resumed from its checkpoint sends ticks the controller has flown already; an FMU refuses a
+        // communication point before its own time, so the controller's time goes on, as a controller's clock on a
+        // bench does (in lockstep, and in a run without a plant restart, it is the sample's tick).
+        let t_s = (sample.header.tick as f64 * dt_s).max(self.fmu_time_s.unwrap_or(f64::NEG_INFINITY));
+        instance.do_step(t_s, dt_s).map_err(|e| e.to_string())?;
+        self.fmu_time_s = Some(t_s + dt_s);
         instance.get_reals(&self.output_refs, &mut self.output_values).map_err(|e| e.to_string())?;
         for &(j, k) in &binding.commands {
             command[k] = self.output_values[j];
@@ -383,6 +392,7 @@ impl Controller for FmuController {
         let bytes = from_hex(&saved.state_hex)?;
         self.instance.get_mut().restore_state(&bytes).map_err(|e| e.to_string())?;
         self.last_tick = saved.tick;
+        self.fmu_time_s = None;
         Ok(())
     }
 }

@@ -529,8 +529,13 @@ fn resume_jump(scenario: &Scenario, report: &RigReport, trace: Option<&Trace>, m
 }
 
 fn deterministic(runs: &[RunEvidence]) -> Judgement {
+    deterministic_traces(runs[0].trace.as_ref(), runs.get(1).and_then(|r| r.trace.as_ref()))
+}
+
+/// `deterministic`: the commands of two flights of the same case, tick by tick, bit for bit.
+pub fn deterministic_traces(a: Option<&Trace>, b: Option<&Trace>) -> Judgement {
     let limit = "2 runs, identical commands".to_string();
-    let (Some(a), Some(b)) = (runs[0].trace.as_ref(), runs.get(1).and_then(|r| r.trace.as_ref())) else {
+    let (Some(a), Some(b)) = (a, b) else {
         return no_evidence("deterministic", limit, "a run logged no trace");
     };
     // The command columns of whatever plant flew: the F-16's `<surface>_cmd_deg`, any plant's `<input>_cmd[_unit]`.

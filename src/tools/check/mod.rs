@@ -1,9 +1,10 @@
 //! `silrig check`: flies a suite of cases with one controller (ours, or a user's through `--controller-cmd`) on the
 //! three-process rig, judges each run by its criteria and gives one verdict: a table, `check.json` and a JUnit XML
 //! file a CI pipeline can gate on. The suite format is in [`suite`], the criteria in [`criteria`], the files in
-//! [`verdict`].
+//! [`verdict`]; `--in-process` flies the lockstep cases in one process ([`one_process`]).
 
 pub mod criteria;
+pub mod one_process;
 pub mod repeat;
 pub mod suite;
 pub mod verdict;
@@ -42,6 +43,12 @@ pub struct CheckOptions {
     /// Fly a co-simulation FMU as the plant in every case (as with `silrig run --plant-fmu`).
     #[arg(long, value_name = "FILE.fmu", conflicts_with = "plant_cmd")]
     pub plant_fmu: Option<PathBuf>,
+    /// Fly the lockstep cases in one process, as `silrig sim` flies a scenario (the built-in F-16 or a plant FMU
+    /// against our controller or a controller FMU): the lockstep rig's trace in a fraction of its time. Realtime
+    /// cases still fly the rig; a case that needs the rig's processes (process or loop faults, timing or recovery
+    /// criteria) is refused.
+    #[arg(long, conflicts_with_all = ["controller_cmd", "plant_cmd"])]
+    pub in_process: bool,
     /// Output folder (default: out/check-<suite>-<UTC time>); must not hold a check already.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -120,6 +127,9 @@ impl CheckOptions {
         if let Some(f) = &self.plant_fmu {
             cmd += &format!(" --plant-fmu {}", shell_quote(&f.display().to_string()));
         }
+        if self.in_process {
+            cmd += " --in-process";
+        }
         // Only the tuning flags that differ from their defaults, so the command stays short.
         let defaults = default_process_options().to_argv();
         for (flag, value) in self
@@ -191,6 +201,9 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
     if let Some(sweep) = &case.sweep {
         return sweep_case(opts, case, sweep, &scenario_path, &case_dir, started).map_err(setup);
     }
+    if opts.in_process && one_process::flies_in_one_process(case) {
+        return in_process_case(opts, case, &case_dir, started).map_err(setup);
+    }
     let runs = case.criteria.runs();
     let mut run_dirs = Vec::new();
     let mut attempts = 0;
@@ -229,6 +242,34 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
         passed: outcome == Outcome::Pass,
         inconclusive: outcome == Outcome::Inconclusive,
         attempts,
+        wall_s: started.elapsed().as_secs_f64(),
+        run_dirs,
+        reproduce: opts.reproduce(&case.name),
+        judgements,
+    })
+}
+
+/// Fly a lockstep case in one process (`--in-process`) and judge it: no inconclusive answer is possible (no
+/// timing criterion), so it flies once (twice for determinism).
+fn in_process_case(
+    opts: &CheckOptions,
+    case: &Case,
+    case_dir: &Path,
+    started: std::time::Instant,
+) -> anyhow::Result<CaseVerdict> {
+    let mut case = case.clone();
+    silrig_rig::in_process::FmuFlags { plant_fmu: opts.plant_fmu.clone(), controller_fmu: opts.controller_fmu.clone() }
+        .apply(&mut case.scenario)?;
+    let (judgements, run_dirs) = one_process::fly_and_judge(&case, case_dir)?;
+    let outcome = verdict::case_outcome(&judgements);
+    Ok(CaseVerdict {
+        name: case.name.clone(),
+        why: case.why.clone(),
+        mode: "lockstep, one process".into(),
+        faults: case.fault_flags.clone(),
+        passed: outcome == Outcome::Pass,
+        inconclusive: false,
+        attempts: 1,
         wall_s: started.elapsed().as_secs_f64(),
         run_dirs,
         reproduce: opts.reproduce(&case.name),
@@ -330,6 +371,11 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
     if let Some(cmd) = &opts.controller_cmd {
         check_command("controller-cmd", cmd).map_err(CheckError::Usage)?;
     }
+    if opts.in_process {
+        for case in suite.cases.iter().filter(|c| one_process::flies_in_one_process(c)) {
+            one_process::refuse_rig_only(case).map_err(CheckError::Usage)?;
+        }
+    }
     let out = opts
         .out
         .clone()
@@ -356,6 +402,7 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
                     sweep.runs,
                     if opts.controller_cmd.is_some() { "through the lockstep rig" } else { "in one process" }
                 ),
+                None if opts.in_process && one_process::flies_in_one_process(case) => "lockstep, in one process".into(),
                 None => case.mode.label().to_string(),
             },
             if case.sweep.is_none() && case.criteria.runs() > 1 { ", flown twice" } else { "" }
