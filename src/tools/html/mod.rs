@@ -137,8 +137,8 @@ pub fn command_line(label: &str, command: &str) -> String {
     format!("<p class=\"cmd\"><span>{}</span> <code>{}</code></p>\n", esc(label), esc(command))
 }
 
-/// A table: `header` cells and `rows` of cells, all HTML already (escape text with [`esc`]); a cell starting with
-/// a digit, a sign or a dash alone is right-aligned.
+/// A table: `header` cells and `rows` of cells, all HTML already (escape text with [`esc`]); a number (or a dash
+/// alone, for none) is right-aligned.
 pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
     let rows: Vec<(&str, &[String])> = rows.iter().map(|r| ("", r.as_slice())).collect();
     table_with(None, header, &rows)
@@ -155,9 +155,7 @@ pub fn table_with(id: Option<&str>, header: &[&str], rows: &[(&str, &[String])])
     for (class, row) in rows {
         out += &if class.is_empty() { "<tr>".to_string() } else { format!("<tr class=\"{class}\">") };
         for cell in row.iter() {
-            let numeric = cell == "-"
-                || cell.starts_with(|c: char| c.is_ascii_digit())
-                || (cell.starts_with(['-', '+']) && cell[1..].starts_with(|c: char| c.is_ascii_digit()));
+            let numeric = cell == "-" || cell.parse::<f64>().is_ok();
             out += if numeric { "<td class=\"num\">" } else { "<td>" };
             out += cell;
             out += "</td>";
@@ -403,9 +401,9 @@ mod tests {
     #[test]
     fn text_is_escaped_and_numbers_align_right() {
         assert_eq!(esc("a<b & \"c\" 'd'>"), "a&lt;b &amp; &quot;c&quot; &#39;d&#39;&gt;");
-        let t = table(&["name", "value"], &[vec!["x".into(), "-1.5".into()], vec!["-".into(), "abc".into()]]);
+        let t = table(&["name", "value"], &[vec!["x".into(), "-1.5".into()], vec!["-".into(), "3 s".into()]]);
         assert!(t.contains("<td>x</td><td class=\"num\">-1.5</td>"), "{t}");
-        assert!(t.contains("<td class=\"num\">-</td><td>abc</td>"), "{t}");
+        assert!(t.contains("<td class=\"num\">-</td><td>3 s</td>"), "{t}");
     }
 
     #[test]

@@ -66,7 +66,8 @@ pub fn page(report: &RigReport, command: &str) -> Page {
 /// The run, the machine, the processes, counters, what went wrong and the control quality.
 fn summary(r: &RigReport) -> String {
     let (c0, c1) = (&r.conditions_start, &r.conditions_end);
-    let flown = r.control.as_ref().map(|s| s.ticks as f64 * s.dt_s);
+    // The trace's last row is at t = (ticks - 1) dt, as the control summary says.
+    let flown = r.control.as_ref().map(|s| s.ticks.saturating_sub(1) as f64 * s.dt_s);
     let mut out = facts(&[
         ("run id", r.run_id.clone()),
         ("scenario", r.scenario.clone()),
@@ -74,7 +75,7 @@ fn summary(r: &RigReport) -> String {
         (
             "flown",
             match flown {
-                Some(f) => format!("{f:.2} s of the scenario's {:.2} s", r.duration_s),
+                Some(f) => format!("t = 0 to {f:.2} s of the scenario's {:.2} s", r.duration_s),
                 None => format!("no trace (the scenario's {:.2} s)", r.duration_s),
             },
         ),
@@ -155,7 +156,7 @@ fn processes(r: &RigReport) -> String {
             format!("{:.2}", l.started_at_s),
             l.ended_at_s.map_or("-".into(), |t| format!("{t:.2}")),
             esc(&own.map_or_else(|| l.exit.clone(), |p| p.ended.clone())),
-            esc(l.report.as_deref().unwrap_or("none")),
+            l.report.as_ref().map_or("none".into(), |f| format!("<a href=\"{}\">{}</a>", esc(f), esc(f))),
         ]);
     }
     table(&["process", "pid", "scheduling", "started (s)", "ended (s)", "how it ended", "its report"], &rows)

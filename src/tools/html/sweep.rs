@@ -1,6 +1,6 @@
 //! The page of one `silrig sweep` (also of a merged sweep and of a check's sweep case): the pass rate with its
-//! interval and the failures by criterion, the worst cases by each criterion with the command that flies each
-//! alone, the departed and infeasible cases, and the sweep's figures (histograms, scatter, envelope). Built from
+//! interval and the failures by criterion, the sweep's figures (histograms, scatter, envelope), the worst cases by
+//! each criterion with the command that flies each alone, and the departed and infeasible cases. Built from
 //! `sweep.json`'s [`SweepSummary`].
 
 use super::{Page, Tone, esc, facts, figure, figure_stems, table};
@@ -55,6 +55,13 @@ pub fn page(s: &SweepSummary, out: &Path) -> Page {
     body += &table(&["criterion", "failed", "of flown cases"], &rows);
     page.section("summary", "Summary", &command, body);
 
+    let figures: String = figure_stems(out).iter().filter_map(|stem| figure(out, out, stem)).collect();
+    let figures = if figures.is_empty() {
+        "<p>No figures: no case could be flown.</p>\n".to_string()
+    } else {
+        figures
+    };
+    page.section("figures", "Figures", &command, figures);
     let mut worst = String::from(
         "<p>Each criterion's worst cases that stayed within the model's data, worst first; each command flies that \
          case alone and prints the same numbers.</p>\n",
@@ -93,13 +100,6 @@ pub fn page(s: &SweepSummary, out: &Path) -> Page {
     }
     page.section("worst", "Worst cases", &command, worst);
 
-    let figures: String = figure_stems(out).iter().filter_map(|stem| figure(out, out, stem)).collect();
-    let figures = if figures.is_empty() {
-        "<p>No figures: no case could be flown.</p>\n".to_string()
-    } else {
-        figures
-    };
-    page.section("figures", "Figures", &command, figures);
     page.section_with("files", "Files", Vec::new(), super::files(out, out));
     page
 }
