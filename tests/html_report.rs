@@ -214,7 +214,8 @@ fn a_runs_page_shows_its_summary_timing_faults_figures_and_events() {
         out.display()
     );
     assert_eq!(html.matches(&command).count(), 5, "{command} in every section but the files");
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     for latency in report["processes"].as_array().unwrap().iter().flat_map(|p| p["latencies"].as_array().unwrap()) {
         if latency["summary"]["count"].as_u64().unwrap() > 0 {
             let name = latency["name"].as_str().unwrap();
@@ -265,8 +266,15 @@ alpha_max_deg = 1.0
     .unwrap();
     let out = dir.join("check");
     let o = silrig(&["check", suite.to_str().unwrap(), "--out", out.to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(1), "{}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-    let verdict: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("check.json")).unwrap()).unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let verdict: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("check.json")).unwrap()).unwrap();
     let failed_dir = out.join("too-strict");
     let figures = svgs(&out, &failed_dir);
     assert!(figures.iter().any(|f| f == "too-strict/fig1_states"), "{figures:?}");
@@ -310,7 +318,8 @@ fn a_sweeps_page_gives_the_pass_rate_the_worst_cases_and_the_figures() {
     let o = silrig(&["sweep", "configs/sweep-robust.toml", "--runs", "20", "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains(&format!("wrote {}", out.join("report.html").display())));
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
     let html = check_page(browser, &out.join("report.html"), &dir, "sweep", &["envelope", "histograms", "scatter"]);
     let seed = summary["seed"].as_u64().unwrap();
     assert!(html.contains(&format!("<code>silrig sweep configs/sweep-robust.toml --runs 20 --seed {seed}</code>")));

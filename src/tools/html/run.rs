@@ -35,7 +35,10 @@ pub fn page(report: &RigReport, command: &str) -> Page {
         let n = report.failures.len();
         (Tone::Bad, format!("FAILED: {n} failure{}", if n == 1 { "" } else { "s" }))
     } else if let Some(s) = &report.stopped_by {
-        (Tone::Unsure, format!("stopped by the user ({}) at t = {:.2} s of {:.2} s", s.signal, s.at_s, report.duration_s))
+        (
+            Tone::Unsure,
+            format!("stopped by the user ({}) at t = {:.2} s of {:.2} s", s.signal, s.at_s, report.duration_s),
+        )
     } else if !report.discontinuities.is_empty() {
         (Tone::Unsure, "all processes ended cleanly; the logged flight has a discontinuity".to_string())
     } else {
@@ -47,11 +50,8 @@ pub fn page(report: &RigReport, command: &str) -> Page {
     page.section("timing", "Timing", command, timing(report, out));
     page.section("faults", "Faults", command, faults(report, out));
     let shown: Vec<&str> = TIMING_FIGURES.iter().chain(&[FAULT_FIGURE]).copied().collect();
-    let others: String = figure_stems(out)
-        .iter()
-        .filter(|s| !shown.contains(&s.as_str()))
-        .filter_map(|s| figure(out, out, s))
-        .collect();
+    let others: String =
+        figure_stems(out).iter().filter(|s| !shown.contains(&s.as_str())).filter_map(|s| figure(out, out, s)).collect();
     let others = if others.is_empty() {
         "<p>No other figures: the run was flown with --no-figures, or left no trace to draw.</p>\n".to_string()
     } else {
@@ -100,7 +100,7 @@ fn summary(r: &RigReport) -> String {
         let _ = write!(problems, "<li>iceoryx2 leftover after cleanup: {}</li>", esc(l));
     }
     if !problems.is_empty() {
-        let _ = write!(out, "<ul class=\"problems\">{problems}</ul>\n");
+        let _ = writeln!(out, "<ul class=\"problems\">{problems}</ul>");
     }
     if !r.notes.is_empty() {
         out += "<ul class=\"notes\">";

@@ -41,26 +41,25 @@ pub fn page(s: &SweepSummary, out: &Path) -> Page {
         ("scenario file", s.config.clone()),
         ("seed", s.seed.to_string()),
         ("cases", s.runs.to_string()),
-        ("outcome", format!("{} passed, {} failed ({} of them departed), {} infeasible", s.passed, s.failed, s.departed, s.infeasible)),
+        (
+            "outcome",
+            format!(
+                "{} passed, {} failed ({} of them departed), {} infeasible",
+                s.passed, s.failed, s.departed, s.infeasible
+            ),
+        ),
         ("pass rate", rate.clone()),
         ("dispersed", format!("{} keys: {}", s.parameters.len(), s.parameters.join(", "))),
         ("folder", out.display().to_string()),
     ]);
     body += "<h3>Failures by criterion</h3>\n";
-    let rows: Vec<Vec<String>> = s
-        .failures_by_criterion
-        .iter()
-        .map(|(name, n)| vec![esc(name), n.to_string(), flown.to_string()])
-        .collect();
+    let rows: Vec<Vec<String>> =
+        s.failures_by_criterion.iter().map(|(name, n)| vec![esc(name), n.to_string(), flown.to_string()]).collect();
     body += &table(&["criterion", "failed", "of flown cases"], &rows);
     page.section("summary", "Summary", &command, body);
 
     let figures: String = figure_stems(out).iter().filter_map(|stem| figure(out, out, stem)).collect();
-    let figures = if figures.is_empty() {
-        "<p>No figures: no case could be flown.</p>\n".to_string()
-    } else {
-        figures
-    };
+    let figures = if figures.is_empty() { "<p>No figures: no case could be flown.</p>\n".to_string() } else { figures };
     page.section("figures", "Figures", &command, figures);
     let mut worst = String::from(
         "<p>Each criterion's worst cases that stayed within the model's data, worst first; each command flies that \
@@ -74,7 +73,11 @@ pub fn page(s: &SweepSummary, out: &Path) -> Page {
                 vec![
                     c.index.to_string(),
                     esc(&c.measured),
-                    format!("<span class=\"tag {}\">{}</span>", if c.passed { "pass" } else { "fail" }, if c.passed { "pass" } else { "FAIL" }),
+                    format!(
+                        "<span class=\"tag {}\">{}</span>",
+                        if c.passed { "pass" } else { "fail" },
+                        if c.passed { "pass" } else { "FAIL" }
+                    ),
                     format!("<code>{}</code>", esc(&c.reproduce)),
                 ]
             })
@@ -87,7 +90,12 @@ pub fn page(s: &SweepSummary, out: &Path) -> Page {
             .departed_cases
             .iter()
             .map(|c| {
-                vec![c.index.to_string(), format!("{:.2}", c.at_s), esc(&c.reason), format!("<code>{}</code>", esc(&c.reproduce))]
+                vec![
+                    c.index.to_string(),
+                    format!("{:.2}", c.at_s),
+                    esc(&c.reason),
+                    format!("<code>{}</code>", esc(&c.reproduce)),
+                ]
             })
             .collect();
         worst += &table(&["case", "at (s)", "why", "reproduce"], &rows);
