@@ -282,7 +282,7 @@ fn sweep_case(
     let cases = campaign.fly(seed, 0..sweep.runs, jobs)?;
     let (summary, mut files) = crate::campaign::write_outputs(&campaign, seed, &cases, case_dir)?;
     files.extend(crate::campaign::write_plots(&campaign, &summary, &cases, case_dir)?);
-    crate::html::sweep::write(&summary, case_dir)?;
+    files.push(crate::html::sweep::write(&summary, case_dir)?);
     let flown = summary.passed + summary.failed;
     let (low, high) = summary.pass_rate_95;
     let measured = format!(

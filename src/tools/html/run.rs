@@ -24,7 +24,7 @@ pub fn write(report: &RigReport, command: &str) -> anyhow::Result<PathBuf> {
 /// The command line this process was started with, as a shell reads it back (`silrig` for the program).
 pub fn this_command() -> String {
     let mut words = vec!["silrig".to_string()];
-    words.extend(std::env::args().skip(1).map(|a| silrig_launch::program::shell_quote(&a)));
+    words.extend(std::env::args_os().skip(1).map(|a| silrig_launch::program::shell_quote(&a.to_string_lossy())));
     words.join(" ")
 }
 
