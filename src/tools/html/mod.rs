@@ -281,6 +281,7 @@ fn file_role(name: &str) -> &'static str {
         "timer-baseline.json" => "the OS timer floor measured beside the run",
         n if n.ends_with(".mcap") => "the recording (MCAP)",
         n if n.ends_with(".report.json") => "a process's own report",
+        n if n.ends_with(".checkpoint.json") => "a process's checkpoint (a restart resumes from it)",
         n if n.ends_with(".hgrm") => "a latency histogram (HdrHistogram percentile text)",
         n if n.ends_with(".log") => "a process's output",
         n if n.ends_with(".png") || n.ends_with(".svg") => "a figure",
