@@ -311,6 +311,11 @@ fn compare(configs: &[PathBuf], out: Option<PathBuf>) -> anyhow::Result<ExitCode
 fn run_rig(opts: &silrig::launch::launcher::LaunchOptions) -> anyhow::Result<ExitCode> {
     let report = silrig::launch::launcher::run(opts)?;
     print!("{}", report.to_text());
+    // The page is for reading the run later: failing to write it (a full disk) costs the run nothing else.
+    match silrig::html::run::write(&report, &silrig::html::run::this_command()) {
+        Ok(page) => println!("page: {}", page.display()),
+        Err(e) => eprintln!("silrig run: warning: no report.html: {e:#}"),
+    }
     if !report.failures.is_empty() {
         return Ok(ExitCode::FAILURE);
     }

@@ -205,6 +205,7 @@ fn a_sweep_split_in_shards_merges_into_the_same_bytes_and_refuses_what_does_not_
     let (csv, json) = sweep(&dir.join("local"), &["--runs", "30"]);
     assert_eq!(std::fs::read_to_string(plan.join("cases.csv")).unwrap(), csv);
     assert_eq!(std::fs::read_to_string(plan.join("sweep.json")).unwrap(), json);
+    assert!(plan.join("report.html").is_file(), "a merged sweep has its page as a local one does");
     ok(&["sweep", "slurm", p]);
     let script = std::fs::read_to_string(plan.join("sweep.sbatch")).unwrap();
     assert!(script.contains("#SBATCH --array=0-2") && script.contains("sweep run"), "{script}");

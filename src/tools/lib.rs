@@ -8,6 +8,7 @@
 //! - [`outputs`]: `silrig sim` and `silrig compare` and the files they write; [`derivative_csv`]:
 //!   `silrig plant derivative`.
 //! - [`export_fmu`]: `silrig export-fmu`, the built-in F-16 as an FMI 2.0 co-simulation FMU.
+//! - [`html`]: `report.html`, one self-contained page per run, check and sweep.
 //!
 //! Layers: the top; uses every crate below.
 
@@ -17,5 +18,6 @@ pub mod check;
 pub mod contract;
 pub mod derivative_csv;
 pub mod export_fmu;
+pub mod html;
 pub mod outputs;
 pub mod replay;

@@ -331,6 +331,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
     let fly_s = started.elapsed().as_secs_f64();
     let (summary, mut files) = write_outputs(&campaign, seed, &cases, &out)?;
     files.extend(write_plots(&campaign, &summary, &cases, &out)?);
+    files.push(crate::html::sweep::write(&summary, &out)?);
     Ok(SweepRun { summary, files, fly_s, jobs })
 }
 

@@ -307,6 +307,7 @@ pub fn merge(dir: &Path) -> anyhow::Result<super::SweepRun> {
     }
     let (summary, mut files) = super::write_outputs(&campaign, manifest.seed, &cases, dir)?;
     files.extend(super::write_plots(&campaign, &summary, &cases, dir)?);
+    files.push(crate::html::sweep::write(&summary, dir)?);
     Ok(super::SweepRun { summary, files, fly_s: f64::NAN, jobs: 0 })
 }
 

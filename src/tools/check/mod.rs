@@ -110,11 +110,19 @@ impl CheckOptions {
 
     /// The command that runs just `case` again, as a user types it.
     fn reproduce(&self, case: &str) -> String {
+        self.command(Some(case))
+    }
+
+    /// The command that runs the suite again (only `case` of it, if given), as a user types it: the suite, the
+    /// controller and plant, and the tuning flags that differ from their defaults.
+    fn command(&self, case: Option<&str>) -> String {
         let mut cmd = "silrig check".to_string();
         if let Some(s) = &self.suite {
             cmd += &format!(" {}", shell_quote(&s.display().to_string()));
         }
-        cmd += &format!(" --case {case}");
+        if let Some(case) = case {
+            cmd += &format!(" --case {}", shell_quote(case));
+        }
         if let Some(c) = &self.controller_cmd {
             cmd += &format!(" --controller-cmd {}", shell_quote(c));
         }
@@ -216,6 +224,10 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
         for i in 1..=runs {
             let dir = if runs == 1 { attempt_dir.clone() } else { attempt_dir.join(format!("run-{i}")) };
             let report = launcher::run(&launch_options(opts, case, &scenario_path, dir.clone())).map_err(setup)?;
+            // The run's page, as `silrig run` writes it: what a reader of a failed case opens first.
+            if let Err(e) = crate::html::run::write(&report, &opts.reproduce(&case.name)) {
+                eprintln!("silrig check: case {}: no report.html in {}: {e:#}", case.name, dir.display());
+            }
             let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
             run_dirs.push(dir.display().to_string());
             evidence.push(RunEvidence { report, trace });
@@ -311,6 +323,7 @@ fn sweep_case(
     let cases = campaign.fly(seed, 0..sweep.runs, jobs)?;
     let (summary, mut files) = crate::campaign::write_outputs(&campaign, seed, &cases, case_dir)?;
     files.extend(crate::campaign::write_plots(&campaign, &summary, &cases, case_dir)?);
+    files.push(crate::html::sweep::write(&summary, case_dir)?);
     let flown = summary.passed + summary.failed;
     let (low, high) = summary.pass_rate_95;
     let measured = format!(
@@ -442,6 +455,9 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
         cases,
     }
     .concluded();
-    verdict.write(&out).map_err(|problem| CheckError::Setup { case: "(verdict files)".into(), problem })?;
+    verdict
+        .write(&out)
+        .and_then(|()| crate::html::check::write(&verdict, &opts.command(opts.case.as_deref())))
+        .map_err(|problem| CheckError::Setup { case: "(verdict files)".into(), problem })?;
     Ok(verdict)
 }

@@ -309,8 +309,8 @@ impl Verdict {
     }
 }
 
-/// ISO 8601 UTC time of `unix_s` (JUnit's `timestamp`).
-fn utc_iso(unix_s: u64) -> String {
+/// ISO 8601 UTC time of `unix_s` (JUnit's `timestamp`, the check's page).
+pub fn utc_iso(unix_s: u64) -> String {
     let s = utc_stamp(Some(unix_s));
     format!("{}-{}-{}T{}:{}:{}", &s[0..4], &s[4..6], &s[6..8], &s[9..11], &s[11..13], &s[13..15])
 }

@@ -1,0 +1,274 @@
+//! The page of one `silrig run` (also of each run a check flies): the summary (the run, the machine, the processes
+//! and their lives, counters, control quality, what went wrong), the timing table with the latency figures, the
+//! fault timeline, every other figure of the folder, the events and the files. Built from `report.json`'s
+//! [`RigReport`] and the folder it names.
+
+use super::{Page, Tone, esc, facts, figure, figure_stems, table};
+use silrig_launch::run_report::{RigReport, command_age_buckets};
+use silrig_wire::timing::LatencySummary;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Figures the timing section shows.
+const TIMING_FIGURES: [&str; 2] = ["latency", "latency_histogram"];
+/// The figure the fault section shows.
+const FAULT_FIGURE: &str = "faults";
+
+/// Write `<out>/report.html` for `report` (its folder is `report.out_dir`); `command` is the command that flies
+/// the run again, as the reader should type it.
+pub fn write(report: &RigReport, command: &str) -> anyhow::Result<PathBuf> {
+    let out = Path::new(&report.out_dir);
+    page(report, command).write(out)
+}
+
+/// The command line this process was started with, as a shell reads it back (`silrig` for the program).
+pub fn this_command() -> String {
+    let mut words = vec!["silrig".to_string()];
+    words.extend(std::env::args_os().skip(1).map(|a| silrig_launch::program::shell_quote(&a.to_string_lossy())));
+    words.join(" ")
+}
+
+/// The page of `report`.
+pub fn page(report: &RigReport, command: &str) -> Page {
+    let out = Path::new(&report.out_dir);
+    let (tone, status) = if !report.failures.is_empty() {
+        let n = report.failures.len();
+        (Tone::Bad, format!("FAILED: {n} failure{}", if n == 1 { "" } else { "s" }))
+    } else if let Some(s) = &report.stopped_by {
+        (
+            Tone::Unsure,
+            format!("stopped by the user ({}) at t = {:.2} s of {:.2} s", s.signal, s.at_s, report.duration_s),
+        )
+    } else if !report.discontinuities.is_empty() {
+        (Tone::Unsure, "all processes ended cleanly; the logged flight has a discontinuity".to_string())
+    } else {
+        (Tone::Good, "all processes ended cleanly".to_string())
+    };
+    let title = format!("silrig run {}: {} ({})", report.run_id, report.scenario, report.mode);
+    let mut page = Page::new(title, tone, status);
+    page.section("summary", "Summary", command, summary(report));
+    page.section("timing", "Timing", command, timing(report, out));
+    page.section("faults", "Faults", command, faults(report, out));
+    let shown: Vec<&str> = TIMING_FIGURES.iter().chain(&[FAULT_FIGURE]).copied().collect();
+    let others: String =
+        figure_stems(out).iter().filter(|s| !shown.contains(&s.as_str())).filter_map(|s| figure(out, out, s)).collect();
+    let others = if others.is_empty() {
+        "<p>No other figures: the run was flown with --no-figures, or left no trace to draw.</p>\n".to_string()
+    } else {
+        others
+    };
+    page.section("figures", "Figures", command, others);
+    page.section("events", "Events", command, super::events(out));
+    page.section_with("files", "Files", Vec::new(), super::files(out, out));
+    page
+}
+
+/// The run, the machine, the processes, counters, what went wrong and the control quality.
+fn summary(r: &RigReport) -> String {
+    let (c0, c1) = (&r.conditions_start, &r.conditions_end);
+    // The trace's last row is at t = (ticks - 1) dt, as the control summary says.
+    let flown = r.control.as_ref().map(|s| s.ticks.saturating_sub(1) as f64 * s.dt_s);
+    let mut out = facts(&[
+        ("run id", r.run_id.clone()),
+        ("scenario", r.scenario.clone()),
+        ("mode", r.mode.clone()),
+        (
+            "flown",
+            match flown {
+                Some(f) => format!("t = 0 to {f:.2} s of the scenario's {:.2} s", r.duration_s),
+                None => format!("no trace (the scenario's {:.2} s)", r.duration_s),
+            },
+        ),
+        ("wall time", format!("{:.3} s, {:.0} plant cycles/s", r.wall_s, r.cycles_per_s)),
+        (
+            "machine",
+            format!(
+                "{} CPUs, load average {:.2} {:.2} {:.2} at the start, {:.2} at the end, kernel {}",
+                c0.cpu_count, c0.load_average[0], c0.load_average[1], c0.load_average[2], c1.load_average[0], c0.kernel
+            ),
+        ),
+        ("folder", r.out_dir.clone()),
+    ]);
+    let mut problems = String::new();
+    for f in &r.failures {
+        let _ = write!(problems, "<li>FAILED: {}</li>", esc(f));
+    }
+    for d in &r.discontinuities {
+        let _ = write!(problems, "<li>flight discontinuity at t = {:.2} s: {}</li>", d.at_s, esc(&d.detail));
+    }
+    for l in &r.leftovers {
+        let _ = write!(problems, "<li>iceoryx2 leftover after cleanup: {}</li>", esc(l));
+    }
+    if !problems.is_empty() {
+        let _ = writeln!(out, "<ul class=\"problems\">{problems}</ul>");
+    }
+    if !r.notes.is_empty() {
+        out += "<ul class=\"notes\">";
+        for n in &r.notes {
+            let _ = write!(out, "<li>note: {}</li>", esc(n));
+        }
+        out += "</ul>\n";
+    }
+    out += "<h3>Processes</h3>\n";
+    out += &processes(r);
+    out += "<h3>Counters</h3>\n";
+    let rows: Vec<Vec<String>> = r
+        .processes
+        .iter()
+        .map(|p| {
+            let counters: Vec<String> = p.counters.iter().map(|(k, v)| format!("{k} {v}")).collect();
+            vec![esc(&p.process), esc(&counters.join(", ")), esc(&command_age_buckets(&p.command_age_ticks).join(", "))]
+        })
+        .collect();
+    out += &table(&["process", "counters", "command age at use (ticks: count)"], &rows);
+    out += "<h3>Control quality of the logged trace</h3>\n";
+    match &r.control {
+        Some(s) => {
+            let _ = writeln!(out, "<pre>{}</pre>", esc(s.to_text().trim_end()));
+        }
+        None => out += "<p>No trace to summarise.</p>\n",
+    }
+    out
+}
+
+/// One row per life of each process the launcher started (a process started by hand: its report's).
+fn processes(r: &RigReport) -> String {
+    let mut rows = Vec::new();
+    for p in r.processes.iter().filter(|p| !r.lives.iter().any(|l| l.process == p.process)) {
+        rows.push(vec![
+            esc(&p.process),
+            p.pid.to_string(),
+            esc(&p.scheduling),
+            "-".into(),
+            "-".into(),
+            esc(&p.ended),
+            "not started by the launcher".into(),
+        ]);
+    }
+    for l in &r.lives {
+        let several = r.lives.iter().filter(|o| o.process == l.process).count() > 1;
+        let own = r.processes.iter().find(|p| p.process == l.process && p.pid == l.pid);
+        let name = if several { format!("{} #{}", l.process, l.life) } else { l.process.clone() };
+        rows.push(vec![
+            esc(&name),
+            l.pid.to_string(),
+            esc(own.map_or("-", |p| p.scheduling.as_str())),
+            format!("{:.2}", l.started_at_s),
+            l.ended_at_s.map_or("-".into(), |t| format!("{t:.2}")),
+            esc(&own.map_or_else(|| l.exit.clone(), |p| p.ended.clone())),
+            l.report.as_ref().map_or("none".into(), |f| format!("<a href=\"{}\">{}</a>", esc(f), esc(f))),
+        ]);
+    }
+    table(&["process", "pid", "scheduling", "started (s)", "ended (s)", "how it ended", "its report"], &rows)
+}
+
+fn latency_row(name: &str, s: &LatencySummary) -> Vec<String> {
+    let mut row = vec![esc(name), s.count.to_string()];
+    row.extend([s.min_us, s.avg_us, s.p50_us, s.p90_us, s.p99_us, s.p999_us, s.max_us].map(|v| format!("{v:.1}")));
+    row
+}
+
+const LATENCY_HEADER: [&str; 9] = ["(µs)", "count", "min", "avg", "p50", "p90", "p99", "p99.9", "max"];
+
+/// Every distribution, the OS floor's beside them, the warm-up apart from steady state, and the latency figures.
+fn timing(r: &RigReport, out: &Path) -> String {
+    let mut rows: Vec<Vec<String>> = r
+        .processes
+        .iter()
+        .flat_map(|p| &p.latencies)
+        .filter(|l| l.summary.count > 0)
+        .map(|l| latency_row(&l.name, &l.summary))
+        .collect();
+    let mut html = String::new();
+    if let Some(b) = &r.timer_baseline {
+        rows.push(latency_row("os-floor.wake_lateness", &b.lateness));
+    }
+    if rows.is_empty() {
+        html += "<p>No timing was recorded.</p>\n";
+    } else {
+        html += &table(&LATENCY_HEADER, &rows);
+    }
+    if let (Some(b), Some(plant)) = (&r.timer_baseline, r.latency("plant.wake_lateness")) {
+        let _ = writeln!(
+            html,
+            "<p>Plant wake-up lateness p99 is {:.2}x the OS floor's p99 measured beside it ({}, {}).</p>",
+            plant.p99_us / b.lateness.p99_us,
+            esc(&b.source.to_string()),
+            esc(&b.policy.to_string())
+        );
+    } else if r.mode == "realtime" && r.timer_baseline.is_none() {
+        html += "<p>No OS floor was measured beside this run (--no-baseline, or the floor could not be taken).</p>\n";
+    }
+    if !r.phases.is_empty() {
+        html += "<h3>Warm-up (the first second) apart from steady state (after it)</h3>\n";
+        let mut rows = Vec::new();
+        for p in &r.phases {
+            rows.push(latency_row(&format!("{} warm-up", p.name), &p.warm_up));
+            rows.push(latency_row(&format!("{} steady", p.name), &p.steady));
+        }
+        let floor = r.timer_baseline.as_ref().and_then(|b| b.lateness_steady);
+        if let Some(floor) = &floor {
+            rows.push(latency_row("os-floor.wake_lateness steady", floor));
+        }
+        html += &table(&LATENCY_HEADER, &rows);
+        if let (Some(floor), Some(plant)) = (floor, r.phases.iter().find(|p| p.name == "plant.wake_lateness")) {
+            let _ = writeln!(
+                html,
+                "<p>Steady state: plant wake-up lateness p99 is {:.2}x the OS floor's.</p>",
+                plant.steady.p99_us / floor.p99_us
+            );
+        }
+    }
+    for stem in TIMING_FIGURES {
+        html += &figure(out, out, stem).unwrap_or_default();
+    }
+    html
+}
+
+/// The fault table, the discontinuities and the timeline figure.
+fn faults(r: &RigReport, out: &Path) -> String {
+    let mut html = String::new();
+    if r.faults.is_empty() {
+        html += "<p>No faults were planned. Add one to a run with e.g. <code>--fault controller:kill@3s,restart_after=0.5s</code> \
+                 or the scenario's <code>[[faults]]</code>.</p>\n";
+    } else {
+        let t = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
+        let rows: Vec<Vec<String>> = r
+            .faults
+            .iter()
+            .map(|f| {
+                vec![
+                    esc(&f.fault),
+                    t(f.injected_at_s),
+                    t(f.injected_at_wall_s),
+                    t(f.detected_at_s),
+                    esc(f.detected_by.as_deref().unwrap_or("-")),
+                    t(f.failsafe_at_s),
+                    t(f.recovered_at_s),
+                    f.plant_samples_lost.to_string(),
+                    f.command_samples_lost.to_string(),
+                ]
+            })
+            .collect();
+        html += "<p>Times in simulated seconds (injection also in wall-clock seconds from the plant's tick 0).</p>\n";
+        html += &table(
+            &[
+                "fault",
+                "injected",
+                "injected (wall)",
+                "detected",
+                "by",
+                "failsafe",
+                "recovered",
+                "plant samples lost",
+                "commands lost",
+            ],
+            &rows,
+        );
+    }
+    for d in &r.discontinuities {
+        let _ = writeln!(html, "<p>Flight discontinuity at t = {:.3} s: {}</p>", d.at_s, esc(&d.detail));
+    }
+    html += &figure(out, out, FAULT_FIGURE).unwrap_or_default();
+    html
+}
