@@ -234,7 +234,14 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<(PathBuf, ShardResult)> {
     let campaign = manifest.campaign()?;
     let jobs = campaign.threads(super::jobs(opts.jobs)?);
     let range = manifest.range(k);
-    let cases = campaign.fly(manifest.seed, range.clone(), jobs)?;
+    let mut cases = Vec::with_capacity((range.end - range.start) as usize);
+    if let Some(interrupted) = campaign.fly_each(manifest.seed, range.clone(), jobs, |case| {
+        cases.push(case);
+        Ok(())
+    })? {
+        // A shard's results hold every case of it or none: merge counts on it.
+        anyhow::bail!("{interrupted}: shard {k} is not written; fly it again");
+    }
     let result = ShardResult {
         fingerprint: manifest.fingerprint.clone(),
         shard: k,
@@ -258,43 +265,7 @@ pub fn merge(dir: &Path) -> anyhow::Result<super::SweepRun> {
         "{} already holds merged results (sweep.json); move them away to merge again: nothing is overwritten",
         dir.display()
     );
-    let mut cases = Vec::with_capacity(manifest.runs as usize);
-    let mut missing = Vec::new();
-    for k in 0..manifest.shards {
-        let path = manifest.shard_path(dir, k);
-        let Ok(text) = std::fs::read_to_string(&path) else {
-            missing.push(k);
-            continue;
-        };
-        let shard: ShardResult =
-            serde_json::from_str(&text).with_context(|| format!("{}: not a shard's results", path.display()))?;
-        anyhow::ensure!(
-            shard.fingerprint == manifest.fingerprint,
-            "{} belongs to another plan (fingerprint {}, this plan's {}): shards of different plans never merge",
-            path.display(),
-            shard.fingerprint,
-            manifest.fingerprint
-        );
-        anyhow::ensure!(
-            shard.shard == k,
-            "{} holds shard {}'s results, not shard {k}'s: renamed or copied over? fly shard {k} again",
-            path.display(),
-            shard.shard
-        );
-        anyhow::ensure!(
-            shard.checksum == cases_checksum(&shard.cases)?,
-            "{}: its cases were changed after it was flown (their checksum does not match); fly shard {k} again",
-            path.display()
-        );
-        let range = manifest.range(k);
-        let indices: Vec<u64> = shard.cases.iter().map(|c| c.index).collect();
-        anyhow::ensure!(
-            indices == range.clone().collect::<Vec<_>>(),
-            "{}: does not hold exactly cases {range:?}",
-            path.display()
-        );
-        cases.extend(shard.cases);
-    }
+    let missing: Vec<u64> = (0..manifest.shards).filter(|k| !manifest.shard_path(dir, *k).exists()).collect();
     if !missing.is_empty() {
         let list: Vec<String> = missing.iter().map(u64::to_string).collect();
         anyhow::bail!(
@@ -305,9 +276,49 @@ pub fn merge(dir: &Path) -> anyhow::Result<super::SweepRun> {
             dir.display()
         );
     }
-    let (summary, mut files) = super::write_outputs(&campaign, manifest.seed, &cases, dir)?;
-    files.extend(super::write_plots(&campaign, &summary, &cases, dir)?);
+    // One shard in memory at a time, its cases written as they are read.
+    let mut writer = super::SweepWriter::create(&campaign, manifest.seed, dir, true)?;
+    for k in 0..manifest.shards {
+        if let Err(e) = read_shard(&manifest, dir, k).and_then(|cases| cases.iter().try_for_each(|c| writer.add(c))) {
+            writer.discard();
+            return Err(e);
+        }
+    }
+    let (summary, files) = writer.finish(None)?;
     Ok(super::SweepRun { summary, files, fly_s: f64::NAN, jobs: 0 })
+}
+
+/// Shard `k`'s cases, checked: of this plan, this shard, unedited, exactly its range.
+fn read_shard(manifest: &Manifest, dir: &Path, k: u64) -> anyhow::Result<Vec<CaseResult>> {
+    let path = manifest.shard_path(dir, k);
+    let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let shard: ShardResult =
+        serde_json::from_str(&text).with_context(|| format!("{}: not a shard's results", path.display()))?;
+    anyhow::ensure!(
+        shard.fingerprint == manifest.fingerprint,
+        "{} belongs to another plan (fingerprint {}, this plan's {}): shards of different plans never merge",
+        path.display(),
+        shard.fingerprint,
+        manifest.fingerprint
+    );
+    anyhow::ensure!(
+        shard.shard == k,
+        "{} holds shard {}'s results, not shard {k}'s: renamed or copied over? fly shard {k} again",
+        path.display(),
+        shard.shard
+    );
+    anyhow::ensure!(
+        shard.checksum == cases_checksum(&shard.cases)?,
+        "{}: its cases were changed after it was flown (their checksum does not match); fly shard {k} again",
+        path.display()
+    );
+    let range = manifest.range(k);
+    anyhow::ensure!(
+        shard.cases.iter().map(|c| c.index).eq(range.clone()),
+        "{}: does not hold exactly cases {range:?}",
+        path.display()
+    );
+    Ok(shard.cases)
 }
 
 /// What `silrig sweep slurm` is asked to do.
