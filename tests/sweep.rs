@@ -169,6 +169,11 @@ fn a_sweep_split_in_shards_merges_into_the_same_bytes_and_refuses_what_does_not_
     ok(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--out", p]);
     refused(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--out", p], "already holds a sweep plan");
     refused(&["sweep", "plan", CONFIG, "--runs", "3", "--shards", "4", "--out", o], "--shards must be within 1..=3");
+    refused(
+        &["sweep", "plan", CONFIG, "--runs", "10000000", "--shards", "10", "--out", o],
+        "--shards must be at least 100 for 10000000 cases",
+    );
+    assert!(!other.join("manifest.json").exists());
     ok(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--seed", "9", "--out", o]);
     // Each way of naming a shard: --index, --shard K/N, the batch system's variable.
     ok(&["sweep", "run", p, "--index", "0"]);

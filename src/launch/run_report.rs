@@ -30,7 +30,8 @@ pub struct RigReport {
     pub wall_s: f64,
     /// Plant ticks per wall second (the lockstep throughput figure).
     pub cycles_per_s: f64,
-    /// The three processes' reports: of a restarted process, its last life's (earlier lives' are in `lives`).
+    /// The three processes' reports: of a restarted process, every life's that wrote one, merged (its
+    /// `lives_merged`; the notes name a life that wrote none).
     pub processes: Vec<ProcessReport>,
     /// Every process the launcher started, one entry per life, with how it ended and its report file.
     #[serde(default)]
@@ -146,6 +147,74 @@ pub struct ProcessLife {
     /// The report this life wrote (`plant.report.json`, or `plant.life1.report.json` for a life that was
     /// followed by a restart), if it wrote one: a process killed with SIGKILL writes none.
     pub report: Option<String>,
+}
+
+/// A restarted process's report over all its lives: each life that wrote a report (an earlier life's kept as
+/// `<role>.life<N>.report.json`) merged into the process's entry of `processes` (its latencies merged exactly
+/// from their histograms, with their `.hgrm` files in `out` rewritten, its counters and CPU time summed; the last
+/// report's identity and end kept), and for each life that wrote none (a SIGKILL), a note in `notes` saying what the
+/// totals miss.
+pub(crate) fn merge_lives(processes: &mut Vec<ProcessReport>, lives: &[ProcessLife], out: &Path, notes: &mut Vec<String>) {
+    for role in silrig_flight::role::Role::ALL.map(|r| r.label()) {
+        let role_lives: Vec<&ProcessLife> = lives.iter().filter(|l| l.process == role).collect();
+        if role_lives.len() < 2 {
+            continue;
+        }
+        let last = processes.iter().position(|p| p.process == role);
+        let mut reports: Vec<(u32, ProcessReport)> = Vec::new();
+        let mut missing = Vec::new();
+        for l in &role_lives {
+            let own = last.map(|i| &processes[i]).filter(|p| p.pid == l.pid).cloned();
+            let read = || {
+                let text = std::fs::read_to_string(out.join(l.report.as_ref()?)).ok()?;
+                serde_json::from_str::<ProcessReport>(&text).ok()
+            };
+            match own.or_else(read) {
+                Some(r) => reports.push((l.life, r)),
+                None => missing.push(*l),
+            }
+        }
+        let merged_lives: Vec<u32> = reports.iter().map(|(life, _)| *life).collect();
+        let Some((_, mut merged)) = reports.pop() else { continue };
+        for (_, r) in &reports {
+            merged.cpu_s += r.cpu_s;
+            for (k, v) in &r.counters {
+                *merged.counters.entry(k.clone()).or_insert(0) += v;
+            }
+            for (k, v) in &r.command_age_ticks {
+                *merged.command_age_ticks.entry(*k).or_insert(0) += v;
+            }
+        }
+        for l in &mut merged.latencies {
+            let mut h = LatencyHistogram::from_buckets(&l.buckets);
+            for (_, r) in &reports {
+                if let Some(e) = r.latencies.iter().find(|e| e.name == l.name) {
+                    h.merge(&LatencyHistogram::from_buckets(&e.buckets));
+                }
+            }
+            *l = silrig_rig::report::NamedLatency::new(&l.name, &l.description, &h);
+            let _ = silrig_flight::files::write_atomically(&out.join(format!("{}.hgrm", l.name)), &h.hgrm());
+        }
+        merged.lives_merged = merged_lives.clone();
+        for l in &missing {
+            let span = match l.ended_at_s {
+                Some(end) => format!("{:.2}..{end:.2} s", l.started_at_s),
+                None => format!("from {:.2} s", l.started_at_s),
+            };
+            notes.push(format!(
+                "{role}: life {} (pid {}, {span}, {}) wrote no report: its latencies and counters are missing from \
+                 the {role}'s, which merge lives {}",
+                l.life,
+                l.pid,
+                l.exit,
+                merged_lives.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
+            ));
+        }
+        match last {
+            Some(i) => processes[i] = merged,
+            None => processes.push(merged),
+        }
+    }
 }
 
 /// How the user stopped a run.
@@ -343,11 +412,15 @@ impl RigReport {
                 };
                 out += &format!("  {name:<10} pid {:<7} {scheduling:<34} {ended}{span}\n", l.pid);
             }
-            if lives.len() > 1 && report.is_some() {
+            if let Some(p) = report.filter(|_| lives.len() > 1) {
+                let merged: Vec<String> = p.lives_merged.iter().map(|l| format!("#{l}")).collect();
+                let unreported = lives.len().saturating_sub(merged.len().max(1));
                 out += &format!(
-                    "  {:<10} {} lives: the latencies and counters below are those of its last life\n",
+                    "  {:<10} {} lives: the latencies and counters below merge {}{}\n",
                     "",
-                    lives.len()
+                    lives.len(),
+                    if merged.is_empty() { "its last life's only".to_string() } else { merged.join(", ") },
+                    if unreported > 0 { format!(" ({unreported} wrote no report: see the notes)") } else { String::new() }
                 );
             }
         }

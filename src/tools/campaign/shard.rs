@@ -16,6 +16,9 @@ pub const MANIFEST: &str = "manifest.json";
 pub const SHARDS_DIR: &str = "shards";
 /// Largest number of shards.
 pub const MAX_SHARDS: u64 = 100_000;
+/// Most cases in one shard: a worker holds its shard's results in memory (about 3.3 KB a case) until it writes
+/// them, and merge reads one shard at a time.
+pub const MAX_SHARD_CASES: u64 = 100_000;
 /// The batch systems' variables that carry a task's index, in the order they are read.
 pub const INDEX_VARIABLES: [&str; 2] = ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"];
 
@@ -163,6 +166,14 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
         (1..=MAX_SHARDS.min(opts.runs)).contains(&opts.shards),
         "--shards must be within 1..={} (at most one per case), got {}",
         MAX_SHARDS.min(opts.runs),
+        opts.shards
+    );
+    let fewest = opts.runs.div_ceil(MAX_SHARD_CASES);
+    anyhow::ensure!(
+        opts.shards >= fewest,
+        "--shards must be at least {fewest} for {} cases: a shard's cases are held in memory until its results are \
+         written, at most {MAX_SHARD_CASES} cases a shard (got {})",
+        opts.runs,
         opts.shards
     );
     let text = std::fs::read_to_string(&opts.config).with_context(|| format!("reading {}", opts.config.display()))?;
