@@ -137,10 +137,10 @@ fn a_restarted_controllers_report_merges_every_life_that_wrote_one_and_names_the
     assert!(text.contains("controller #3"), "{code:?} {text}");
     let c = process(&r, "controller");
     assert_eq!(c["lives_merged"], serde_json::json!([1, 3]), "{c}");
-    let first: Value = serde_json::from_str(&std::fs::read_to_string(out.join("controller.life1.report.json")).unwrap())
-        .expect("life 1's report kept");
-    let lives: Vec<&Value> =
-        r["lives"].as_array().unwrap().iter().filter(|l| l["process"] == "controller").collect();
+    let first: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("controller.life1.report.json")).unwrap())
+            .expect("life 1's report kept");
+    let lives: Vec<&Value> = r["lives"].as_array().unwrap().iter().filter(|l| l["process"] == "controller").collect();
     assert_eq!(lives.len(), 3);
     let last_pid = lives[2]["pid"].as_u64().unwrap();
     assert_eq!(c["pid"].as_u64(), Some(last_pid), "the last life's identity");

@@ -154,7 +154,12 @@ pub struct ProcessLife {
 /// from their histograms, with their `.hgrm` files in `out` rewritten, its counters and CPU time summed; the last
 /// report's identity and end kept), and for each life that wrote none (a SIGKILL), a note in `notes` saying what the
 /// totals miss.
-pub(crate) fn merge_lives(processes: &mut Vec<ProcessReport>, lives: &[ProcessLife], out: &Path, notes: &mut Vec<String>) {
+pub(crate) fn merge_lives(
+    processes: &mut Vec<ProcessReport>,
+    lives: &[ProcessLife],
+    out: &Path,
+    notes: &mut Vec<String>,
+) {
     for role in silrig_flight::role::Role::ALL.map(|r| r.label()) {
         let role_lives: Vec<&ProcessLife> = lives.iter().filter(|l| l.process == role).collect();
         if role_lives.len() < 2 {
@@ -420,7 +425,11 @@ impl RigReport {
                     "",
                     lives.len(),
                     if merged.is_empty() { "its last life's only".to_string() } else { merged.join(", ") },
-                    if unreported > 0 { format!(" ({unreported} wrote no report: see the notes)") } else { String::new() }
+                    if unreported > 0 {
+                        format!(" ({unreported} wrote no report: see the notes)")
+                    } else {
+                        String::new()
+                    }
                 );
             }
         }

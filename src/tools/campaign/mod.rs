@@ -262,9 +262,9 @@ impl Campaign {
             done.store(total, Ordering::Relaxed);
             progress.join().expect("the progress reporter does not panic");
             match outcome {
-                Ok(None) if expected < indices.end => Ok(Some(rig_case::check_interrupted().err().unwrap_or(
-                    rig_case::Interrupted("a signal"),
-                ))),
+                Ok(None) if expected < indices.end => {
+                    Ok(Some(rig_case::check_interrupted().err().unwrap_or(rig_case::Interrupted("a signal"))))
+                }
                 outcome => outcome,
             }
         })
@@ -406,7 +406,8 @@ impl<'a> SweepWriter<'a> {
         csv.into_inner().map_err(|e| e.into_error()).with_context(|| format!("writing {}", csv_path.display()))?;
         let csv = out.join("cases.csv");
         if csv_path != csv {
-            std::fs::rename(&csv_path, &csv).with_context(|| format!("renaming {} to cases.csv", csv_path.display()))?;
+            std::fs::rename(&csv_path, &csv)
+                .with_context(|| format!("renaming {} to cases.csv", csv_path.display()))?;
         }
         let summary = tally.finish(interrupted);
         let json = out.join("sweep.json");
