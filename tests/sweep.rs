@@ -1,7 +1,9 @@
 //! `silrig sweep`: a sweep is a pure function of (scenario, seed, index): the same bytes with 1 or 2 threads and as
 //! a prefix of a longer sweep; a worst case flown alone (`silrig sim --sample I --seed S`, the command the sweep
 //! prints) gives the numbers the sweep gave; infeasible cases are counted with their reason; every figure is drawn;
-//! bad dispersions and criteria are refused naming the key, with nothing written.
+//! bad dispersions and criteria are refused naming the key, with nothing written; a long sweep's peak memory grows by
+//! far less than a case's results per case (they are streamed to cases.csv); SIGINT stops a sweep keeping every case
+//! it flew; shards are checked at merge.
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};

@@ -214,7 +214,11 @@ impl Campaign {
             for _ in 0..jobs {
                 let tx = tx.clone();
                 let (next, handed, turn, done, scratch) = (&next, &handed, &turn, &done, &scratch);
+                let stop = &stop;
                 scope.spawn(move || {
+                    // A case that panics stops the others (who might wait for it at the window's edge for ever);
+                    // the scope then passes the panic on.
+                    let _stop_on_panic = StopOnPanic(stop);
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
                         if i >= indices.end || stopped() {
@@ -268,6 +272,17 @@ impl Campaign {
                 outcome => outcome,
             }
         })
+    }
+}
+
+/// Sets its flag when dropped by a panicking thread.
+struct StopOnPanic<'a>(&'a AtomicBool);
+
+impl Drop for StopOnPanic<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Ordering::Relaxed);
+        }
     }
 }
 
