@@ -198,6 +198,20 @@ fn logger_stopped_500_ms_loses_no_sample() {
 }
 
 #[test]
+fn a_logger_stopped_past_its_buffer_counts_the_commands_it_lost_in_the_fault_table() {
+    // 2 s is 200 ticks, more than the logger's subscribers buffer: the rows and their commands are lost together.
+    let (code, text, r, _out) = run("log-stop-long", &["--duration-s", "4", "--fault", "logger:stop@1s,for=2s"]);
+    assert_eq!(code, Some(0), "{text}");
+    let logger = process(&r, "logger");
+    let lost = logger["counters"]["command_samples_lost"].as_u64().unwrap();
+    assert!(lost > 0 && logger["counters"]["plant_ticks_missing"].as_u64().unwrap() > 0, "{logger}");
+    let fault = &r["faults"][0];
+    let (plant, commands) =
+        (fault["plant_samples_lost"].as_u64().unwrap(), fault["command_samples_lost"].as_u64().unwrap());
+    assert!(plant > 0 && commands >= plant, "{fault}");
+}
+
+#[test]
 fn controller_stopped_500_ms_is_detected_and_recovered() {
     let (code, text, r, out) = run("ctl-stop", &["--duration-s", "3", "--fault", "controller:stop@1s,for=500ms"]);
     assert_eq!(code, Some(0), "{text}");
