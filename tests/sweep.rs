@@ -222,6 +222,8 @@ fn a_sweep_split_in_shards_merges_into_the_same_bytes_and_refuses_what_does_not_
 /// the kernel accounts it for this child alone).
 fn silrig_peak_kib(args: &[&str]) -> (Option<i32>, i64) {
     use std::os::unix::process::ExitStatusExt;
+    // Reaped by wait4 below, which gives its resource usage with it.
+    #[allow(clippy::zombie_processes)]
     let child = Command::new(SILRIG)
         .args(args)
         .current_dir(ROOT)
