@@ -72,17 +72,14 @@ impl Figures {
             return;
         }
         self.flown += 1;
-        let point = Point {
-            rank: rank(c.index),
-            index: c.index,
-            values: c.values.clone(),
-            judged: c.judgements.iter().map(|j| (j.value, j.passed)).collect(),
-        };
-        if self.sample.len() < FIGURE_SAMPLE_MAX {
-            self.sample.push(point);
-        } else if self.sample.peek().is_some_and(|top| point < *top) {
-            self.sample.pop();
-            self.sample.push(point);
+        let (rank, index) = (rank(c.index), c.index);
+        let full = self.sample.len() >= FIGURE_SAMPLE_MAX;
+        if !full || self.sample.peek().is_some_and(|top| (rank, index) < (top.rank, top.index)) {
+            if full {
+                self.sample.pop();
+            }
+            let judged = c.judgements.iter().map(|j| (j.value, j.passed)).collect();
+            self.sample.push(Point { rank, index, values: c.values.clone(), judged });
         }
         match c.outcome {
             Outcome::Pass => {

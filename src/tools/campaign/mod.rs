@@ -1,8 +1,9 @@
 //! Monte Carlo campaigns (`silrig sweep`): the scenario's dispersions sampled case by case
 //! ([`silrig_flight::dispersion`]), each case flown in the single-process loop ([`case`]), or with a user's
 //! controller command through the three-process lockstep rig ([`rig_case`]), judged by the scenario's `[criteria]`,
-//! in parallel over the cores with a progress line, and summarised with the pass rate, its interval and the worst
-//! cases ([`report`]).
+//! in parallel over the cores with a progress line, each case written as it comes ([`SweepWriter`]: memory bounded
+//! whatever the number of cases), and summarised with the pass rate, its interval and the worst cases ([`report`],
+//! [`figures`]).
 
 pub mod case;
 pub mod figures;
