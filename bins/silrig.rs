@@ -246,6 +246,11 @@ fn sweep(opts: &silrig::campaign::SweepOptions) -> anyhow::Result<ExitCode> {
         run.summary.runs, run.fly_s, run.jobs
     );
     print_written(run.files);
+    if run.summary.interrupted.is_some() {
+        // As a shell reports a command ended by the signal (SIGINT is 2), though what was flown is written.
+        let signal = silrig::rig::signals::termination_signal().unwrap_or(2);
+        return Ok(ExitCode::from(silrig::rig::signals::exit_status_for(signal)));
+    }
     Ok(ExitCode::SUCCESS)
 }
 

@@ -120,6 +120,52 @@ fn controller_sigkill_and_restart_failsafe_then_resume_with_the_gap_marked() {
 }
 
 #[test]
+fn a_restarted_controllers_report_merges_every_life_that_wrote_one_and_names_the_one_that_did_not() {
+    // Life 1 ends on SIGTERM and writes its report, life 2 is killed with SIGKILL and writes none, life 3 runs to
+    // the end.
+    let (code, text, r, out) = run(
+        "lives",
+        &[
+            "--duration-s",
+            "4",
+            "--fault",
+            "controller:term@1s,restart_after=0.3s",
+            "--fault",
+            "controller:kill@2.2s,restart_after=0.3s",
+        ],
+    );
+    assert!(text.contains("controller #3"), "{code:?} {text}");
+    let c = process(&r, "controller");
+    assert_eq!(c["lives_merged"], serde_json::json!([1, 3]), "{c}");
+    let first: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("controller.life1.report.json")).unwrap())
+            .expect("life 1's report kept");
+    let lives: Vec<&Value> = r["lives"].as_array().unwrap().iter().filter(|l| l["process"] == "controller").collect();
+    assert_eq!(lives.len(), 3);
+    let last_pid = lives[2]["pid"].as_u64().unwrap();
+    assert_eq!(c["pid"].as_u64(), Some(last_pid), "the last life's identity");
+    // Counters summed, latencies merged: life 1's values are in the totals, beside life 3's.
+    let counters = first["counters"].as_object().unwrap();
+    assert!(!counters.is_empty());
+    for (k, v) in counters {
+        assert!(c["counters"][k].as_u64().unwrap() >= v.as_u64().unwrap(), "{k}: {c}");
+    }
+    let count = |p: &Value, name: &str| {
+        p["latencies"].as_array().unwrap().iter().find(|l| l["name"] == name).unwrap()["summary"]["count"]
+            .as_u64()
+            .unwrap()
+    };
+    let name = first["latencies"][0]["name"].as_str().unwrap();
+    assert!(count(&first, name) > 0 && count(c, name) > count(&first, name), "{name}: {c}");
+    let buckets: u64 = c["latencies"][0]["buckets"].as_array().unwrap().iter().map(|b| b[1].as_u64().unwrap()).sum();
+    assert_eq!(buckets, count(c, name), "the merged histogram is the merged summary's");
+    // The life without a report is named, with what is missing.
+    let notes = r["notes"].to_string();
+    assert!(notes.contains("controller: life 2 (pid ") && notes.contains("merge lives 1, 3"), "{notes}");
+    assert!(text.contains("3 lives: the latencies and counters below merge #1, #3 (1 wrote no report"), "{text}");
+}
+
+#[test]
 fn plant_sigkill_and_restart_continues_the_flight_from_its_checkpoint() {
     let (code, text, r, out) = run("plant-kill", &["--duration-s", "3", "--fault", "plant:kill@1s,restart_after=0.3s"]);
     assert_eq!(code, Some(0), "{text}");
@@ -149,6 +195,20 @@ fn logger_stopped_500_ms_loses_no_sample() {
     let with_command = 301 - logger["counters"]["rows_without_command"].as_u64().unwrap();
     assert_eq!(with_command, process(&r, "controller")["counters"]["commands_sent"].as_u64().unwrap());
     assert!(first(&events(&out), "launcher", "fault-ended").is_some());
+}
+
+#[test]
+fn a_logger_stopped_past_its_buffer_counts_the_commands_it_lost_in_the_fault_table() {
+    // 2 s is 200 ticks, more than the logger's subscribers buffer: the rows and their commands are lost together.
+    let (code, text, r, _out) = run("log-stop-long", &["--duration-s", "4", "--fault", "logger:stop@1s,for=2s"]);
+    assert_eq!(code, Some(0), "{text}");
+    let logger = process(&r, "logger");
+    let lost = logger["counters"]["command_samples_lost"].as_u64().unwrap();
+    assert!(lost > 0 && logger["counters"]["plant_ticks_missing"].as_u64().unwrap() > 0, "{logger}");
+    let fault = &r["faults"][0];
+    let (plant, commands) =
+        (fault["plant_samples_lost"].as_u64().unwrap(), fault["command_samples_lost"].as_u64().unwrap());
+    assert!(plant > 0 && commands >= plant, "{fault}");
 }
 
 #[test]

@@ -322,6 +322,16 @@ fn replay_refuses_what_is_not_a_whole_recording_of_this_layout() {
     assert!(text.contains("is cut short"), "{text}");
     assert!(!dir.join("replay").exists(), "nothing is started for a recording that cannot be replayed");
 
+    // A whole recording with bytes changed in its middle (its footer intact): damaged, not cut short.
+    let mut damaged = bytes.clone();
+    let middle = damaged.len() / 2;
+    damaged[middle..middle + 64].fill(0xa5);
+    std::fs::write(dir.join("recording.mcap"), &damaged).unwrap();
+    let (code, text) = replay(&dir, &[], &[]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("recording.mcap is damaged") && !text.contains("is cut short"), "{text}");
+    assert!(text.contains("ends with its footer"), "{text}");
+
     // A whole recording copied into the folder of another run.
     let other_dir = temp_dir("recording", "other");
     let (code, text) =

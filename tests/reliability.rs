@@ -351,7 +351,12 @@ fn a_peer_that_dies_is_cleaned_up_by_the_launcher_and_every_life_is_in_the_repor
     assert!(lives[0]["report"].is_null());
     assert_eq!(lives[1]["report"], "controller.report.json");
     assert!(text.contains("controller #1") && text.contains("controller #2"), "{text}");
-    assert!(text.contains("2 lives: the latencies and counters below are those of its last life"), "{text}");
+    assert!(
+        text.contains("2 lives: the latencies and counters below merge #2 (1 wrote no report: see the notes)"),
+        "{text}"
+    );
+    let notes = report["notes"].to_string();
+    assert!(notes.contains("controller: life 1 (pid ") && notes.contains("wrote no report"), "{notes}");
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }

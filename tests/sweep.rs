@@ -1,7 +1,9 @@
 //! `silrig sweep`: a sweep is a pure function of (scenario, seed, index): the same bytes with 1 or 2 threads and as
 //! a prefix of a longer sweep; a worst case flown alone (`silrig sim --sample I --seed S`, the command the sweep
 //! prints) gives the numbers the sweep gave; infeasible cases are counted with their reason; every figure is drawn;
-//! bad dispersions and criteria are refused naming the key, with nothing written.
+//! bad dispersions and criteria are refused naming the key, with nothing written; a long sweep's peak memory grows by
+//! far less than a case's results per case (they are streamed to cases.csv); SIGINT stops a sweep keeping every case
+//! it flew; shards are checked at merge.
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -169,6 +171,11 @@ fn a_sweep_split_in_shards_merges_into_the_same_bytes_and_refuses_what_does_not_
     ok(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--out", p]);
     refused(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--out", p], "already holds a sweep plan");
     refused(&["sweep", "plan", CONFIG, "--runs", "3", "--shards", "4", "--out", o], "--shards must be within 1..=3");
+    refused(
+        &["sweep", "plan", CONFIG, "--runs", "10000000", "--shards", "10", "--out", o],
+        "--shards must be at least 100 for 10000000 cases",
+    );
+    assert!(!other.join("manifest.json").exists());
     ok(&["sweep", "plan", CONFIG, "--runs", "30", "--shards", "3", "--seed", "9", "--out", o]);
     // Each way of naming a shard: --index, --shard K/N, the batch system's variable.
     ok(&["sweep", "run", p, "--index", "0"]);
@@ -209,5 +216,94 @@ fn a_sweep_split_in_shards_merges_into_the_same_bytes_and_refuses_what_does_not_
     ok(&["sweep", "slurm", p]);
     let script = std::fs::read_to_string(plan.join("sweep.sbatch")).unwrap();
     assert!(script.contains("#SBATCH --array=0-2") && script.contains("sweep run"), "{script}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `silrig ARGS` from the repository root, its output thrown away: (exit code, its peak resident memory in KiB, as
+/// the kernel accounts it for this child alone).
+fn silrig_peak_kib(args: &[&str]) -> (Option<i32>, i64) {
+    use std::os::unix::process::ExitStatusExt;
+    // Reaped by wait4 below, which gives its resource usage with it.
+    #[allow(clippy::zombie_processes)]
+    let child = Command::new(SILRIG)
+        .args(args)
+        .current_dir(ROOT)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let (mut status, mut usage) = (0, unsafe { std::mem::zeroed::<libc::rusage>() });
+    // SAFETY: waits for this test's own child, whose pid it holds, with valid pointers.
+    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
+    assert_eq!(pid, child.id() as libc::pid_t, "{}", std::io::Error::last_os_error());
+    (std::process::ExitStatus::from_raw(status).code(), usage.ru_maxrss)
+}
+
+#[test]
+fn a_long_sweep_streams_its_cases_in_memory_bounded_per_case() {
+    // Today's results held in memory took about 3.3 KB a case (10 million cases: 33 GB). Both sweeps are longer
+    // than the figures' sample, so what grows with the cases is what is held per case.
+    let dir = temp_dir("memory");
+    let (few, many) = (6_000_u64, 18_000_u64);
+    let peak = |runs: u64| {
+        let out = dir.join(format!("runs-{runs}"));
+        let runs = runs.to_string();
+        let (code, kib) =
+            silrig_peak_kib(&["sweep", CONFIG, "--runs", &runs, "--jobs", "2", "--out", out.to_str().unwrap()]);
+        assert_eq!(code, Some(0), "sweep of {runs} cases");
+        let csv = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+        assert_eq!(csv.lines().count().to_string(), (runs.parse::<usize>().unwrap() + 1).to_string());
+        let json: Value = serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+        assert_eq!(json["runs"].to_string(), runs);
+        assert!(json.get("interrupted").is_none(), "{json}");
+        kib
+    };
+    let (small, large) = (peak(few), peak(many));
+    let per_case_bytes = (large - small) as f64 * 1024.0 / (many - few) as f64;
+    eprintln!("peak memory {small} KiB for {few} cases, {large} KiB for {many}: {per_case_bytes:.0} B a case");
+    assert!(per_case_bytes < 600.0, "{per_case_bytes:.0} B a case ({small} KiB -> {large} KiB)");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sigint_stops_a_sweep_keeping_every_case_it_flew_and_sweep_json_says_so() {
+    let dir = temp_dir("sigint");
+    let out = dir.join("stopped");
+    let mut child = Command::new(SILRIG)
+        .args(["sweep", CONFIG, "--runs", "10000000", "--jobs", "2", "--out", out.to_str().unwrap()])
+        .current_dir(ROOT)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Rows reach cases.csv as they are flown.
+    let started = std::time::Instant::now();
+    while std::fs::read_to_string(out.join("cases.csv")).map_or(0, |t| t.lines().count()) < 500 {
+        assert!(started.elapsed().as_secs() < 120, "no rows in cases.csv after 120 s");
+        assert!(child.try_wait().unwrap().is_none(), "the sweep ended before it was stopped");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    // SAFETY: signals this test's own child by its pid.
+    assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) }, 0);
+    let o = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(130), "{stdout}{}", String::from_utf8_lossy(&o.stderr));
+    let json: Value = serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let why = json["interrupted"].as_str().unwrap_or_default();
+    assert!(why.contains("stopped by SIGINT") && why.contains("of the 10000000 cases asked"), "{json}");
+    assert!(stdout.contains("interrupted: stopped by SIGINT"), "{stdout}");
+    // Whole: every case from 0 on, each row complete, the counts those of the rows.
+    let csv = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    assert!(csv.ends_with('\n'));
+    let runs = json["runs"].as_u64().unwrap();
+    assert!(runs >= 499, "{runs}");
+    let indices: Vec<u64> = csv.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert_eq!(indices, (0..runs).collect::<Vec<_>>());
+    let counted = ["passed", "failed", "infeasible"].iter().map(|k| json[k].as_u64().unwrap()).sum::<u64>();
+    assert_eq!(counted, runs);
+    // The same rows as a sweep of that many cases.
+    let (whole, _) = sweep(&dir.join("whole"), &["--runs", "300"]);
+    assert_eq!(csv.lines().take(301).collect::<Vec<_>>(), whole.lines().collect::<Vec<_>>());
+    assert!(out.join("envelope.png").exists(), "the figures of the cases flown are drawn");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -31,7 +31,8 @@ pub struct FaultRecord {
     pub recovered_at_s: Option<f64>,
     /// Plant ticks absent from the log between injection and recovery.
     pub plant_samples_lost: u64,
-    /// Logged ticks without a command between injection and recovery.
+    /// Ticks between injection and recovery whose command is not in the log: rows without a command, and the ticks
+    /// absent from the log (their commands went with them: a stopped logger loses both).
     pub command_samples_lost: u64,
     /// Where the logged flight joins a re-flown one after this fault (a restarted plant), and by how much.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -192,7 +193,8 @@ fn read_timing(out_dir: &Path) -> Vec<(u64, u64, bool)> {
         .collect()
 }
 
-/// Plant ticks missing and rows without a command among the rows published in [from_ns, to_ns].
+/// Plant ticks missing, and commands missing (rows without one, and the missing ticks', which went with them), among
+/// the rows published in [from_ns, to_ns].
 fn losses(timing: &[(u64, u64, bool)], from_ns: u64, to_ns: u64) -> (u64, u64) {
     let rows: Vec<&(u64, u64, bool)> = timing.iter().filter(|r| r.1 >= from_ns && r.1 <= to_ns).collect();
     let command_lost = rows.iter().filter(|r| r.2).count() as u64;
@@ -205,7 +207,7 @@ fn losses(timing: &[(u64, u64, bool)], from_ns: u64, to_ns: u64) -> (u64, u64) {
     ticks.sort_unstable();
     ticks.dedup();
     let plant_lost = ticks.windows(2).map(|w| w[1] - w[0] - 1).sum();
-    (plant_lost, command_lost)
+    (plant_lost, command_lost + plant_lost)
 }
 
 #[cfg(test)]

@@ -672,6 +672,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             Err(e) => failures.push(format!("bridge: no report ({e})")),
         }
     }
+    super::run_report::merge_lives(&mut processes, &sup.lives, &out, &mut notes);
     mark_stopped_at_end(&mut processes, &sup.lives);
     let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
     let control = trace.as_ref().map(|t| summarize(t, &scenario));

@@ -30,7 +30,8 @@ pub struct RigReport {
     pub wall_s: f64,
     /// Plant ticks per wall second (the lockstep throughput figure).
     pub cycles_per_s: f64,
-    /// The three processes' reports: of a restarted process, its last life's (earlier lives' are in `lives`).
+    /// The three processes' reports: of a restarted process, every life's that wrote one, merged (its
+    /// `lives_merged`; the notes name a life that wrote none).
     pub processes: Vec<ProcessReport>,
     /// Every process the launcher started, one entry per life, with how it ended and its report file.
     #[serde(default)]
@@ -148,6 +149,79 @@ pub struct ProcessLife {
     pub report: Option<String>,
 }
 
+/// A restarted process's report over all its lives: each life that wrote a report (an earlier life's kept as
+/// `<role>.life<N>.report.json`) merged into the process's entry of `processes` (its latencies merged exactly
+/// from their histograms, with their `.hgrm` files in `out` rewritten, its counters and CPU time summed; the last
+/// report's identity and end kept), and for each life that wrote none (a SIGKILL), a note in `notes` saying what the
+/// totals miss.
+pub(crate) fn merge_lives(
+    processes: &mut Vec<ProcessReport>,
+    lives: &[ProcessLife],
+    out: &Path,
+    notes: &mut Vec<String>,
+) {
+    for role in silrig_flight::role::Role::ALL.map(|r| r.label()) {
+        let role_lives: Vec<&ProcessLife> = lives.iter().filter(|l| l.process == role).collect();
+        if role_lives.len() < 2 {
+            continue;
+        }
+        let last = processes.iter().position(|p| p.process == role);
+        let mut reports: Vec<(u32, ProcessReport)> = Vec::new();
+        let mut missing = Vec::new();
+        for l in &role_lives {
+            let own = last.map(|i| &processes[i]).filter(|p| p.pid == l.pid).cloned();
+            let read = || {
+                let text = std::fs::read_to_string(out.join(l.report.as_ref()?)).ok()?;
+                serde_json::from_str::<ProcessReport>(&text).ok()
+            };
+            match own.or_else(read) {
+                Some(r) => reports.push((l.life, r)),
+                None => missing.push(*l),
+            }
+        }
+        let merged_lives: Vec<u32> = reports.iter().map(|(life, _)| *life).collect();
+        let Some((_, mut merged)) = reports.pop() else { continue };
+        for (_, r) in &reports {
+            merged.cpu_s += r.cpu_s;
+            for (k, v) in &r.counters {
+                *merged.counters.entry(k.clone()).or_insert(0) += v;
+            }
+            for (k, v) in &r.command_age_ticks {
+                *merged.command_age_ticks.entry(*k).or_insert(0) += v;
+            }
+        }
+        for l in &mut merged.latencies {
+            let mut h = LatencyHistogram::from_buckets(&l.buckets);
+            for (_, r) in &reports {
+                if let Some(e) = r.latencies.iter().find(|e| e.name == l.name) {
+                    h.merge(&LatencyHistogram::from_buckets(&e.buckets));
+                }
+            }
+            *l = silrig_rig::report::NamedLatency::new(&l.name, &l.description, &h);
+            let _ = silrig_flight::files::write_atomically(&out.join(format!("{}.hgrm", l.name)), &h.hgrm());
+        }
+        merged.lives_merged = merged_lives.clone();
+        for l in &missing {
+            let span = match l.ended_at_s {
+                Some(end) => format!("{:.2}..{end:.2} s", l.started_at_s),
+                None => format!("from {:.2} s", l.started_at_s),
+            };
+            notes.push(format!(
+                "{role}: life {} (pid {}, {span}, {}) wrote no report: its latencies and counters are missing from \
+                 the {role}'s, which merge lives {}",
+                l.life,
+                l.pid,
+                l.exit,
+                merged_lives.iter().map(u32::to_string).collect::<Vec<_>>().join(", ")
+            ));
+        }
+        match last {
+            Some(i) => processes[i] = merged,
+            None => processes.push(merged),
+        }
+    }
+}
+
 /// How the user stopped a run.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct StoppedBy {
@@ -159,38 +233,52 @@ pub struct StoppedBy {
     pub exit_status: u8,
 }
 
-/// The closed-loop figures of the logged trace and the latency distributions of every process.
+/// The closed-loop figures of the logged trace and the latency distributions of every process, each figure drawn on
+/// a thread of its own (drawing is most of the time from a run's end, or a Ctrl-C, to its report); the first error
+/// in the figures' order is returned.
 pub(crate) fn write_plots(
     report: &RigReport,
     out: &Path,
     scenario: &silrig_flight::scenario::Scenario,
 ) -> anyhow::Result<()> {
-    if report.control.is_some() {
-        let trace = Trace::load(&out.join("trace.csv"))?;
-        // Rows without a command (a lost controller) have NaN command columns, which the plots skip.
-        let f_true = silrig_flight::f_true::from_trace(&trace, scenario);
-        match silrig_plot::plot_closed_loop(&trace, f_true.as_ref(), out, &silrig_plot::plot_title(scenario)) {
-            // A plant of the user's own names its signals itself: the F-16's states figure may not fit it; the
-            // signals figure below shows every one of its signals.
-            Err(silrig_plot::PlotError::MissingColumn { column, file, .. })
-                if !silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) =>
-            {
-                println!(
-                    "figures: {} not drawn: the plant's trace has no column `{column}` (the closed-loop figures show \
-                     the F-16's states; signals.png shows this plant's)",
-                    file.display()
-                );
+    let trace = match report.control {
+        Some(_) => Some(Trace::load(&out.join("trace.csv"))?),
+        None => None,
+    };
+    let trace = trace.as_ref();
+    type Figure<'a> = Box<dyn FnOnce() -> anyhow::Result<()> + Send + 'a>;
+    let mut figures: Vec<Figure> = Vec::new();
+    if let Some(trace) = trace {
+        figures.push(Box::new(move || {
+            // Rows without a command (a lost controller) have NaN command columns, which the plots skip.
+            let f_true = silrig_flight::f_true::from_trace(trace, scenario);
+            match silrig_plot::plot_closed_loop(trace, f_true.as_ref(), out, &silrig_plot::plot_title(scenario)) {
+                // A plant of the user's own names its signals itself: the F-16's states figure may not fit it; the
+                // signals figure shows every one of its signals.
+                Err(silrig_plot::PlotError::MissingColumn { column, file, .. })
+                    if !silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) =>
+                {
+                    println!(
+                        "figures: {} not drawn: the plant's trace has no column `{column}` (the closed-loop figures \
+                         show the F-16's states; signals.png shows this plant's)",
+                        file.display()
+                    );
+                    Ok(())
+                }
+                other => other.map(|_| ()).map_err(anyhow::Error::from),
             }
-            other => {
-                other?;
-            }
-        }
-        // The units are in the plant's announcement, which the recording keeps (a run without one draws bare names).
-        let plant = silrig_wire::recording::reader::RecordedRun::read(out).ok().and_then(|r| r.plant_signals().ok());
-        let plant_name = plant.as_ref().map_or(String::new(), |p| format!(", plant {}", p.plant));
-        let title = format!("{}{plant_name}: every signal, commands in orange", scenario.name);
-        let setpoint = |name: &str| scenario.setpoint.get(name);
-        silrig_plot::plot_signals(&trace, plant.as_ref(), &setpoint, out, "signals", &title)?;
+        }));
+        figures.push(Box::new(move || {
+            // The units are in the plant's announcement, which the recording keeps (a run without one draws bare
+            // names).
+            let plant =
+                silrig_wire::recording::reader::RecordedRun::read(out).ok().and_then(|r| r.plant_signals().ok());
+            let plant_name = plant.as_ref().map_or(String::new(), |p| format!(", plant {}", p.plant));
+            let title = format!("{}{plant_name}: every signal, commands in orange", scenario.name);
+            let setpoint = |name: &str| scenario.setpoint.get(name);
+            silrig_plot::plot_signals(trace, plant.as_ref(), &setpoint, out, "signals", &title)?;
+            Ok(())
+        }));
     }
     let mut series: Vec<(String, Vec<(f64, f64)>)> = report
         .processes
@@ -206,36 +294,49 @@ pub(crate) fn write_plots(
         series.push(("os-floor.wake_lateness".into(), b.percentile_points.clone()));
     }
     if !series.is_empty() {
-        let title = format!("{} ({}, run {}): latency distributions", report.scenario, report.mode, report.run_id);
-        silrig_plot::plot_percentile_distributions(&series, out, "latency", &title)?;
+        figures.push(Box::new(move || {
+            let title = format!("{} ({}, run {}): latency distributions", report.scenario, report.mode, report.run_id);
+            silrig_plot::plot_percentile_distributions(&series, out, "latency", &title)?;
+            Ok(())
+        }));
     }
-    let per_tick = per_tick_values_us(out, report.mode == "realtime");
-    if per_tick.iter().any(|(_, v)| !v.is_empty()) {
-        let title = format!("{} ({}, run {}): per-tick histograms", report.scenario, report.mode, report.run_id);
-        silrig_plot::plot_latency_histograms(&per_tick, 5.0, out, "latency_histogram", &title)?;
-    }
-    if !(report.faults.is_empty() && report.discontinuities.is_empty()) && report.control.is_some() {
-        let trace = Trace::load(&out.join("trace.csv"))?;
-        let mut marks = Vec::new();
-        for f in &report.faults {
-            let short = f.fault.split(',').next().unwrap_or(&f.fault).to_string();
-            if let Some(t) = f.injected_at_s {
-                marks.push(silrig_plot::TimelineEvent { t_s: t, label: short.clone() });
-            }
-            if let Some(t) = f.failsafe_at_s {
-                marks.push(silrig_plot::TimelineEvent { t_s: t, label: "failsafe".into() });
-            }
-            if let Some(t) = f.recovered_at_s {
-                marks.push(silrig_plot::TimelineEvent { t_s: t, label: "recovered".into() });
-            }
+    figures.push(Box::new(move || {
+        let per_tick = per_tick_values_us(out, report.mode == "realtime");
+        if per_tick.iter().any(|(_, v)| !v.is_empty()) {
+            let title = format!("{} ({}, run {}): per-tick histograms", report.scenario, report.mode, report.run_id);
+            silrig_plot::plot_latency_histograms(&per_tick, 5.0, out, "latency_histogram", &title)?;
         }
-        for d in &report.discontinuities {
-            marks.push(silrig_plot::TimelineEvent { t_s: d.at_s, label: "discontinuity".into() });
-        }
-        let title = format!("{} ({}, run {}): faults", report.scenario, report.mode, report.run_id);
-        silrig_plot::plot_timeline(&trace, &marks, out, "faults", &title)?;
+        Ok(())
+    }));
+    if let Some(trace) = trace.filter(|_| !(report.faults.is_empty() && report.discontinuities.is_empty())) {
+        figures.push(Box::new(move || {
+            let mut marks = Vec::new();
+            for f in &report.faults {
+                let short = f.fault.split(',').next().unwrap_or(&f.fault).to_string();
+                if let Some(t) = f.injected_at_s {
+                    marks.push(silrig_plot::TimelineEvent { t_s: t, label: short.clone() });
+                }
+                if let Some(t) = f.failsafe_at_s {
+                    marks.push(silrig_plot::TimelineEvent { t_s: t, label: "failsafe".into() });
+                }
+                if let Some(t) = f.recovered_at_s {
+                    marks.push(silrig_plot::TimelineEvent { t_s: t, label: "recovered".into() });
+                }
+            }
+            for d in &report.discontinuities {
+                marks.push(silrig_plot::TimelineEvent { t_s: d.at_s, label: "discontinuity".into() });
+            }
+            let title = format!("{} ({}, run {}): faults", report.scenario, report.mode, report.run_id);
+            silrig_plot::plot_timeline(trace, &marks, out, "faults", &title)?;
+            Ok(())
+        }));
     }
-    Ok(())
+    std::thread::scope(|scope| {
+        let drawing: Vec<_> = figures.into_iter().map(|f| scope.spawn(f)).collect();
+        drawing.into_iter().map(|d| d.join().expect("drawing a figure does not panic")).collect::<Vec<_>>()
+    })
+    .into_iter()
+    .collect()
 }
 
 /// Command ages in doubling buckets (1, 2, 3-4, 5-8, ...), so a long outage is a few entries on one line and not
@@ -343,11 +444,19 @@ impl RigReport {
                 };
                 out += &format!("  {name:<10} pid {:<7} {scheduling:<34} {ended}{span}\n", l.pid);
             }
-            if lives.len() > 1 && report.is_some() {
+            if let Some(p) = report.filter(|_| lives.len() > 1) {
+                let merged: Vec<String> = p.lives_merged.iter().map(|l| format!("#{l}")).collect();
+                let unreported = lives.len().saturating_sub(merged.len().max(1));
                 out += &format!(
-                    "  {:<10} {} lives: the latencies and counters below are those of its last life\n",
+                    "  {:<10} {} lives: the latencies and counters below merge {}{}\n",
                     "",
-                    lives.len()
+                    lives.len(),
+                    if merged.is_empty() { "its last life's only".to_string() } else { merged.join(", ") },
+                    if unreported > 0 {
+                        format!(" ({unreported} wrote no report: see the notes)")
+                    } else {
+                        String::new()
+                    }
                 );
             }
         }

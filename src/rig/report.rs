@@ -19,6 +19,23 @@ pub struct NamedLatency {
     /// `(percentile, µs)` points for plots.
     #[serde(default)]
     pub percentile_points: Vec<(f64, f64)>,
+    /// The histogram itself ([`LatencyHistogram::buckets`]: value ns, count), so the reports of a restarted
+    /// process's lives merge exactly.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub buckets: Vec<(u64, u64)>,
+}
+
+impl NamedLatency {
+    /// The distribution `h` named `name` (described by `description`).
+    pub fn new(name: &str, description: &str, h: &LatencyHistogram) -> Self {
+        Self {
+            name: name.into(),
+            description: description.into(),
+            summary: h.summary(),
+            percentile_points: h.percentile_points(),
+            buckets: h.buckets(),
+        }
+    }
 }
 
 /// The end-of-run report of one process.
@@ -48,6 +65,11 @@ pub struct ProcessReport {
     /// CPU time the process used, user plus system, s (what it costs beside the loop's figures).
     #[serde(default)]
     pub cpu_s: f64,
+    /// A restarted process: the lives (1, 2, ...) whose reports these figures merge, latencies merged and counters
+    /// and CPU time summed (the run's `lives` give each one's span; a life killed with SIGKILL wrote none, and the
+    /// run's notes say what is missing). Empty: one life's report.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lives_merged: Vec<u32>,
 }
 
 /// CPU time this process has used so far, user plus system, s.
@@ -148,12 +170,7 @@ impl Recorder {
         let mut latencies = Vec::new();
         for (name, description, h) in &self.histograms {
             silrig_flight::files::write_atomically(&out_dir.join(format!("{name}.hgrm")), &h.hgrm())?;
-            latencies.push(NamedLatency {
-                name: name.clone(),
-                description: description.clone(),
-                summary: h.summary(),
-                percentile_points: h.percentile_points(),
-            });
+            latencies.push(NamedLatency::new(name, description, h));
         }
         let report = ProcessReport {
             process: self.process.clone(),
@@ -167,6 +184,7 @@ impl Recorder {
             counters: self.counters,
             command_age_ticks: self.command_age_ticks,
             cpu_s: process_cpu_s(),
+            lives_merged: Vec::new(),
         };
         silrig_flight::files::write_atomically(
             &report_path(out_dir, &self.process),

@@ -92,6 +92,22 @@ impl LatencyHistogram {
         }
     }
 
+    /// Every bucket that holds values: (a value of the bucket, ns; how many values it holds), in value order. A
+    /// histogram rebuilt from them ([`LatencyHistogram::from_buckets`]) is this one, so reports written by separate
+    /// processes (a restarted process's lives) merge exactly.
+    pub fn buckets(&self) -> Vec<(u64, u64)> {
+        self.hist.iter_recorded().map(|v| (v.value_iterated_to(), v.count_at_value())).collect()
+    }
+
+    /// The histogram whose [`buckets`](LatencyHistogram::buckets) these are.
+    pub fn from_buckets(buckets: &[(u64, u64)]) -> Self {
+        let mut h = Self::new();
+        for (value_ns, count) in buckets {
+            h.hist.saturating_record_n(*value_ns, *count);
+        }
+        h
+    }
+
     /// Forget all values.
     pub fn reset(&mut self) {
         self.hist.reset();

@@ -1,20 +1,23 @@
 //! Monte Carlo campaigns (`silrig sweep`): the scenario's dispersions sampled case by case
 //! ([`silrig_flight::dispersion`]), each case flown in the single-process loop ([`case`]), or with a user's
 //! controller command through the three-process lockstep rig ([`rig_case`]), judged by the scenario's `[criteria]`,
-//! in parallel over the cores with a progress line, and summarised with the pass rate, its interval and the worst
-//! cases ([`report`]).
+//! in parallel over the cores with a progress line, each case written as it comes ([`SweepWriter`]: memory bounded
+//! whatever the number of cases), and summarised with the pass rate, its interval and the worst cases ([`report`],
+//! [`figures`]).
 
 pub mod case;
+pub mod figures;
 pub mod report;
 pub mod rig_case;
 pub mod shard;
 
 use anyhow::Context;
 use case::CaseResult;
-use rayon::prelude::*;
-use std::io::IsTerminal;
+use std::collections::BTreeMap;
+use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use silrig_flight::criteria::Criteria;
@@ -177,37 +180,116 @@ impl Campaign {
         }
     }
 
+    /// The criteria's names, in the order every flown case's judgements come in.
+    pub fn criterion_names(&self) -> Vec<String> {
+        silrig_flight::judge::judge_flight(&self.criteria, &self.scenario, None, None)
+            .into_iter()
+            .map(|j| j.criterion)
+            .collect()
+    }
+
     /// Fly the cases `indices` under `seed` on `jobs` threads (with a controller command, `jobs` rigs side by
-    /// side), reporting progress on stderr; results in index order.
-    pub fn fly(&self, seed: u64, indices: std::ops::Range<u64>, jobs: usize) -> anyhow::Result<Vec<CaseResult>> {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build().context("starting the worker threads")?;
+    /// side), reporting progress on stderr, and hand each result to `sink` in index order as soon as the cases
+    /// before it are flown: at most [`REORDER_WINDOW`] results wait for their turn, so memory stays bounded
+    /// whatever the number of cases. SIGINT or SIGTERM stops it: the cases in flight finish (a rig's case is
+    /// stopped, and not handed on), no case is started, and it returns the interruption, every case before the
+    /// first one not flown having been handed to `sink`. An error of `sink` stops it too, and is returned.
+    pub fn fly_each(
+        &self,
+        seed: u64,
+        indices: std::ops::Range<u64>,
+        jobs: usize,
+        mut sink: impl FnMut(CaseResult) -> anyhow::Result<()>,
+    ) -> anyhow::Result<Option<rig_case::Interrupted>> {
+        silrig_rig::signals::install_termination_flag();
         let scratch = self.controller_cmd.as_ref().map(|_| rig_case::Scratch::new()).transpose()?;
         let total = indices.end - indices.start;
-        let done = AtomicU64::new(0);
+        let (done, next, stop) = (AtomicU64::new(0), AtomicU64::new(indices.start), AtomicBool::new(false));
+        // The first case not yet handed to `sink`: no worker starts a case a window or more past it.
+        let (handed, turn) = (Mutex::new(indices.start), Condvar::new());
+        let stopped = || stop.load(Ordering::Relaxed) || silrig_rig::signals::termination_requested();
         let started = Instant::now();
-        let results = std::thread::scope(|scope| {
+        std::thread::scope(|scope| {
             let progress = scope.spawn(|| report_progress(&done, total, started));
-            let results: Result<Vec<CaseResult>, rig_case::Interrupted> = pool.install(|| {
-                indices
-                    .into_par_iter()
-                    .map(|i| {
-                        let r = match (&self.controller_cmd, &scratch) {
+            let (tx, rx) = std::sync::mpsc::channel();
+            for _ in 0..jobs {
+                let tx = tx.clone();
+                let (next, handed, turn, done, scratch) = (&next, &handed, &turn, &done, &scratch);
+                let stop = &stop;
+                scope.spawn(move || {
+                    // A case that panics stops the others (who might wait for it at the window's edge for ever);
+                    // the scope then passes the panic on.
+                    let _stop_on_panic = StopOnPanic(stop);
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        if i >= indices.end || stopped() {
+                            break;
+                        }
+                        let mut first = handed.lock().expect("no worker panics holding it");
+                        while i >= *first + REORDER_WINDOW && !stopped() {
+                            first = turn.wait_timeout(first, Duration::from_millis(100)).expect("not poisoned").0;
+                        }
+                        drop(first);
+                        let r = match (&self.controller_cmd, scratch) {
                             (Some(cmd), Some(scratch)) => scratch.fly(self, cmd, seed, i),
                             _ => Ok(case::fly(&self.models, &self.scenario, &self.criteria, seed, i)),
                         };
                         done.fetch_add(1, Ordering::Relaxed);
-                        r
-                    })
-                    .collect()
-            });
+                        if tx.send((i, r)).is_err() {
+                            break;
+                        }
+                    }
+                });
+            }
+            drop(tx);
+            let mut waiting = BTreeMap::new();
+            let mut expected = indices.start;
+            let mut outcome = Ok(None);
+            for (i, r) in rx {
+                waiting.insert(i, r);
+                while outcome.as_ref().is_ok_and(Option::is_none)
+                    && let Some(r) = waiting.remove(&expected)
+                {
+                    match r.map(&mut sink) {
+                        Ok(Ok(())) => expected += 1,
+                        Ok(Err(e)) => outcome = Err(e),
+                        Err(interrupted) => outcome = Ok(Some(interrupted)),
+                    }
+                    *handed.lock().expect("no worker panics holding it") = expected;
+                    turn.notify_all();
+                }
+                if !outcome.as_ref().is_ok_and(Option::is_none) {
+                    stop.store(true, Ordering::Relaxed);
+                    waiting.clear();
+                }
+            }
             // An interrupted sweep leaves cases unflown: the progress line ends all the same.
             done.store(total, Ordering::Relaxed);
             progress.join().expect("the progress reporter does not panic");
-            results
-        });
-        Ok(results?)
+            match outcome {
+                Ok(None) if expected < indices.end => {
+                    Ok(Some(rig_case::check_interrupted().err().unwrap_or(rig_case::Interrupted("a signal"))))
+                }
+                outcome => outcome,
+            }
+        })
     }
 }
+
+/// Sets its flag when dropped by a panicking thread.
+struct StopOnPanic<'a>(&'a AtomicBool);
+
+impl Drop for StopOnPanic<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
+/// Cases flown ahead of the first one not yet written, at most: bounds the memory of the results waiting for the
+/// cases before them (a case of the rig may take seconds while the others fly on).
+pub const REORDER_WINDOW: u64 = 4096;
 
 /// Refuse the controller command `cmd` up front when its program cannot be found, or when `scenario` (named
 /// `config`) flies a controller FMU, which takes the controller's place in silrig-controller just as `cmd` would.
@@ -272,29 +354,124 @@ pub struct SweepRun {
     pub jobs: usize,
 }
 
-/// Write `cases.csv` and `sweep.json` of `cases` into `out`.
-pub fn write_outputs(
+/// A sweep's outputs written as its cases come in index order: each case's row of `cases.csv` at once, the summary
+/// and the figures gathered in bounded memory and written at the end.
+pub struct SweepWriter<'a> {
+    campaign: &'a Campaign,
+    out: PathBuf,
+    /// Where `cases.csv` is written: `cases.csv` itself, or a name it gets only once the sweep is whole.
+    csv_path: PathBuf,
+    csv: std::io::BufWriter<std::fs::File>,
+    row: String,
+    criteria: usize,
+    tally: report::Tally,
+    figures: figures::Figures,
+}
+
+impl<'a> SweepWriter<'a> {
+    /// Start the outputs of `campaign` under `seed` in `out` (created); with `staged`, `cases.csv` is written under
+    /// another name and takes its own only when [`finish`](Self::finish)ed, so a sweep that fails half way (a
+    /// merge that finds a bad shard) leaves none.
+    pub fn create(campaign: &'a Campaign, seed: u64, out: &Path, staged: bool) -> anyhow::Result<Self> {
+        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+        let names = campaign.criterion_names();
+        let csv_path = out.join(if staged { "cases.csv.partial" } else { "cases.csv" });
+        let file = std::fs::File::create(&csv_path).with_context(|| format!("writing {}", csv_path.display()))?;
+        let mut csv = std::io::BufWriter::with_capacity(1 << 16, file);
+        csv.write_all(report::cases_csv_header(&campaign.parameters, &names).as_bytes())
+            .with_context(|| format!("writing {}", csv_path.display()))?;
+        let tally = report::Tally::new(
+            &campaign.scenario.name,
+            &campaign.command_config(),
+            seed,
+            &campaign.parameters,
+            &campaign.criteria,
+            &names,
+        );
+        Ok(Self {
+            campaign,
+            out: out.to_path_buf(),
+            csv_path,
+            csv,
+            row: String::new(),
+            criteria: names.len(),
+            tally,
+            figures: figures::Figures::default(),
+        })
+    }
+
+    /// The next case, in index order.
+    pub fn add(&mut self, case: &CaseResult) -> anyhow::Result<()> {
+        self.row.clear();
+        report::case_csv_row(&mut self.row, case, self.criteria);
+        self.csv.write_all(self.row.as_bytes()).with_context(|| format!("writing {}", self.csv_path.display()))?;
+        self.tally.add(case);
+        self.figures.add(case);
+        Ok(())
+    }
+
+    /// Cases written so far.
+    pub fn cases(&self) -> u64 {
+        self.tally.cases()
+    }
+
+    /// Finish `cases.csv`, write `sweep.json` (saying why the sweep stopped short, if `interrupted` says it did)
+    /// and the figures; returns the summary and the files written.
+    pub fn finish(self, interrupted: Option<String>) -> anyhow::Result<(report::SweepSummary, Vec<PathBuf>)> {
+        let Self { campaign, out, csv_path, csv, tally, figures, .. } = self;
+        csv.into_inner().map_err(|e| e.into_error()).with_context(|| format!("writing {}", csv_path.display()))?;
+        let csv = out.join("cases.csv");
+        if csv_path != csv {
+            std::fs::rename(&csv_path, &csv)
+                .with_context(|| format!("renaming {} to cases.csv", csv_path.display()))?;
+        }
+        let summary = tally.finish(interrupted);
+        let json = out.join("sweep.json");
+        std::fs::write(&json, serde_json::to_string_pretty(&summary)? + "\n")
+            .with_context(|| format!("writing {}", json.display()))?;
+        let setpoint = &campaign.scenario.setpoint;
+        let mut files = vec![csv, json];
+        files.extend(figures.write(
+            &summary,
+            &campaign.criteria,
+            [setpoint.phi_deg, setpoint.theta_deg, setpoint.psi_deg],
+            &out,
+        )?);
+        files.push(crate::html::sweep::write(&summary, &out)?);
+        Ok((summary, files))
+    }
+
+    /// Remove what was written (a sweep refused half way).
+    pub fn discard(self) {
+        let _ = std::fs::remove_file(&self.csv_path);
+    }
+}
+
+/// Fly the cases `indices` of `campaign` under `seed` on `jobs` threads with their outputs in `out` as they come;
+/// a sweep stopped by SIGINT or SIGTERM keeps the cases flown before the first one that was not, and its
+/// `sweep.json` says so.
+pub fn fly_into(
     campaign: &Campaign,
     seed: u64,
-    cases: &[CaseResult],
+    indices: std::ops::Range<u64>,
+    jobs: usize,
     out: &Path,
-) -> anyhow::Result<(report::SweepSummary, Vec<PathBuf>)> {
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let summary = report::summarize(
-        cases,
-        &campaign.scenario.name,
-        &campaign.command_config(),
-        seed,
-        &campaign.parameters,
-        &campaign.criteria,
-    );
-    let csv = out.join("cases.csv");
-    std::fs::write(&csv, report::cases_csv(cases, &campaign.parameters))
-        .with_context(|| format!("writing {}", csv.display()))?;
-    let json = out.join("sweep.json");
-    std::fs::write(&json, serde_json::to_string_pretty(&summary)? + "\n")
-        .with_context(|| format!("writing {}", json.display()))?;
-    Ok((summary, vec![csv, json]))
+) -> anyhow::Result<SweepRun> {
+    let mut writer = SweepWriter::create(campaign, seed, out, false)?;
+    let started = Instant::now();
+    let interrupted = campaign.fly_each(seed, indices.clone(), jobs, |case| writer.add(&case))?;
+    let fly_s = started.elapsed().as_secs_f64();
+    let interrupted = interrupted.map(|i| {
+        format!(
+            "stopped by {} after {} of the {} cases asked: cases.csv and this summary hold the cases flown before \
+             it, in index order; the rest were not flown",
+            i.0,
+            writer.cases(),
+            indices.end - indices.start
+        )
+    });
+    let (summary, files) = writer.finish(interrupted)?;
+    Ok(SweepRun { summary, files, fly_s, jobs })
 }
 
 /// Refuse a number of cases outside 1..=MAX_RUNS.
@@ -326,13 +503,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
         "{} already holds a sweep (sweep.json); choose another --out or move it away: nothing is overwritten",
         out.display()
     );
-    let started = Instant::now();
-    let cases = campaign.fly(seed, 0..runs, jobs)?;
-    let fly_s = started.elapsed().as_secs_f64();
-    let (summary, mut files) = write_outputs(&campaign, seed, &cases, &out)?;
-    files.extend(write_plots(&campaign, &summary, &cases, &out)?);
-    files.push(crate::html::sweep::write(&summary, &out)?);
-    Ok(SweepRun { summary, files, fly_s, jobs })
+    fly_into(&campaign, seed, 0..runs, jobs, &out)
 }
 
 /// `silrig sim CONFIG --sample I`: fly case I alone, with its trace, summary and plots in `out`; returns the text
@@ -382,167 +553,4 @@ pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow
         );
     }
     Ok((text, files))
-}
-
-/// The unit of a criterion's figure (as `Judgement::value` holds it).
-fn criterion_unit(criterion: &str) -> &'static str {
-    match criterion {
-        "settled" => "settling time (s)",
-        "alpha_max_deg" => "largest alpha (deg)",
-        "overshoot_max_deg" => "overshoot (deg)",
-        "final_error_max_deg" => "final error (deg)",
-        "body_rate_max_dps" => "late |p|,|q|,|r| (deg/s)",
-        "rate_limit_fraction_max" => "ticks at rate limit",
-        "position_limit_fraction_max" => "ticks at position limit",
-        "no_sustained_oscillation" => "oscillation / threshold",
-        _ => "",
-    }
-}
-
-/// Failed cases drawn one by one in the envelope.
-const ENVELOPE_FAILED_DRAWN: usize = 30;
-/// Parameters in the scatter figure.
-const SCATTER_PARAMETERS: usize = 4;
-
-/// The sweep's figures: `histograms`, `scatter` (the parameters that move the most-failed criterion's figure the
-/// most, by |Spearman's rho|) and `envelope`.
-pub fn write_plots(
-    campaign: &Campaign,
-    summary: &report::SweepSummary,
-    cases: &[CaseResult],
-    out: &Path,
-) -> anyhow::Result<Vec<PathBuf>> {
-    use silrig_plot::{Envelope, Histogram, Scatter, plot_envelope, plot_histograms, plot_scatter};
-    let flown: Vec<&CaseResult> = cases.iter().filter(|c| c.outcome != case::Outcome::Infeasible).collect();
-    let mut files = Vec::new();
-    if flown.is_empty() {
-        return Ok(files);
-    }
-    let name = &campaign.scenario.name;
-    let limits = criterion_limits(&campaign.criteria);
-    let histograms: Vec<Histogram> = summary
-        .failures_by_criterion
-        .iter()
-        .enumerate()
-        .map(|(k, (criterion, failures))| {
-            let limit = limits.iter().find(|(c, _)| c == criterion).and_then(|(_, l)| *l);
-            // Departed flights reach absurd figures; they are shown in the last bin, not as the axis.
-            let cap = limit.map_or(f64::INFINITY, |l| 3.0 * l.abs().max(1e-9));
-            let values: Vec<f64> = flown.iter().filter_map(|c| c.judgements[k].value).map(|v| v.min(cap)).collect();
-            let missing = flown.len() - values.len();
-            let never = if missing > 0 { format!(", {missing} never") } else { String::new() };
-            Histogram {
-                caption: format!("{criterion}: {failures} of {} failed{never}", flown.len()),
-                unit: criterion_unit(criterion).into(),
-                values,
-                limit,
-            }
-        })
-        .collect();
-    let title = format!("{name}: {} cases, seed {}", summary.runs, summary.seed);
-    files.extend(plot_histograms(&histograms, out, "histograms", &format!("{title}: criteria"))?);
-
-    // The criterion that failed most, and the parameters whose rank moves its figure most.
-    if let Some((k, (criterion, _))) =
-        summary.failures_by_criterion.iter().enumerate().max_by_key(|(k, (_, n))| (*n, usize::MAX - k))
-    {
-        let figure: Vec<f64> = flown.iter().map(|c| c.judgements[k].value.unwrap_or(f64::INFINITY)).collect();
-        let mut influence: Vec<(usize, f64)> = (0..campaign.parameters.len())
-            .map(|p| {
-                let x: Vec<f64> = flown.iter().map(|c| c.values[p]).collect();
-                (p, spearman_or_zero(&x, &figure))
-            })
-            .collect();
-        influence.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
-        // Departed flights reach absurd figures: the axis stops at 3x the limit, and a case beyond it (or that never
-        // settled) is drawn at that edge.
-        let largest = figure.iter().copied().filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
-        let limit = limits.iter().find(|(c, _)| c == criterion).and_then(|(_, l)| *l);
-        let shown = limit.map_or(largest, |l| largest.min(3.0 * l.abs()));
-        let scatters: Vec<Scatter> = influence
-            .iter()
-            .take(SCATTER_PARAMETERS)
-            .map(|(p, rho)| {
-                let point = |c: &&&CaseResult| (c.values[*p], c.judgements[k].value.unwrap_or(shown).min(shown));
-                let split = |passed: bool| {
-                    flown.iter().filter(|c| c.judgements[k].passed == passed).map(|c| point(&c)).collect()
-                };
-                Scatter {
-                    caption: format!("{} (Spearman rho {rho:+.2})", campaign.parameters[*p]),
-                    x_desc: campaign.parameters[*p].clone(),
-                    y_desc: format!("{} (cap {shown:.3})", criterion_unit(criterion)),
-                    passed: split(true),
-                    failed: split(false),
-                }
-            })
-            .collect();
-        files.extend(plot_scatter(&scatters, out, "scatter", &format!("{title}: what drives {criterion}"))?);
-    }
-
-    let setpoints =
-        [campaign.scenario.setpoint.phi_deg, campaign.scenario.setpoint.theta_deg, campaign.scenario.setpoint.psi_deg];
-    let envelopes: Vec<Envelope> = ["φ roll", "θ pitch", "ψ yaw"]
-        .iter()
-        .enumerate()
-        .map(|(a, caption)| {
-            let passed: Vec<&&CaseResult> = flown.iter().filter(|c| c.outcome == case::Outcome::Pass).collect();
-            let ticks = flown.iter().map(|c| c.envelope.len()).max().unwrap_or(0);
-            let band = (0..ticks)
-                .filter_map(|k| {
-                    let at: Vec<&[f32; 4]> = passed.iter().filter_map(|c| c.envelope.get(k)).collect();
-                    let t = *at.first()?.first()? as f64;
-                    let (lo, hi) = at.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| {
-                        (l.min(r[a + 1] as f64), h.max(r[a + 1] as f64))
-                    });
-                    Some((t, lo, hi))
-                })
-                .collect();
-            // A departed flight is drawn up to its departure: past it the model has no data to show.
-            let failed = flown
-                .iter()
-                .filter(|c| c.outcome == case::Outcome::Fail)
-                .take(ENVELOPE_FAILED_DRAWN)
-                .map(|c| {
-                    let until = c.figures.as_ref().and_then(|f| f.departed_at_s).unwrap_or(f64::INFINITY);
-                    c.envelope
-                        .iter()
-                        .filter(|r| (r[0] as f64) <= until)
-                        .map(|r| (r[0] as f64, r[a + 1] as f64))
-                        .collect()
-                })
-                .collect();
-            Envelope { caption: caption.to_string(), band, failed, setpoint: setpoints[a] }
-        })
-        .collect();
-    let failed = flown.iter().filter(|c| c.outcome == case::Outcome::Fail).count();
-    files.extend(plot_envelope(
-        &envelopes,
-        out,
-        "envelope",
-        &format!(
-            "{title}: attitude, {} passed (band), {} of {failed} failed (drawn to their departure, if any)",
-            summary.passed,
-            failed.min(ENVELOPE_FAILED_DRAWN)
-        ),
-    )?);
-    Ok(files)
-}
-
-fn spearman_or_zero(x: &[f64], y: &[f64]) -> f64 {
-    let r = report::spearman(x, y);
-    if r.is_finite() { r } else { 0.0 }
-}
-
-/// Each flight criterion's limit as a number in the unit of its figure.
-fn criterion_limits(c: &Criteria) -> Vec<(String, Option<f64>)> {
-    vec![
-        ("settled".into(), c.settled.map(|s| s.within_s)),
-        ("alpha_max_deg".into(), c.alpha_max_deg),
-        ("overshoot_max_deg".into(), c.overshoot_max_deg),
-        ("final_error_max_deg".into(), c.final_error_max_deg),
-        ("body_rate_max_dps".into(), c.body_rate_max_dps.map(|b| b.max)),
-        ("rate_limit_fraction_max".into(), c.rate_limit_fraction_max),
-        ("position_limit_fraction_max".into(), c.position_limit_fraction_max),
-        ("no_sustained_oscillation".into(), Some(1.0)),
-    ]
 }

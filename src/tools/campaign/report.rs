@@ -68,7 +68,7 @@ pub struct SweepSummary {
     pub config: String,
     /// Seed of the dispersions.
     pub seed: u64,
-    /// Cases in the sweep.
+    /// Cases in the sweep (when it was interrupted, those flown before it).
     pub runs: u64,
     /// The dispersed keys, in the order of the values in `cases.csv`.
     pub parameters: Vec<String>,
@@ -92,10 +92,14 @@ pub struct SweepSummary {
     /// first; never settled counts as worst). Departed cases are listed apart: past their departure no figure
     /// means anything.
     pub worst: Vec<(String, Vec<WorstCase>)>,
-    /// Every departed case, in index order.
+    /// The departed cases, in index order: the first `CASES_LISTED_MAX` (`departed` counts them all).
     pub departed_cases: Vec<DepartedCase>,
-    /// Every infeasible case.
+    /// The infeasible cases, in index order: the first `CASES_LISTED_MAX` (`infeasible` counts them all).
     pub infeasible_cases: Vec<InfeasibleCase>,
+    /// A sweep stopped before its last case (SIGINT or SIGTERM): by what, and that `runs` counts the cases flown
+    /// before it (`cases.csv` holds them, cases 0 to `runs` - 1); absent when every case asked was flown.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<String>,
 }
 
 /// The command that flies case `index` alone.
@@ -103,76 +107,123 @@ pub fn reproduce_command(config: &str, seed: u64, index: u64) -> String {
     format!("silrig sim {config} --sample {index} --seed {seed}")
 }
 
-/// Summarise `cases` (sorted by index).
-pub fn summarize(
-    cases: &[CaseResult],
-    scenario: &str,
-    config: &str,
-    seed: u64,
-    parameters: &[String],
-    criteria: &Criteria,
-) -> SweepSummary {
-    let count = |o: Outcome| cases.iter().filter(|c| c.outcome == o).count() as u64;
-    let (passed, failed, infeasible) = (count(Outcome::Pass), count(Outcome::Fail), count(Outcome::Infeasible));
-    let flown: Vec<&CaseResult> = cases.iter().filter(|c| c.outcome != Outcome::Infeasible).collect();
-    let departure = |c: &CaseResult| c.figures.as_ref().and_then(|f| f.departed_at_s);
-    let in_data: Vec<&CaseResult> = flown.iter().copied().filter(|c| departure(c).is_none()).collect();
-    let names: Vec<String> =
-        flown.first().map(|c| c.judgements.iter().map(|j| j.criterion.clone()).collect()).unwrap_or_default();
-    let mut failures_by_criterion = Vec::new();
-    let mut worst = Vec::new();
-    for (k, name) in names.iter().enumerate() {
-        failures_by_criterion.push((name.clone(), flown.iter().filter(|c| !c.judgements[k].passed).count() as u64));
-        let mut ranked: Vec<&&CaseResult> = in_data.iter().collect();
-        // Worst first: no figure (never settled) before the largest figure; ties by index, so the order is stable.
-        ranked.sort_by(|a, b| {
-            let key = |c: &CaseResult| c.judgements[k].value.unwrap_or(f64::INFINITY);
-            key(b).total_cmp(&key(a)).then(a.index.cmp(&b.index))
-        });
-        let listed = ranked
-            .iter()
-            .take(WORST_LISTED)
-            .map(|c| WorstCase {
-                index: c.index,
-                measured: c.judgements[k].measured.clone(),
-                passed: c.judgements[k].passed,
-                reproduce: reproduce_command(config, seed, c.index),
-            })
-            .collect();
-        worst.push((name.clone(), listed));
+/// Departed and infeasible cases listed in `sweep.json`, at most (the first ones, by index): `departed` and
+/// `infeasible` count them all, and `cases.csv` holds every one with its reason.
+pub const CASES_LISTED_MAX: usize = 1000;
+
+/// One of the worst cases by a criterion, as ranked: its figure (never settled as infinite) and what is listed.
+struct Ranked {
+    key: f64,
+    case: WorstCase,
+}
+
+/// `sweep.json` built case by case in index order, in memory bounded whatever the number of cases: counts, the
+/// `WORST_LISTED` worst cases by each criterion, the first `CASES_LISTED_MAX` departed and infeasible cases.
+pub struct Tally {
+    summary: SweepSummary,
+    worst: Vec<Vec<Ranked>>,
+}
+
+impl Tally {
+    /// An empty summary of a sweep of `scenario` (the file `config`, as the printed commands name it) under `seed`,
+    /// whose flown cases are judged by `criteria` as `criterion_names` (in the order of their judgements).
+    pub fn new(
+        scenario: &str,
+        config: &str,
+        seed: u64,
+        parameters: &[String],
+        criteria: &Criteria,
+        criterion_names: &[String],
+    ) -> Self {
+        Self {
+            summary: SweepSummary {
+                scenario: scenario.into(),
+                config: config.into(),
+                seed,
+                runs: 0,
+                parameters: parameters.to_vec(),
+                criteria: criteria.clone(),
+                passed: 0,
+                failed: 0,
+                infeasible: 0,
+                departed: 0,
+                pass_rate: 0.0,
+                pass_rate_95: (0.0, 1.0),
+                failures_by_criterion: criterion_names.iter().map(|n| (n.clone(), 0)).collect(),
+                worst: Vec::new(),
+                departed_cases: Vec::new(),
+                infeasible_cases: Vec::new(),
+                interrupted: None,
+            },
+            worst: criterion_names.iter().map(|_| Vec::new()).collect(),
+        }
     }
-    let pass_rate = if passed + failed > 0 { passed as f64 / (passed + failed) as f64 } else { 0.0 };
-    SweepSummary {
-        scenario: scenario.into(),
-        config: config.into(),
-        seed,
-        runs: cases.len() as u64,
-        parameters: parameters.to_vec(),
-        criteria: criteria.clone(),
-        passed,
-        failed,
-        infeasible,
-        departed: (flown.len() - in_data.len()) as u64,
-        pass_rate,
-        pass_rate_95: wilson_95(passed, passed + failed),
-        failures_by_criterion,
-        worst,
-        departed_cases: flown
-            .iter()
-            .filter_map(|c| {
-                departure(c).map(|at_s| DepartedCase {
+
+    /// Cases counted so far.
+    pub fn cases(&self) -> u64 {
+        self.summary.runs
+    }
+
+    /// Count the next case (cases come in index order).
+    pub fn add(&mut self, c: &CaseResult) {
+        let s = &mut self.summary;
+        s.runs += 1;
+        match c.outcome {
+            Outcome::Pass => s.passed += 1,
+            Outcome::Fail => s.failed += 1,
+            Outcome::Infeasible => {
+                s.infeasible += 1;
+                if s.infeasible_cases.len() < CASES_LISTED_MAX {
+                    s.infeasible_cases.push(InfeasibleCase { index: c.index, reason: c.reason.clone() });
+                }
+                return;
+            }
+        }
+        for ((_, failures), j) in s.failures_by_criterion.iter_mut().zip(&c.judgements) {
+            *failures += u64::from(!j.passed);
+        }
+        if let Some(at_s) = c.figures.as_ref().and_then(|f| f.departed_at_s) {
+            s.departed += 1;
+            if s.departed_cases.len() < CASES_LISTED_MAX {
+                s.departed_cases.push(DepartedCase {
                     index: c.index,
                     at_s,
                     reason: c.reason.split(';').next().unwrap_or_default().to_string(),
-                    reproduce: reproduce_command(config, seed, c.index),
-                })
-            })
-            .collect(),
-        infeasible_cases: cases
+                    reproduce: reproduce_command(&s.config, s.seed, c.index),
+                });
+            }
+            return;
+        }
+        // Worst first: no figure (never settled) before the largest figure; ties by index, so the order is stable.
+        for (ranked, j) in self.worst.iter_mut().zip(&c.judgements) {
+            let key = j.value.unwrap_or(f64::INFINITY);
+            let at = ranked.partition_point(|r| r.key.total_cmp(&key).then(c.index.cmp(&r.case.index)).is_gt());
+            if at < WORST_LISTED {
+                let case = WorstCase {
+                    index: c.index,
+                    measured: j.measured.clone(),
+                    passed: j.passed,
+                    reproduce: reproduce_command(&s.config, s.seed, c.index),
+                };
+                ranked.insert(at, Ranked { key, case });
+                ranked.truncate(WORST_LISTED);
+            }
+        }
+    }
+
+    /// The summary of the cases counted; `interrupted` says why it stopped short of the cases asked, if it did.
+    pub fn finish(mut self, interrupted: Option<String>) -> SweepSummary {
+        let s = &mut self.summary;
+        s.pass_rate = if s.passed + s.failed > 0 { s.passed as f64 / (s.passed + s.failed) as f64 } else { 0.0 };
+        s.pass_rate_95 = wilson_95(s.passed, s.passed + s.failed);
+        s.worst = s
+            .failures_by_criterion
             .iter()
-            .filter(|c| c.outcome == Outcome::Infeasible)
-            .map(|c| InfeasibleCase { index: c.index, reason: c.reason.clone() })
-            .collect(),
+            .zip(self.worst)
+            .map(|((name, _), ranked)| (name.clone(), ranked.into_iter().map(|r| r.case).collect()))
+            .collect();
+        s.interrupted = interrupted;
+        self.summary
     }
 }
 
@@ -180,55 +231,50 @@ fn opt(v: Option<f64>) -> String {
     v.map_or(String::new(), |x| x.to_string())
 }
 
-/// `cases.csv`: one row per case. Numbers are written in Rust's shortest round-trip form; an empty cell is a figure
-/// that does not exist (never settled, or a case that was not flown).
-pub fn cases_csv(cases: &[CaseResult], parameters: &[String]) -> String {
-    let criteria: Vec<String> = cases
-        .iter()
-        .find(|c| c.outcome != Outcome::Infeasible)
-        .map(|c| c.judgements.iter().map(|j| j.criterion.clone()).collect())
-        .unwrap_or_default();
+/// The header of `cases.csv`: one row per case follows ([`case_csv_row`]). Numbers are written in Rust's shortest
+/// round-trip form; an empty cell is a figure that does not exist (never settled, or a case that was not flown).
+pub fn cases_csv_header(parameters: &[String], criterion_names: &[String]) -> String {
     let mut out = String::from("index,outcome,reason");
     for p in parameters {
         out += &format!(",{p}");
     }
     out += ",phi_settle_s,theta_settle_s,psi_settle_s,phi_final_error_deg,theta_final_error_deg,psi_final_error_deg,\
             alpha_peak_deg,p_max_late_dps,q_max_late_dps,r_max_late_dps,rate_limit_fraction,limit_cycle,departed_at_s";
-    for c in &criteria {
+    for c in criterion_names {
         out += &format!(",{c},{c}_passed");
     }
     out.push('\n');
-    for case in cases {
-        // Reasons may hold commas; quote them as CSV does.
-        let _ = write!(out, "{},{},\"{}\"", case.index, case.outcome.label(), case.reason.replace('"', "\"\""));
-        for v in &case.values {
-            let _ = write!(out, ",{v}");
-        }
-        match &case.figures {
-            Some(f) => {
-                for s in f.settle_0p5deg_s {
-                    let _ = write!(out, ",{}", opt(s));
-                }
-                for v in
-                    f.final_error_deg.iter().chain([f.alpha_peak_deg].iter()).chain(f.body_rate_max_late_dps.iter())
-                {
-                    let _ = write!(out, ",{}", opt(*v));
-                }
-                let _ = write!(out, ",{},{},{}", f.rate_limit_fraction, u8::from(f.limit_cycle), opt(f.departed_at_s));
-            }
-            None => out += &",".repeat(13),
-        }
-        for k in 0..criteria.len() {
-            match case.judgements.get(k) {
-                Some(j) => {
-                    let _ = write!(out, ",{},{}", opt(j.value), u8::from(j.passed));
-                }
-                None => out += ",,",
-            }
-        }
-        out.push('\n');
-    }
     out
+}
+
+/// A case's row of `cases.csv`, with `criteria` criteria columns, appended to `out`.
+pub fn case_csv_row(out: &mut String, case: &CaseResult, criteria: usize) {
+    // Reasons may hold commas; quote them as CSV does.
+    let _ = write!(out, "{},{},\"{}\"", case.index, case.outcome.label(), case.reason.replace('"', "\"\""));
+    for v in &case.values {
+        let _ = write!(out, ",{v}");
+    }
+    match &case.figures {
+        Some(f) => {
+            for s in f.settle_0p5deg_s {
+                let _ = write!(out, ",{}", opt(s));
+            }
+            for v in f.final_error_deg.iter().chain([f.alpha_peak_deg].iter()).chain(f.body_rate_max_late_dps.iter()) {
+                let _ = write!(out, ",{}", opt(*v));
+            }
+            let _ = write!(out, ",{},{},{}", f.rate_limit_fraction, u8::from(f.limit_cycle), opt(f.departed_at_s));
+        }
+        None => *out += &",".repeat(13),
+    }
+    for k in 0..criteria {
+        match case.judgements.get(k) {
+            Some(j) => {
+                let _ = write!(out, ",{},{}", opt(j.value), u8::from(j.passed));
+            }
+            None => *out += ",,",
+        }
+    }
+    out.push('\n');
 }
 
 impl SweepSummary {
@@ -242,6 +288,9 @@ impl SweepSummary {
             self.parameters.len(),
             self.seed
         );
+        if let Some(why) = &self.interrupted {
+            let _ = writeln!(out, "  interrupted: {why}");
+        }
         let _ = writeln!(
             out,
             "  passed {} of {} flown: {:.1} % (95 % Wilson interval {:.1} .. {:.1} %); {} departed (left the \

@@ -24,10 +24,10 @@ use std::path::{Path, PathBuf};
 /// The case's scenario as the rig is given it, in the case's run folder.
 pub const CASE_SCENARIO: &str = "case-scenario.toml";
 
-/// A sweep stopped by SIGINT or SIGTERM: it writes nothing (a sweep's outputs hold every case or none).
+/// A sweep stopped by SIGINT or SIGTERM (named).
 #[derive(Debug, thiserror::Error)]
-#[error("interrupted by {0}: the cases flown so far are not written (a sweep's outputs hold every case or none)")]
-pub struct Interrupted(&'static str);
+#[error("interrupted by {0}")]
+pub struct Interrupted(pub &'static str);
 
 /// Stop when the user asked to: launcher::run routes SIGINT and SIGTERM to a flag, so a sweep must look at it.
 pub fn check_interrupted() -> Result<(), Interrupted> {

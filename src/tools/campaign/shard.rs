@@ -16,6 +16,9 @@ pub const MANIFEST: &str = "manifest.json";
 pub const SHARDS_DIR: &str = "shards";
 /// Largest number of shards.
 pub const MAX_SHARDS: u64 = 100_000;
+/// Most cases in one shard: a worker holds its shard's results in memory (about 3.3 KB a case) until it writes
+/// them, and merge reads one shard at a time.
+pub const MAX_SHARD_CASES: u64 = 100_000;
 /// The batch systems' variables that carry a task's index, in the order they are read.
 pub const INDEX_VARIABLES: [&str; 2] = ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"];
 
@@ -165,6 +168,14 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
         MAX_SHARDS.min(opts.runs),
         opts.shards
     );
+    let fewest = opts.runs.div_ceil(MAX_SHARD_CASES);
+    anyhow::ensure!(
+        opts.shards >= fewest,
+        "--shards must be at least {fewest} for {} cases: a shard's cases are held in memory until its results are \
+         written, at most {MAX_SHARD_CASES} cases a shard (got {})",
+        opts.runs,
+        opts.shards
+    );
     let text = std::fs::read_to_string(&opts.config).with_context(|| format!("reading {}", opts.config.display()))?;
     let campaign = Campaign::load(&opts.config, &opts.fmus, opts.controller_cmd.as_deref())?;
     let config = campaign.command_config();
@@ -234,7 +245,14 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<(PathBuf, ShardResult)> {
     let campaign = manifest.campaign()?;
     let jobs = campaign.threads(super::jobs(opts.jobs)?);
     let range = manifest.range(k);
-    let cases = campaign.fly(manifest.seed, range.clone(), jobs)?;
+    let mut cases = Vec::with_capacity((range.end - range.start) as usize);
+    if let Some(interrupted) = campaign.fly_each(manifest.seed, range.clone(), jobs, |case| {
+        cases.push(case);
+        Ok(())
+    })? {
+        // A shard's results hold every case of it or none: merge counts on it.
+        anyhow::bail!("{interrupted}: shard {k} is not written; fly it again");
+    }
     let result = ShardResult {
         fingerprint: manifest.fingerprint.clone(),
         shard: k,
@@ -258,43 +276,7 @@ pub fn merge(dir: &Path) -> anyhow::Result<super::SweepRun> {
         "{} already holds merged results (sweep.json); move them away to merge again: nothing is overwritten",
         dir.display()
     );
-    let mut cases = Vec::with_capacity(manifest.runs as usize);
-    let mut missing = Vec::new();
-    for k in 0..manifest.shards {
-        let path = manifest.shard_path(dir, k);
-        let Ok(text) = std::fs::read_to_string(&path) else {
-            missing.push(k);
-            continue;
-        };
-        let shard: ShardResult =
-            serde_json::from_str(&text).with_context(|| format!("{}: not a shard's results", path.display()))?;
-        anyhow::ensure!(
-            shard.fingerprint == manifest.fingerprint,
-            "{} belongs to another plan (fingerprint {}, this plan's {}): shards of different plans never merge",
-            path.display(),
-            shard.fingerprint,
-            manifest.fingerprint
-        );
-        anyhow::ensure!(
-            shard.shard == k,
-            "{} holds shard {}'s results, not shard {k}'s: renamed or copied over? fly shard {k} again",
-            path.display(),
-            shard.shard
-        );
-        anyhow::ensure!(
-            shard.checksum == cases_checksum(&shard.cases)?,
-            "{}: its cases were changed after it was flown (their checksum does not match); fly shard {k} again",
-            path.display()
-        );
-        let range = manifest.range(k);
-        let indices: Vec<u64> = shard.cases.iter().map(|c| c.index).collect();
-        anyhow::ensure!(
-            indices == range.clone().collect::<Vec<_>>(),
-            "{}: does not hold exactly cases {range:?}",
-            path.display()
-        );
-        cases.extend(shard.cases);
-    }
+    let missing: Vec<u64> = (0..manifest.shards).filter(|k| !manifest.shard_path(dir, *k).exists()).collect();
     if !missing.is_empty() {
         let list: Vec<String> = missing.iter().map(u64::to_string).collect();
         anyhow::bail!(
@@ -305,10 +287,49 @@ pub fn merge(dir: &Path) -> anyhow::Result<super::SweepRun> {
             dir.display()
         );
     }
-    let (summary, mut files) = super::write_outputs(&campaign, manifest.seed, &cases, dir)?;
-    files.extend(super::write_plots(&campaign, &summary, &cases, dir)?);
-    files.push(crate::html::sweep::write(&summary, dir)?);
+    // One shard in memory at a time, its cases written as they are read.
+    let mut writer = super::SweepWriter::create(&campaign, manifest.seed, dir, true)?;
+    for k in 0..manifest.shards {
+        if let Err(e) = read_shard(&manifest, dir, k).and_then(|cases| cases.iter().try_for_each(|c| writer.add(c))) {
+            writer.discard();
+            return Err(e);
+        }
+    }
+    let (summary, files) = writer.finish(None)?;
     Ok(super::SweepRun { summary, files, fly_s: f64::NAN, jobs: 0 })
+}
+
+/// Shard `k`'s cases, checked: of this plan, this shard, unedited, exactly its range.
+fn read_shard(manifest: &Manifest, dir: &Path, k: u64) -> anyhow::Result<Vec<CaseResult>> {
+    let path = manifest.shard_path(dir, k);
+    let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let shard: ShardResult =
+        serde_json::from_str(&text).with_context(|| format!("{}: not a shard's results", path.display()))?;
+    anyhow::ensure!(
+        shard.fingerprint == manifest.fingerprint,
+        "{} belongs to another plan (fingerprint {}, this plan's {}): shards of different plans never merge",
+        path.display(),
+        shard.fingerprint,
+        manifest.fingerprint
+    );
+    anyhow::ensure!(
+        shard.shard == k,
+        "{} holds shard {}'s results, not shard {k}'s: renamed or copied over? fly shard {k} again",
+        path.display(),
+        shard.shard
+    );
+    anyhow::ensure!(
+        shard.checksum == cases_checksum(&shard.cases)?,
+        "{}: its cases were changed after it was flown (their checksum does not match); fly shard {k} again",
+        path.display()
+    );
+    let range = manifest.range(k);
+    anyhow::ensure!(
+        shard.cases.iter().map(|c| c.index).eq(range.clone()),
+        "{}: does not hold exactly cases {range:?}",
+        path.display()
+    );
+    Ok(shard.cases)
 }
 
 /// What `silrig sweep slurm` is asked to do.

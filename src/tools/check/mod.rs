@@ -320,10 +320,11 @@ fn sweep_case(
     }
     let seed = sweep.seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(crate::campaign::jobs(None)?);
-    let cases = campaign.fly(seed, 0..sweep.runs, jobs)?;
-    let (summary, mut files) = crate::campaign::write_outputs(&campaign, seed, &cases, case_dir)?;
-    files.extend(crate::campaign::write_plots(&campaign, &summary, &cases, case_dir)?);
-    files.push(crate::html::sweep::write(&summary, case_dir)?);
+    let crate::campaign::SweepRun { summary, .. } =
+        crate::campaign::fly_into(&campaign, seed, 0..sweep.runs, jobs, case_dir)?;
+    if let Some(why) = &summary.interrupted {
+        anyhow::bail!("the sweep was {why}");
+    }
     let flown = summary.passed + summary.failed;
     let (low, high) = summary.pass_rate_95;
     let measured = format!(

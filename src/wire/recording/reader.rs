@@ -42,6 +42,22 @@ pub enum RecordingError {
         /// What the reader found where the file ends.
         why: String,
     },
+    /// A record inside the file cannot be read although the file ends with its footer: it was changed after it was
+    /// written (a disk or copy error), not cut short.
+    #[error(
+        "{} is damaged ({why}): {messages} messages can be read before the damaged record, although the file ends \
+         with its footer (so it was not cut short: its bytes were changed after they were written); replay needs \
+         whole recordings",
+        path.display()
+    )]
+    Damaged {
+        /// The file.
+        path: PathBuf,
+        /// Messages readable before the damage.
+        messages: u64,
+        /// What the reader found.
+        why: String,
+    },
     /// Samples of another wire layout.
     #[error(
         "{}: recorded with wire layout version {found}, this silrig reads version {WIRE_LAYOUT_VERSION}: use the \
@@ -118,8 +134,12 @@ impl RecordedRun {
             let record = match record {
                 Ok(r) => r,
                 Err(e) => {
-                    let why = e.to_string();
-                    return Err(RecordingError::Truncated { path: path.to_path_buf(), messages, why });
+                    let (path, why) = (path.to_path_buf(), e.to_string());
+                    return Err(if bytes.ends_with(mcap::MAGIC) {
+                        RecordingError::Damaged { path, messages, why }
+                    } else {
+                        RecordingError::Truncated { path, messages, why }
+                    });
                 }
             };
             match record {
