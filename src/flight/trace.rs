@@ -125,13 +125,20 @@ impl Trace {
     /// One row as a CSV line; values print so that they parse back to the same f64.
     pub fn format_row(row: &[f64]) -> String {
         let mut line = String::with_capacity(row.len() * 20);
+        Self::push_row(&mut line, row);
+        line
+    }
+
+    /// Append [`Self::format_row`]'s text to `line`, allocating nothing beyond its growth (the logger writes a
+    /// row per tick).
+    pub fn push_row(line: &mut String, row: &[f64]) {
+        use std::fmt::Write as _;
         for (i, v) in row.iter().enumerate() {
             if i > 0 {
                 line.push(',');
             }
-            line.push_str(&format!("{v:?}"));
+            let _ = write!(line, "{v:?}");
         }
-        line
     }
 
     /// Write as CSV.
