@@ -7,7 +7,7 @@
 //! The ping-pong is taken two ways in each repeat, because how a process waits decides what a round trip costs:
 //! [`WaitStrategy::Block`] (take what waits, then sleep on the listener: what the lockstep plant and controller
 //! do, and what an idle machine pays two vCPU wake-ups a round trip for) and [`WaitStrategy::Poll`] (look again
-//! and again for [`POLL_SPIN_NS`] before sleeping, so an answer that comes quickly is taken by a process still
+//! and again, yielding the CPU between looks, for [`POLL_SPIN_NS`] before sleeping, so an answer that comes quickly is taken by a process still
 //! on its CPU: the transport's own cost). The rig's three processes keep the vCPUs busier than a bare ping-pong,
 //! so lockstep can beat the blocking figure; the polling one is the ceiling no wait strategy gets past.
 
@@ -33,7 +33,7 @@ const ANSWER_TIMEOUT: Duration = Duration::from_secs(5);
 pub enum WaitStrategy {
     /// Take what waits, then sleep on the listener until notified (the lockstep rig's plant and controller).
     Block,
-    /// Look again and again for [`POLL_SPIN_NS`], then sleep on the listener.
+    /// Look again and again for [`POLL_SPIN_NS`] (yielding the CPU between looks), then sleep on the listener.
     Poll,
 }
 
@@ -306,7 +306,8 @@ fn round_trip(
         }
         anyhow::ensure!(now < deadline, "no answer to ping {tick} within {ANSWER_TIMEOUT:?}");
         if now < spin_until {
-            std::hint::spin_loop();
+            // Yield rather than spin: on a busy machine the answer may need this very CPU.
+            std::thread::yield_now();
             continue;
         }
         answers.wait_readable_until(deadline);
@@ -326,8 +327,9 @@ fn answer(run_id: &RunId, wait: WaitStrategy) -> anyhow::Result<()> {
     let mut spin_until = monotonic_ns() + wait.spin_ns();
     loop {
         if monotonic_ns() < spin_until {
-            // Polling: look without sleeping; the drain below takes whatever came.
-            std::hint::spin_loop();
+            // Polling: look without sleeping (yielding the CPU to whoever waits for it); the drain below takes
+            // whatever came.
+            std::thread::yield_now();
         } else {
             match subscriber.wait(ANSWER_TIMEOUT)? {
                 WaitOutcome::TimedOut => anyhow::bail!("no ping within {ANSWER_TIMEOUT:?}"),

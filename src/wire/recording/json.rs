@@ -264,7 +264,7 @@ pub fn sample_from_json<T: WireType + Copy>(value: &Value) -> Result<T, JsonFiel
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wire::{CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
+    use crate::wire::{CommandSample, ControllerInfo, PlantSample};
 
     fn plant() -> PlantSample {
         let mut s = PlantSample::zeroed();
