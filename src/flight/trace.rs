@@ -203,7 +203,13 @@ impl Trace {
 /// 1e16; otherwise `1.5e-5`, `1e16`.
 pub fn push_f64_debug(out: &mut String, v: f64, digits: &mut zmij::Buffer) {
     if !v.is_finite() {
-        out.push_str(if v.is_nan() { "NaN" } else if v > 0.0 { "inf" } else { "-inf" });
+        out.push_str(if v.is_nan() {
+            "NaN"
+        } else if v > 0.0 {
+            "inf"
+        } else {
+            "-inf"
+        });
         return;
     }
     let abs = v.abs();
@@ -338,10 +344,33 @@ mod tests {
             push_f64_debug(&mut out, v, &mut digits);
             assert_eq!(out, format!("{v:?}"), "bits {:#x}", v.to_bits());
         };
-        for v in [0.0, -0.0, 1.0, -1.5, 0.1, 1e-4, 9.999e-5, 1e-5, 1e16, 9.999999999999998e15, 1e15, 123456.0, 1e300,
-            -2.5e-310, f64::MIN_POSITIVE, f64::MAX, f64::MIN, f64::EPSILON, f64::NAN, f64::INFINITY, -f64::INFINITY,
-            1.0 / 3.0, 100.0, 0.000123, 12345678901234567.0]
-        {
+        for v in [
+            0.0,
+            -0.0,
+            1.0,
+            -1.5,
+            0.1,
+            1e-4,
+            9.999e-5,
+            1e-5,
+            1e16,
+            9.999999999999998e15,
+            1e15,
+            123456.0,
+            1e300,
+            -2.5e-310,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            f64::MIN,
+            f64::EPSILON,
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            1.0 / 3.0,
+            100.0,
+            0.000123,
+            12345678901234567.0,
+        ] {
             check(v);
         }
         // Random bit patterns (every exponent) and random values of the sizes a trace holds.

@@ -268,7 +268,12 @@ fn ping_pong_in(run_id: &RunId, round_trips: u64, wait: WaitStrategy) -> anyhow:
             hist.record_ns(round_trip(&mut publisher, &subscriber, &mut ping, tick, wait)? as i64);
         }
         let elapsed_s = (monotonic_ns() - start) as f64 / 1e9;
-        Ok(PingPong { wait, round_trips, round_trips_per_s: round_trips as f64 / elapsed_s, round_trip: hist.summary() })
+        Ok(PingPong {
+            wait,
+            round_trips,
+            round_trips_per_s: round_trips as f64 / elapsed_s,
+            round_trip: hist.summary(),
+        })
     })();
     let _ = publisher.announce_finished();
     let deadline = monotonic_ns() + ANSWER_TIMEOUT.as_nanos() as u64;

@@ -21,8 +21,7 @@ pub const PACKAGE: &str = "silrig";
 /// CDR encapsulation header: plain CDR, little-endian.
 const ENCAPSULATION_LE: [u8; 4] = [0, 1, 0, 0];
 /// Separates a definition from the definitions it uses, as `ros2 bag` writes them.
-const DEFINITION_SEPARATOR: &str =
-    "================================================================================\n";
+const DEFINITION_SEPARATOR: &str = "================================================================================\n";
 
 /// A CDR message being built; reused from message to message, so writing one allocates nothing.
 #[derive(Debug, Default, Clone)]
@@ -116,7 +115,10 @@ impl<'a> CdrReader<'a> {
     fn take<const N: usize>(&mut self) -> Result<[u8; N], CdrError> {
         let position = self.at - ENCAPSULATION_LE.len();
         let start = self.at + (N - position % N) % N;
-        let bytes = self.data.get(start..start + N).ok_or_else(|| self.error(format!("the message ends ({N} bytes more expected)")))?;
+        let bytes = self
+            .data
+            .get(start..start + N)
+            .ok_or_else(|| self.error(format!("the message ends ({N} bytes more expected)")))?;
         self.at = start + N;
         Ok(bytes.try_into().expect("N bytes"))
     }
@@ -144,7 +146,10 @@ impl<'a> CdrReader<'a> {
     /// A string's bytes, without its NUL.
     pub fn string(&mut self) -> Result<&'a [u8], CdrError> {
         let len = self.u32()? as usize;
-        let bytes = self.data.get(self.at..self.at + len).ok_or_else(|| self.error(format!("a string of {len} bytes runs past the end")))?;
+        let bytes = self
+            .data
+            .get(self.at..self.at + len)
+            .ok_or_else(|| self.error(format!("a string of {len} bytes runs past the end")))?;
         if len == 0 || bytes[len - 1] != 0 {
             return Err(self.error("a string without its terminating NUL".into()));
         }
@@ -333,10 +338,8 @@ pub fn valid_field_name(name: &str) -> bool {
 /// columns' real names travel beside the definition (the channel's metadata), in order.
 pub fn field_names(columns: &[String]) -> Vec<String> {
     let mut taken = std::collections::HashSet::new();
-    let mut names: Vec<Option<String>> = columns
-        .iter()
-        .map(|c| (valid_field_name(c) && taken.insert(c.clone())).then(|| c.clone()))
-        .collect();
+    let mut names: Vec<Option<String>> =
+        columns.iter().map(|c| (valid_field_name(c) && taken.insert(c.clone())).then(|| c.clone())).collect();
     for (k, (slot, column)) in names.iter_mut().zip(columns).enumerate() {
         if slot.is_none() {
             let lowered: String =
@@ -460,7 +463,8 @@ mod tests {
 
     #[test]
     fn column_names_become_valid_unique_field_names() {
-        let columns: Vec<String> = ["t_s", "phi_deg", "S_phi", "s_phi", "x__y", "9lives", "t_s"].map(String::from).into();
+        let columns: Vec<String> =
+            ["t_s", "phi_deg", "S_phi", "s_phi", "x__y", "9lives", "t_s"].map(String::from).into();
         let names = field_names(&columns);
         assert_eq!(names, ["t_s", "phi_deg", "c2_s_phi", "s_phi", "c4_x_y", "c5_9lives", "c6_t_s"]);
         assert!(names.iter().all(|n| valid_field_name(n)));

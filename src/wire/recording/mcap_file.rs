@@ -5,10 +5,11 @@
 //! stamps); `/events` holds the run's `events.jsonl` lines as they appear, as JSON. The run's identity and scenario
 //! are MCAP metadata.
 //!
-//! Chunks are LZ4-compressed and closed at every flush, so a killed logger leaves a file a reader can read up to
-//! its last flush; a restarted logger writes the next `recording-<n>.mcap`, never over an earlier one. Message log
-//! times are wall-clock (the monotonic stamps shifted by the offset between the clocks when the file was opened),
-//! so a viewer shows when the run flew; the monotonic stamps themselves are in the messages.
+//! Chunks are LZ4-compressed and closed at every flush (the logger flushes every 0.1 s), so a killed logger leaves a
+//! file a reader can read up to its last flush; a restarted logger writes the next `recording-<n>.mcap`, never over
+//! an earlier one. Message log times are wall-clock (the monotonic stamps shifted by the offset between the clocks
+//! when the file was opened), so a viewer shows when the run flew; the monotonic stamps themselves are in the
+//! messages. Each message is encoded into one reused buffer: writing a row allocates nothing.
 
 use super::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
 use super::{
@@ -97,7 +98,8 @@ impl McapSink {
             let schema_id = writer.add_schema(name, SCHEMA_ENCODING, msg.as_bytes())?;
             writer.add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())
         };
-        let plant = add(topics::PLANT, &cdr::msg_name::<PlantSample>(), cdr::sample_msg::<PlantSample>(&[RECEIVE_STAMP]));
+        let plant =
+            add(topics::PLANT, &cdr::msg_name::<PlantSample>(), cdr::sample_msg::<PlantSample>(&[RECEIVE_STAMP]));
         let plant_info = add(topics::PLANT_INFO, &cdr::msg_name::<PlantInfo>(), cdr::sample_msg::<PlantInfo>(&[]));
         let command =
             add(topics::COMMAND, &cdr::msg_name::<CommandSample>(), cdr::sample_msg::<CommandSample>(&[RECEIVE_STAMP]));
@@ -226,7 +228,6 @@ fn event_schema() -> Value {
         "kind": {"type": "string"},
         "detail": {"type": "string"}}})
 }
-
 
 impl RowSink for McapSink {
     fn plant(&mut self, info: &PlantInfo) -> std::io::Result<()> {
