@@ -53,14 +53,22 @@ fn bench_ipc_measures_the_ceiling_and_a_lockstep_run_against_it() {
         silrig(&["bench", "ipc", "--round-trips", "300", "--lockstep-ticks", "200", "--repeats", "1", "--json"]);
     assert_eq!(code, 0, "{err}");
     let report: serde_json::Value = serde_json::from_str(&out).unwrap();
-    let ping = &report["ping_pongs"][0];
-    assert_eq!(ping["round_trips"], 300);
-    assert_eq!(ping["round_trip"]["count"], 300);
+    // Both wait strategies, blocking first; the ceiling is the polling one's.
+    let pings = report["ping_pongs"].as_array().unwrap();
+    assert_eq!(pings.iter().map(|p| p["wait"].as_str().unwrap()).collect::<Vec<_>>(), ["block", "poll"]);
+    for ping in pings {
+        assert_eq!(ping["round_trips"], 300);
+        assert_eq!(ping["round_trip"]["count"], 300);
+    }
+    assert_eq!(report["ceiling_per_s"], pings[1]["round_trips_per_s"]);
+    assert_eq!(report["blocking_per_s"], pings[0]["round_trips_per_s"]);
     assert_eq!(report["lockstep"][0]["ticks"], 200);
     let (ceiling, lockstep) =
         (report["ceiling_per_s"].as_f64().unwrap(), report["lockstep_loop_per_s"].as_f64().unwrap());
     assert!(ceiling > 0.0 && lockstep > 0.0, "{report}");
     assert!((report["ratio"].as_f64().unwrap() - lockstep / ceiling).abs() < 1e-9);
+    let blocking = report["blocking_per_s"].as_f64().unwrap();
+    assert!((report["ratio_to_blocking"].as_f64().unwrap() - lockstep / blocking).abs() < 1e-9);
 }
 
 #[test]

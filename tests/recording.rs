@@ -1,6 +1,7 @@
 //! The MCAP recording and `silrig replay`, with the real processes. Recordings are read back with Foxglove's own
-//! Python `mcap` package (`recording/read_mcap.py`, in the virtual environment `.ci/run` creates, or this test
-//! creates when it is missing) and compared value by value with `trace.csv` and `timing.csv`. Replay is checked
+//! Python packages, `mcap` and `mcap-ros2-support` (the CDR decoder: `recording/read_mcap.py`, in the virtual
+//! environment `.ci/run` creates, or this test creates when it is missing) and compared value by value, bit for bit,
+//! with `trace.csv` and `timing.csv`. Replay is checked
 //! bit for bit against our controller and a user's, for a changed controller's divergence, and for every recording
 //! it must refuse.
 
@@ -17,19 +18,22 @@ use std::time::Duration;
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-/// The Python of the test virtual environment, with `mcap` installed (created here if `.ci/run` has not).
+/// The Python of the test virtual environment, with `mcap` and `mcap_ros2` installed (created here if `.ci/run` has
+/// not).
 fn python_with_mcap() -> &'static Path {
     static PYTHON: OnceLock<PathBuf> = OnceLock::new();
     PYTHON.get_or_init(|| {
         let venv = Path::new(ROOT).join("target/test-venv");
         let python = venv.join("bin/python3");
-        let has_mcap = || Command::new(&python).args(["-c", "import mcap"]).status().is_ok_and(|s| s.success());
+        let has_mcap =
+            || Command::new(&python).args(["-c", "import mcap, mcap_ros2"]).status().is_ok_and(|s| s.success());
         if !has_mcap() {
             let made = Command::new("python3").args(["-m", "venv"]).arg(&venv).status().expect("python3 runs");
             assert!(made.success(), "python3 -m venv {} failed (Debian: apt-get install python3-venv)", venv.display());
             let pip = venv.join("bin/pip");
-            let installed = Command::new(&pip).args(["install", "-q", "mcap"]).status().expect("pip runs");
-            assert!(installed.success(), "pip install mcap failed");
+            let installed =
+                Command::new(&pip).args(["install", "-q", "mcap", "mcap-ros2-support"]).status().expect("pip runs");
+            assert!(installed.success(), "pip install mcap mcap-ros2-support failed");
         }
         python
     })
@@ -85,6 +89,11 @@ fn number(v: &Value) -> f64 {
     v.as_f64().unwrap_or(f64::NAN)
 }
 
+/// A float `read_mcap.py` printed as its bit pattern.
+fn float_bits(v: &Value) -> f64 {
+    f64::from_bits(v.as_u64().unwrap_or_else(|| panic!("{v} is not a float's bit pattern")))
+}
+
 /// Every `/trace` message of `file` equals `trace.csv`'s row of its tick, bit for bit; returns the rows' indexes in
 /// `trace.csv` (a tick the logger never saw has no row, so index and tick may differ).
 fn assert_trace_rows_match(file: &Value, trace: &Trace) -> Vec<usize> {
@@ -96,7 +105,8 @@ fn assert_trace_rows_match(file: &Value, trace: &Trace) -> Vec<usize> {
         trace.rows.iter().enumerate().map(|(i, r)| (r[t].to_bits(), i)).collect();
     let mut rows = Vec::new();
     for message in file["trace"].as_array().unwrap() {
-        let values: Vec<f64> = message.as_array().unwrap().iter().map(number).collect();
+        let values: Vec<f64> = message.as_array().unwrap().iter().map(float_bits).collect();
+        assert_eq!(values.len(), columns.len(), "a field per column");
         let row = *row_of.get(&values[t].to_bits()).unwrap_or_else(|| panic!("t = {} is not in trace.csv", values[t]));
         let csv = &trace.rows[row];
         for (i, (a, b)) in values.iter().zip(csv).enumerate() {
@@ -111,7 +121,8 @@ fn assert_trace_rows_match(file: &Value, trace: &Trace) -> Vec<usize> {
 fn a_realtime_run_records_what_the_csv_files_hold() {
     let out = temp_dir("recording", "realtime");
     let id = format!("m{}-rt", std::process::id());
-    let (code, text) = run(&out, &id, &["--duration-s", "2"]);
+    // A stopped controller leaves rows without a command: empty cells in timing.csv.
+    let (code, text) = run(&out, &id, &["--duration-s", "2", "--fault", "controller:stop@1s,for=0.2s"]);
     assert_eq!(code, Some(0), "{text}");
     let files = silrig::recording::recording_files(&out);
     assert_eq!(files, vec![out.join("recording.mcap")]);
@@ -122,10 +133,12 @@ fn a_realtime_run_records_what_the_csv_files_hold() {
     assert_eq!(run_meta["layout_version"], silrig::wire::WIRE_LAYOUT_VERSION.to_string());
     assert_eq!(run_meta["mode"], "realtime");
     assert!(file["metadata"]["scenario"]["toml"].as_str().unwrap().contains("[timing]"));
-    for topic in ["/plant", "/command", "/trace", "/timing", "/events"] {
-        assert_eq!(file["schemas"][topic], "jsonschema", "{topic}");
-        assert_eq!(file["channels"][topic], "json", "{topic}");
+    for topic in ["/plant", "/command", "/plant_info", "/trace", "/timing"] {
+        assert_eq!(file["schemas"][topic], "ros2msg", "{topic}");
+        assert_eq!(file["channels"][topic], "cdr", "{topic}");
     }
+    assert_eq!(file["schema_names"]["/plant"], "silrig/msg/PlantSample");
+    assert_eq!((&file["schemas"]["/events"], &file["channels"]["/events"]), (&"jsonschema".into(), &"json".into()));
 
     let trace = Trace::load(&out.join("trace.csv")).unwrap();
     let rows = assert_trace_rows_match(file, &trace);
@@ -148,26 +161,34 @@ fn a_realtime_run_records_what_the_csv_files_hold() {
     let (theta_out, aileron_in) = (position("output_names", "theta_deg"), position("input_names", "aileron"));
     // Plant samples: the outputs the trace shows, as received.
     let theta = trace.index("theta_deg").unwrap();
+    let t_s = trace.index("t_s").unwrap();
     for (i, p) in file["plant"].as_array().unwrap().iter().enumerate() {
         assert_eq!(p["tick"], i as u64);
-        assert!(same(number(&p["outputs"][theta_out]), trace.rows[i][theta]), "tick {i}: theta");
+        assert!(same(float_bits(&p["t_sim_s"]), trace.rows[i][t_s]), "tick {i}: t_sim_s");
+        assert!(same(float_bits(&p["outputs"][theta_out]), trace.rows[i][theta]), "tick {i}: theta");
     }
     // Commands: the surfaces the trace shows as commanded.
     for c in file["command"].as_array().unwrap() {
         let tick = c["answers_tick"].as_u64().unwrap() as usize;
-        assert!(same(number(&c["inputs"][aileron_in]), trace.rows[tick][aileron_cmd]), "tick {tick}: aileron");
+        assert!(same(float_bits(&c["inputs"][aileron_in]), trace.rows[tick][aileron_cmd]), "tick {tick}: aileron");
     }
-    // Timing: timing.csv's rows, with empty cells as null.
+    // Timing: timing.csv's rows; an empty cell is a 0 with its bit set in `empty_columns`.
     let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();
     let mut lines = timing.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut empty_cells = 0;
     for (line, message) in lines.zip(file["timing"].as_array().unwrap()) {
-        for (column, cell) in header.iter().zip(line.split(',')) {
-            let recorded = &message[*column];
-            let expected = if cell.is_empty() { Value::Null } else { cell.parse::<i64>().unwrap().into() };
-            assert_eq!(*recorded, expected, "timing column {column}");
+        let empty = message["empty_columns"].as_u64().unwrap();
+        for (k, (column, cell)) in header.iter().zip(line.split(',')).enumerate() {
+            let recorded = message[*column].as_i64().unwrap();
+            assert_eq!(empty >> k & 1 == 1, cell.is_empty(), "timing column {column}: {line}");
+            let expected = if cell.is_empty() { 0 } else { cell.parse::<i64>().unwrap() };
+            assert_eq!(recorded, expected, "timing column {column}");
+            empty_cells += usize::from(cell.is_empty());
         }
+        assert_eq!(empty >> header.len(), 0, "no bits past the columns");
     }
+    assert!(empty_cells > 0, "the rows without a command have empty cells");
     assert_eq!(file["timing"].as_array().unwrap().len(), timing.lines().count() - 1);
     // Events: the run's events.jsonl lines up to the logger's end, in order.
     let events: Vec<Value> = std::fs::read_to_string(out.join("events.jsonl"))

@@ -35,8 +35,10 @@ use std::collections::BTreeMap;
 
 /// A plant sample waits this many newer samples for its command before it is written without one.
 pub const MISSING_COMMAND_WINDOW: u64 = 10;
-/// Rows per flush (0.1 s of data at 100 Hz).
-pub const FLUSH_EVERY_ROWS: u64 = 10;
+/// The sinks are flushed this long after their last flush, once a row has come since, ns: 10 rows at 100 Hz in
+/// realtime; in lockstep (about 2,000 rows at 20,000 ticks/s) it keeps the syscalls and the recording's chunks off
+/// the per-tick cost. A kill loses at most this much of the trace.
+pub const FLUSH_PERIOD_NS: u64 = 100_000_000;
 /// Lockstep: the logger looks for new samples this often instead of being woken by each one, ns. Two wake-ups a
 /// tick of a third process on a two-core machine cost the plant and controller about a third of their speed
 /// (README, "Lockstep speed"); at 40,000 ticks/s this is 10 ticks a look, well inside the plant's window.
@@ -61,6 +63,12 @@ struct Writer {
     last_written: Option<PlantSample>,
     /// The trace's `flight_segment`: one more at each flight discontinuity.
     flight_segment: u32,
+    /// When the sinks were last flushed, ns.
+    flushed_ns: u64,
+    /// Rows written since the last flush.
+    unflushed: u64,
+    /// The row's diagnostics, reused from row to row.
+    diagnostics: Vec<f64>,
 }
 
 impl Writer {
@@ -101,7 +109,9 @@ impl Writer {
         step_exec_ns: Option<u64>,
     ) -> std::io::Result<()> {
         // The trace's columns are fixed by its header: missing diagnostics are empty, extra ones dropped.
-        let mut diagnostics = vec![f64::NAN; self.diagnostic_names.len()];
+        let diagnostics = &mut self.diagnostics;
+        diagnostics.clear();
+        diagnostics.resize(self.diagnostic_names.len(), f64::NAN);
         if let Some(c) = command {
             let given = c.sample.diagnostics();
             let n = given.len().min(diagnostics.len());
@@ -113,7 +123,7 @@ impl Writer {
             command.map(|c| c.sample.inputs()),
             next.map(PlantSample::outputs),
             self.flight_segment,
-            &diagnostics,
+            &self.diagnostics,
         );
         let row = LoggedRow { plant: sample, command, step_exec_ns, trace: &trace };
         for sink in &mut self.sinks {
@@ -122,7 +132,13 @@ impl Writer {
         self.rows += 1;
         self.last_tick = Some(sample.sample.header.tick);
         self.last_written = Some(sample.sample);
-        if self.rows.is_multiple_of(FLUSH_EVERY_ROWS) {
+        self.unflushed += 1;
+        Ok(())
+    }
+
+    /// Flush when rows have come since the last flush and [`FLUSH_PERIOD_NS`] has passed.
+    fn flush_if_due(&mut self) -> std::io::Result<()> {
+        if self.unflushed > 0 && monotonic_ns() >= self.flushed_ns + FLUSH_PERIOD_NS {
             self.flush()?;
         }
         Ok(())
@@ -140,6 +156,7 @@ impl Writer {
         for sink in &mut self.sinks {
             sink.flush()?;
         }
+        (self.flushed_ns, self.unflushed) = (monotonic_ns(), 0);
         Ok(())
     }
 
@@ -274,6 +291,9 @@ impl LoggerLoop {
             last_tick: resume_after,
             last_written: None,
             flight_segment: previous_segment,
+            flushed_ns: monotonic_ns(),
+            unflushed: 0,
+            diagnostics: Vec::new(),
         };
         let mut rec = Recorder::new(
             Role::Logger.label(),
@@ -376,7 +396,8 @@ impl LoggerLoop {
         let rows_before = self.writer.rows;
         self.write_ready_rows(final_flush)?;
         if self.writer.rows != rows_before {
-            self.writer.flush()?;
+            self.writer.flush_if_due()?;
+            // Rows taken, flushed or not: the acknowledgement bounds the queues, the flush period what a kill loses.
             acks.send(self.writer.last_tick.unwrap_or(0), &LogAckSample::new(self.writer.rows))?;
         }
         let (tick, dt_s) = (self.writer.last_tick.unwrap_or(0), self.scenario.timing.dt_s);

@@ -40,21 +40,17 @@ impl RowFile {
         Ok(Self { path, file, pending: String::new(), whole_len })
     }
 
-    fn push(&mut self, row: std::fmt::Arguments) {
-        use std::fmt::Write as _;
-        let _ = self.pending.write_fmt(row);
-        self.pending.push('\n');
-    }
-
     fn flush(&mut self) -> std::io::Result<()> {
         if self.pending.is_empty() {
             return Ok(());
         }
         let written = self.file.write_all(self.pending.as_bytes());
-        let batch = std::mem::take(&mut self.pending);
+        let batch_len = self.pending.len() as u64;
+        // Cleared, not dropped: the next batch reuses its allocation.
+        self.pending.clear();
         match written {
             Ok(()) => {
-                self.whole_len += batch.len() as u64;
+                self.whole_len += batch_len;
                 Ok(())
             }
             Err(e) => {
@@ -91,19 +87,21 @@ impl RowSink for CsvSink {
     }
 
     fn row(&mut self, row: &LoggedRow) -> std::io::Result<()> {
+        use std::fmt::Write as _;
         let trace = self.trace.as_mut().ok_or_else(|| std::io::Error::other("trace.csv written before its header"))?;
-        trace.push(format_args!("{}", Trace::format_row(row.trace)));
-        let values = timing_values(row);
-        let mut line = String::with_capacity(16 * values.len());
-        for (i, v) in values.iter().enumerate() {
+        // Straight into the pending batch: no allocation per row or value.
+        Trace::push_row(&mut trace.pending, row.trace);
+        trace.pending.push('\n');
+        let line = &mut self.timing.pending;
+        for (i, v) in timing_values(row).iter().enumerate() {
             if i > 0 {
                 line.push(',');
             }
             if let Some(v) = v {
-                line.push_str(&v.to_string());
+                let _ = write!(line, "{v}");
             }
         }
-        self.timing.push(format_args!("{line}"));
+        line.push('\n');
         Ok(())
     }
 

@@ -1,16 +1,17 @@
-//! Wire samples as JSON and their JSON Schemas, built from each type's field table ([`crate::wire::WireField`]), so a
-//! field added to the wire appears in the recording without an edit here. Every field is written as received:
+//! Wire samples as JSON, what the first recordings held (the logger now writes CDR, [`super::cdr`]); replay still
+//! reads them. Built from each type's field table ([`crate::wire::WireField`]), like the CDR codec, whose field
+//! shapes ([`shape`]) are these. Every field is written as received:
 //! numbers with the shortest text that reads back to the same bits (non-finite values as `null`), integers exactly,
 //! `SampleHeader` as a nested object, byte arrays (names and units) as strings. `_pad` fields are left out.
 //! [`sample_from_json`] is the inverse, which replay uses to send the recorded samples again bit for bit.
 
 use crate::wire::{SampleHeader, WireField, WireType};
-use serde_json::{Map, Value};
+use serde_json::Value;
 use std::fmt::Write as _;
 
-/// The element type of a field, from its Rust type as written in the wire definition.
+/// The element type of a field, from its Rust type as written in the wire definition (shared with [`super::cdr`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Element {
+pub(super) enum Element {
     F64,
     U64,
     I64,
@@ -21,7 +22,7 @@ enum Element {
 }
 
 impl Element {
-    fn size(self, text_len: usize) -> usize {
+    pub(super) fn size(self, text_len: usize) -> usize {
         match self {
             Element::F64 | Element::U64 | Element::I64 => 8,
             Element::U32 => 4,
@@ -33,10 +34,10 @@ impl Element {
 
 /// A field's shape: its element, whether it is an array, and for text the bytes per string.
 #[derive(Debug, Clone, Copy)]
-struct Shape {
-    element: Element,
-    array: bool,
-    text_len: usize,
+pub(super) struct Shape {
+    pub(super) element: Element,
+    pub(super) array: bool,
+    pub(super) text_len: usize,
 }
 
 fn element_of(rust_type: &str) -> Option<(Element, usize)> {
@@ -53,7 +54,7 @@ fn element_of(rust_type: &str) -> Option<(Element, usize)> {
 
 /// The shape of `field`; a type this codec does not know is a bug in the wire definition, caught by the tests that
 /// encode every wire type.
-fn shape(field: &WireField) -> Shape {
+pub(super) fn shape(field: &WireField) -> Shape {
     let t = field.rust_type.trim();
     if let Some((element, _)) = element_of(t) {
         let text_len = if element == Element::Text { field.size } else { 0 };
@@ -79,7 +80,7 @@ fn shape(field: &WireField) -> Shape {
     }
 }
 
-fn fields_shown(fields: &'static [WireField]) -> impl Iterator<Item = &'static WireField> {
+pub(super) fn fields_shown(fields: &'static [WireField]) -> impl Iterator<Item = &'static WireField> {
     fields.iter().filter(|f| !f.name.starts_with('_'))
 }
 
@@ -151,7 +152,7 @@ fn push_object(out: &mut String, fields: &'static [WireField], bytes: &[u8], ext
 
 /// The bytes of a wire sample. Wire types are `#[repr(C)]` with explicit padding fields (their sizes are asserted
 /// in `wire`), so every byte is a field's.
-fn bytes_of<T: WireType + Copy>(sample: &T) -> &[u8] {
+pub(super) fn bytes_of<T: WireType + Copy>(sample: &T) -> &[u8] {
     // SAFETY: T is a plain-old-data wire type (numbers and arrays of numbers, no implicit padding); reading its
     // bytes for its size is sound.
     unsafe { std::slice::from_raw_parts((sample as *const T).cast::<u8>(), size_of::<T>()) }
@@ -162,44 +163,6 @@ pub fn sample_json<T: WireType + Copy>(sample: &T, extra: &[(&str, u64)]) -> Str
     let mut out = String::with_capacity(64 * T::FIELDS.len());
     push_object(&mut out, T::FIELDS, bytes_of(sample), extra);
     out
-}
-
-fn property_schema(field: &WireField) -> Value {
-    let s = shape(field);
-    let item = match s.element {
-        Element::F64 => serde_json::json!({"type": ["number", "null"]}),
-        Element::U64 | Element::U32 => serde_json::json!({"type": "integer", "minimum": 0}),
-        Element::I64 => serde_json::json!({"type": "integer"}),
-        Element::Header => object_schema(SampleHeader::NAME, SampleHeader::FIELDS, &[]),
-        Element::Text => serde_json::json!({"type": "string"}),
-    };
-    let mut schema = if s.array {
-        let n = field.size / s.element.size(s.text_len);
-        serde_json::json!({"type": "array", "items": item, "minItems": n, "maxItems": n})
-    } else {
-        item
-    };
-    let doc = field.doc.split_whitespace().collect::<Vec<_>>().join(" ");
-    schema["description"] = Value::String(doc);
-    schema
-}
-
-fn object_schema(title: &str, fields: &'static [WireField], extra: &[(&str, &str)]) -> Value {
-    let mut properties = Map::new();
-    for field in fields_shown(fields) {
-        properties.insert(field.name.to_string(), property_schema(field));
-    }
-    for (name, doc) in extra {
-        properties.insert(name.to_string(), serde_json::json!({"type": "integer", "minimum": 0, "description": doc}));
-    }
-    serde_json::json!({"title": title, "type": "object", "properties": properties})
-}
-
-/// The JSON Schema of [`sample_json`]'s objects for `T` with `extra` integer fields (name, description).
-pub fn sample_schema<T: WireType>(extra: &[(&str, &str)]) -> Value {
-    let mut schema = object_schema(T::TYPE_NAME, T::FIELDS, extra);
-    schema["$schema"] = Value::String("https://json-schema.org/draft/2020-12/schema".into());
-    schema
 }
 
 /// A recorded field that does not fit the wire type.
@@ -301,7 +264,7 @@ pub fn sample_from_json<T: WireType + Copy>(value: &Value) -> Result<T, JsonFiel
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wire::{CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
+    use crate::wire::{CommandSample, ControllerInfo, PlantSample};
 
     fn plant() -> PlantSample {
         let mut s = PlantSample::zeroed();
@@ -356,26 +319,6 @@ mod tests {
         assert_eq!(value["diagnostic_names"][2], "");
         let back: ControllerInfo = sample_from_json(&value).expect("fits");
         assert_eq!(back.names(), info.names());
-    }
-
-    #[test]
-    fn every_wire_type_has_a_schema_naming_every_field() {
-        for (schema, fields) in [
-            (sample_schema::<PlantSample>(&[("t_recv_ns", "received")]), PlantSample::FIELDS),
-            (sample_schema::<CommandSample>(&[]), CommandSample::FIELDS),
-            (sample_schema::<ControllerInfo>(&[]), ControllerInfo::FIELDS),
-            (sample_schema::<PlantInfo>(&[]), PlantInfo::FIELDS),
-            (sample_schema::<LogAckSample>(&[]), LogAckSample::FIELDS),
-        ] {
-            let properties = schema["properties"].as_object().expect("properties");
-            for f in fields_shown(fields) {
-                assert!(properties.contains_key(f.name), "{} missing from {schema}", f.name);
-            }
-        }
-        let plant = sample_schema::<PlantSample>(&[]);
-        assert_eq!(plant["properties"]["outputs"]["maxItems"], crate::wire::MAX_OUTPUTS);
-        assert_eq!(plant["properties"]["header"]["properties"]["seq"]["type"], "integer");
-        assert!(plant["properties"]["outputs"]["description"].as_str().is_some_and(|d| d.contains("announced")));
     }
 
     #[test]

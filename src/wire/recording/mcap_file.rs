@@ -1,14 +1,17 @@
-//! The MCAP sink: the run as Foxglove and PlotJuggler open it. JSON messages with JSON Schemas (no plug-in needed)
-//! on [`super::topics`]: `/plant` and `/command` (every field as received, with header stamps, flags and the
-//! logger's receive stamp), `/trace` (the trace row by column name), `/timing` (the per-tick stamps) and `/events`
-//! (the run's `events.jsonl` lines as they appear). The run's identity and scenario are MCAP metadata.
+//! The MCAP sink: the run as Foxglove, PlotJuggler and `ros2 bag` open it. Binary messages (CDR, with ROS 2 message
+//! definitions generated from the wire's field tables, [`super::cdr`]) on [`super::topics`]: `/plant` and
+//! `/command` (every field as received, with header stamps, flags and the logger's receive stamp), `/plant_info`
+//! (the plant's announcement), `/trace` (the trace row, one float64 field per column) and `/timing` (the per-tick
+//! stamps); `/events` holds the run's `events.jsonl` lines as they appear, as JSON. The run's identity and scenario
+//! are MCAP metadata.
 //!
-//! Chunks are LZ4-compressed and closed at every flush, so a killed logger leaves a file a reader can read up to
-//! its last flush; a restarted logger writes the next `recording-<n>.mcap`, never over an earlier one. Message log
-//! times are wall-clock (the monotonic stamps shifted by the offset between the clocks when the file was opened),
-//! so a viewer shows when the run flew; the monotonic stamps themselves are in the messages.
+//! Chunks are LZ4-compressed and closed at every flush (the logger flushes every 0.1 s), so a killed logger leaves a
+//! file a reader can read up to its last flush; a restarted logger writes the next `recording-<n>.mcap`, never over
+//! an earlier one. Message log times are wall-clock (the monotonic stamps shifted by the offset between the clocks
+//! when the file was opened), so a viewer shows when the run flew; the monotonic stamps themselves are in the
+//! messages. Each message is encoded into one reused buffer: writing a row allocates nothing.
 
-use super::json::{push_f64, sample_json, sample_schema};
+use super::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
 use super::{
     LoggedRow, RecordingMeta, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, meta_keys, recording_file_name,
     timing_values, topics,
@@ -36,9 +39,12 @@ pub struct McapSink {
     path: PathBuf,
     writer: mcap::Writer<BufWriter<File>>,
     channels: Channels,
-    /// Per-topic message counters (MCAP's `sequence`).
-    sequence: BTreeMap<u16, u32>,
-    trace_columns: Vec<String>,
+    /// Per-channel message counters (MCAP's `sequence`), by channel id.
+    sequence: Vec<u32>,
+    plant_codec: CdrCodec,
+    command_codec: CdrCodec,
+    /// The message being written, reused.
+    buffer: CdrBuffer,
     events_path: PathBuf,
     events_file: Option<File>,
     /// Bytes of `events.jsonl` already recorded.
@@ -62,9 +68,13 @@ fn named_error(path: &Path, e: mcap::McapError) -> std::io::Error {
     std::io::Error::other(text)
 }
 
-fn schema_bytes(schema: &Value) -> Vec<u8> {
-    serde_json::to_vec(schema).expect("a JSON value serialises")
-}
+// `empty_columns` has a bit per timing column.
+const _: () = assert!(TIMING_COLUMNS.len() <= 32);
+
+/// The schema name of the `/timing` messages.
+const TIMING_MSG: &str = "silrig/msg/Timing";
+/// The schema name of the `/trace` messages.
+const TRACE_MSG: &str = "silrig/msg/Trace";
 
 impl McapSink {
     /// Create the run's next recording file in `out_dir` (`recording.mcap`, or `recording-<n>.mcap` after a
@@ -84,15 +94,19 @@ impl McapSink {
             .profile("")
             .library(format!("silrig {}", env!("CARGO_PKG_VERSION")));
         let mut writer = options.create(BufWriter::new(file)).map_err(named)?;
-        let mut add = |topic: &str, name: &str, schema: Value| -> mcap::McapResult<u16> {
-            let schema_id = writer.add_schema(name, "jsonschema", &schema_bytes(&schema))?;
-            writer.add_channel(schema_id, topic, "json", &BTreeMap::new())
+        let mut add = |topic: &str, name: &str, msg: String| -> mcap::McapResult<u16> {
+            let schema_id = writer.add_schema(name, SCHEMA_ENCODING, msg.as_bytes())?;
+            writer.add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())
         };
-        let plant = add(topics::PLANT, "silrig.PlantSample", sample_schema::<PlantSample>(&[RECEIVE_STAMP]));
-        let plant_info = add(topics::PLANT_INFO, "silrig.PlantInfo", sample_schema::<PlantInfo>(&[]));
-        let command = add(topics::COMMAND, "silrig.CommandSample", sample_schema::<CommandSample>(&[RECEIVE_STAMP]));
-        let timing = add(topics::TIMING, "silrig.Timing", timing_schema());
-        let events = add(topics::EVENTS, "silrig.Event", event_schema());
+        let plant =
+            add(topics::PLANT, &cdr::msg_name::<PlantSample>(), cdr::sample_msg::<PlantSample>(&[RECEIVE_STAMP]));
+        let plant_info = add(topics::PLANT_INFO, &cdr::msg_name::<PlantInfo>(), cdr::sample_msg::<PlantInfo>(&[]));
+        let command =
+            add(topics::COMMAND, &cdr::msg_name::<CommandSample>(), cdr::sample_msg::<CommandSample>(&[RECEIVE_STAMP]));
+        let timing = add(topics::TIMING, TIMING_MSG, timing_msg());
+        let events = writer
+            .add_schema("silrig.Event", "jsonschema", &serde_json::to_vec(&event_schema()).expect("JSON"))
+            .and_then(|schema_id| writer.add_channel(schema_id, topics::EVENTS, "json", &BTreeMap::new()));
         let channels = Channels {
             plant: plant.map_err(named)?,
             plant_info: plant_info.map_err(named)?,
@@ -124,8 +138,10 @@ impl McapSink {
             path,
             writer,
             channels,
-            sequence: BTreeMap::new(),
-            trace_columns: Vec::new(),
+            sequence: Vec::new(),
+            plant_codec: CdrCodec::of::<PlantSample>(),
+            command_codec: CdrCodec::of::<CommandSample>(),
+            buffer: CdrBuffer::default(),
             events_read: 0,
             wall_minus_monotonic_ns: wall_ns as i128 - i128::from(crate::clock::monotonic_ns()),
             finished: false,
@@ -146,15 +162,26 @@ impl McapSink {
     }
 
     fn write(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64, data: &[u8]) -> std::io::Result<()> {
-        let sequence = self.sequence.entry(channel).or_insert(0);
-        *sequence = sequence.wrapping_add(1);
+        let id = usize::from(channel);
+        if self.sequence.len() <= id {
+            self.sequence.resize(id + 1, 0);
+        }
+        self.sequence[id] = self.sequence[id].wrapping_add(1);
         let header = mcap::records::MessageHeader {
             channel_id: channel,
-            sequence: *sequence,
+            sequence: self.sequence[id],
             log_time: self.wall_ns(t_log_ns),
             publish_time: self.wall_ns(t_publish_ns),
         };
-        self.writer.write_to_known_channel(&header, data).map_err(|e| self.named(e))
+        self.writer.write_to_known_channel(&header, data).map_err(|e| named_error(&self.path, e))
+    }
+
+    /// Write the message in [`Self::buffer`].
+    fn write_buffer(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64) -> std::io::Result<()> {
+        let buffer = std::mem::take(&mut self.buffer);
+        let written = self.write(channel, t_log_ns, t_publish_ns, buffer.bytes());
+        self.buffer = buffer;
+        written
     }
 
     /// Record the lines other processes appended to `events.jsonl` since the last call (whole lines only).
@@ -182,11 +209,15 @@ impl McapSink {
     }
 }
 
-fn timing_schema() -> Value {
-    let properties: serde_json::Map<String, Value> =
-        TIMING_COLUMNS.iter().map(|c| (c.to_string(), json!({"type": ["integer", "null"]}))).collect();
-    json!({"title": "silrig timing.csv row", "type": "object", "properties": properties,
-           "description": "timing.csv's columns; the command's are null when no command answered the tick"})
+/// The definition of `/timing`: timing.csv's columns, then which of them are empty.
+fn timing_msg() -> String {
+    let mut msg = "# timing.csv's columns (a row per tick), in order\n".to_string();
+    for column in TIMING_COLUMNS {
+        msg += &format!("int64 {column}\n");
+    }
+    msg += "# Bit k set: column k above is empty in timing.csv (no command answered the tick, or the step time is \
+            unknown), and its field is 0\nuint32 empty_columns\n";
+    msg
 }
 
 fn event_schema() -> Value {
@@ -198,28 +229,25 @@ fn event_schema() -> Value {
         "detail": {"type": "string"}}})
 }
 
-fn trace_schema(columns: &[String]) -> Value {
-    let properties: serde_json::Map<String, Value> =
-        columns.iter().map(|c| (c.clone(), json!({"type": ["number", "null"]}))).collect();
-    json!({"title": "silrig trace.csv row", "type": "object", "properties": properties,
-           "description": "trace.csv's columns (the same as silrig sim); empty values are null"})
-}
-
 impl RowSink for McapSink {
     fn plant(&mut self, info: &PlantInfo) -> std::io::Result<()> {
         let t_send = info.header.t_send_ns;
-        self.write(self.channels.plant_info, t_send, t_send, sample_json(info, &[]).as_bytes())
+        self.buffer.start();
+        CdrCodec::of::<PlantInfo>().encode(info, &mut self.buffer);
+        self.write_buffer(self.channels.plant_info, t_send, t_send)
     }
 
     fn start(&mut self, trace_columns: &[String]) -> std::io::Result<()> {
         if self.channels.trace.is_none() {
-            let schema = schema_bytes(&trace_schema(trace_columns));
-            let schema_id = self.writer.add_schema("silrig.Trace", "jsonschema", &schema).map_err(|e| self.named(e))?;
-            // JSON objects have no column order; the channel keeps trace.csv's.
+            let names = cdr::field_names(trace_columns);
+            let header = "trace.csv's columns (the same as silrig sim), in order; an empty value is NaN";
+            let msg = cdr::float_row_msg(header, &names, trace_columns);
+            let schema_id =
+                self.writer.add_schema(TRACE_MSG, SCHEMA_ENCODING, msg.as_bytes()).map_err(|e| self.named(e))?;
+            // A column whose name is no ROS field name has another field name; the channel keeps the real ones.
             let columns = BTreeMap::from([(TRACE_COLUMNS_KEY.to_string(), trace_columns.join(","))]);
-            let channel = self.writer.add_channel(schema_id, topics::TRACE, "json", &columns);
+            let channel = self.writer.add_channel(schema_id, topics::TRACE, MESSAGE_ENCODING, &columns);
             self.channels.trace = Some(channel.map_err(|e| self.named(e))?);
-            self.trace_columns = trace_columns.to_vec();
         }
         Ok(())
     }
@@ -227,38 +255,30 @@ impl RowSink for McapSink {
     fn row(&mut self, row: &LoggedRow) -> std::io::Result<()> {
         let plant = row.plant;
         let (t_recv, t_send) = (plant.t_recv_ns, plant.sample.header.t_send_ns);
-        let json = sample_json(&plant.sample, &[(RECEIVE_STAMP.0, t_recv)]);
-        self.write(self.channels.plant, t_recv, t_send, json.as_bytes())?;
+        self.buffer.start();
+        self.plant_codec.encode(&plant.sample, &mut self.buffer);
+        self.buffer.u64(t_recv);
+        self.write_buffer(self.channels.plant, t_recv, t_send)?;
         if let Some(c) = row.command {
-            let json = sample_json(&c.sample, &[(RECEIVE_STAMP.0, c.t_recv_ns)]);
-            self.write(self.channels.command, c.t_recv_ns, c.sample.header.t_send_ns, json.as_bytes())?;
+            self.buffer.start();
+            self.command_codec.encode(&c.sample, &mut self.buffer);
+            self.buffer.u64(c.t_recv_ns);
+            self.write_buffer(self.channels.command, c.t_recv_ns, c.sample.header.t_send_ns)?;
         }
         let trace = self.channels.trace.ok_or_else(|| std::io::Error::other("recording: a row before its columns"))?;
-        let mut json = String::with_capacity(32 * row.trace.len());
-        json.push('{');
-        for (i, (name, v)) in self.trace_columns.iter().zip(row.trace).enumerate() {
-            if i > 0 {
-                json.push(',');
-            }
-            json.push_str(&Value::String(name.clone()).to_string());
-            json.push(':');
-            push_f64(&mut json, *v);
+        self.buffer.start();
+        for v in row.trace {
+            self.buffer.f64(*v);
         }
-        json.push('}');
-        self.write(trace, t_recv, t_send, json.as_bytes())?;
-        let mut json = String::with_capacity(32 * TIMING_COLUMNS.len());
-        json.push('{');
-        for (i, (name, v)) in TIMING_COLUMNS.iter().zip(timing_values(row)).enumerate() {
-            if i > 0 {
-                json.push(',');
-            }
-            match v {
-                Some(v) => json.push_str(&format!("\"{name}\":{v}")),
-                None => json.push_str(&format!("\"{name}\":null")),
-            }
+        self.write_buffer(trace, t_recv, t_send)?;
+        self.buffer.start();
+        let mut empty = 0u32;
+        for (k, v) in timing_values(row).into_iter().enumerate() {
+            self.buffer.i64(v.unwrap_or(0));
+            empty |= u32::from(v.is_none()) << k;
         }
-        json.push('}');
-        self.write(self.channels.timing, t_recv, t_send, json.as_bytes())
+        self.buffer.u32(empty);
+        self.write_buffer(self.channels.timing, t_recv, t_send)
     }
 
     fn flush(&mut self) -> std::io::Result<()> {

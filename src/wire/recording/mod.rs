@@ -1,10 +1,12 @@
 //! What the logger writes, and reading it back: the sinks a logged row goes to ([`RowSink`]: `trace.csv` and
-//! `timing.csv` in [`csv`], the MCAP recording in [`mcap_file`]), the JSON form of wire samples and its schemas
-//! ([`json`]), and the reader replay uses ([`reader`]).
+//! `timing.csv` in [`csv`], the MCAP recording in [`mcap_file`]), the binary form of wire samples and rows with their
+//! ROS 2 message definitions ([`cdr`], what the recording holds), their JSON form ([`json`], what the first
+//! recordings held: replay still reads them), and the reader replay uses ([`reader`]).
 //!
 //! The logger decides what a row is (pairing, gaps, restarts); a sink only writes it, so a new format is a new sink,
 //! not a second copy of that logic.
 
+pub mod cdr;
 pub mod csv;
 pub mod json;
 pub mod mcap_file;

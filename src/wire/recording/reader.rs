@@ -1,11 +1,14 @@
 //! Reading a run's recording back: every `recording*.mcap` of a run folder, in the order their loggers wrote them,
-//! as wire samples again (bit for bit, see [`super::json`]), with the run's metadata and the trace's columns. A
-//! folder without a recording, a file that is not MCAP, one cut short (its logger was killed), one of another wire
-//! layout, or a message that does not fit its type is an error naming the file.
+//! as wire samples again (bit for bit, see [`super::cdr`]), with the run's metadata and the trace's columns. Each
+//! channel's message encoding says how its messages are read: `cdr` (what the logger writes) or `json` (what the
+//! first recordings held), so recordings of older runs of the same wire layout still replay. A folder without a
+//! recording, a file that is not MCAP, one cut short (its logger was killed), one of another wire layout, or a
+//! message that does not fit its type is an error naming the file.
 
+use super::cdr::{self, CdrCodec, CdrReader};
 use super::json::sample_from_json;
 use super::{TRACE_COLUMNS_KEY, meta_keys, recording_files, topics};
-use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
+use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION, WireType};
 use silrig_flight::signals::PlantSignals;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -105,6 +108,44 @@ pub struct RecordedRun {
     pub counts: BTreeMap<String, u64>,
 }
 
+/// The codecs of the recorded wire types, made once per file.
+struct Codecs {
+    plant: CdrCodec,
+    command: CdrCodec,
+    plant_info: CdrCodec,
+}
+
+impl Codecs {
+    fn new() -> Self {
+        Self {
+            plant: CdrCodec::of::<PlantSample>(),
+            command: CdrCodec::of::<CommandSample>(),
+            plant_info: CdrCodec::of::<PlantInfo>(),
+        }
+    }
+}
+
+/// The sample a message of `encoding` holds, bit for bit; a `stamped` message (`/plant`, `/command`) carries the
+/// logger's receive stamp after the sample's own fields.
+fn decode<T: WireType + Copy>(encoding: &str, codec: &CdrCodec, data: &[u8], stamped: bool) -> Result<T, String> {
+    match encoding {
+        cdr::MESSAGE_ENCODING => {
+            let mut reader = CdrReader::new(T::TYPE_NAME, data).map_err(|e| e.to_string())?;
+            let sample = codec.decode(&mut reader).map_err(|e| e.to_string())?;
+            if stamped {
+                reader.u64().map_err(|e| e.to_string())?;
+            }
+            reader.finish().map_err(|e| e.to_string())?;
+            Ok(sample)
+        }
+        "json" => {
+            let value = serde_json::from_slice(data).map_err(|e| e.to_string())?;
+            sample_from_json(&value).map_err(|e| e.to_string())
+        }
+        other => Err(format!("message encoding `{other}`: this silrig reads cdr (and json, of older recordings)")),
+    }
+}
+
 impl RecordedRun {
     /// Read every recording file of the run in `run_dir`.
     pub fn read(run_dir: &Path) -> Result<Self, RecordingError> {
@@ -125,7 +166,8 @@ impl RecordedRun {
         if !bytes.starts_with(mcap::MAGIC) {
             return Err(unreadable("not an MCAP file (no MCAP magic at its start)".into()));
         }
-        let mut topics_by_id: HashMap<u16, (String, BTreeMap<String, String>)> = HashMap::new();
+        let mut topics_by_id: HashMap<u16, (String, String, BTreeMap<String, String>)> = HashMap::new();
+        let codecs = Codecs::new();
         let mut messages = 0u64;
         let mut layout_checked = false;
         let reader = mcap::read::ChunkFlattener::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
@@ -159,7 +201,7 @@ impl RecordedRun {
                     self.scenario_toml = m.metadata.get(meta_keys::TOML).cloned().unwrap_or_default();
                 }
                 mcap::records::Record::Channel(c) => {
-                    topics_by_id.insert(c.id, (c.topic, c.metadata));
+                    topics_by_id.insert(c.id, (c.topic, c.message_encoding, c.metadata));
                 }
                 mcap::records::Record::Message { header, data } => {
                     messages += 1;
@@ -167,7 +209,7 @@ impl RecordedRun {
                         let found = "no silrig metadata before the first message".to_string();
                         return Err(RecordingError::OtherLayout { path: path.to_path_buf(), found });
                     }
-                    let Some((topic, channel_meta)) = topics_by_id.get(&header.channel_id) else {
+                    let Some((topic, encoding, channel_meta)) = topics_by_id.get(&header.channel_id) else {
                         return Err(unreadable(format!("a message on unknown channel {}", header.channel_id)));
                     };
                     let index = {
@@ -182,18 +224,13 @@ impl RecordedRun {
                         why,
                     };
                     match topic.as_str() {
-                        topics::PLANT => {
-                            let value = serde_json::from_slice(&data).map_err(|e| bad(e.to_string()))?;
-                            self.plant.push(sample_from_json(&value).map_err(|e| bad(e.to_string()))?);
-                        }
+                        topics::PLANT => self.plant.push(decode(encoding, &codecs.plant, &data, true).map_err(bad)?),
                         topics::COMMAND => {
-                            let value = serde_json::from_slice(&data).map_err(|e| bad(e.to_string()))?;
-                            let command: CommandSample = sample_from_json(&value).map_err(|e| bad(e.to_string()))?;
+                            let command: CommandSample = decode(encoding, &codecs.command, &data, true).map_err(bad)?;
                             self.commands.insert(command.answers_tick, command);
                         }
                         topics::PLANT_INFO if self.plant_info.is_none() => {
-                            let value = serde_json::from_slice(&data).map_err(|e| bad(e.to_string()))?;
-                            self.plant_info = Some(sample_from_json(&value).map_err(|e| bad(e.to_string()))?);
+                            self.plant_info = Some(decode(encoding, &codecs.plant_info, &data, false).map_err(bad)?);
                         }
                         topics::TRACE if self.trace_columns.is_empty() => {
                             let columns = channel_meta.get(TRACE_COLUMNS_KEY).map(String::as_str).unwrap_or("");
@@ -227,5 +264,62 @@ impl RecordedRun {
     pub fn diagnostic_names(&self) -> Result<Vec<String>, RecordingError> {
         let plant_columns = self.plant_signals()?.trace_columns(&[]).len();
         Ok(self.trace_columns.iter().skip(plant_columns).cloned().collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::json::sample_json;
+    use crate::wire::SampleHeader;
+
+    /// A recording as the first loggers wrote it (JSON messages with JSON Schemas), with `plant` and `command`.
+    fn write_json_recording(path: &Path, info: &PlantInfo, plant: &PlantSample, command: &CommandSample) {
+        let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+        let mut writer = mcap::Writer::new(file).unwrap();
+        let run = BTreeMap::from([
+            ("run_id".to_string(), "old".to_string()),
+            (meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string()),
+        ]);
+        writer.write_metadata(&mcap::records::Metadata { name: meta_keys::RUN.into(), metadata: run }).unwrap();
+        let mut add = |topic: &str, metadata: BTreeMap<String, String>| {
+            let schema = writer.add_schema(topic, "jsonschema", b"{}").unwrap();
+            writer.add_channel(schema, topic, "json", &metadata).unwrap()
+        };
+        let columns = BTreeMap::from([(TRACE_COLUMNS_KEY.to_string(), "t_s,phi_deg".to_string())]);
+        let channels = [
+            (add(topics::PLANT_INFO, BTreeMap::new()), sample_json(info, &[])),
+            (add(topics::PLANT, BTreeMap::new()), sample_json(plant, &[("t_recv_ns", 5)])),
+            (add(topics::COMMAND, BTreeMap::new()), sample_json(command, &[("t_recv_ns", 6)])),
+            (add(topics::TRACE, columns), r#"{"t_s":0.0,"phi_deg":1.5}"#.to_string()),
+        ];
+        for (channel_id, json) in channels {
+            let header = mcap::records::MessageHeader { channel_id, sequence: 1, log_time: 1, publish_time: 1 };
+            writer.write_to_known_channel(&header, json.as_bytes()).unwrap();
+        }
+        writer.finish().unwrap();
+    }
+
+    #[test]
+    fn a_recording_of_json_messages_is_still_read_bit_for_bit() {
+        let dir = std::env::temp_dir().join(format!("silrig-reader-json-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let info = PlantInfo::new(&silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2])).unwrap();
+        let mut plant = PlantSample::zeroed();
+        plant.header = SampleHeader { seq: 3, tick: 3, t_send_ns: 1 << 60, epoch: 9, ..plant.header };
+        plant.outputs[..3].copy_from_slice(&[0.1 + 0.2, -0.0, 1e-310]);
+        plant.outputs_len = 28;
+        let mut command = CommandSample::zeroed();
+        command.answers_tick = 3;
+        command.diagnostics[2] = std::f64::consts::PI;
+        write_json_recording(&dir.join(super::super::RECORDING_FILE), &info, &plant, &command);
+        let run = RecordedRun::read(&dir).unwrap();
+        assert_eq!(run.plant_info, Some(info));
+        assert_eq!(run.plant.len(), 1);
+        assert_eq!(run.plant[0].outputs.map(f64::to_bits), plant.outputs.map(f64::to_bits));
+        assert_eq!(run.plant[0].header, plant.header);
+        assert_eq!(run.commands[&3].diagnostics[2].to_bits(), std::f64::consts::PI.to_bits());
+        assert_eq!(run.trace_columns, ["t_s", "phi_deg"]);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
