@@ -147,11 +147,7 @@ impl ControllerSession {
         let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
         let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
         let session = rig_session::ControllerSession::open(args, scenario, &diagnostic_names)?;
-        Ok(Self {
-            session: Some(session),
-            plant: None,
-            stop_reason: None,
-        })
+        Ok(Self { session: Some(session), plant: None, stop_reason: None })
     }
 
     fn live(&mut self, py: Python<'_>) -> PyResult<&mut rig_session::ControllerSession> {
@@ -176,19 +172,16 @@ impl ControllerSession {
         match session.next_sample().map_err(|e| session_error(py, &e))? {
             Next::Sample(raw) => {
                 let n = (raw.outputs_len as usize).min(raw.outputs.len());
-                Ok(Some(Sample {
-                    tick: raw.header.tick,
-                    t_s: raw.t_sim_s,
-                    outputs: raw.outputs[..n].to_vec(),
-                    index,
-                }))
+                Ok(Some(Sample { tick: raw.header.tick, t_s: raw.t_sim_s, outputs: raw.outputs[..n].to_vec(), index }))
             }
             Next::Stop(reason) => {
-                self.stop_reason = Some(match reason {
-                    StopReason::TerminationRequested => Status::Stopped,
-                    StopReason::RunEnded => Status::RunEnded,
-                }
-                .code());
+                self.stop_reason = Some(
+                    match reason {
+                        StopReason::TerminationRequested => Status::Stopped,
+                        StopReason::RunEnded => Status::RunEnded,
+                    }
+                    .code(),
+                );
                 Ok(None)
             }
         }
@@ -293,7 +286,8 @@ impl ControllerSession {
     /// Say whether you resumed from `restored_checkpoint` (False: with the reason it did not fit).
     #[pyo3(signature = (used, reason = None))]
     fn checkpoint_used(&mut self, py: Python<'_>, used: bool, reason: Option<String>) -> PyResult<()> {
-        let outcome = if used { Ok(()) } else { Err(reason.unwrap_or_else(|| "the controller did not say why".into())) };
+        let outcome =
+            if used { Ok(()) } else { Err(reason.unwrap_or_else(|| "the controller did not say why".into())) };
         self.live(py)?.checkpoint_used(outcome);
         Ok(())
     }
@@ -382,7 +376,8 @@ fn fly(py: Python<'_>, controller: &Bound<'_, PyAny>, session: &Bound<'_, Contro
     let saved = session.borrow_mut().live(py)?.restored_checkpoint().map(str::to_string);
     if let Some(saved) = saved {
         // The session says in the run's events whether the controller resumed or started fresh.
-        let used = call_optional(controller, intern!(py, "restore"), (saved,))?.is_some_and(|r| r.is_truthy().unwrap_or(false));
+        let used = call_optional(controller, intern!(py, "restore"), (saved,))?
+            .is_some_and(|r| r.is_truthy().unwrap_or(false));
         let outcome = if used { Ok(()) } else { Err("the controller's restore() returned False".to_string()) };
         session.borrow_mut().live(py)?.checkpoint_used(outcome);
     }

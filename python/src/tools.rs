@@ -52,7 +52,11 @@ fn columns<'py>(
     Ok(out)
 }
 
-fn float_column<'py>(py: Python<'py>, column: Vec<f64>, numpy: Option<&Bound<'py, PyModule>>) -> PyResult<Bound<'py, PyAny>> {
+fn float_column<'py>(
+    py: Python<'py>,
+    column: Vec<f64>,
+    numpy: Option<&Bound<'py, PyModule>>,
+) -> PyResult<Bound<'py, PyAny>> {
     match numpy {
         None => Ok(PyList::new(py, column)?.into_any()),
         Some(np) => {
