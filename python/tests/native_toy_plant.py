@@ -1,0 +1,16 @@
+"""tests/clients/toy_plant.py's model, written against the ctypes module, flown through the package's
+`serve_plant`: the plant role natively, and the proof that a model moves between the two by its import alone.
+
+    python3 native_toy_plant.py [MODE]     MODE as toy_plant.py's: ok, nan, twice, none
+"""
+
+import pathlib
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "tests" / "clients"))
+
+import silrig  # noqa: E402
+from toy_plant import Toy  # noqa: E402
+
+if __name__ == "__main__":
+    sys.exit(silrig.serve_plant(Toy(sys.argv[1] if len(sys.argv) > 1 else "ok")))
