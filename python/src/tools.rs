@@ -156,22 +156,29 @@ fn fly_sweep(source: Source, runs: u64, seed: Option<u64>, jobs: Option<usize>) 
     let seed = seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(campaign::jobs(jobs).map_err(error)?);
     let started = std::time::Instant::now();
-    let cases = campaign.fly(seed, 0..runs, jobs).map_err(error)?;
-    let fly_s = started.elapsed().as_secs_f64();
-    let summary = report::summarize(
-        &cases,
+    // As `silrig sweep` writes them, case by case in index order: cases.csv's rows and sweep.json's tally.
+    let names = campaign.criterion_names();
+    let mut cases_csv = report::cases_csv_header(&campaign.parameters, &names);
+    let mut tally = report::Tally::new(
         &campaign.scenario.name,
         &campaign.command_config(),
         seed,
         &campaign.parameters,
         &campaign.criteria,
+        &names,
     );
-    Ok(Swept {
-        cases_csv: report::cases_csv(&cases, &campaign.parameters),
-        summary_json: serde_json::to_string(&summary).map_err(|e| e.to_string())?,
-        fly_s,
-        jobs,
-    })
+    let interrupted = campaign
+        .fly_each(seed, 0..runs, jobs, |case| {
+            report::case_csv_row(&mut cases_csv, &case, names.len());
+            tally.add(&case);
+            Ok(())
+        })
+        .map_err(error)?;
+    let fly_s = started.elapsed().as_secs_f64();
+    let flown = tally.cases();
+    let summary =
+        tally.finish(interrupted.map(|i| format!("stopped by {} after {flown} of the {runs} cases asked", i.0)));
+    Ok(Swept { cases_csv, summary_json: serde_json::to_string(&summary).map_err(|e| e.to_string())?, fly_s, jobs })
 }
 
 /// The cells of one line of cases.csv (a quoted cell may hold commas and doubled quotes).
