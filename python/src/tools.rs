@@ -159,14 +159,7 @@ fn fly_sweep(source: Source, runs: u64, seed: Option<u64>, jobs: Option<usize>) 
     // As `silrig sweep` writes them, case by case in index order: cases.csv's rows and sweep.json's tally.
     let names = campaign.criterion_names();
     let mut cases_csv = report::cases_csv_header(&campaign.parameters, &names);
-    let mut tally = report::Tally::new(
-        &campaign.scenario.name,
-        &campaign.command_config(),
-        seed,
-        &campaign.parameters,
-        &campaign.criteria,
-        &names,
-    );
+    let mut tally = campaign.tally(seed, &names);
     let interrupted = campaign
         .fly_each(seed, 0..runs, jobs, |case| {
             report::case_csv_row(&mut cases_csv, &case, names.len());

@@ -188,6 +188,18 @@ impl Campaign {
             .collect()
     }
 
+    /// An empty `sweep.json` of this campaign under `seed`, whose cases are judged as `criterion_names` (theirs).
+    pub fn tally(&self, seed: u64, criterion_names: &[String]) -> report::Tally {
+        report::Tally::new(
+            &self.scenario.name,
+            &self.command_config(),
+            seed,
+            &self.parameters,
+            &self.criteria,
+            criterion_names,
+        )
+    }
+
     /// Fly the cases `indices` under `seed` on `jobs` threads (with a controller command, `jobs` rigs side by
     /// side), reporting progress on stderr, and hand each result to `sink` in index order as soon as the cases
     /// before it are flown: at most [`REORDER_WINDOW`] results wait for their turn, so memory stays bounded
@@ -380,14 +392,7 @@ impl<'a> SweepWriter<'a> {
         let mut csv = std::io::BufWriter::with_capacity(1 << 16, file);
         csv.write_all(report::cases_csv_header(&campaign.parameters, &names).as_bytes())
             .with_context(|| format!("writing {}", csv_path.display()))?;
-        let tally = report::Tally::new(
-            &campaign.scenario.name,
-            &campaign.command_config(),
-            seed,
-            &campaign.parameters,
-            &campaign.criteria,
-            &names,
-        );
+        let tally = campaign.tally(seed, &names);
         Ok(Self {
             campaign,
             out: out.to_path_buf(),
