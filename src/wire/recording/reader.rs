@@ -127,6 +127,44 @@ impl Codecs {
 
 /// The sample a message of `encoding` holds, bit for bit; a `stamped` message (`/plant`, `/command`) carries the
 /// logger's receive stamp after the sample's own fields.
+/// The first top-level record of an MCAP file (after its magic) whose length, or whose chunk's uncompressed size,
+/// no file of this size can hold (a record cut off by the end of a file cut short, or a damaged length field):
+/// its byte offset and why. None when every record fits.
+fn first_impossible_record(bytes: &[u8]) -> Option<(usize, String)> {
+    const OP_FOOTER: u8 = 0x02;
+    const OP_CHUNK: u8 = 0x06;
+    // LZ4 expands at most about 255 times; anything far beyond that is a damaged size field.
+    const MAX_EXPANSION: u64 = 256;
+    let u64_at = |at: usize| bytes.get(at..at + 8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")));
+    let mut at = mcap::MAGIC.len();
+    while at + 9 <= bytes.len() {
+        let opcode = bytes[at];
+        let len = u64_at(at + 1)?;
+        let left = (bytes.len() - at - 9) as u64;
+        if len > left {
+            let why = format!(
+                "the record at byte {at} (opcode {opcode:#04x}) claims {len} bytes, more than the {left} left in the file"
+            );
+            return Some((at, why));
+        }
+        if opcode == OP_CHUNK {
+            // message_start_time, message_end_time, uncompressed_size: the third u64 of the chunk.
+            let uncompressed = u64_at(at + 9 + 16).unwrap_or(0);
+            if uncompressed > len.saturating_mul(MAX_EXPANSION) + (1 << 20) {
+                return Some((
+                    at,
+                    format!("the chunk at byte {at} claims {uncompressed} bytes uncompressed from {len} bytes"),
+                ));
+            }
+        }
+        if opcode == OP_FOOTER {
+            return None;
+        }
+        at += 9 + len as usize;
+    }
+    None
+}
+
 fn decode<T: WireType + Copy>(encoding: &str, codec: &CdrCodec, data: &[u8], stamped: bool) -> Result<T, String> {
     match encoding {
         cdr::MESSAGE_ENCODING => {
@@ -170,7 +208,11 @@ impl RecordedRun {
         let codecs = Codecs::new();
         let mut messages = 0u64;
         let mut layout_checked = false;
-        let reader = mcap::read::ChunkFlattener::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
+        // A record whose length field was damaged would have the reader reserve that many bytes (an abort, not an
+        // error): read up to the first record that claims more than the file holds, then say so.
+        let bad_record = first_impossible_record(&bytes);
+        let readable = bad_record.as_ref().map_or(&bytes[..], |(offset, _)| &bytes[..*offset]);
+        let reader = mcap::read::ChunkFlattener::new_with_options(readable, mcap::read::Options::IgnoreEndMagic.into())
             .map_err(|e| unreadable(e.to_string()))?;
         for record in reader {
             let record = match record {
@@ -241,6 +283,14 @@ impl RecordedRun {
                 }
                 _ => {}
             }
+        }
+        if let Some((_, why)) = bad_record {
+            let path = path.to_path_buf();
+            return Err(if bytes.ends_with(mcap::MAGIC) {
+                RecordingError::Damaged { path, messages, why }
+            } else {
+                RecordingError::Truncated { path, messages, why }
+            });
         }
         if !bytes.ends_with(mcap::MAGIC) {
             let why = "no MCAP footer at its end".to_string();
@@ -320,6 +370,32 @@ mod tests {
         assert_eq!(run.plant[0].header, plant.header);
         assert_eq!(run.commands[&3].diagnostics[2].to_bits(), std::f64::consts::PI.to_bits());
         assert_eq!(run.trace_columns, ["t_s", "phi_deg"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_damaged_length_or_chunk_size_is_a_damaged_recording_not_an_abort() {
+        let dir = std::env::temp_dir().join(format!("silrig-reader-damaged-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let info = PlantInfo::new(&silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2])).unwrap();
+        let path = dir.join(super::super::RECORDING_FILE);
+        write_json_recording(&path, &info, &PlantSample::zeroed(), &CommandSample::zeroed());
+        let whole = std::fs::read(&path).unwrap();
+        // The first chunk among the top-level records.
+        let mut at = mcap::MAGIC.len();
+        while whole[at] != 0x06 {
+            at += 9 + u64::from_le_bytes(whole[at + 1..at + 9].try_into().unwrap()) as usize;
+        }
+        // Its length, then its uncompressed size, filled with the bytes a damaged disk might leave.
+        for (field, said) in [(at + 1, "claims"), (at + 9 + 16, "uncompressed")] {
+            let mut damaged = whole.clone();
+            damaged[field..field + 8].fill(0xa5);
+            std::fs::write(&path, &damaged).unwrap();
+            match RecordedRun::read(&dir) {
+                Err(e @ RecordingError::Damaged { .. }) => assert!(e.to_string().contains(said), "{e}"),
+                other => panic!("{other:?}"),
+            }
+        }
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
