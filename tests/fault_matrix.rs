@@ -1,7 +1,7 @@
-//! The README's fault matrix is what the rig does: every row is flown here (a 3 s realtime run with one fault) and
-//! the table built from the runs' reports must equal the one in the README, between its markers. After a change
-//! in behaviour, `SILRIG_UPDATE_README=1 cargo test --release --test fault_matrix` writes the new table; the diff
-//! then shows what changed. Only what does not depend on the machine's timing is in the table: the exit status,
+//! The book's fault matrix (docs/src/guides/faults.md) is what the rig does: every row is flown here (a 3 s realtime
+//! run with one fault) and the table built from the runs' reports must equal the one in the book, between its
+//! markers. After a change in behaviour, `SILRIG_UPDATE_DOCS=1 cargo test --release --test fault_matrix` writes the
+//! new table; the diff then shows what changed. Only what does not depend on the machine's timing is in the table: the exit status,
 //! which process detected the fault, whether the failsafe engaged, whether the loop recovered, whether the flight
 //! has a discontinuity, and the report's verdict line. (A delay is not here: whether its samples come late enough
 //! for the peers to flag them, and so whether anything "recovers", depends on the machine's load.)
@@ -76,7 +76,7 @@ fn observe(i: usize, fault: &str) -> String {
 }
 
 #[test]
-fn the_readme_fault_matrix_is_what_the_rig_does() {
+fn the_books_fault_matrix_is_what_the_rig_does() {
     // Two at a time: each run is three realtime processes on a 2-core machine.
     let mut observed = vec![String::new(); ROWS.len()];
     for pair in (0..ROWS.len()).collect::<Vec<_>>().chunks(2) {
@@ -98,18 +98,18 @@ fn the_readme_fault_matrix_is_what_the_rig_does() {
         expected += &format!("| `{fault}` | {expect} |\n");
     }
     let block = format!("{START}\n{expected}\n{table}{END}");
-    let readme_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
-    let readme = std::fs::read_to_string(&readme_path).unwrap();
-    let (Some(a), Some(b)) = (readme.find(START), readme.find(END)) else {
-        panic!("README has no fault-matrix markers")
+    let page_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/src/guides/faults.md");
+    let page = std::fs::read_to_string(&page_path).unwrap();
+    let (Some(a), Some(b)) = (page.find(START), page.find(END)) else {
+        panic!("docs/src/guides/faults.md has no fault-matrix markers")
     };
-    let current = &readme[a..b + END.len()];
-    if std::env::var_os("SILRIG_UPDATE_README").is_some() {
-        std::fs::write(&readme_path, readme.replace(current, &block)).unwrap();
+    let current = &page[a..b + END.len()];
+    if std::env::var_os("SILRIG_UPDATE_DOCS").is_some() {
+        std::fs::write(&page_path, page.replace(current, &block)).unwrap();
     } else {
         assert_eq!(
             current, block,
-            "the rig's behaviour differs from the README's fault matrix (SILRIG_UPDATE_README=1 rewrites it)"
+            "the rig's behaviour differs from the book's fault matrix (SILRIG_UPDATE_DOCS=1 rewrites it)"
         );
     }
 }

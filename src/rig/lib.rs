@@ -206,7 +206,7 @@ impl ProcessArgs {
         env
     }
 
-    /// Every variable [`Self::from_env`] reads, with what it means (for `silrig contract` and the README).
+    /// Every variable [`Self::from_env`] reads, with what it means (for `silrig contract` and the book).
     pub fn env_variables() -> Vec<(String, String)> {
         use clap::Args;
         let command = Self::augment_args(clap::Command::new("silrig-client"));

@@ -130,9 +130,9 @@ fn memlock_limit_bytes() -> Option<u64> {
     }
 }
 
-/// How to get what was refused, once for both privileges (README "Running without root").
+/// How to get what was refused, once for both privileges (the book: docs/src/guides/without-root.md).
 const PRIVILEGE_HINT: &str = "for both: `sudo setcap cap_sys_nice,cap_ipc_lock+ep` on the silrig binaries, or \
-     rtprio and memlock lines for your group in /etc/security/limits.d/ (README \"Running without root\")";
+     rtprio and memlock lines for your group in /etc/security/limits.d/ (docs/src/guides/without-root.md)";
 
 /// Ask for `SCHED_FIFO` at `priority` (1..=99) for the calling process and lock its memory. Never fails: a refusal
 /// (non-root without `ulimit -r`/`-l`, a container without CAP_SYS_NICE) leaves the process as it was and says so in

@@ -1,6 +1,6 @@
 //! `silrig check --repeat N`: the flake benchmark. The suite is flown N times in a row, each check into a folder of
 //! its own, and every criterion's answers are counted: a verdict to gate on gives the same answer every time, so
-//! the table shows which criteria changed their answer and how often. Figures for the README, never a test bound.
+//! the table shows which criteria changed their answer and how often. Figures for the book, never a test bound.
 
 use super::verdict::{self, Verdict};
 use super::{CheckError, CheckOptions};

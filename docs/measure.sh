@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# Measures again the benchmark figures the book quotes, with the commands the book names, and prints each with the
+# date, the machine's load and the command: `bash docs/measure.sh` runs all of them (about an hour: run it on a
+# quiet machine), `bash docs/measure.sh sweep ipc` the ones named. Paste what it prints beside the table it
+# refreshes; the tables' own "command" columns are these commands.
+#
+#   model       silrig bench (plant derivative, RK4 step, closed-loop tick)         explanations/timing.md
+#   timer       silrig timer-baseline (the OS floor)                                explanations/timing.md
+#   ipc         silrig bench ipc (ping-pong ceilings, lockstep against them)        explanations/timing.md
+#   realtime    silrig run --duration-s 30, 3 runs (wake-up lateness vs the floor)  explanations/timing.md
+#   lockstep    20,000-tick lockstep runs, 3 runs: cycles/s, CPU per tick           explanations/timing.md
+#   controllers lockstep 300 s: ours, the C and the Python PID, paired              guides/controller.md
+#   sweep       1,000-case sweep, --jobs 2 against --jobs 1, 7 pairs               guides/sweep.md
+#   rigsweep    40 cases of the Python PID through the rig, --jobs 1 and 2         guides/sweep.md
+#   fmu         silrig bench fmu on the exported F-16                             guides/fmu.md
+#   sizes       the default run's files and report.html                          guides/recordings.md
+#   check       silrig check --repeat 20 (the flake benchmark; about 20 minutes)  guides/check.md
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release -q
+export PATH="$PWD/target/release:$PATH"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+all=(model timer ipc realtime lockstep controllers sweep rigsweep fmu sizes check)
+wanted=("$@")
+[ ${#wanted[@]} -eq 0 ] && wanted=("${all[@]}")
+
+header() {
+  echo
+  echo "== $1: $(date -u '+%Y-%m-%d %H:%M UTC'), $(nproc) CPUs, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+  echo "   command: $2"
+}
+# The median, minimum and maximum of the numbers on stdin.
+stats() { python3 -c 'import sys,statistics as s; v=[float(x) for x in sys.stdin.read().split()]; print(f"median {s.median(v):.4g} (min {min(v):.4g} .. max {max(v):.4g}, {len(v)} runs)")'; }
+# A figure of a report.json: report DIR EXPR, EXPR a Python expression on `r` (the report), `p99(name)` (a
+# distribution's p99 in us, e.g. plant.wake_lateness) and `proc(role)` (a process's entry).
+report() {
+  python3 -c "
+import json
+r = json.load(open('$1/report.json'))
+proc = lambda role: next(p for p in r['processes'] if p['process'] == role)
+p99 = lambda name: next(l['summary']['p99_us'] for p in r['processes'] for l in p['latencies'] if l['name'] == name)
+print($2)"
+}
+# Wall seconds of a command.
+wall() { local t0 t1; t0=$(date +%s.%N); "$@" > /dev/null 2>&1 || true; t1=$(date +%s.%N); python3 -c "print(round($t1 - $t0, 3))"; }
+
+for name in "${wanted[@]}"; do
+  case $name in
+    model) header model "silrig bench"; silrig bench ;;
+    timer) header timer "silrig timer-baseline"; silrig timer-baseline ;;
+    ipc) header ipc "silrig bench ipc"; silrig bench ipc ;;
+    realtime)
+      header realtime "silrig run --duration-s 30 (3 runs)"
+      for k in 1 2 3; do
+        silrig run --duration-s 30 --quiet --no-figures --out "$work/rt$k" > /dev/null
+        report "$work/rt$k" "'plant wake p99 %.1f us, OS floor p99 %.1f us, sense-to-actuate p99 %.1f us' % (p99('plant.wake_lateness'), r['timer_baseline']['lateness']['p99_us'], p99('plant.sense_to_actuate'))"
+      done ;;
+    lockstep)
+      header lockstep "silrig run --mode lockstep --duration-s 200 --no-baseline --no-figures --quiet (3 runs)"
+      for k in 1 2 3; do
+        silrig run --mode lockstep --duration-s 200 --no-baseline --no-figures --quiet --out "$work/ls$k" > /dev/null
+        report "$work/ls$k" "'cycles/s %.0f; CPU us/tick: ' % r['cycles_per_s'] + ', '.join('%s %.1f' % (p, 1e6 * proc(p)['cpu_s'] / 20001) for p in ('plant', 'controller', 'logger'))"
+      done ;;
+    controllers)
+      cc -std=c11 -O2 -I examples/c examples/c/pid_attitude.c -L target/release -lsilrig_client \
+        -Wl,-rpath,"$PWD/target/release" -lm -o "$work/pid_attitude"
+      base="silrig run --mode lockstep --duration-s 300 --no-baseline --quiet --no-figures"
+      for who in ours "c:$work/pid_attitude" "python:python3 examples/python/pid_attitude.py"; do
+        cmd=${who#*:}
+        header "controllers ($who)" "$base${cmd:+ --controller-cmd \"$cmd\"} (5 runs, wall s)"
+        for k in 1 2 3 4 5; do
+          if [ "$who" = ours ]; then wall $base --out "$work/c-ours-$k"
+          else wall $base --controller-cmd "$cmd" --out "$work/c-${who%%:*}-$k"; fi
+        done | stats
+      done ;;
+    sweep)
+      for jobs in 2 1; do
+        header "sweep --jobs $jobs" "silrig sweep configs/sweep-robust.toml --runs 1000 --jobs $jobs (7 runs, wall s)"
+        for k in 1 2 3 4 5 6 7; do wall silrig sweep configs/sweep-robust.toml --runs 1000 --jobs $jobs --out "$work/sw$jobs-$k"; done | stats
+      done ;;
+    rigsweep)
+      for jobs in 1 2; do
+        header "rigsweep --jobs $jobs" "silrig sweep configs/sweep-robust.toml --runs 40 --jobs $jobs --controller-cmd \"python3 examples/python/pid_attitude.py\" (3 runs, wall s)"
+        for k in 1 2 3; do wall silrig sweep configs/sweep-robust.toml --runs 40 --jobs $jobs --controller-cmd "python3 examples/python/pid_attitude.py" --out "$work/rs$jobs-$k"; done | stats
+      done ;;
+    fmu)
+      header fmu "silrig export-fmu --out f16.fmu && silrig bench fmu f16.fmu"
+      silrig export-fmu --out "$work/f16.fmu" > /dev/null
+      silrig bench fmu "$work/f16.fmu" ;;
+    sizes)
+      header sizes "silrig run --no-baseline (the default 10 s run)"
+      silrig run --no-baseline --quiet --out "$work/size" > /dev/null
+      (cd "$work/size" && ls -l recording.mcap trace.csv timing.csv report.html | awk '{printf "%s %.2f MB\n", $9, $5 / 1e6}') ;;
+    check)
+      header check "silrig check --repeat 20"
+      silrig check --repeat 20 --out "$work/repeat" | tail -n 60 ;;
+    *) echo "unknown benchmark $name; one of: ${all[*]}" >&2; exit 2 ;;
+  esac
+done
