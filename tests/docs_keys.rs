@@ -208,9 +208,83 @@ fn load_suite(doc: &toml::Table) -> Result<(), String> {
     silrig::check::suite::Suite::load(&write(doc, "suite")).map(|_| ()).map_err(|e| e.to_string())
 }
 
-/// Each row's example (with what it needs) loads, every value it lists as "one of" loads, and an unknown key beside
-/// it is refused by name. Returns the problems.
+/// One end of a documented range, and whether the range includes it.
+#[derive(Debug, Clone, Copy)]
+struct Bound {
+    at: f64,
+    included: bool,
+}
+
+/// The range a "range or values" cell states before its first ';', in the forms the pages use: `a..b`, `(a, b]`,
+/// `[a, b)`, `> a`, `>= a`, `a or more`, each of them after `each ` for a list; "run duration" is `duration_s`.
+/// None for anything else (names, lists of values, words).
+fn range(cell: &str, duration_s: f64) -> Option<[Option<Bound>; 2]> {
+    let text = cell.split(';').next().unwrap().trim().replace("run duration", &duration_s.to_string());
+    let text = text.strip_prefix("each ").unwrap_or(&text);
+    let number = |t: &str| t.trim().replace(',', "").parse::<f64>().ok();
+    let first_word = |t: &str| t.split([',', ' ']).next().unwrap_or("").to_string();
+    let from = |at, included| Some([Some(Bound { at, included }), None]);
+    if let Some(rest) = text.strip_prefix(">= ") {
+        return from(number(&first_word(rest))?, true);
+    }
+    if let Some(rest) = text.strip_prefix("> ") {
+        return from(number(&first_word(rest))?, false);
+    }
+    if let Some((n, _)) = text.split_once(" or more") {
+        return from(number(n)?, true);
+    }
+    if text.starts_with(['(', '[']) {
+        let close = text.find([')', ']'])?;
+        let (a, b) = text[1..close].split_once(", ")?;
+        return Some([
+            Some(Bound { at: number(a)?, included: text.starts_with('[') }),
+            Some(Bound { at: number(b)?, included: text[close..].starts_with(']') }),
+        ]);
+    }
+    let (a, b) = text.split(' ').next()?.split_once("..")?;
+    Some([Some(Bound { at: number(a)?, included: true }), Some(Bound { at: number(b)?, included: true })])
+}
+
+/// Values a documented range must accept, and values just beyond it it must refuse: each included end and one step
+/// outside it, each excluded end and one step inside it (steps of 1 for a whole number).
+fn probes([lower, upper]: [Option<Bound>; 2], whole: bool) -> (Vec<f64>, Vec<f64>) {
+    let (mut inside, mut outside) = (Vec::new(), Vec::new());
+    let span = match (lower, upper) {
+        (Some(a), Some(b)) => b.at - a.at,
+        _ => 1.0,
+    };
+    let step = |x: f64| if whole { 1.0 } else { 1e-6 * x.abs().max(1.0) };
+    let into = if whole { 1.0 } else { span * 1e-3 };
+    for (bound, outward) in [(lower, -1.0), (upper, 1.0)] {
+        let Some(b) = bound else { continue };
+        if b.included {
+            inside.push(b.at);
+            outside.push(b.at + outward * step(b.at));
+        } else {
+            outside.push(b.at);
+            inside.push(b.at - outward * into);
+        }
+    }
+    (inside, outside)
+}
+
+/// `x` in the shape of `example`: a whole number, a float, or a list of them all `x`.
+fn shaped(example: &toml::Value, x: f64) -> Option<toml::Value> {
+    match example {
+        toml::Value::Integer(_) => Some(toml::Value::Integer(x as i64)),
+        toml::Value::Float(_) => Some(toml::Value::Float(x)),
+        toml::Value::Array(list) if !list.is_empty() => {
+            Some(toml::Value::Array(list.iter().map(|v| shaped(v, x)).collect::<Option<Vec<_>>>()?))
+        }
+        _ => None,
+    }
+}
+
+/// Each row's example (with what it needs) loads, every value it lists as "one of" loads, its documented range's
+/// ends are where the validation puts them, and an unknown key beside it is refused by name. Returns the problems.
 fn check_rows(rows: &[Row], base: &toml::Table, load: fn(&toml::Table) -> Result<(), String>) -> Vec<String> {
+    // The run duration the ranges speak of: robust.toml's, which a minimal suite's cases fly too.
+    let duration_s = robust()["timing"]["duration_s"].as_float().unwrap();
     let mut problems = Vec::new();
     for row in rows {
         let key = parts(&row.name());
@@ -228,12 +302,29 @@ fn check_rows(rows: &[Row], base: &toml::Table, load: fn(&toml::Table) -> Result
             problems.push(format!("{}: the example {example} is refused: {e}", row.at()));
             continue;
         }
-        let range = row.cell("range or values").unwrap_or_default();
-        if example.is_str() && range.contains("one of") {
-            for span in code_spans(range) {
+        let range_cell = row.cell("range or values").unwrap_or_default();
+        if example.is_str() && range_cell.contains("one of") {
+            for span in code_spans(range_cell) {
                 let v = value(&span, &row.at());
                 if let Err(e) = load(&with(v)) {
                     problems.push(format!("{}: the value {span} it lists is refused: {e}", row.at()));
+                }
+            }
+        }
+        let whole = matches!(example, toml::Value::Integer(_));
+        if let Some(bounds) = range(range_cell, duration_s)
+            && shaped(&example, 0.0).is_some()
+        {
+            let (inside, outside) = probes(bounds, whole);
+            for x in inside {
+                if let Err(e) = load(&with(shaped(&example, x).unwrap())) {
+                    problems
+                        .push(format!("{}: {x} is within the documented {range_cell:?}, and refused: {e}", row.at()));
+                }
+            }
+            for x in outside {
+                if load(&with(shaped(&example, x).unwrap())).is_ok() {
+                    problems.push(format!("{}: {x} is outside the documented {range_cell:?}, and accepted", row.at()));
                 }
             }
         }
