@@ -4,9 +4,12 @@
 //! file, configs/robust.toml for a scenario key, a minimal suite for a suite key, and that file must load through
 //! the loaders `silrig sim` and `silrig check` use (a scenario for the built-in F-16 also passes the F-16's own
 //! checks); the same file with an unknown key beside it must be refused, naming that key, so a renamed key fails.
-//! Every value a row lists as "one of" must load too. The fault actions' table is checked against the validation
-//! (targets, required keys, keys that do not apply), and the converse: every field of the serde structs these files
-//! are read into, as the source declares them, has a row. Nothing here starts a process.
+//! The other columns hold too: every value a row lists as "one of" loads; a documented range's included ends load
+//! and a step beyond them is refused (an excluded end is refused); a "required" key's file without it is refused, and
+//! omitting a key with a default in backticks loads the same as setting that default. The fault actions' table is
+//! checked against the validation (targets, required keys, keys that do not apply), and the converse: every field
+//! of the serde structs these files are read into, as the source declares them, has a row. Nothing here starts a
+//! process.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -192,20 +195,24 @@ fn robust() -> toml::Table {
     toml::from_str(&std::fs::read_to_string(Path::new(ROOT).join("configs/robust.toml")).unwrap()).unwrap()
 }
 
+/// What a file loaded into, as text to compare (the Debug form of what the loader returned).
+type Loaded = Result<String, String>;
+
 /// Load a scenario as `silrig sim` and `silrig run` do; one for the built-in F-16 (no plant FMU or parameters of
 /// a plant of your own) must pass the F-16's checks too.
-fn load_scenario(doc: &toml::Table) -> Result<(), String> {
+fn load_scenario(doc: &toml::Table) -> Loaded {
     let path = write(doc, "scenario");
     let s = silrig::rig::load_scenario(Some(&path), None).map_err(|e| format!("{e:#}"))?;
     if s.plant.fmu.is_none() && s.plant.parameters.is_empty() {
         silrig::sim::check_for_f16(&s).map_err(|(key, problem)| format!("`{key}`: {problem}"))?;
     }
-    Ok(())
+    Ok(format!("{s:?}"))
 }
 
 /// Load a suite as `silrig check` does (beside it a copy of robust.toml, for `scenario` keys).
-fn load_suite(doc: &toml::Table) -> Result<(), String> {
-    silrig::check::suite::Suite::load(&write(doc, "suite")).map(|_| ()).map_err(|e| e.to_string())
+fn load_suite(doc: &toml::Table) -> Loaded {
+    let s = silrig::check::suite::Suite::load(&write(doc, "suite")).map_err(|e| e.to_string())?;
+    Ok(format!("{:?} {:?} {:?}", s.name, s.description, s.cases))
 }
 
 /// One end of a documented range, and whether the range includes it.
@@ -282,7 +289,7 @@ fn shaped(example: &toml::Value, x: f64) -> Option<toml::Value> {
 
 /// Each row's example (with what it needs) loads, every value it lists as "one of" loads, its documented range's
 /// ends are where the validation puts them, and an unknown key beside it is refused by name. Returns the problems.
-fn check_rows(rows: &[Row], base: &toml::Table, load: fn(&toml::Table) -> Result<(), String>) -> Vec<String> {
+fn check_rows(rows: &[Row], base: &toml::Table, load: fn(&toml::Table) -> Loaded) -> Vec<String> {
     // The run duration the ranges speak of: robust.toml's, which a minimal suite's cases fly too.
     let duration_s = robust()["timing"]["duration_s"].as_float().unwrap();
     let mut problems = Vec::new();
@@ -311,6 +318,27 @@ fn check_rows(rows: &[Row], base: &toml::Table, load: fn(&toml::Table) -> Result
                 }
             }
         }
+        let default = row.cell("default").unwrap_or_default();
+        let mut without = doc.clone();
+        table_at(&mut without, &key[..key.len() - 1]).remove(key.last().unwrap());
+        if default.contains("required") {
+            if load(&without).is_ok() {
+                problems.push(format!("{}: documented as required, and a file without it loads", row.at()));
+            }
+        } else if default.starts_with('`') {
+            let span = &code_spans(default)[0];
+            let mut v = value(span, &row.at());
+            if let (toml::Value::Float(_), toml::Value::Integer(i)) = (&example, &v) {
+                v = toml::Value::Float(*i as f64);
+            }
+            match (load(&without), load(&with(v))) {
+                (Ok(a), Ok(b)) if a == b => {}
+                (Ok(_), Ok(_)) => {
+                    problems.push(format!("{}: omitting it is not the same as setting the default {span}", row.at()))
+                }
+                (a, b) => problems.push(format!("{}: default {span}: omitted {a:?}, set {b:?}", row.at())),
+            }
+        }
         let whole = matches!(example, toml::Value::Integer(_));
         if let Some(bounds) = range(range_cell, duration_s)
             && shaped(&example, 0.0).is_some()
@@ -337,7 +365,7 @@ fn check_rows(rows: &[Row], base: &toml::Table, load: fn(&toml::Table) -> Result
         *beside.last_mut().unwrap() = UNKNOWN.into();
         set(&mut sibling, &beside, example.clone());
         match load(&sibling) {
-            Ok(()) => {
+            Ok(_) => {
                 problems.push(format!("{}: an unknown key `{}` beside it is accepted", row.at(), beside.join(".")))
             }
             Err(e) if !e.contains(UNKNOWN) => {
@@ -397,7 +425,7 @@ fn the_fault_actions_table_says_what_the_validation_does() {
             f.insert("target".into(), role.into());
             let listed = targets == "any" || targets.split(", ").any(|t| t == role);
             match (with_fault(&f), listed) {
-                (Ok(()), false) => problems.push(format!("{}: target {role} is accepted, not listed", row.at())),
+                (Ok(_), false) => problems.push(format!("{}: target {role} is accepted, not listed", row.at())),
                 (Err(e), true) => problems.push(format!("{}: target {role} is listed, refused: {e}", row.at())),
                 _ => {}
             }
@@ -419,7 +447,7 @@ fn the_fault_actions_table_says_what_the_validation_does() {
             let mut f = example.clone();
             f.insert(key.clone(), example_of(other));
             match with_fault(&f) {
-                Ok(()) => problems.push(format!("{}: `{key}` is not listed, and the fault takes it", row.at())),
+                Ok(_) => problems.push(format!("{}: `{key}` is not listed, and the fault takes it", row.at())),
                 Err(e) if !e.contains("does not apply") => problems
                     .push(format!("{}: `{key}` is not listed, and is refused for another reason: {e}", row.at())),
                 Err(_) => {}
@@ -613,9 +641,7 @@ fn rig_criteria_are_refused_in_a_scenario() {
         let key = parts(&row.name().replacen("cases.criteria", "criteria", 1));
         set(&mut doc, &key, example_of(row));
         match load_scenario(&doc) {
-            Ok(()) => {
-                problems.push(format!("`{}` is not on the scenario page, and a scenario takes it", key.join(".")))
-            }
+            Ok(_) => problems.push(format!("`{}` is not on the scenario page, and a scenario takes it", key.join("."))),
             Err(e) if !e.contains("is judged by `silrig check` on the rig") => {
                 problems.push(format!("`{}` is refused in a scenario for another reason: {e}", key.join(".")))
             }
