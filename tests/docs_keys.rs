@@ -13,6 +13,7 @@
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -176,19 +177,14 @@ fn needs(row: &Row) -> Vec<(Vec<String>, toml::Value)> {
         .collect()
 }
 
-fn scratch() -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("docs_keys-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(Path::new(ROOT).join("configs/robust.toml"), dir.join("robust.toml")).unwrap();
-    dir
-}
-
-/// A file of its own for each check (the tests run in parallel).
-fn write(doc: &toml::Table, stem: &str) -> PathBuf {
-    static N: AtomicUsize = AtomicUsize::new(0);
-    let path = scratch().join(format!("{stem}-{}.toml", N.fetch_add(1, Ordering::Relaxed)));
-    std::fs::write(&path, doc.to_string()).unwrap();
-    path
+/// The folder for the scenario files the checks write (each removed once loaded).
+fn scratch() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("docs_keys");
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    })
 }
 
 fn robust() -> toml::Table {
@@ -198,20 +194,26 @@ fn robust() -> toml::Table {
 /// What a file loaded into, as text to compare (the Debug form of what the loader returned).
 type Loaded = Result<String, String>;
 
-/// Load a scenario as `silrig sim` and `silrig run` do; one for the built-in F-16 (no plant FMU or parameters of
-/// a plant of your own) must pass the F-16's checks too.
+/// Load a scenario as `silrig sim` and `silrig run` do, from a file of its own (the tests run in parallel); one for
+/// the built-in F-16 (no plant FMU or parameters of a plant of your own) must pass the F-16's checks too.
 fn load_scenario(doc: &toml::Table) -> Loaded {
-    let path = write(doc, "scenario");
-    let s = silrig::rig::load_scenario(Some(&path), None).map_err(|e| format!("{e:#}"))?;
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let path = scratch().join(format!("scenario-{}-{}.toml", std::process::id(), N.fetch_add(1, Ordering::Relaxed)));
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let loaded = silrig::rig::load_scenario(Some(&path), None);
+    std::fs::remove_file(&path).unwrap();
+    let s = loaded.map_err(|e| format!("{e:#}"))?;
     if s.plant.fmu.is_none() && s.plant.parameters.is_empty() {
         silrig::sim::check_for_f16(&s).map_err(|(key, problem)| format!("`{key}`: {problem}"))?;
     }
     Ok(format!("{s:?}"))
 }
 
-/// Load a suite as `silrig check` does (beside it a copy of robust.toml, for `scenario` keys).
+/// Load a suite as `silrig check` does (`Suite::load` is reading the file and this), as if it lay in configs/, so a
+/// `scenario = "robust.toml"` is configs/robust.toml.
 fn load_suite(doc: &toml::Table) -> Loaded {
-    let s = silrig::check::suite::Suite::load(&write(doc, "suite")).map_err(|e| e.to_string())?;
+    let beside = Path::new(ROOT).join("configs/docs-keys-suite.toml");
+    let s = silrig::check::suite::Suite::from_toml(&doc.to_string(), Some(&beside)).map_err(|e| e.to_string())?;
     Ok(format!("{:?} {:?} {:?}", s.name, s.description, s.cases))
 }
 
