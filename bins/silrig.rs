@@ -192,7 +192,7 @@ fn trim(airspeed_mps: f64, altitude_ft: f64, xcg: f64, json: bool) -> anyhow::Re
 
 fn plant_derivative() -> anyhow::Result<ExitCode> {
     let rows = derivative_csv::run(std::io::stdin().lock(), std::io::stdout().lock()).context("plant derivative")?;
-    eprintln!("{rows} rows");
+    eprintln!("{rows} {}", if rows == 1 { "row" } else { "rows" });
     Ok(ExitCode::SUCCESS)
 }
 
