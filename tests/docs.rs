@@ -394,16 +394,17 @@ fn commands_in_docs(text: &str) -> Vec<(usize, String, Vec<String>, Vec<String>)
                 let binary = words[at].rsplit('/').next().unwrap().to_string();
                 let mut subcommand = Vec::new();
                 let mut rest = &words[at + 1..];
-                if binary == "silrig" {
-                    if let Some(first) = rest.first().filter(|w| w.chars().all(|c| c.is_ascii_lowercase() || c == '-') && !w.starts_with('-')) {
-                        subcommand.push(first.to_string());
+                let is_word = |w: &&&str| !w.starts_with('-') && w.chars().all(|c| c.is_ascii_lowercase() || c == '-');
+                if binary == "silrig"
+                    && let Some(first) = rest.first().filter(is_word)
+                {
+                    subcommand.push(first.to_string());
+                    rest = &rest[1..];
+                    if NESTED.contains(first)
+                        && let Some(second) = rest.first().filter(is_word)
+                    {
+                        subcommand.push(second.to_string());
                         rest = &rest[1..];
-                        if NESTED.contains(first) {
-                            if let Some(second) = rest.first().filter(|w| !w.starts_with('-') && w.chars().all(|c| c.is_ascii_lowercase())) {
-                                subcommand.push(second.to_string());
-                                rest = &rest[1..];
-                            }
-                        }
                     }
                 }
                 let flags: Vec<String> = rest
