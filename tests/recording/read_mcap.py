@@ -54,7 +54,9 @@ def read(path):
                 elif isinstance(record, Message):
                     topic = channels[record.channel_id].topic
                     out["counts"][topic] = out["counts"].get(topic, 0) + 1
-                    body = decoders[record.channel_id](record.data)
+                    # The 3-D channels are protobuf, which the CDR decoder does not read (tests/foxglove.rs does).
+                    decoder = decoders[record.channel_id]
+                    body = decoder(record.data) if decoder else None
                     if topic == "/trace":
                         # The fields in the order of the definition: trace.csv's columns.
                         out["trace"].append(bits(getattr(body, s) for s in body.__slots__))

@@ -2,7 +2,10 @@
 //! definitions generated from the wire's field tables, [`super::cdr`]) on [`super::topics`]: `/plant` and
 //! `/command` (every field as received, with header stamps, flags and the logger's receive stamp), `/plant_info`
 //! (the plant's announcement), `/trace` (the trace row, one float64 field per column) and `/timing` (the per-tick
-//! stamps); `/events` holds the run's `events.jsonl` lines as they appear, as JSON. The run's identity and scenario
+//! stamps); `/events` holds the run's `events.jsonl` lines as they appear, as JSON. A plant that announces its
+//! position and attitude also gets the aircraft in 3-D for Foxglove's 3D panel ([`super::foxglove`]): `/body_transform`
+//! (`foxglove.FrameTransform`, world -> body) and `/aircraft` (`foxglove.SceneUpdate`, the model with its surfaces
+//! deflected), protobuf, a message each per row, stamped with the plant's send time. The run's identity and scenario
 //! are MCAP metadata.
 //!
 //! Chunks are LZ4-compressed and closed at every flush (the logger flushes every 0.1 s), so a killed logger leaves a
@@ -12,6 +15,7 @@
 //! messages. Each message is encoded into one reused buffer: writing a row allocates nothing.
 
 use super::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
+use super::foxglove::{self as fox, BodySignals, ProtoBuffer};
 use super::{
     LoggedRow, RecordingMeta, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, meta_keys, recording_file_name,
     timing_values, topics,
@@ -32,6 +36,8 @@ struct Channels {
     events: u16,
     /// Added with the trace's columns.
     trace: Option<u16>,
+    /// `/body_transform` and `/aircraft`, added with the first announcement of a position and an attitude.
+    body: Option<(u16, u16)>,
 }
 
 /// The run's MCAP recording, being written.
@@ -45,6 +51,10 @@ pub struct McapSink {
     command_codec: CdrCodec,
     /// The message being written, reused.
     buffer: CdrBuffer,
+    /// Where the current plant announces its position, attitude and surfaces (`None`: it does not, no 3-D).
+    body_signals: Option<BodySignals>,
+    /// The 3-D messages being written, reused.
+    proto: ProtoBuffer,
     events_path: PathBuf,
     events_file: Option<File>,
     /// Bytes of `events.jsonl` already recorded.
@@ -114,6 +124,7 @@ impl McapSink {
             timing: timing.map_err(named)?,
             events: events.map_err(named)?,
             trace: None,
+            body: None,
         };
         let run = BTreeMap::from([
             ("run_id".to_string(), meta.run_id.clone()),
@@ -142,6 +153,8 @@ impl McapSink {
             plant_codec: CdrCodec::of::<PlantSample>(),
             command_codec: CdrCodec::of::<CommandSample>(),
             buffer: CdrBuffer::default(),
+            body_signals: None,
+            proto: ProtoBuffer::default(),
             events_read: 0,
             wall_minus_monotonic_ns: wall_ns as i128 - i128::from(crate::clock::monotonic_ns()),
             finished: false,
@@ -182,6 +195,23 @@ impl McapSink {
         let written = self.write(channel, t_log_ns, t_publish_ns, buffer.bytes());
         self.buffer = buffer;
         written
+    }
+
+    /// Write the message in [`Self::proto`].
+    fn write_proto(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64) -> std::io::Result<()> {
+        let proto = std::mem::take(&mut self.proto);
+        let written = self.write(channel, t_log_ns, t_publish_ns, proto.bytes());
+        self.proto = proto;
+        written
+    }
+
+    /// Add `/body_transform` and `/aircraft`, with Foxglove's schemas.
+    fn add_body_channels(&mut self) -> mcap::McapResult<(u16, u16)> {
+        let mut add = |topic: &str, schema: &str| -> mcap::McapResult<u16> {
+            let schema_id = self.writer.add_schema(schema, fox::SCHEMA_ENCODING, &fox::descriptor_set(schema))?;
+            self.writer.add_channel(schema_id, topic, fox::MESSAGE_ENCODING, &BTreeMap::new())
+        };
+        Ok((add(topics::BODY_TRANSFORM, fox::FRAME_TRANSFORM)?, add(topics::AIRCRAFT, fox::SCENE_UPDATE)?))
     }
 
     /// Record the lines other processes appended to `events.jsonl` since the last call (whole lines only).
@@ -231,6 +261,11 @@ fn event_schema() -> Value {
 
 impl RowSink for McapSink {
     fn plant(&mut self, info: &PlantInfo) -> std::io::Result<()> {
+        // Each plant life announces itself: the 3-D follows what the current one has.
+        self.body_signals = info.signals().ok().and_then(|signals| BodySignals::resolve(&signals));
+        if self.body_signals.is_some() && self.channels.body.is_none() {
+            self.channels.body = Some(self.add_body_channels().map_err(|e| self.named(e))?);
+        }
         let t_send = info.header.t_send_ns;
         self.buffer.start();
         CdrCodec::of::<PlantInfo>().encode(info, &mut self.buffer);
@@ -278,7 +313,19 @@ impl RowSink for McapSink {
             empty |= u32::from(v.is_none()) << k;
         }
         self.buffer.u32(empty);
-        self.write_buffer(self.channels.timing, t_recv, t_send)
+        self.write_buffer(self.channels.timing, t_recv, t_send)?;
+        if let (Some(body), Some((transform, aircraft))) = (&self.body_signals, self.channels.body) {
+            let outputs = plant.sample.outputs();
+            let (translation, rotation, surfaces) =
+                (body.translation_m(outputs), body.rotation(outputs), body.surfaces_rad(outputs));
+            // Stamped with the sample's time, so the panel draws the model at the transform of the same tick.
+            let stamp = self.wall_ns(t_send);
+            fox::frame_transform(&mut self.proto, stamp, translation, rotation);
+            self.write_proto(transform, t_recv, t_send)?;
+            fox::aircraft_scene(&mut self.proto, stamp, surfaces);
+            self.write_proto(aircraft, t_recv, t_send)?;
+        }
+        Ok(())
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
@@ -294,5 +341,51 @@ impl RowSink for McapSink {
             self.writer.finish().map_err(|e| self.named(e))?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use silrig_flight::signals::{OutputSignal, PlantSignals};
+
+    /// The topics of the recording a sink writes for a plant announcing `plant`.
+    fn topics_for(plant: &PlantSignals, test: &str) -> Vec<String> {
+        let dir = std::env::temp_dir().join(format!("silrig-mcap-sink-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let meta = RecordingMeta {
+            run_id: "r".into(),
+            scenario_name: "s".into(),
+            scenario_toml: String::new(),
+            mode: "lockstep".into(),
+            ticks: 1,
+        };
+        let mut sink = McapSink::create(&dir, &meta).unwrap();
+        sink.plant(&PlantInfo::new(plant).unwrap()).unwrap();
+        sink.finish().unwrap();
+        let bytes = std::fs::read(sink.path()).unwrap();
+        let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut topics: Vec<String> = summary.channels.values().map(|c| c.topic.clone()).collect();
+        topics.sort();
+        topics
+    }
+
+    #[test]
+    fn only_a_plant_with_a_position_and_an_attitude_gets_the_3d_channels() {
+        let f16 = silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2]);
+        let with = topics_for(&f16, "f16");
+        assert!(with.contains(&topics::BODY_TRANSFORM.to_string()) && with.contains(&topics::AIRCRAFT.to_string()));
+        // Attitude and altitude but no north/east position, as the JSBSim example plant announces.
+        let outputs = ["phi_deg", "theta_deg", "psi_deg", "alt_ft"].map(|name| OutputSignal {
+            name: name.into(),
+            unit: name.rsplit('_').next().unwrap().into(),
+            in_trace: true,
+        });
+        let level = PlantSignals { plant: "level".into(), outputs: outputs.into(), inputs: Vec::new() };
+        let without = topics_for(&level, "level");
+        assert_eq!(with.len(), without.len() + 2, "{with:?} against {without:?}");
+        assert!(!without.iter().any(|t| t == topics::BODY_TRANSFORM || t == topics::AIRCRAFT), "{without:?}");
     }
 }

@@ -1,6 +1,7 @@
 //! What the logger writes, and reading it back: the sinks a logged row goes to ([`RowSink`]: `trace.csv` and
 //! `timing.csv` in [`csv`], the MCAP recording in [`mcap_file`]), the binary form of wire samples and rows with their
-//! ROS 2 message definitions ([`cdr`], what the recording holds), their JSON form ([`json`], what the first
+//! ROS 2 message definitions ([`cdr`], what the recording holds), the aircraft in 3-D for Foxglove ([`foxglove`]: a
+//! frame transform and a scene, protobuf), their JSON form ([`json`], what the first
 //! recordings held: replay still reads them), and the reader replay uses ([`reader`]).
 //!
 //! The logger decides what a row is (pairing, gaps, restarts); a sink only writes it, so a new format is a new sink,
@@ -8,6 +9,7 @@
 
 pub mod cdr;
 pub mod csv;
+pub mod foxglove;
 pub mod json;
 pub mod mcap_file;
 pub mod reader;
@@ -164,4 +166,9 @@ pub mod topics {
     pub const TIMING: &str = "/timing";
     /// The run's events (`events.jsonl`).
     pub const EVENTS: &str = "/events";
+    /// The aircraft's position and attitude, `foxglove.FrameTransform` world -> body, a message a row (plants that
+    /// announce both, [`super::foxglove`]).
+    pub const BODY_TRANSFORM: &str = "/body_transform";
+    /// The aircraft's model with its surfaces deflected, `foxglove.SceneUpdate` in `body`, a message a row.
+    pub const AIRCRAFT: &str = "/aircraft";
 }

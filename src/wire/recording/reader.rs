@@ -165,6 +165,33 @@ fn first_impossible_record(bytes: &[u8]) -> Option<(usize, String)> {
     None
 }
 
+/// The records of an MCAP file, chunks unpacked, each chunk's CRC checked before any of its records is read: bytes
+/// changed inside a compressed chunk would otherwise be read as records (with any length, which the reader would
+/// reserve), or as samples.
+fn checked_records(mut bytes: &[u8]) -> impl Iterator<Item = mcap::McapResult<mcap::records::Record<'static>>> + '_ {
+    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    // Lengths are bounded by `first_impossible_record` before this reads them.
+    let options = LinearReaderOptions::default().with_skip_end_magic(true).with_prevalidate_chunk_crcs(true);
+    let mut reader = LinearReader::new_with_options(options);
+    std::iter::from_fn(move || {
+        while let Some(event) = reader.next_event() {
+            match event {
+                Ok(LinearReadEvent::ReadRequest(need)) => {
+                    let n = need.min(bytes.len());
+                    reader.insert(n).copy_from_slice(&bytes[..n]);
+                    reader.notify_read(n);
+                    bytes = &bytes[n..];
+                }
+                Ok(LinearReadEvent::Record { data, opcode }) => {
+                    return Some(mcap::parse_record(opcode, data).map(mcap::records::Record::into_owned));
+                }
+                Err(e) => return Some(Err(e)),
+            }
+        }
+        None
+    })
+}
+
 fn decode<T: WireType + Copy>(encoding: &str, codec: &CdrCodec, data: &[u8], stamped: bool) -> Result<T, String> {
     match encoding {
         cdr::MESSAGE_ENCODING => {
@@ -212,9 +239,7 @@ impl RecordedRun {
         // error): read up to the first record that claims more than the file holds, then say so.
         let bad_record = first_impossible_record(&bytes);
         let readable = bad_record.as_ref().map_or(&bytes[..], |(offset, _)| &bytes[..*offset]);
-        let reader = mcap::read::ChunkFlattener::new_with_options(readable, mcap::read::Options::IgnoreEndMagic.into())
-            .map_err(|e| unreadable(e.to_string()))?;
-        for record in reader {
+        for record in checked_records(readable) {
             let record = match record {
                 Ok(r) => r,
                 Err(e) => {
@@ -395,6 +420,16 @@ mod tests {
                 Err(e @ RecordingError::Damaged { .. }) => assert!(e.to_string().contains(said), "{e}"),
                 other => panic!("{other:?}"),
             }
+        }
+        // Bytes changed inside the chunk's records: its CRC says so before any of them is read.
+        let chunk_len = u64::from_le_bytes(whole[at + 1..at + 9].try_into().unwrap()) as usize;
+        assert!(chunk_len > 200, "a chunk with records to damage ({chunk_len} bytes)");
+        let mut damaged = whole.clone();
+        damaged[at + 9 + chunk_len / 2..][..8].fill(0xa5);
+        std::fs::write(&path, &damaged).unwrap();
+        match RecordedRun::read(&dir) {
+            Err(e @ RecordingError::Damaged { messages: 0, .. }) => assert!(e.to_string().contains("CRC"), "{e}"),
+            other => panic!("{other:?}"),
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
