@@ -355,17 +355,27 @@ pub fn serve(py: Python<'_>, controller: &Bound<'_, PyAny>) -> PyResult<i32> {
             return Ok(2);
         }
     };
-    match fly(py, controller, &session) {
+    let flown = fly(py, controller, &session);
+    end_served(py, flown, |why| session.borrow_mut().close_with(py, why))
+}
+
+/// The end of `serve` and `serve_plant`: the session closed with no reason after a flight that ended (exit status
+/// 0), or with the exception that ended it, which propagates (the caller must see it; a failure to write the report
+/// beside it is said on stderr).
+pub(crate) fn end_served(
+    py: Python<'_>,
+    flown: PyResult<()>,
+    close: impl FnOnce(Option<String>) -> PyResult<()>,
+) -> PyResult<i32> {
+    match flown {
         Ok(()) => {
-            session.borrow_mut().close_with(py, None)?;
+            close(None)?;
             Ok(0)
         }
         Err(e) => {
             let why = failure(Some(e.get_type(py).as_any()), Some(e.value(py).as_any()))?;
-            // The controller's exception is what the caller must see; a failure to write the report beside it is
-            // said on stderr.
-            if let Err(close) = session.borrow_mut().close_with(py, why) {
-                eprintln!("silrig: {close}");
+            if let Err(closing) = close(why) {
+                eprintln!("silrig: {closing}");
             }
             Err(e)
         }

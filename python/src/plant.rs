@@ -3,7 +3,7 @@
 //! flies a `PlantModel` (its `name`, `outputs` and `inputs`, `outputs_now()` and `step(inputs, dt_s)`). The rig keeps
 //! the clock, the watchdog, the failsafe and the faults around the model, as for a plant in C.
 
-use crate::controller::failure;
+use crate::controller::{end_served, failure};
 use crate::{session_error, silrig_error, text_of};
 use pyo3::exceptions::PyValueError;
 use pyo3::intern;
@@ -208,19 +208,8 @@ pub fn serve_plant(py: Python<'_>, model: &Bound<'_, PyAny>) -> PyResult<i32> {
             return Ok(2);
         }
     };
-    match fly(py, model, &session) {
-        Ok(()) => {
-            session.borrow_mut().close_with(py, None)?;
-            Ok(0)
-        }
-        Err(e) => {
-            let why = failure(Some(e.get_type(py).as_any()), Some(e.value(py).as_any()))?;
-            if let Err(close) = session.borrow_mut().close_with(py, why) {
-                eprintln!("silrig: {close}");
-            }
-            Err(e)
-        }
-    }
+    let flown = fly(py, model, &session);
+    end_served(py, flown, |why| session.borrow_mut().close_with(py, why))
 }
 
 fn fly(py: Python<'_>, model: &Bound<'_, PyAny>, session: &Bound<'_, PlantSession>) -> PyResult<()> {
