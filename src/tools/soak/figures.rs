@@ -2,7 +2,7 @@
 //! completed where the rig has no recovery event by the trace itself), losses inside and outside the faults' own
 //! windows, torn rows, failsafe engagements, and the verdict over them and the processes' measurements.
 
-use super::probe::{Leftovers, ProcessProbe};
+use super::probe::{Leftovers, LifeProbe, ProcessProbe};
 use super::schedule::{kind_label, watched};
 use serde::{Deserialize, Serialize};
 use silrig_flight::fault::Fault;
@@ -122,6 +122,8 @@ pub struct SoakReport {
     pub processes_start: Vec<ProcessProbe>,
     /// At the end.
     pub processes_end: Vec<ProcessProbe>,
+    /// Every life of every process, measured settled and last (growth is judged within a life).
+    pub lives: Vec<LifeProbe>,
     /// The run's `/dev/shm` entries at the start and at the end.
     pub run_shm_start: Vec<String>,
     /// At the end.
@@ -156,6 +158,8 @@ pub struct Measured {
     pub start: Option<(Vec<ProcessProbe>, Vec<String>)>,
     /// At the end.
     pub end: Option<(Vec<ProcessProbe>, Vec<String>)>,
+    /// Every life of every process, settled and last.
+    pub lives: Vec<LifeProbe>,
     /// After the run.
     pub leftovers: Leftovers,
 }
@@ -237,6 +241,7 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         rows,
         processes_start: m.start.as_ref().map(|s| s.0.clone()).unwrap_or_default(),
         processes_end: m.end.as_ref().map(|s| s.0.clone()).unwrap_or_default(),
+        lives: m.lives,
         run_shm_start: m.start.map(|s| s.1).unwrap_or_default(),
         run_shm_end: m.end.map(|s| s.1).unwrap_or_default(),
         leftovers: m.leftovers,
@@ -283,17 +288,19 @@ fn problems(r: &SoakReport) -> Vec<String> {
     if r.processes_start.is_empty() || r.processes_end.is_empty() {
         p.push("the processes were not measured at the start and the end (see the soak's chapter)".into());
     }
-    for s in &r.processes_start {
-        if let Some(e) = r.processes_end.iter().find(|e| e.process == s.process) {
-            if e.fds > s.fds {
-                p.push(format!("{}: {} open file descriptors at the end, {} at the start", s.process, e.fds, s.fds));
-            }
-            if e.shm_files > s.shm_files {
-                p.push(format!(
-                    "{}: {} shared-memory files at the end, {} at the start",
-                    s.process, e.shm_files, s.shm_files
-                ));
-            }
+    for l in &r.lives {
+        let (s, e) = (&l.settled, &l.last);
+        if e.fds > s.fds {
+            p.push(format!(
+                "{} (pid {}): {} open file descriptors at last, {} settled",
+                l.process, l.pid, e.fds, s.fds
+            ));
+        }
+        if e.shm_files > s.shm_files {
+            p.push(format!(
+                "{} (pid {}): {} shared-memory files at last, {} settled",
+                l.process, l.pid, e.shm_files, s.shm_files
+            ));
         }
     }
     if r.leftovers.count() > 0 {
@@ -448,6 +455,12 @@ pub fn to_text(r: &SoakReport) -> String {
             f(e.map(|e| e.shm_files))
         );
     }
+    let grew = r.lives.iter().filter(|l| l.last.fds > l.settled.fds || l.last.shm_files > l.settled.shm_files);
+    s += &format!(
+        "  {} lives measured settled and last: {} held more descriptors or shared-memory files at last\n",
+        r.lives.len(),
+        grew.count()
+    );
     s += &format!(
         "  the run's /dev/shm entries: {} at the start, {} at the end\n",
         r.run_shm_start.len(),

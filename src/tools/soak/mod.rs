@@ -73,6 +73,7 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
     let mut start: Option<(Vec<ProcessProbe>, Vec<String>)> = None;
     let mut end: Option<(Vec<ProcessProbe>, Vec<String>)> = None;
     let mut t0_ns: Option<u64> = None;
+    let mut lives = probe::Lives::default();
     let status = loop {
         if let Some(status) = child.try_wait()? {
             break status;
@@ -82,6 +83,10 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         }
         let probes = probe::probe_run(launcher, &shm_prefix);
         seen.extend(probes.iter().map(|p| p.pid));
+        let now_s = t0_ns.map(|t0| silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9);
+        if let Some(now_s) = now_s.filter(|t| *t <= args.duration_s - 1.0) {
+            lives.observe(&probes, now_s);
+        }
         let rig_up = ["plant", "controller", "logger"].iter().all(|r| probes.iter().any(|p| p.process == *r));
         if let Some(t0) = t0_ns
             && rig_up
@@ -110,6 +115,7 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         run_exit: status.code(),
         start,
         end,
+        lives: lives.into_vec(),
         leftovers,
     };
     let report = figures::report(&plan, dt_s, measured);

@@ -23,6 +23,58 @@ pub struct ProcessProbe {
     pub shm_names: Vec<String>,
 }
 
+/// Each process's life as measured: settled (after its start-up) and last seen before the run's end. A restarted
+/// process is a new life, which may hold other files than its predecessor (a restarted plant maps two more
+/// shared-memory files than the first from its start, and keeps them); growth is judged within a life.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct LifeProbe {
+    /// The process.
+    pub process: String,
+    /// Its pid.
+    pub pid: u32,
+    /// When it was first seen, wall s from the plant's tick 0.
+    pub first_seen_s: f64,
+    /// As measured once settled (SETTLE_S after it was first seen).
+    pub settled: ProcessProbe,
+    /// As measured last.
+    pub last: ProcessProbe,
+}
+
+/// A life is measured as settled this long after it was first seen, s: after its start-up, before the next fault.
+pub const SETTLE_S: f64 = 2.0;
+
+/// Every life seen while a run went.
+#[derive(Debug, Default)]
+pub struct Lives {
+    lives: std::collections::BTreeMap<u32, (f64, Option<ProcessProbe>, ProcessProbe)>,
+}
+
+impl Lives {
+    /// Take in a measurement of the run's processes at `now_s` (wall s from tick 0).
+    pub fn observe(&mut self, probes: &[ProcessProbe], now_s: f64) {
+        for p in probes {
+            let life = self.lives.entry(p.pid).or_insert_with(|| (now_s, None, p.clone()));
+            if life.1.is_none() && now_s >= life.0 + SETTLE_S {
+                life.1 = Some(p.clone());
+            }
+            life.2 = p.clone();
+        }
+    }
+
+    /// The lives that were measured settled, by first sight.
+    pub fn into_vec(self) -> Vec<LifeProbe> {
+        let mut v: Vec<LifeProbe> = self
+            .lives
+            .into_iter()
+            .filter_map(|(pid, (first_seen_s, settled, last))| {
+                Some(LifeProbe { process: last.process.clone(), pid, first_seen_s, settled: settled?, last })
+            })
+            .collect();
+        v.sort_by(|a, b| a.first_seen_s.total_cmp(&b.first_seen_s));
+        v
+    }
+}
+
 /// The launcher and each of its children.
 pub fn probe_run(launcher_pid: u32, shm_prefix: &str) -> Vec<ProcessProbe> {
     let mut out: Vec<ProcessProbe> = probe(launcher_pid, "launcher", shm_prefix).into_iter().collect();
