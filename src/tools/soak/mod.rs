@@ -83,15 +83,15 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         }
         let probes = probe::probe_run(launcher, &shm_prefix);
         seen.extend(probes.iter().map(|p| p.pid));
-        let now_s = t0_ns.map(|t0| silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9);
-        if let Some(now_s) = now_s.filter(|t| *t <= args.duration_s - 1.0) {
-            lives.observe(&probes, now_s);
+        // Wall seconds from tick 0; measurements stop a second before the end, when the launcher ends the rig.
+        let wall_s = t0_ns.map(|t0| silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9);
+        if let Some(wall_s) = wall_s.filter(|t| *t <= args.duration_s - 1.0) {
+            lives.observe(&probes, wall_s);
         }
         let rig_up = ["plant", "controller", "logger"].iter().all(|r| probes.iter().any(|p| p.process == *r));
-        if let Some(t0) = t0_ns
+        if let Some(wall_s) = wall_s
             && rig_up
         {
-            let wall_s = silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9;
             let shm = probe::shm_entries(&shm_prefix);
             if start.is_none() && (SETTLED_S..schedule::FIRST_FAULT_S - 0.5).contains(&wall_s) {
                 start = Some((probes.clone(), shm.clone()));
