@@ -59,6 +59,7 @@ fn a_short_soak_s_figures_agree_with_the_run_s_files() {
     let kinds: Vec<&str> = faults.iter().map(|f| f["kind"].as_str().unwrap()).collect();
     assert_eq!(kinds, ["plant:kill", "plant:actuator-hard-over", "logger:term", "plant:drop"]);
     assert_eq!((n(&soak["scheduled"]), n(&soak["injected"]), n(&soak["recovered"])), (4, 4, 4));
+    assert_eq!(n(&soak["flight_back"]), 4, "the flight came back to its attitude after each fault");
     let events: Vec<Value> = std::fs::read_to_string(out.join("events.jsonl"))
         .unwrap()
         .lines()

@@ -14,8 +14,11 @@ use std::path::Path;
 /// A fault's own window reaches this far before its injection (a killed logger loses the rows it had not flushed
 /// yet, up to 0.1 s) and after its recovery, s.
 pub const WINDOW_MARGIN_S: f64 = 0.2;
-/// The loop is whole again when this many consecutive ticks are logged with their commands.
+/// The loop is whole again when this many consecutive ticks are logged with their commands; the flight is back
+/// when as many hold the attitude within [`ATTITUDE_BACK_DEG`] of where it was before the fault.
 pub const WHOLE_TICKS: usize = 10;
+/// How close roll and pitch must come back to their values before a fault, deg.
+pub const ATTITUDE_BACK_DEG: f64 = 5.0;
 
 /// What became of one fault of the soak.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -37,6 +40,11 @@ pub struct FaultOutcome {
     /// `rig` (the rig's own recovery event) or `trace` (the first of 10 ticks logged in a row with their commands
     /// after the fault's end, where the rig has no recovery event for it).
     pub recovered_by: Option<String>,
+    /// When the flight was back: roll and pitch within 5 deg of their values before the injection for 10 ticks
+    /// in a row, after the fault's own end and before the next fault, simulated s.
+    pub flight_back_at_s: Option<f64>,
+    /// The largest change of roll or pitch from their values before the injection, until the next fault, deg.
+    pub max_attitude_change_deg: Option<f64>,
     /// The fault's own window for losses, simulated s.
     pub window_s: Option<(f64, f64)>,
     /// Rows missing from the log inside that window.
@@ -56,6 +64,8 @@ pub struct KindFigures {
     pub detected: u64,
     /// Recovered.
     pub recovered: u64,
+    /// Whose flight came back to its attitude.
+    pub flight_back: u64,
 }
 
 /// The logged rows: how many, how many lost inside and outside the faults' windows, torn, written twice.
@@ -111,6 +121,8 @@ pub struct SoakReport {
     pub watched: u64,
     /// Injected faults recovered from.
     pub recovered: u64,
+    /// Injected faults after which the flight came back to its attitude.
+    pub flight_back: u64,
     /// Per kind.
     pub kinds: Vec<KindFigures>,
     /// `failsafe-engaged` events.
@@ -180,6 +192,7 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         .iter()
         .filter_map(|r| Some((r.first()?.parse().ok()?, r.get(11).map(|c| c.as_str()) == Some("0"))))
         .collect();
+    let attitude = attitude_by_tick(&trace, dt_s);
     let mut plan: Vec<&Fault> = plan.iter().collect();
     plan.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
     let last_tick = logged.iter().map(|r| r.0).max().unwrap_or(0);
@@ -189,7 +202,7 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         .map(|(i, f)| {
             let rec = records.iter().find(|r| r.fault == f.describe());
             let next_s = plan.get(i + 1).map_or(f64::INFINITY, |n| n.at_s);
-            outcome(f, rec, &logged, dt_s, next_s, last_tick)
+            outcome(f, rec, &logged, &attitude, dt_s, next_s, last_tick)
         })
         .collect();
     let mut faults = faults;
@@ -218,6 +231,7 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         k.injected += o.injected_at_s.is_some() as u64;
         k.detected += (o.injected_at_s.is_some() && o.detected_at_s.is_some()) as u64;
         k.recovered += (o.injected_at_s.is_some() && o.recovered_at_s.is_some()) as u64;
+        k.flight_back += (o.injected_at_s.is_some() && o.flight_back_at_s.is_some()) as u64;
     }
     let injected: Vec<&FaultOutcome> = faults.iter().filter(|o| o.injected_at_s.is_some()).collect();
     let mut r = SoakReport {
@@ -236,6 +250,7 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         detected: injected.iter().filter(|o| o.detected_at_s.is_some()).count() as u64,
         watched: injected.iter().filter(|o| o.watched).count() as u64,
         recovered: injected.iter().filter(|o| o.recovered_at_s.is_some()).count() as u64,
+        flight_back: injected.iter().filter(|o| o.flight_back_at_s.is_some()).count() as u64,
         kinds: kinds.into_values().collect(),
         failsafe_engagements: events.iter().filter(|e| e.kind == "failsafe-engaged").count() as u64,
         rows,
@@ -267,6 +282,14 @@ fn problems(r: &SoakReport) -> Vec<String> {
         }
         if o.injected_at_s.is_some() && o.recovered_at_s.is_none() {
             p.push(format!("{}: not recovered from", o.fault));
+        }
+        if o.injected_at_s.is_some() && o.flight_back_at_s.is_none() {
+            p.push(format!(
+                "{}: the flight did not come back within {ATTITUDE_BACK_DEG} deg of its roll and pitch before the \
+                 next fault (largest change {:.1} deg)",
+                o.fault,
+                o.max_attitude_change_deg.unwrap_or(f64::NAN)
+            ));
         }
     }
     let rows = &r.rows;
@@ -322,6 +345,7 @@ fn outcome(
     f: &Fault,
     rec: Option<&FaultRecord>,
     logged: &[(u64, bool)],
+    attitude: &BTreeMap<u64, (f64, f64)>,
     dt_s: f64,
     next_s: f64,
     last_tick: u64,
@@ -336,6 +360,8 @@ fn outcome(
         detected_by: rec.and_then(|r| r.detected_by.clone()),
         recovered_at_s: rec.and_then(|r| r.recovered_at_s),
         recovered_by: rec.and_then(|r| r.recovered_at_s).map(|_| "rig".to_string()),
+        flight_back_at_s: None,
+        max_attitude_change_deg: None,
         window_s: None,
         rows_lost: 0,
     };
@@ -354,6 +380,20 @@ fn outcome(
             o.recovered_at_s = Some(k as f64 * dt_s);
             o.recovered_by = Some("trace".into());
         }
+    }
+    // The flight: roll and pitch against their values at the last logged tick before the injection.
+    let inj_tick = (inj / dt_s).floor() as u64;
+    let next_tick = if next_s.is_finite() { (next_s / dt_s).floor() as u64 } else { u64::MAX };
+    if let Some((_, &(phi0, theta0))) = attitude.range(..=inj_tick).next_back() {
+        let change = |&(phi, theta): &(f64, f64)| (phi - phi0).abs().max((theta - theta0).abs());
+        o.max_attitude_change_deg = attitude.range(inj_tick..next_tick).map(|(_, a)| change(a)).reduce(f64::max);
+        let from = (own_end_s / dt_s).ceil() as u64;
+        let back = |k: u64| attitude.get(&k).is_some_and(|a| change(a) <= ATTITUDE_BACK_DEG);
+        o.flight_back_at_s = attitude
+            .range(from..next_tick)
+            .map(|(k, _)| *k)
+            .find(|k| (0..WHOLE_TICKS as u64).all(|j| back(k + j)))
+            .map(|k| k as f64 * dt_s);
     }
     let end_s = [Some(own_end_s), o.detected_at_s, o.recovered_at_s].into_iter().flatten().fold(inj, f64::max);
     o.window_s = Some((inj - WINDOW_MARGIN_S, end_s + WINDOW_MARGIN_S));
@@ -384,8 +424,23 @@ fn losses(logged: &[(u64, bool)], faults: &mut [FaultOutcome], dt_s: f64) -> (u6
     (inside, outside)
 }
 
+/// Roll and pitch (deg) of each logged tick, from `trace.csv`.
+fn attitude_by_tick(trace: &Csv, dt_s: f64) -> BTreeMap<u64, (f64, f64)> {
+    let col = |name: &str| trace.header.iter().position(|h| h == name);
+    let (Some(t), Some(phi), Some(theta)) = (col("t_s"), col("phi_deg"), col("theta_deg")) else {
+        return BTreeMap::new();
+    };
+    let num = |r: &[String], i: usize| r.get(i).and_then(|v| v.parse::<f64>().ok());
+    trace
+        .rows
+        .iter()
+        .filter_map(|r| Some(((num(r, t)? / dt_s).round() as u64, (num(r, phi)?, num(r, theta)?))))
+        .collect()
+}
+
 /// A CSV file's rows (as text fields), and how many of them are torn.
 struct Csv {
+    header: Vec<String>,
     rows: Vec<Vec<String>>,
     torn: u64,
 }
@@ -393,8 +448,9 @@ struct Csv {
 fn read_csv(path: &Path) -> Csv {
     let text = std::fs::read_to_string(path).unwrap_or_default();
     let mut lines = text.split_inclusive('\n');
-    let width = lines.next().map_or(0, |h| h.trim_end().split(',').count());
-    let mut csv = Csv { rows: Vec::new(), torn: 0 };
+    let header: Vec<String> = lines.next().map_or(Vec::new(), |h| h.trim_end().split(',').map(String::from).collect());
+    let width = header.len();
+    let mut csv = Csv { header, rows: Vec::new(), torn: 0 };
     for line in lines {
         let fields: Vec<String> = line.trim_end_matches('\n').split(',').map(String::from).collect();
         let whole = line.ends_with('\n')
@@ -417,13 +473,20 @@ pub fn to_text(r: &SoakReport) -> String {
     );
     s += &format!(
         "faults: {} scheduled, {} injected ({} fault-injected events), {} detected ({} of kinds the rig watches), \
-         {} recovered; failsafe engaged {} times\n",
-        r.scheduled, r.injected, r.fault_events, r.detected, r.watched, r.recovered, r.failsafe_engagements
+         {} recovered, the flight back after {}; failsafe engaged {} times\n",
+        r.scheduled,
+        r.injected,
+        r.fault_events,
+        r.detected,
+        r.watched,
+        r.recovered,
+        r.flight_back,
+        r.failsafe_engagements
     );
-    s += &format!("  {:<30} {:>8} {:>8} {:>9}\n", "kind", "injected", "detected", "recovered");
+    s += &format!("  {:<30} {:>8} {:>8} {:>9} {:>11}\n", "kind", "injected", "detected", "recovered", "flight back");
     for k in &r.kinds {
         let detected = if k.watched { k.detected.to_string() } else { format!("({})", k.detected) };
-        s += &format!("  {:<30} {:>8} {:>8} {:>9}\n", k.kind, k.injected, detected, k.recovered);
+        s += &format!("  {:<30} {:>8} {:>8} {:>9} {:>11}\n", k.kind, k.injected, detected, k.recovered, k.flight_back);
     }
     s += "  (detected in parentheses: the rig has no detector for that kind, so it is not required)\n";
     let rows = &r.rows;
@@ -501,6 +564,8 @@ mod tests {
             detected_by: None,
             recovered_at_s: None,
             recovered_by: None,
+            flight_back_at_s: None,
+            max_attitude_change_deg: None,
             window_s: Some((0.2, 0.3)),
             rows_lost: 0,
         };
