@@ -40,8 +40,8 @@ pub struct FaultOutcome {
     /// `rig` (the rig's own recovery event) or `trace` (the first of 10 ticks logged in a row with their commands
     /// after the fault's end, where the rig has no recovery event for it).
     pub recovered_by: Option<String>,
-    /// When the flight was back: roll and pitch within 5 deg of their values before the injection for 10 ticks
-    /// in a row, after the fault's own end and before the next fault, simulated s.
+    /// When the flight was back: roll and pitch within 5 deg of their values before the injection from then up to
+    /// the next fault (10 ticks at least), after the fault's own end, simulated s.
     pub flight_back_at_s: Option<f64>,
     /// The largest change of roll or pitch from their values before the injection, until the next fault, deg.
     pub max_attitude_change_deg: Option<f64>,
@@ -387,13 +387,15 @@ fn outcome(
     if let Some((_, &(phi0, theta0))) = attitude.range(..=inj_tick).next_back() {
         let change = |&(phi, theta): &(f64, f64)| (phi - phi0).abs().max((theta - theta0).abs());
         o.max_attitude_change_deg = attitude.range(inj_tick..next_tick).map(|(_, a)| change(a)).reduce(f64::max);
+        // Back, and staying back up to the next fault: the trailing run of ticks within the bound, if it is at
+        // least WHOLE_TICKS long (a flight passing through its old attitude on its way elsewhere is not back).
         let from = (own_end_s / dt_s).ceil() as u64;
-        let back = |k: u64| attitude.get(&k).is_some_and(|a| change(a) <= ATTITUDE_BACK_DEG);
-        o.flight_back_at_s = attitude
-            .range(from..next_tick)
-            .map(|(k, _)| *k)
-            .find(|k| (0..WHOLE_TICKS as u64).all(|j| back(k + j)))
-            .map(|k| k as f64 * dt_s);
+        let slot: Vec<(u64, bool)> =
+            attitude.range(from..next_tick).map(|(k, a)| (*k, change(a) <= ATTITUDE_BACK_DEG)).collect();
+        let trailing = slot.iter().rev().take_while(|(_, ok)| *ok).count();
+        if trailing >= WHOLE_TICKS {
+            o.flight_back_at_s = Some(slot[slot.len() - trailing].0 as f64 * dt_s);
+        }
     }
     let end_s = [Some(own_end_s), o.detected_at_s, o.recovered_at_s].into_iter().flatten().fold(inj, f64::max);
     o.window_s = Some((inj - WINDOW_MARGIN_S, end_s + WINDOW_MARGIN_S));
