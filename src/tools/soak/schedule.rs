@@ -47,8 +47,9 @@ const SENSOR_CHANNELS: [&str; 6] = ["phi_rad", "theta_rad", "psi_rad", "p_radps"
 /// for it: its 128-sample queues absorb a stop, delay or jitter), and the rig has no detection of sensor or
 /// actuator faults; those are injected and their windows checked for losses, but their detection is not required.
 pub fn watched(target: Role, action: FaultAction) -> bool {
-    !(target == Role::Logger && matches!(action, FaultAction::Stop | FaultAction::Delay | FaultAction::Jitter))
-        && !action.is_plant_model_fault()
+    let logger_stalled =
+        target == Role::Logger && matches!(action, FaultAction::Stop | FaultAction::Delay | FaultAction::Jitter);
+    !(logger_stalled || action.is_plant_model_fault())
 }
 
 /// `target:action` of a fault, the name of its kind in the soak's figures.
