@@ -150,7 +150,7 @@ pub struct SoakReport {
 
 /// What the soak measured while the run went, for [`report`].
 pub struct Measured {
-    /// Run id, folder, seed, length, command, start time, load averages, exit status.
+    /// The schedule's seed.
     pub seed: u64,
     /// Length, s.
     pub duration_s: f64,

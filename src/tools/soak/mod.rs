@@ -20,8 +20,6 @@ use std::time::Duration;
 pub const DURATION_RANGE_S: (f64, f64) = (15.0, 86_400.0);
 /// How often the soak looks at the run's processes.
 const POLL: Duration = Duration::from_millis(250);
-/// The processes must be up this long (wall s from tick 0) before the start is measured.
-const SETTLED_S: f64 = 2.0;
 
 /// `silrig soak`'s options.
 #[derive(Debug, Clone, clap::Args)]
@@ -93,7 +91,7 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
             && rig_up
         {
             let shm = probe::shm_entries(&shm_prefix);
-            if start.is_none() && (SETTLED_S..schedule::FIRST_FAULT_S - 0.5).contains(&wall_s) {
+            if start.is_none() && (probe::SETTLE_S..schedule::FIRST_FAULT_S - 0.5).contains(&wall_s) {
                 start = Some((probes.clone(), shm.clone()));
             }
             // After the last fault's recovery (the schedule leaves the last seconds quiet), before the run's end.
