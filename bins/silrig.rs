@@ -116,6 +116,9 @@ enum Command {
         #[command(subcommand)]
         what: Option<BenchCommand>,
     },
+    /// The chaos soak: a realtime run (default 10 minutes) whose processes are killed, stopped, delayed and
+    /// restarted at times drawn from a seed; prints its figures and writes soak.json; exit 1 unless it passed.
+    Soak(silrig::soak::SoakArgs),
     /// Measure the OS timer floor: a bare absolute-deadline loop, wake-up lateness as cyclictest reports it.
     #[command(name = silrig::launch::floor::timer_baseline::SUBCOMMAND)]
     TimerBaseline(silrig::launch::floor::timer_baseline::BaselineArgs),
@@ -176,6 +179,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::TimerBaseline(args) => timer_baseline(&args),
+        Command::Soak(args) => soak(&args),
     }
 }
 
@@ -402,6 +406,18 @@ fn bench() -> anyhow::Result<ExitCode> {
 fn bench_ipc(args: &silrig::bench::ipc::IpcBenchArgs) -> anyhow::Result<ExitCode> {
     print!("{}", silrig::bench::ipc::run(args)?);
     Ok(ExitCode::SUCCESS)
+}
+
+fn soak(args: &silrig::soak::SoakArgs) -> anyhow::Result<ExitCode> {
+    if args.print_schedule {
+        for flag in silrig::soak::schedule::flags(args.seed, args.duration_s) {
+            println!("--fault {flag}");
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let report = silrig::soak::run(args, &std::env::current_exe()?)?;
+    print!("{}", silrig::soak::figures::to_text(&report));
+    Ok(if report.problems.is_empty() { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
 fn timer_baseline(args: &silrig::launch::floor::timer_baseline::BaselineArgs) -> anyhow::Result<ExitCode> {

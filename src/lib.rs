@@ -12,7 +12,7 @@
 //! - `silrig-rig` ([`rig`]): the plant, controller and logger processes and the controller session.
 //! - `silrig-launch` ([`launch`]): `silrig run`, supervision, faults, the run's report.
 //! - `silrig-tools` ([`check`], [`campaign`], [`replay`], [`bench`], [`contract`], [`outputs`],
-//!   [`derivative_csv`], [`export_fmu`], [`html`]): the tools on top.
+//!   [`derivative_csv`], [`export_fmu`], [`html`], [`soak`]): the tools on top.
 //! - `silrig-bridge` ([`bridge`], feature `bridge`): the rig's streams between two hosts over Zenoh.
 
 #![warn(missing_docs)]
@@ -25,5 +25,5 @@ pub use silrig_launch as launch;
 pub use silrig_model::{actuator, control, f16_outputs, integrator, plant, rng, units, vehicle};
 pub use silrig_plot as plot;
 pub use silrig_rig as rig;
-pub use silrig_tools::{bench, campaign, check, contract, derivative_csv, export_fmu, html, outputs, replay};
+pub use silrig_tools::{bench, campaign, check, contract, derivative_csv, export_fmu, html, outputs, replay, soak};
 pub use silrig_wire::{clock, ipc, recording, timing, topology, wire};

@@ -52,7 +52,10 @@ impl LoopFaults {
             if !f.active_at(t_s) {
                 continue;
             }
-            let first_tick = (f.at_s / self.dt_s).round() as u64;
+            // The first tick the window covers (`active_at`: t >= at_s): a time between two ticks starts at the
+            // later one. Rounding to the nearer one made a once-only delay at such a time never act (its first
+            // active tick came one after the rounded one, so `since` was never 0).
+            let first_tick = (f.at_s / self.dt_s - 1e-9).ceil().max(0.0) as u64;
             let since = tick.saturating_sub(first_tick);
             let acts = match f.action() {
                 FaultAction::Delay => {
@@ -86,5 +89,24 @@ impl LoopFaults {
             }
         }
         effect
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use silrig_flight::fault::parse_fault_flag;
+
+    #[test]
+    fn a_once_only_delay_acts_once_whether_or_not_its_time_is_on_a_tick() {
+        let dir = std::env::temp_dir().join(format!("silrig-loop-faults-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (flag, tick) in [("plant:delay@28.483s,delay=42ms", 2849), ("plant:delay@5s,delay=42ms", 500)] {
+            let plan = [parse_fault_flag(flag).unwrap()];
+            let mut faults = LoopFaults::new(&plan, Role::Plant, 0.01, 1, EventLog::new(&dir, "plant"));
+            let acting: Vec<u64> = (0..4000).filter(|k| faults.at(*k).sleep_ns > 0).collect();
+            assert_eq!(acting, [tick], "{flag}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

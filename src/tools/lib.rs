@@ -9,6 +9,7 @@
 //!   `silrig plant derivative`.
 //! - [`export_fmu`]: `silrig export-fmu`, the built-in F-16 as an FMI 2.0 co-simulation FMU.
 //! - [`html`]: `report.html`, one self-contained page per run, check and sweep.
+//! - [`soak`]: `silrig soak`, a long realtime run under faults drawn from a seed, and its figures.
 //!
 //! Layers: the top; uses every crate below.
 
@@ -21,3 +22,4 @@ pub mod export_fmu;
 pub mod html;
 pub mod outputs;
 pub mod replay;
+pub mod soak;

@@ -1,0 +1,589 @@
+//! The soak's figures, from the run folder a soak leaves: what became of each fault (the launcher's fault table,
+//! completed where the rig has no recovery event by the trace itself), losses inside and outside the faults' own
+//! windows, torn rows, failsafe engagements, and the verdict over them and the processes' measurements.
+
+use super::probe::{Leftovers, LifeProbe, ProcessProbe};
+use super::schedule::{kind_label, watched};
+use serde::{Deserialize, Serialize};
+use silrig_flight::fault::Fault;
+use silrig_launch::fault_report::FaultRecord;
+use silrig_rig::events::read_events;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// A fault's own window reaches this far before its injection (a killed logger loses the rows it had not flushed
+/// yet, up to 0.1 s) and after its recovery, s.
+pub const WINDOW_MARGIN_S: f64 = 0.2;
+/// The loop is whole again when this many consecutive ticks are logged with their commands; the flight is back
+/// when as many hold the attitude within [`ATTITUDE_BACK_DEG`] of where it was before the fault.
+pub const WHOLE_TICKS: usize = 10;
+/// How close roll and pitch must come back to their values before a fault, deg.
+pub const ATTITUDE_BACK_DEG: f64 = 5.0;
+
+/// What became of one fault of the soak.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FaultOutcome {
+    /// The fault, as the run's fault table names it.
+    pub fault: String,
+    /// `target:action`.
+    pub kind: String,
+    /// Whether the rig has a detector that must fire for it (see the soak's chapter).
+    pub watched: bool,
+    /// Injected at, simulated s (None: not injected).
+    pub injected_at_s: Option<f64>,
+    /// Detected at, simulated s, and by whom.
+    pub detected_at_s: Option<f64>,
+    /// The detecting process and event.
+    pub detected_by: Option<String>,
+    /// Recovered at, simulated s.
+    pub recovered_at_s: Option<f64>,
+    /// `rig` (the rig's own recovery event) or `trace` (the first of 10 ticks logged in a row with their commands
+    /// after the fault's end, where the rig has no recovery event for it).
+    pub recovered_by: Option<String>,
+    /// When the flight was back: roll and pitch within 5 deg of their values before the injection from then up to
+    /// the next fault (10 ticks at least), after the fault's own end, simulated s.
+    pub flight_back_at_s: Option<f64>,
+    /// The largest change of roll or pitch from their values before the injection, until the next fault, deg.
+    pub max_attitude_change_deg: Option<f64>,
+    /// The fault's own window for losses, simulated s.
+    pub window_s: Option<(f64, f64)>,
+    /// Rows missing from the log inside that window.
+    pub rows_lost: u64,
+}
+
+/// One kind's totals.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct KindFigures {
+    /// `target:action`.
+    pub kind: String,
+    /// Whether its detection is required.
+    pub watched: bool,
+    /// Faults of the kind injected, detected and recovered from.
+    pub injected: u64,
+    /// Detected.
+    pub detected: u64,
+    /// Recovered.
+    pub recovered: u64,
+    /// Whose flight came back to its attitude.
+    pub flight_back: u64,
+}
+
+/// The logged rows: how many, how many lost inside and outside the faults' windows, torn, written twice.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Rows {
+    /// Rows of `trace.csv`.
+    pub trace_rows: u64,
+    /// Rows of `timing.csv`.
+    pub timing_rows: u64,
+    /// Ticks missing from the log (between tick 0 and the last logged tick) inside some fault's window.
+    pub lost_in_fault_windows: u64,
+    /// ... outside every fault's window (must be 0).
+    pub lost_outside_fault_windows: u64,
+    /// The ticks lost outside, for the reader (first 20).
+    pub lost_outside_ticks: Vec<u64>,
+    /// Rows of either file that are not whole (a field missing or too many, a value that is not a number, no end
+    /// of line) (must be 0).
+    pub torn: u64,
+    /// Ticks logged more than once (must be 0).
+    pub duplicated: u64,
+}
+
+/// Everything the soak reports (`soak.json`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SoakReport {
+    /// The seed the schedule came from.
+    pub seed: u64,
+    /// The run's length, s.
+    pub duration_s: f64,
+    /// Its run id and folder.
+    pub run_id: String,
+    /// The run's folder.
+    pub out_dir: String,
+    /// The `silrig run` command the soak started.
+    pub command: Vec<String>,
+    /// When it started (UTC, from the system clock).
+    pub started_utc: String,
+    /// Load average (1, 5, 15 min) at the start and the end.
+    pub load_average_start: Vec<f64>,
+    /// At the end.
+    pub load_average_end: Vec<f64>,
+    /// `silrig run`'s exit status.
+    pub run_exit: Option<i32>,
+    /// Faults scheduled, injected, detected (watched ones), recovered.
+    pub scheduled: u64,
+    /// Injected.
+    pub injected: u64,
+    /// `fault-injected` events in `events.jsonl` (the plant-model faults have none: they act at their time).
+    pub fault_events: u64,
+    /// Injected faults detected.
+    pub detected: u64,
+    /// Injected faults of watched kinds.
+    pub watched: u64,
+    /// Injected faults recovered from.
+    pub recovered: u64,
+    /// Injected faults after which the flight came back to its attitude.
+    pub flight_back: u64,
+    /// Per kind.
+    pub kinds: Vec<KindFigures>,
+    /// `failsafe-engaged` events.
+    pub failsafe_engagements: u64,
+    /// The logged rows.
+    pub rows: Rows,
+    /// The long-lived processes at the start (after start-up, before the first fault) and at the end (after the
+    /// last fault's recovery, before the run's end).
+    pub processes_start: Vec<ProcessProbe>,
+    /// At the end.
+    pub processes_end: Vec<ProcessProbe>,
+    /// Every life of every process, measured settled and last (growth is judged within a life).
+    pub lives: Vec<LifeProbe>,
+    /// The run's `/dev/shm` entries at the start and at the end.
+    pub run_shm_start: Vec<String>,
+    /// At the end.
+    pub run_shm_end: Vec<String>,
+    /// What was left after the run (must be empty).
+    pub leftovers: Leftovers,
+    /// Each fault.
+    pub faults: Vec<FaultOutcome>,
+    /// Why the soak failed (empty: it passed).
+    pub problems: Vec<String>,
+}
+
+/// What the soak measured while the run went, for [`report`].
+pub struct Measured {
+    /// The schedule's seed.
+    pub seed: u64,
+    /// Length, s.
+    pub duration_s: f64,
+    /// Run id.
+    pub run_id: String,
+    /// The run's folder.
+    pub out: std::path::PathBuf,
+    /// The command.
+    pub command: Vec<String>,
+    /// Start, UTC.
+    pub started_utc: String,
+    /// Load averages.
+    pub load_average: (Vec<f64>, Vec<f64>),
+    /// `silrig run`'s exit status.
+    pub run_exit: Option<i32>,
+    /// The processes and the run's `/dev/shm` entries at the start and the end.
+    pub start: Option<(Vec<ProcessProbe>, Vec<String>)>,
+    /// At the end.
+    pub end: Option<(Vec<ProcessProbe>, Vec<String>)>,
+    /// Every life of every process, settled and last.
+    pub lives: Vec<LifeProbe>,
+    /// After the run.
+    pub leftovers: Leftovers,
+}
+
+/// The figures and the verdict of a soak of `plan` (loop period `dt_s`) from its run folder and measurements.
+pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
+    let out = m.out.as_path();
+    let records: Vec<FaultRecord> = std::fs::read_to_string(out.join("report.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| serde_json::from_value(v["faults"].clone()).ok())
+        .unwrap_or_default();
+    let timing = read_csv(&out.join("timing.csv"));
+    let trace = read_csv(&out.join("trace.csv"));
+    // (tick, command present) per logged row.
+    let logged: Vec<(u64, bool)> = timing
+        .rows
+        .iter()
+        .filter_map(|r| Some((r.first()?.parse().ok()?, r.get(11).map(|c| c.as_str()) == Some("0"))))
+        .collect();
+    let attitude = attitude_by_tick(&trace, dt_s);
+    let mut plan: Vec<&Fault> = plan.iter().collect();
+    plan.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+    let last_tick = logged.iter().map(|r| r.0).max().unwrap_or(0);
+    let faults: Vec<FaultOutcome> = plan
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let rec = records.iter().find(|r| r.fault == f.describe());
+            let next_s = plan.get(i + 1).map_or(f64::INFINITY, |n| n.at_s);
+            outcome(f, rec, &logged, &attitude, dt_s, next_s, last_tick)
+        })
+        .collect();
+    let mut faults = faults;
+    let (lost_in, lost_out) = losses(&logged, &mut faults, dt_s);
+    let mut ticks: Vec<u64> = logged.iter().map(|r| r.0).collect();
+    ticks.sort_unstable();
+    let before = ticks.len();
+    ticks.dedup();
+    let rows = Rows {
+        trace_rows: trace.rows.len() as u64,
+        timing_rows: timing.rows.len() as u64,
+        lost_in_fault_windows: lost_in,
+        lost_outside_fault_windows: lost_out.len() as u64,
+        lost_outside_ticks: lost_out.iter().take(20).copied().collect(),
+        torn: trace.torn + timing.torn,
+        duplicated: (before - ticks.len()) as u64,
+    };
+    let events = read_events(out);
+    let mut kinds: BTreeMap<String, KindFigures> = BTreeMap::new();
+    for (f, o) in plan.iter().zip(&faults) {
+        let k = kinds.entry(o.kind.clone()).or_insert_with(|| KindFigures {
+            kind: o.kind.clone(),
+            watched: watched(f.target(), f.action()),
+            ..KindFigures::default()
+        });
+        k.injected += o.injected_at_s.is_some() as u64;
+        k.detected += (o.injected_at_s.is_some() && o.detected_at_s.is_some()) as u64;
+        k.recovered += (o.injected_at_s.is_some() && o.recovered_at_s.is_some()) as u64;
+        k.flight_back += (o.injected_at_s.is_some() && o.flight_back_at_s.is_some()) as u64;
+    }
+    let injected: Vec<&FaultOutcome> = faults.iter().filter(|o| o.injected_at_s.is_some()).collect();
+    let mut r = SoakReport {
+        seed: m.seed,
+        duration_s: m.duration_s,
+        run_id: m.run_id,
+        out_dir: out.display().to_string(),
+        command: m.command,
+        started_utc: m.started_utc,
+        load_average_start: m.load_average.0,
+        load_average_end: m.load_average.1,
+        run_exit: m.run_exit,
+        scheduled: faults.len() as u64,
+        injected: injected.len() as u64,
+        fault_events: events.iter().filter(|e| e.kind == "fault-injected").count() as u64,
+        detected: injected.iter().filter(|o| o.detected_at_s.is_some()).count() as u64,
+        watched: injected.iter().filter(|o| o.watched).count() as u64,
+        recovered: injected.iter().filter(|o| o.recovered_at_s.is_some()).count() as u64,
+        flight_back: injected.iter().filter(|o| o.flight_back_at_s.is_some()).count() as u64,
+        kinds: kinds.into_values().collect(),
+        failsafe_engagements: events.iter().filter(|e| e.kind == "failsafe-engaged").count() as u64,
+        rows,
+        processes_start: m.start.as_ref().map(|s| s.0.clone()).unwrap_or_default(),
+        processes_end: m.end.as_ref().map(|s| s.0.clone()).unwrap_or_default(),
+        lives: m.lives,
+        run_shm_start: m.start.map(|s| s.1).unwrap_or_default(),
+        run_shm_end: m.end.map(|s| s.1).unwrap_or_default(),
+        leftovers: m.leftovers,
+        faults,
+        problems: Vec::new(),
+    };
+    r.problems = problems(&r);
+    r
+}
+
+/// Why the soak failed: every figure that must be 0 and is not, every fault not injected, not detected (watched
+/// kinds) or not recovered from, every process holding more descriptors or shared-memory files at the end.
+fn problems(r: &SoakReport) -> Vec<String> {
+    let mut p = Vec::new();
+    if r.run_exit != Some(0) {
+        p.push(format!("silrig run exited with {:?} (see its report)", r.run_exit));
+    }
+    for o in &r.faults {
+        if o.injected_at_s.is_none() {
+            p.push(format!("{}: not injected", o.fault));
+        } else if o.watched && o.detected_at_s.is_none() {
+            p.push(format!("{}: not detected", o.fault));
+        }
+        if o.injected_at_s.is_some() && o.recovered_at_s.is_none() {
+            p.push(format!("{}: not recovered from", o.fault));
+        }
+        if o.injected_at_s.is_some() && o.flight_back_at_s.is_none() {
+            p.push(format!(
+                "{}: the flight did not come back within {ATTITUDE_BACK_DEG} deg of its roll and pitch before the \
+                 next fault (largest change {:.1} deg)",
+                o.fault,
+                o.max_attitude_change_deg.unwrap_or(f64::NAN)
+            ));
+        }
+    }
+    let rows = &r.rows;
+    if rows.lost_outside_fault_windows > 0 {
+        p.push(format!(
+            "{} rows lost outside the faults' windows (ticks {:?})",
+            rows.lost_outside_fault_windows, rows.lost_outside_ticks
+        ));
+    }
+    if rows.torn > 0 {
+        p.push(format!("{} torn rows", rows.torn));
+    }
+    if rows.duplicated > 0 {
+        p.push(format!("{} ticks logged twice", rows.duplicated));
+    }
+    if rows.trace_rows != rows.timing_rows {
+        p.push(format!("trace.csv has {} rows, timing.csv {}", rows.trace_rows, rows.timing_rows));
+    }
+    if r.processes_start.is_empty() || r.processes_end.is_empty() {
+        p.push("the processes were not measured at the start and the end (see the soak's chapter)".into());
+    }
+    for l in &r.lives {
+        let (s, e) = (&l.settled, &l.last);
+        if e.fds > s.fds {
+            p.push(format!(
+                "{} (pid {}): {} open file descriptors at last, {} settled",
+                l.process, l.pid, e.fds, s.fds
+            ));
+        }
+        if e.shm_files > s.shm_files {
+            p.push(format!(
+                "{} (pid {}): {} shared-memory files at last, {} settled",
+                l.process, l.pid, e.shm_files, s.shm_files
+            ));
+        }
+    }
+    if r.leftovers.count() > 0 {
+        p.push(format!("left after the run: {:?}", r.leftovers));
+    }
+    p
+}
+
+/// The fault's own length after its injection, s: a stop, a window, a restart's pause, a delay, dropped ticks.
+fn own_length_s(f: &Fault, dt_s: f64) -> f64 {
+    f.duration_s
+        .or(f.restart_after_s)
+        .or(f.delay_ms.map(|d| d / 1000.0))
+        .or(f.ticks.map(|t| t as f64 * dt_s))
+        .unwrap_or(0.0)
+}
+
+fn outcome(
+    f: &Fault,
+    rec: Option<&FaultRecord>,
+    logged: &[(u64, bool)],
+    attitude: &BTreeMap<u64, (f64, f64)>,
+    dt_s: f64,
+    next_s: f64,
+    last_tick: u64,
+) -> FaultOutcome {
+    let injected_at_s = rec.and_then(|r| r.injected_at_s).filter(|t| *t <= last_tick as f64 * dt_s);
+    let mut o = FaultOutcome {
+        fault: f.describe(),
+        kind: kind_label(f.target(), f.action()),
+        watched: watched(f.target(), f.action()),
+        injected_at_s,
+        detected_at_s: rec.and_then(|r| r.detected_at_s),
+        detected_by: rec.and_then(|r| r.detected_by.clone()),
+        recovered_at_s: rec.and_then(|r| r.recovered_at_s),
+        recovered_by: rec.and_then(|r| r.recovered_at_s).map(|_| "rig".to_string()),
+        flight_back_at_s: None,
+        max_attitude_change_deg: None,
+        window_s: None,
+        rows_lost: 0,
+    };
+    let Some(inj) = injected_at_s else { return o };
+    let own_end_s = inj + own_length_s(f, dt_s);
+    if o.recovered_at_s.is_none() {
+        // No recovery event of the rig's for this fault: the loop is whole again when WHOLE_TICKS ticks in a row
+        // after the fault's end are logged with their commands, before the next fault.
+        let from = (own_end_s / dt_s).ceil() as u64;
+        let by_tick: BTreeMap<u64, bool> = logged.iter().copied().collect();
+        let whole = by_tick
+            .range(from..)
+            .map(|(k, _)| *k)
+            .find(|k| (0..WHOLE_TICKS as u64).all(|j| by_tick.get(&(k + j)).copied().unwrap_or(false)));
+        if let Some(k) = whole.filter(|k| (*k as f64 * dt_s) < next_s) {
+            o.recovered_at_s = Some(k as f64 * dt_s);
+            o.recovered_by = Some("trace".into());
+        }
+    }
+    // The flight: roll and pitch against their values at the last logged tick before the injection.
+    let inj_tick = (inj / dt_s).floor() as u64;
+    let next_tick = if next_s.is_finite() { (next_s / dt_s).floor() as u64 } else { u64::MAX };
+    if let Some((_, &(phi0, theta0))) = attitude.range(..=inj_tick).next_back() {
+        let change = |&(phi, theta): &(f64, f64)| (phi - phi0).abs().max((theta - theta0).abs());
+        o.max_attitude_change_deg = attitude.range(inj_tick..next_tick).map(|(_, a)| change(a)).reduce(f64::max);
+        // Back, and staying back up to the next fault: the trailing run of ticks within the bound, if it is at
+        // least WHOLE_TICKS long (a flight passing through its old attitude on its way elsewhere is not back).
+        let from = (own_end_s / dt_s).ceil() as u64;
+        let slot: Vec<(u64, bool)> =
+            attitude.range(from..next_tick).map(|(k, a)| (*k, change(a) <= ATTITUDE_BACK_DEG)).collect();
+        let trailing = slot.iter().rev().take_while(|(_, ok)| *ok).count();
+        if trailing >= WHOLE_TICKS {
+            o.flight_back_at_s = Some(slot[slot.len() - trailing].0 as f64 * dt_s);
+        }
+    }
+    let end_s = [Some(own_end_s), o.detected_at_s, o.recovered_at_s].into_iter().flatten().fold(inj, f64::max);
+    o.window_s = Some((inj - WINDOW_MARGIN_S, end_s + WINDOW_MARGIN_S));
+    o
+}
+
+/// Ticks missing from the log between tick 0 and the last logged tick, counted into the fault whose window holds
+/// them; (lost inside some window, the ticks lost outside every window).
+fn losses(logged: &[(u64, bool)], faults: &mut [FaultOutcome], dt_s: f64) -> (u64, Vec<u64>) {
+    let mut ticks: Vec<u64> = logged.iter().map(|r| r.0).collect();
+    ticks.sort_unstable();
+    ticks.dedup();
+    let mut inside = 0;
+    let mut outside = Vec::new();
+    let mut expected = 0u64;
+    for &k in &ticks {
+        for missing in expected..k {
+            let t = missing as f64 * dt_s;
+            if let Some(o) = faults.iter_mut().find(|o| o.window_s.is_some_and(|(a, b)| t >= a && t <= b)) {
+                o.rows_lost += 1;
+                inside += 1;
+            } else {
+                outside.push(missing);
+            }
+        }
+        expected = k + 1;
+    }
+    (inside, outside)
+}
+
+/// Roll and pitch (deg) of each logged tick, from `trace.csv`.
+fn attitude_by_tick(trace: &Csv, dt_s: f64) -> BTreeMap<u64, (f64, f64)> {
+    let col = |name: &str| trace.header.iter().position(|h| h == name);
+    let (Some(t), Some(phi), Some(theta)) = (col("t_s"), col("phi_deg"), col("theta_deg")) else {
+        return BTreeMap::new();
+    };
+    let num = |r: &[String], i: usize| r.get(i).and_then(|v| v.parse::<f64>().ok());
+    trace
+        .rows
+        .iter()
+        .filter_map(|r| Some(((num(r, t)? / dt_s).round() as u64, (num(r, phi)?, num(r, theta)?))))
+        .collect()
+}
+
+/// A CSV file's rows (as text fields), and how many of them are torn.
+struct Csv {
+    header: Vec<String>,
+    rows: Vec<Vec<String>>,
+    torn: u64,
+}
+
+fn read_csv(path: &Path) -> Csv {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let mut lines = text.split_inclusive('\n');
+    let header: Vec<String> = lines.next().map_or(Vec::new(), |h| h.trim_end().split(',').map(String::from).collect());
+    let width = header.len();
+    let mut csv = Csv { header, rows: Vec::new(), torn: 0 };
+    for line in lines {
+        let fields: Vec<String> = line.trim_end_matches('\n').split(',').map(String::from).collect();
+        let whole = line.ends_with('\n')
+            && fields.len() == width
+            && fields.iter().all(|v| v.is_empty() || v.parse::<f64>().is_ok());
+        if whole {
+            csv.rows.push(fields);
+        } else {
+            csv.torn += 1;
+        }
+    }
+    csv
+}
+
+/// The report as text: the totals, each kind, the rows, the processes, the leftovers and the verdict.
+pub fn to_text(r: &SoakReport) -> String {
+    let mut s = format!(
+        "silrig soak: seed {}, {} s realtime, run {} ({}), load average {:?} at the start, {:?} at the end\n",
+        r.seed, r.duration_s, r.run_id, r.out_dir, r.load_average_start, r.load_average_end
+    );
+    s += &format!(
+        "faults: {} scheduled, {} injected ({} fault-injected events), {} detected ({} of kinds the rig watches), \
+         {} recovered, the flight back after {}; failsafe engaged {} times\n",
+        r.scheduled,
+        r.injected,
+        r.fault_events,
+        r.detected,
+        r.watched,
+        r.recovered,
+        r.flight_back,
+        r.failsafe_engagements
+    );
+    s += &format!("  {:<30} {:>8} {:>8} {:>9} {:>11}\n", "kind", "injected", "detected", "recovered", "flight back");
+    for k in &r.kinds {
+        let detected = if k.watched { k.detected.to_string() } else { format!("({})", k.detected) };
+        s += &format!("  {:<30} {:>8} {:>8} {:>9} {:>11}\n", k.kind, k.injected, detected, k.recovered, k.flight_back);
+    }
+    s += "  (detected in parentheses: the rig has no detector for that kind, so it is not required)\n";
+    let rows = &r.rows;
+    s += &format!(
+        "rows: {} logged; lost {} inside the faults' windows, {} outside them; {} torn, {} logged twice\n",
+        rows.trace_rows, rows.lost_in_fault_windows, rows.lost_outside_fault_windows, rows.torn, rows.duplicated
+    );
+    s += &format!(
+        "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
+        "process", "pid", "pid", "RSS KiB", "RSS KiB", "fds", "fds", "shm", "shm"
+    );
+    s += &format!(
+        "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
+        "", "start", "end", "start", "end", "start", "end", "start", "end"
+    );
+    for a in &r.processes_start {
+        let e = r.processes_end.iter().find(|e| e.process == a.process);
+        let f = |v: Option<u64>| v.map_or("-".to_string(), |v| v.to_string());
+        s += &format!(
+            "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
+            a.process,
+            a.pid,
+            f(e.map(|e| e.pid as u64)),
+            a.rss_kib,
+            f(e.map(|e| e.rss_kib)),
+            a.fds,
+            f(e.map(|e| e.fds)),
+            a.shm_files,
+            f(e.map(|e| e.shm_files))
+        );
+    }
+    let grew = r.lives.iter().filter(|l| l.last.fds > l.settled.fds || l.last.shm_files > l.settled.shm_files);
+    s += &format!(
+        "  {} lives measured settled and last: {} held more descriptors or shared-memory files at last\n",
+        r.lives.len(),
+        grew.count()
+    );
+    s += &format!(
+        "  the run's /dev/shm entries: {} at the start, {} at the end\n",
+        r.run_shm_start.len(),
+        r.run_shm_end.len()
+    );
+    s += &format!(
+        "left after the run: {} processes, {} shared-memory files, {} lock files\n",
+        r.leftovers.processes.len(),
+        r.leftovers.shm_files.len(),
+        r.leftovers.lock_files.len()
+    );
+    if r.problems.is_empty() {
+        s += "soak passed\n";
+    } else {
+        s += &format!("soak FAILED ({} problems):\n", r.problems.len());
+        for p in &r.problems {
+            s += &format!("  {p}\n");
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn losses_inside_and_outside_the_windows() {
+        // Ticks 0..100 logged except 20..25 (inside a window at 0.2..0.3 s) and 80 (outside).
+        let logged: Vec<(u64, bool)> =
+            (0..100).filter(|k| !(20..25).contains(k) && *k != 80).map(|k| (k, true)).collect();
+        let o = FaultOutcome {
+            fault: "x".into(),
+            kind: "logger:kill".into(),
+            watched: true,
+            injected_at_s: Some(0.2),
+            detected_at_s: None,
+            detected_by: None,
+            recovered_at_s: None,
+            recovered_by: None,
+            flight_back_at_s: None,
+            max_attitude_change_deg: None,
+            window_s: Some((0.2, 0.3)),
+            rows_lost: 0,
+        };
+        let mut faults = [o];
+        assert_eq!(losses(&logged, &mut faults, 0.01), (5, vec![80]));
+        assert_eq!(faults[0].rows_lost, 5);
+    }
+
+    #[test]
+    fn a_row_cut_short_or_holding_garbage_is_torn() {
+        let dir = std::env::temp_dir().join(format!("silrig-soak-csv-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("t.csv");
+        std::fs::write(&p, "a,b\n1,2\n3\n4,x\n5,6\n7,").unwrap();
+        let csv = read_csv(&p);
+        assert_eq!((csv.rows.len(), csv.torn), (2, 3));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,158 @@
+//! `silrig soak`: the chaos soak. A realtime `silrig run` of the default scenario whose fault plan is drawn from a
+//! seed ([`schedule`]): every process killed, terminated, stopped, delayed, jittered and restarted, the plant's
+//! and controller's publishing dropped, the plant's sensors and actuators faulted, at times a few seconds apart.
+//! The soak watches the run's processes from outside while it flies ([`probe`]), then reads the run folder and
+//! gives its figures and verdict ([`figures`]), printed and written as `soak.json` in the run folder.
+
+pub mod figures;
+pub mod probe;
+pub mod schedule;
+
+use anyhow::Context;
+use figures::{Measured, SoakReport};
+use probe::ProcessProbe;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+/// Shortest and longest soak, s: the first fault comes 5 s in and the last 6 s before the end.
+pub const DURATION_RANGE_S: (f64, f64) = (15.0, 86_400.0);
+/// How often the soak looks at the run's processes.
+const POLL: Duration = Duration::from_millis(250);
+
+/// `silrig soak`'s options.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SoakArgs {
+    /// Length of the realtime run, s (15..86400).
+    #[arg(long, default_value_t = 600.0)]
+    pub duration_s: f64,
+    /// Seed of the fault schedule: the same seed, the same faults at the same times.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The run's folder (default: out/soak-<run id>); soak.json is written there beside the run's files.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Run id (default: soak<seed>-<pid>).
+    #[arg(long)]
+    pub run_id: Option<String>,
+    /// Print the schedule's `--fault` flags and stop.
+    #[arg(long)]
+    pub print_schedule: bool,
+}
+
+/// Run a soak with the `silrig` binary `silrig`; the report (also in `<out>/soak.json`).
+pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
+    let (lo, hi) = DURATION_RANGE_S;
+    anyhow::ensure!(
+        args.duration_s.is_finite() && (lo..=hi).contains(&args.duration_s),
+        "--duration-s must be within {lo}..{hi} s, got {}",
+        args.duration_s
+    );
+    let plan = schedule::schedule(args.seed, args.duration_s);
+    let run_id = args.run_id.clone().unwrap_or_else(|| format!("soak{}-{}", args.seed % 100_000, std::process::id()));
+    silrig_wire::ipc::namespace::RunId::new(&run_id).with_context(|| format!("--run-id {run_id:?}"))?;
+    let out = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("soak-{run_id}")));
+    let dt_s = silrig_rig::load_scenario(None, Some(args.duration_s))?.timing.dt_s;
+    let mut command: Vec<String> = ["run", "--quiet", "--duration-s"].map(String::from).to_vec();
+    command.extend([args.duration_s.to_string(), "--out".into(), out.display().to_string()]);
+    command.extend(["--run-id".into(), run_id.clone()]);
+    for f in schedule::flags(args.seed, args.duration_s) {
+        command.extend(["--fault".into(), f]);
+    }
+    let started_utc = utc_now();
+    let load_start = load_average();
+    let mut child =
+        Command::new(silrig).args(&command).spawn().with_context(|| format!("starting {}", silrig.display()))?;
+    let launcher = child.id();
+    let shm_prefix = format!("sr_{run_id}_");
+    let last_fault_s = plan.iter().map(|f| f.at_s).fold(0.0, f64::max);
+    let mut seen: BTreeSet<u32> = BTreeSet::from([launcher]);
+    let mut start: Option<(Vec<ProcessProbe>, Vec<String>)> = None;
+    let mut end: Option<(Vec<ProcessProbe>, Vec<String>)> = None;
+    let mut t0_ns: Option<u64> = None;
+    let mut lives = probe::Lives::default();
+    let status = loop {
+        if let Some(status) = child.try_wait()? {
+            break status;
+        }
+        if t0_ns.is_none() {
+            t0_ns = silrig_launch::fault_report::plant_t0_ns(&out);
+        }
+        let probes = probe::probe_run(launcher, &shm_prefix);
+        seen.extend(probes.iter().map(|p| p.pid));
+        // Wall seconds from tick 0; measurements stop a second before the end, when the launcher ends the rig.
+        let wall_s = t0_ns.map(|t0| silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9);
+        if let Some(wall_s) = wall_s.filter(|t| *t <= args.duration_s - 1.0) {
+            lives.observe(&probes, wall_s);
+        }
+        let rig_up = ["plant", "controller", "logger"].iter().all(|r| probes.iter().any(|p| p.process == *r));
+        if let Some(wall_s) = wall_s
+            && rig_up
+        {
+            let shm = probe::shm_entries(&shm_prefix);
+            if start.is_none() && (probe::SETTLE_S..schedule::FIRST_FAULT_S - 0.5).contains(&wall_s) {
+                start = Some((probes.clone(), shm.clone()));
+            }
+            // After the last fault's recovery (the schedule leaves the last seconds quiet), before the run's end.
+            if wall_s >= last_fault_s + 3.0 && wall_s <= args.duration_s - 1.0 {
+                end = Some((probes, shm));
+            }
+        }
+        std::thread::sleep(POLL);
+    };
+    let leftovers = probe::Leftovers::find(&run_id, &out, &seen);
+    let measured = Measured {
+        seed: args.seed,
+        duration_s: args.duration_s,
+        run_id,
+        out: out.clone(),
+        command: std::iter::once("silrig".to_string()).chain(command).collect(),
+        started_utc,
+        load_average: (load_start, load_average()),
+        run_exit: status.code(),
+        start,
+        end,
+        lives: lives.into_vec(),
+        leftovers,
+    };
+    let report = figures::report(&plan, dt_s, measured);
+    if out.is_dir() {
+        let path = out.join("soak.json");
+        silrig_flight::files::write_atomically(&path, &serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(report)
+}
+
+/// 1, 5 and 15 minute load averages.
+fn load_average() -> Vec<f64> {
+    let text = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    text.split_whitespace().take(3).filter_map(|v| v.parse().ok()).collect()
+}
+
+/// Now, as `YYYY-MM-DD hh:mm:ss UTC`.
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let (days, rem) = ((secs / 86_400) as i64, secs % 86_400);
+    // Howard Hinnant's days-to-civil.
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + (month <= 2) as i64;
+    format!("{year:04}-{month:02}-{day:02} {:02}:{:02}:{:02} UTC", rem / 3600, rem % 3600 / 60, rem % 60)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_date_is_the_calendar_date() {
+        let s = super::utc_now();
+        assert!(s.starts_with("20") && s.ends_with(" UTC") && s.len() == 23, "{s}");
+    }
+}

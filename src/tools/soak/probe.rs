@@ -1,0 +1,224 @@
+//! What the soak measures of the run's processes from outside, through `/proc`: each long-lived process's
+//! resident memory, open file descriptors and the run's shared-memory files it holds (mapped or open), the run's
+//! `/dev/shm` entries, and what of the run is left once it has ended (processes, shared memory, lock files).
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use std::path::Path;
+
+/// One process as measured at one moment.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct ProcessProbe {
+    /// `launcher`, `plant`, `controller`, `logger`, `timer-baseline`, or the program's name.
+    pub process: String,
+    /// Its pid at that moment (a restarted process has another at the end).
+    pub pid: u32,
+    /// Resident set size, KiB (`VmRSS`).
+    pub rss_kib: u64,
+    /// Open file descriptors.
+    pub fds: u64,
+    /// The run's `/dev/shm` files it has mapped or open.
+    pub shm_files: u64,
+    /// Their names.
+    pub shm_names: Vec<String>,
+}
+
+/// Each process's life as measured: settled (after its start-up) and last seen before the run's end. A restarted
+/// process is a new life, which may hold other files than its predecessor (a restarted plant maps two more
+/// shared-memory files than the first from its start, and keeps them); growth is judged within a life.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct LifeProbe {
+    /// The process.
+    pub process: String,
+    /// Its pid.
+    pub pid: u32,
+    /// When it was first seen, wall s from the plant's tick 0.
+    pub first_seen_s: f64,
+    /// As measured once settled (SETTLE_S after it was first seen).
+    pub settled: ProcessProbe,
+    /// As measured last.
+    pub last: ProcessProbe,
+}
+
+/// A life is measured as settled this long after it was first seen, s: after its start-up, before the next fault.
+pub const SETTLE_S: f64 = 2.0;
+
+/// Every life seen while a run went.
+#[derive(Debug, Default)]
+pub struct Lives {
+    lives: std::collections::BTreeMap<u32, (f64, Option<ProcessProbe>, ProcessProbe)>,
+}
+
+impl Lives {
+    /// Take in a measurement of the run's processes at `now_s` (wall s from tick 0).
+    pub fn observe(&mut self, probes: &[ProcessProbe], now_s: f64) {
+        for p in probes {
+            let life = self.lives.entry(p.pid).or_insert_with(|| (now_s, None, p.clone()));
+            if life.1.is_none() && now_s >= life.0 + SETTLE_S {
+                life.1 = Some(p.clone());
+            }
+            life.2 = p.clone();
+        }
+    }
+
+    /// The lives that were measured settled, by first sight.
+    pub fn into_vec(self) -> Vec<LifeProbe> {
+        let mut v: Vec<LifeProbe> = self
+            .lives
+            .into_iter()
+            .filter_map(|(pid, (first_seen_s, settled, last))| {
+                Some(LifeProbe { process: last.process.clone(), pid, first_seen_s, settled: settled?, last })
+            })
+            .collect();
+        v.sort_by(|a, b| a.first_seen_s.total_cmp(&b.first_seen_s));
+        v
+    }
+}
+
+/// The launcher and each of its children.
+pub fn probe_run(launcher_pid: u32, shm_prefix: &str) -> Vec<ProcessProbe> {
+    let mut out: Vec<ProcessProbe> = probe(launcher_pid, "launcher", shm_prefix).into_iter().collect();
+    for pid in children(launcher_pid) {
+        if let Some(p) = probe(pid, &process_name(pid), shm_prefix) {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// Pids whose parent is `parent` (zombies left out).
+pub fn children(parent: u32) -> Vec<u32> {
+    let Ok(dir) = std::fs::read_dir("/proc") else { return Vec::new() };
+    dir.filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| stat(*pid).is_some_and(|(state, ppid)| ppid == parent && state != 'Z'))
+        .collect()
+}
+
+/// (state, ppid) from `/proc/<pid>/stat` (the command name may hold spaces and parentheses: read past the last `)`).
+fn stat(pid: u32) -> Option<(char, u32)> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    let mut rest = text[text.rfind(')')? + 1..].split_whitespace();
+    let state = rest.next()?.chars().next()?;
+    Some((state, rest.next()?.parse().ok()?))
+}
+
+/// A process of the rig by its role: `silrig-plant` is `plant`; `silrig timer-baseline` is `timer-baseline`.
+fn process_name(pid: u32) -> String {
+    let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+    let args: Vec<String> = cmdline.split(|b| *b == 0).map(|a| String::from_utf8_lossy(a).into_owned()).collect();
+    let program = args.first().map(|a| a.rsplit('/').next().unwrap_or(a).to_string()).unwrap_or_default();
+    match program.strip_prefix("silrig-") {
+        Some(role) => role.to_string(),
+        None if program == "silrig" => args.get(1).cloned().unwrap_or(program),
+        None => program,
+    }
+}
+
+fn probe(pid: u32, name: &str, shm_prefix: &str) -> Option<ProcessProbe> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let rss_kib = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0);
+    let fd_links: Vec<String> = std::fs::read_dir(format!("/proc/{pid}/fd"))
+        .ok()?
+        .filter_map(|e| Some(std::fs::read_link(e.ok()?.path()).ok()?.to_string_lossy().into_owned()))
+        .collect();
+    let shm = format!("/dev/shm/{shm_prefix}");
+    // A file removed while still open or mapped shows as "<path> (deleted)": the same file.
+    let file = |l: &str| l.trim_end_matches(" (deleted)").trim_start_matches("/dev/shm/").to_string();
+    let mut files: BTreeSet<String> = fd_links.iter().filter(|l| l.starts_with(&shm)).map(|l| file(l)).collect();
+    let maps = std::fs::read_to_string(format!("/proc/{pid}/maps")).unwrap_or_default();
+    files.extend(maps.lines().filter_map(|l| l.find(&shm).map(|i| file(&l[i..]))));
+    Some(ProcessProbe {
+        process: name.to_string(),
+        pid,
+        rss_kib,
+        fds: fd_links.len() as u64,
+        shm_files: files.len() as u64,
+        shm_names: files.into_iter().collect(),
+    })
+}
+
+/// The run's entries in `/dev/shm` (names starting with `shm_prefix`).
+pub fn shm_entries(shm_prefix: &str) -> Vec<String> {
+    let Ok(dir) = std::fs::read_dir("/dev/shm") else { return Vec::new() };
+    let mut names: Vec<String> = dir
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+        .filter(|n| n.starts_with(shm_prefix))
+        .collect();
+    names.sort();
+    names
+}
+
+/// What of a run is left after it ended: processes still alive among `pids` (every process of the run the soak
+/// saw) or naming the run id on their command line, its `/dev/shm` entries, its lock files and iceoryx2 folder.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Leftovers {
+    /// Live processes of the run: "pid (name)".
+    pub processes: Vec<String>,
+    /// `/dev/shm` entries of the run.
+    pub shm_files: Vec<String>,
+    /// Lock files and the iceoryx2 folder of the run.
+    pub lock_files: Vec<String>,
+}
+
+impl Leftovers {
+    /// Look for what `run_id` (run folder `out`) left; `pids`: every pid of the run seen while it ran.
+    pub fn find(run_id: &str, out: &Path, pids: &BTreeSet<u32>) -> Leftovers {
+        let mut processes: BTreeSet<String> = BTreeSet::new();
+        for &pid in pids {
+            if stat(pid).is_some_and(|(state, _)| state != 'Z') {
+                processes.insert(format!("{pid} ({})", process_name(pid)));
+            }
+        }
+        let me = std::process::id();
+        if let Ok(dir) = std::fs::read_dir("/proc") {
+            for pid in dir.filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok()).filter(|p| *p != me) {
+                let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+                let named = cmdline.split(|b| *b == 0).any(|a| a == run_id.as_bytes());
+                if named && stat(pid).is_some_and(|(state, _)| state != 'Z') {
+                    processes.insert(format!("{pid} ({})", process_name(pid)));
+                }
+            }
+        }
+        let lock_files = [
+            format!("/tmp/silrig_{run_id}.lock"),
+            out.join(".silrig-run.lock").to_string_lossy().into_owned(),
+            format!("/tmp/silrig_{run_id}"),
+        ]
+        .into_iter()
+        .filter(|p| Path::new(p).exists())
+        .collect();
+        Leftovers {
+            processes: processes.into_iter().collect(),
+            shm_files: shm_entries(&format!("sr_{run_id}_")),
+            lock_files,
+        }
+    }
+
+    /// How many things are left in all.
+    pub fn count(&self) -> usize {
+        self.processes.len() + self.shm_files.len() + self.lock_files.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_process_is_measured_and_its_children_found() {
+        let me = std::process::id();
+        let p = probe(me, "me", "no-such-prefix-").unwrap();
+        assert!(p.rss_kib > 0 && p.fds >= 3, "{p:?}");
+        assert_eq!(p.shm_files, 0);
+        let mut child = std::process::Command::new("sleep").arg("30").spawn().unwrap();
+        let found = children(me).contains(&child.id());
+        child.kill().unwrap();
+        child.wait().unwrap();
+        assert!(found);
+        assert!(!process_name(me).is_empty());
+    }
+}
