@@ -447,6 +447,70 @@ mod tests {
         topics
     }
 
+    /// What a tap was handed: channels (id, topic, message encoding, schema name, schema) and messages (id, log
+    /// time, bytes), in order.
+    #[derive(Default)]
+    struct Seen {
+        channels: Vec<(u16, String, String, String, Vec<u8>)>,
+        messages: Vec<(u16, u64, Vec<u8>)>,
+        finished: bool,
+    }
+
+    struct Tap(std::sync::Arc<std::sync::Mutex<Seen>>);
+
+    impl RecordingTap for Tap {
+        fn channel(&mut self, c: &TapChannel) {
+            let channel = (c.id, c.topic.into(), c.message_encoding.into(), c.schema_name.into(), c.schema_data.into());
+            self.0.lock().unwrap().channels.push(channel);
+        }
+        fn message(&mut self, id: u16, log_time_ns: u64, data: &[u8]) {
+            self.0.lock().unwrap().messages.push((id, log_time_ns, data.to_vec()));
+        }
+        fn finish(&mut self) {
+            self.0.lock().unwrap().finished = true;
+        }
+    }
+
+    #[test]
+    fn a_tap_is_handed_every_channel_and_message_the_file_gets() {
+        let dir = std::env::temp_dir().join(format!("silrig-mcap-sink-tap-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let meta = RecordingMeta {
+            run_id: "r".into(),
+            scenario_name: "s".into(),
+            scenario_toml: String::new(),
+            mode: "lockstep".into(),
+            ticks: 1,
+        };
+        let seen = std::sync::Arc::new(std::sync::Mutex::new(Seen::default()));
+        let mut sink = McapSink::create(&dir, &meta, Some(Box::new(Tap(seen.clone())))).unwrap();
+        let f16 = silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2]);
+        sink.plant(&PlantInfo::new(&f16).unwrap()).unwrap();
+        sink.start(&["t_s".to_string(), "alpha_deg".to_string()]).unwrap();
+        std::fs::write(dir.join("events.jsonl"), "{\"t_ns\":5,\"kind\":\"a\"}\nnot an event\n").unwrap();
+        sink.finish().unwrap();
+        let bytes = std::fs::read(sink.path()).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let seen = seen.lock().unwrap();
+        assert!(seen.finished);
+        let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+        assert_eq!(seen.channels.len(), summary.channels.len());
+        for (id, topic, encoding, schema_name, schema) in &seen.channels {
+            let c = &summary.channels[id];
+            let s = c.schema.as_ref().unwrap();
+            assert_eq!((&c.topic, &c.message_encoding, &s.name), (topic, encoding, schema_name));
+            assert_eq!(&s.data[..], &schema[..], "{topic}");
+        }
+        let file: Vec<(u16, u64, Vec<u8>)> = mcap::MessageStream::new(&bytes)
+            .unwrap()
+            .map(|m| m.map(|m| (m.channel.id, m.log_time, m.data.into_owned())).unwrap())
+            .collect();
+        // The announcement and the one whole event line.
+        assert_eq!(file.len(), 2);
+        assert_eq!(seen.messages, file);
+    }
+
     #[test]
     fn only_a_plant_with_a_position_and_an_attitude_gets_the_3d_channels() {
         let f16 = silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2]);
