@@ -8,10 +8,14 @@ use clap::Parser;
 struct Cli {
     #[command(flatten)]
     args: silrig::rig::ProcessArgs,
+    /// Also serve the recording's channels, as they are written, over the Foxglove WebSocket protocol on IP:PORT
+    /// (`silrig run --live foxglove`; needs the `live` feature).
+    #[arg(long, value_name = "IP:PORT")]
+    live_foxglove: Option<std::net::SocketAddr>,
 }
 
 fn main() -> std::process::ExitCode {
     silrig::rig::owner_only_files();
     let cli = Cli::parse();
-    silrig::rig::finish_process("logger", &cli.args, silrig::rig::logger::run_logger(&cli.args))
+    silrig::rig::finish_process("logger", &cli.args, silrig::rig::logger::run_logger(&cli.args, cli.live_foxglove))
 }

@@ -91,3 +91,23 @@ fn top_of_a_run_that_does_not_exist_says_so_and_lists_the_runs_it_sees() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("no running rig with run id") && err.contains("running rigs it can see: "), "{err}");
 }
+
+/// Without the `live` feature, `silrig run --live foxglove` is refused before anything starts, naming the feature
+/// and the build command (with it, tests/foxglove_live.rs flies it).
+#[cfg(not(feature = "live"))]
+#[test]
+fn live_foxglove_without_the_feature_is_refused_with_the_build_command() {
+    let stderr = common::Run::refused(SILRIG, "live", "lv", "nofeature", &["--live", "foxglove", "--duration-s", "1"]);
+    assert!(stderr.contains("`live` feature") && stderr.contains("cargo build --release --features live"), "{stderr}");
+}
+
+/// `--live` takes `foxglove` or `foxglove=IP:PORT`; anything else is refused, saying what was wrong.
+#[test]
+fn a_live_target_other_than_foxglove_at_an_address_is_refused() {
+    for (value, said) in
+        [("rerun", "`rerun` is no live protocol"), ("foxglove=localhost", "`localhost` is no IP:PORT address")]
+    {
+        let stderr = common::Run::refused(SILRIG, "live", "lv", "badtarget", &["--live", value, "--duration-s", "1"]);
+        assert!(stderr.contains(said), "--live {value}: {stderr}");
+    }
+}

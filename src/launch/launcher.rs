@@ -21,6 +21,7 @@ use silrig_rig::report::{MachineConditions, ProcessReport, read_report};
 use silrig_rig::status::LiveLine;
 use silrig_rig::{ProcessArgs, ProcessOptions, RigMode, load_scenario, signals};
 use silrig_wire::ipc::{self, RunId};
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;
@@ -113,6 +114,32 @@ pub struct LaunchOptions {
     /// to the tick it just published) or next-tick.
     #[arg(long, value_enum)]
     pub command_timing: Option<silrig_flight::scenario::CommandTiming>,
+    /// Serve the run live while it flies: `foxglove` or `foxglove=IP:PORT` (default 127.0.0.1:8765), the
+    /// recording's channels over the Foxglove WebSocket protocol, from the logger, for Foxglove or Lichtblick to
+    /// connect to. Needs the `live` feature (`cargo build --release --features live`).
+    #[arg(long, value_name = "foxglove[=IP:PORT]", value_parser = parse_live)]
+    pub live: Option<LiveServe>,
+}
+
+/// Where `--live` serves the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LiveServe {
+    /// The Foxglove WebSocket protocol, on this address.
+    Foxglove(SocketAddr),
+}
+
+/// Where `--live foxglove` serves without an address: Foxglove's own default.
+pub const LIVE_FOXGLOVE_DEFAULT: &str = "127.0.0.1:8765";
+
+/// `--live`'s value: `foxglove` or `foxglove=IP:PORT`.
+pub fn parse_live(value: &str) -> Result<LiveServe, String> {
+    let (protocol, addr) = value.split_once('=').unwrap_or((value, LIVE_FOXGLOVE_DEFAULT));
+    if protocol != "foxglove" {
+        return Err(format!("`{protocol}` is no live protocol: the one served is `foxglove` (foxglove[=IP:PORT])"));
+    }
+    addr.parse()
+        .map(LiveServe::Foxglove)
+        .map_err(|e| format!("`{addr}` is no IP:PORT address ({e}), e.g. foxglove=127.0.0.1:8765"))
 }
 
 /// Who measures the OS floor beside a realtime run (`--floor`).
@@ -297,6 +324,15 @@ impl Drop for Claim {
 /// Phase 1: the scenario with `--fault` flags added and validated, a folder that holds no run yet, the effective
 /// scenario written there, and the run id's namespace free of a crashed run's leftovers.
 fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
+    if let Some(LiveServe::Foxglove(addr)) = opts.live {
+        anyhow::ensure!(
+            silrig_rig::live_foxglove::AVAILABLE,
+            "--live foxglove: {}",
+            silrig_rig::live_foxglove::NOT_BUILT
+        );
+        // The logger binds it once the run has started: a port in use is said now, before anything flies.
+        std::net::TcpListener::bind(addr).with_context(|| format!("--live foxglove={addr}: cannot listen there"))?;
+    }
     opts.process.validate().map_err(|e| anyhow::anyhow!(e))?;
     opts.supervision.validate().map_err(|e| anyhow::anyhow!(e))?;
     silrig_rig::flag_in_range("external-timeout-s", opts.external_timeout_s, 0.1, 86_400.0, "s")
@@ -605,7 +641,15 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         None => None,
     };
     let plant_launch = if plant_external { None } else { Some(opts.plant_cmd.clone()) };
-    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), controller.clone(), plant_launch)?;
+    let logger_args = match opts.live {
+        Some(LiveServe::Foxglove(addr)) => {
+            eprintln!("silrig run: serving the run live on ws://{addr} (Foxglove WebSocket protocol)");
+            vec!["--live-foxglove".to_string(), addr.to_string()]
+        }
+        None => Vec::new(),
+    };
+    let launch = (controller.clone(), plant_launch, logger_args);
+    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), launch)?;
     sup.plant_fmu = scenario.plant.fmu.clone();
     sup.controller_fmu = scenario.controller.fmu.clone();
     let mut faults = FaultSchedule::new(&scenario.faults, &out, events);

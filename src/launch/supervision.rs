@@ -183,10 +183,12 @@ pub(crate) fn end_with_launcher(command: &mut Command, signal: libc::c_int) {
 /// Start `role`'s process of the run `args` describes, tied to this process's life ([`end_with_launcher`]): the
 /// rig binary from `bin_dir`, or a user's `command` for the role (`--controller-cmd`, `--plant-cmd`) with the run's
 /// `SILRIG_*` variables, in a process group of its own so a stop or kill fault reaches whatever it started.
+/// `extra_args` follow the run's arguments on the rig binary's command line (the logger's `--live-foxglove`).
 pub fn start_process(
     role: Role,
     command: Option<&str>,
     args: &ProcessArgs,
+    extra_args: &[String],
     bin_dir: &Path,
     stdout: Stdio,
     stderr: Stdio,
@@ -215,6 +217,7 @@ pub fn start_process(
     end_with_launcher(&mut command, if role == Role::Plant { libc::SIGKILL } else { libc::SIGTERM });
     let child = command
         .args(args.to_argv())
+        .args(extra_args)
         .stdin(Stdio::null())
         .stdout(stdout)
         .stderr(stderr)
@@ -391,6 +394,8 @@ pub(crate) struct Supervisor {
     plant_cmd: Option<String>,
     /// `--plant external`: nobody here starts the plant; the logger's end is the run's.
     plant_external: bool,
+    /// What the logger's command line gets beyond the run's arguments (`--live-foxglove`), every life.
+    logger_args: Vec<String>,
     /// The FMU silrig-plant flies, if it flies one: named when the plant process dies of a signal.
     pub(crate) plant_fmu: Option<PathBuf>,
     /// The controller FMU silrig-controller flies, if any: named when the controller dies of a signal.
@@ -415,13 +420,15 @@ pub(crate) struct Supervisor {
 impl Supervisor {
     /// Start the three processes with `args`: the logger first and the plant last, staggered, because concurrent
     /// node creation with dead-node cleanup is where iceoryx2 has had races (#1880).
+    /// `launch`: where the controller comes from, the plant's command (`None`: external), and what the logger's
+    /// command line gets beyond the run's arguments.
     pub(crate) fn start(
         args: ProcessArgs,
         events: EventLog,
         restart: SupervisionOptions,
-        controller: ControllerLaunch,
-        plant: Option<Option<String>>,
+        launch: (ControllerLaunch, Option<Option<String>>, Vec<String>),
     ) -> anyhow::Result<Self> {
+        let (controller, plant, logger_args) = launch;
         let bin_dir = binary_dir()?;
         warn_if_stale(&bin_dir);
         let mut sup = Self {
@@ -431,6 +438,7 @@ impl Supervisor {
             plant_external: plant.is_none(),
             plant_fmu: None,
             controller_fmu: None,
+            logger_args,
             args,
             events,
             restart,
@@ -470,7 +478,8 @@ impl Supervisor {
             (Role::Plant, _) => self.plant_cmd.as_deref(),
             _ => None,
         };
-        let process = start_process(role, command, &args, &self.bin_dir, log.into(), writer.into())?;
+        let extra: &[String] = if role == Role::Logger { &self.logger_args } else { &[] };
+        let process = start_process(role, command, &args, extra, &self.bin_dir, log.into(), writer.into())?;
         Ok(process.with_output(output))
     }
 

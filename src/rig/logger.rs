@@ -32,6 +32,7 @@ use silrig_wire::recording::{LoggedRow, RecordingMeta, RowSink};
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
 use std::collections::BTreeMap;
+use std::net::SocketAddr;
 
 /// A plant sample waits this many newer samples for its command before it is written without one.
 pub const MISSING_COMMAND_WINDOW: u64 = 10;
@@ -255,7 +256,9 @@ pub struct LoggerLoop {
 
 impl LoggerLoop {
     /// Phase 1: the scenario, and the files, opened for appending after whatever a previous logger wrote.
-    pub fn setup(args: &ProcessArgs) -> anyhow::Result<Self> {
+    /// With `live_foxglove`, the recording's channels are also served there as they are written
+    /// ([`crate::live_foxglove`]).
+    pub fn setup(args: &ProcessArgs, live_foxglove: Option<SocketAddr>) -> anyhow::Result<Self> {
         let scenario = args.scenario()?;
         std::fs::create_dir_all(&args.out)?;
         let events = EventLog::new(&args.out, Role::Logger.label());
@@ -277,7 +280,15 @@ impl LoggerLoop {
             mode: args.mode.label().into(),
             ticks: scenario.timing.ticks(),
         };
-        let recording = McapSink::create(&args.out, &meta)?;
+        let tap = match live_foxglove {
+            Some(addr) => {
+                let tap = crate::live_foxglove::serve(addr, &args.run_id.to_string())?;
+                events.emit(None, "live-serving", format!("Foxglove WebSocket server on ws://{addr}"));
+                Some(tap)
+            }
+            None => None,
+        };
+        let recording = McapSink::create(&args.out, &meta, tap)?;
         if resume_after.is_some() {
             let file = recording.path().display().to_string();
             events.emit(resume_after, "recording-continued", format!("the recording continues in {file}"));
@@ -674,9 +685,10 @@ impl LoggerLoop {
     }
 }
 
-/// Run the logger until it has written every tick of the scenario (or SIGTERM), and write its report.
-pub fn run_logger(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
-    let mut logger = LoggerLoop::setup(args)?;
+/// Run the logger until it has written every tick of the scenario (or SIGTERM), and write its report; with
+/// `live_foxglove`, serving the recording's channels there as it goes.
+pub fn run_logger(args: &ProcessArgs, live_foxglove: Option<SocketAddr>) -> anyhow::Result<ProcessReport> {
+    let mut logger = LoggerLoop::setup(args, live_foxglove)?;
     let mut ports = LoggerPorts::connect(args)?;
     let exit = logger.serve(&mut ports)?;
     logger.finish(args, &ports, exit)

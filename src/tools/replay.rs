@@ -308,6 +308,7 @@ impl ReplayRig {
             Role::Controller,
             opts.controller_cmd.as_deref(),
             &args,
+            &[],
             &binary_dir()?,
             log.try_clone()?.into(),
             log.into(),

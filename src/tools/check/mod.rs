@@ -192,6 +192,7 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         bridge_listen: None,
         // The case's scenario says.
         command_timing: None,
+        live: None,
     }
 }
 

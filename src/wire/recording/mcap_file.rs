@@ -12,13 +12,14 @@
 //! file a reader can read up to its last flush; a restarted logger writes the next `recording-<n>.mcap`, never over
 //! an earlier one. Message log times are wall-clock (the monotonic stamps shifted by the offset between the clocks
 //! when the file was opened), so a viewer shows when the run flew; the monotonic stamps themselves are in the
-//! messages. Each message is encoded into one reused buffer: writing a row allocates nothing.
+//! messages. Each message is encoded into one reused buffer: writing a row allocates nothing. A [`RecordingTap`]
+//! given at creation sees every channel and message after the file has it.
 
 use super::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
 use super::foxglove::{self as fox, BodySignals, ProtoBuffer};
 use super::{
-    LoggedRow, RecordingMeta, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, meta_keys, recording_file_name,
-    timing_values, topics,
+    LoggedRow, RecordingMeta, RecordingTap, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, TapChannel, meta_keys,
+    recording_file_name, timing_values, topics,
 };
 use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use serde_json::{Value, json};
@@ -62,6 +63,8 @@ pub struct McapSink {
     /// Wall clock minus monotonic clock, ns.
     wall_minus_monotonic_ns: i128,
     finished: bool,
+    /// Who else sees the channels and messages (the live server), if anyone.
+    tap: Option<Box<dyn RecordingTap>>,
 }
 
 const RECEIVE_STAMP: (&str, &str) = ("t_recv_ns", "CLOCK_MONOTONIC when the logger took the sample from its queue, ns");
@@ -78,6 +81,37 @@ fn named_error(path: &Path, e: mcap::McapError) -> std::io::Error {
     std::io::Error::other(text)
 }
 
+/// A channel of `topic` with its schema in the file, announced to the tap.
+struct NewChannel<'a> {
+    topic: &'a str,
+    message_encoding: &'a str,
+    schema_name: &'a str,
+    schema_encoding: &'a str,
+    schema_data: &'a [u8],
+    metadata: &'a BTreeMap<String, String>,
+}
+
+fn add_channel(
+    writer: &mut mcap::Writer<BufWriter<File>>,
+    tap: &mut Option<Box<dyn RecordingTap>>,
+    c: NewChannel,
+) -> mcap::McapResult<u16> {
+    let schema_id = writer.add_schema(c.schema_name, c.schema_encoding, c.schema_data)?;
+    let id = writer.add_channel(schema_id, c.topic, c.message_encoding, c.metadata)?;
+    if let Some(tap) = tap {
+        tap.channel(&TapChannel {
+            id,
+            topic: c.topic,
+            message_encoding: c.message_encoding,
+            schema_name: c.schema_name,
+            schema_encoding: c.schema_encoding,
+            schema_data: c.schema_data,
+            metadata: c.metadata,
+        });
+    }
+    Ok(id)
+}
+
 // `empty_columns` has a bit per timing column.
 const _: () = assert!(TIMING_COLUMNS.len() <= 32);
 
@@ -88,8 +122,13 @@ const TRACE_MSG: &str = "silrig/msg/Trace";
 
 impl McapSink {
     /// Create the run's next recording file in `out_dir` (`recording.mcap`, or `recording-<n>.mcap` after a
-    /// logger restart), with the run's metadata and the channels that do not depend on the controller.
-    pub fn create(out_dir: &Path, meta: &RecordingMeta) -> std::io::Result<Self> {
+    /// logger restart), with the run's metadata and the channels that do not depend on the controller; `tap`, if
+    /// given, sees every channel and message after the file.
+    pub fn create(
+        out_dir: &Path,
+        meta: &RecordingMeta,
+        mut tap: Option<Box<dyn RecordingTap>>,
+    ) -> std::io::Result<Self> {
         let (path, file) = (1..)
             .map(|life| out_dir.join(recording_file_name(life)))
             .find_map(|path| match OpenOptions::new().write(true).create_new(true).open(&path) {
@@ -104,9 +143,17 @@ impl McapSink {
             .profile("")
             .library(format!("silrig {}", env!("CARGO_PKG_VERSION")));
         let mut writer = options.create(BufWriter::new(file)).map_err(named)?;
+        let no_metadata = BTreeMap::new();
         let mut add = |topic: &str, name: &str, msg: String| -> mcap::McapResult<u16> {
-            let schema_id = writer.add_schema(name, SCHEMA_ENCODING, msg.as_bytes())?;
-            writer.add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())
+            let channel = NewChannel {
+                topic,
+                message_encoding: MESSAGE_ENCODING,
+                schema_name: name,
+                schema_encoding: SCHEMA_ENCODING,
+                schema_data: msg.as_bytes(),
+                metadata: &no_metadata,
+            };
+            add_channel(&mut writer, &mut tap, channel)
         };
         let plant =
             add(topics::PLANT, &cdr::msg_name::<PlantSample>(), cdr::sample_msg::<PlantSample>(&[RECEIVE_STAMP]));
@@ -114,9 +161,16 @@ impl McapSink {
         let command =
             add(topics::COMMAND, &cdr::msg_name::<CommandSample>(), cdr::sample_msg::<CommandSample>(&[RECEIVE_STAMP]));
         let timing = add(topics::TIMING, TIMING_MSG, timing_msg());
-        let events = writer
-            .add_schema("silrig.Event", "jsonschema", &serde_json::to_vec(&event_schema()).expect("JSON"))
-            .and_then(|schema_id| writer.add_channel(schema_id, topics::EVENTS, "json", &BTreeMap::new()));
+        let event_schema = serde_json::to_vec(&event_schema()).expect("JSON");
+        let events = NewChannel {
+            topic: topics::EVENTS,
+            message_encoding: "json",
+            schema_name: "silrig.Event",
+            schema_encoding: "jsonschema",
+            schema_data: &event_schema,
+            metadata: &no_metadata,
+        };
+        let events = add_channel(&mut writer, &mut tap, events);
         let channels = Channels {
             plant: plant.map_err(named)?,
             plant_info: plant_info.map_err(named)?,
@@ -158,6 +212,7 @@ impl McapSink {
             events_read: 0,
             wall_minus_monotonic_ns: wall_ns as i128 - i128::from(crate::clock::monotonic_ns()),
             finished: false,
+            tap,
         })
     }
 
@@ -186,7 +241,11 @@ impl McapSink {
             log_time: self.wall_ns(t_log_ns),
             publish_time: self.wall_ns(t_publish_ns),
         };
-        self.writer.write_to_known_channel(&header, data).map_err(|e| named_error(&self.path, e))
+        self.writer.write_to_known_channel(&header, data).map_err(|e| named_error(&self.path, e))?;
+        if let Some(tap) = &mut self.tap {
+            tap.message(channel, header.log_time, data);
+        }
+        Ok(())
     }
 
     /// Write the message in [`Self::buffer`].
@@ -208,8 +267,15 @@ impl McapSink {
     /// Add `/body_transform` and `/aircraft`, with Foxglove's schemas.
     fn add_body_channels(&mut self) -> mcap::McapResult<(u16, u16)> {
         let mut add = |topic: &str, schema: &str| -> mcap::McapResult<u16> {
-            let schema_id = self.writer.add_schema(schema, fox::SCHEMA_ENCODING, &fox::descriptor_set(schema))?;
-            self.writer.add_channel(schema_id, topic, fox::MESSAGE_ENCODING, &BTreeMap::new())
+            let channel = NewChannel {
+                topic,
+                message_encoding: fox::MESSAGE_ENCODING,
+                schema_name: schema,
+                schema_encoding: fox::SCHEMA_ENCODING,
+                schema_data: &fox::descriptor_set(schema),
+                metadata: &BTreeMap::new(),
+            };
+            add_channel(&mut self.writer, &mut self.tap, channel)
         };
         Ok((add(topics::BODY_TRANSFORM, fox::FRAME_TRANSFORM)?, add(topics::AIRCRAFT, fox::SCENE_UPDATE)?))
     }
@@ -277,11 +343,17 @@ impl RowSink for McapSink {
             let names = cdr::field_names(trace_columns);
             let header = "trace.csv's columns (the same as silrig sim), in order; an empty value is NaN";
             let msg = cdr::float_row_msg(header, &names, trace_columns);
-            let schema_id =
-                self.writer.add_schema(TRACE_MSG, SCHEMA_ENCODING, msg.as_bytes()).map_err(|e| self.named(e))?;
             // A column whose name is no ROS field name has another field name; the channel keeps the real ones.
             let columns = BTreeMap::from([(TRACE_COLUMNS_KEY.to_string(), trace_columns.join(","))]);
-            let channel = self.writer.add_channel(schema_id, topics::TRACE, MESSAGE_ENCODING, &columns);
+            let channel = NewChannel {
+                topic: topics::TRACE,
+                message_encoding: MESSAGE_ENCODING,
+                schema_name: TRACE_MSG,
+                schema_encoding: SCHEMA_ENCODING,
+                schema_data: msg.as_bytes(),
+                metadata: &columns,
+            };
+            let channel = add_channel(&mut self.writer, &mut self.tap, channel);
             self.channels.trace = Some(channel.map_err(|e| self.named(e))?);
         }
         Ok(())
@@ -339,6 +411,9 @@ impl RowSink for McapSink {
             self.record_new_events()?;
             self.finished = true;
             self.writer.finish().map_err(|e| self.named(e))?;
+            if let Some(tap) = &mut self.tap {
+                tap.finish();
+            }
         }
         Ok(())
     }
@@ -361,7 +436,7 @@ mod tests {
             mode: "lockstep".into(),
             ticks: 1,
         };
-        let mut sink = McapSink::create(&dir, &meta).unwrap();
+        let mut sink = McapSink::create(&dir, &meta, None).unwrap();
         sink.plant(&PlantInfo::new(plant).unwrap()).unwrap();
         sink.finish().unwrap();
         let bytes = std::fs::read(sink.path()).unwrap();
@@ -370,6 +445,70 @@ mod tests {
         let mut topics: Vec<String> = summary.channels.values().map(|c| c.topic.clone()).collect();
         topics.sort();
         topics
+    }
+
+    /// What a tap was handed: channels (id, topic, message encoding, schema name, schema) and messages (id, log
+    /// time, bytes), in order.
+    #[derive(Default)]
+    struct Seen {
+        channels: Vec<(u16, String, String, String, Vec<u8>)>,
+        messages: Vec<(u16, u64, Vec<u8>)>,
+        finished: bool,
+    }
+
+    struct Tap(std::sync::Arc<std::sync::Mutex<Seen>>);
+
+    impl RecordingTap for Tap {
+        fn channel(&mut self, c: &TapChannel) {
+            let channel = (c.id, c.topic.into(), c.message_encoding.into(), c.schema_name.into(), c.schema_data.into());
+            self.0.lock().unwrap().channels.push(channel);
+        }
+        fn message(&mut self, id: u16, log_time_ns: u64, data: &[u8]) {
+            self.0.lock().unwrap().messages.push((id, log_time_ns, data.to_vec()));
+        }
+        fn finish(&mut self) {
+            self.0.lock().unwrap().finished = true;
+        }
+    }
+
+    #[test]
+    fn a_tap_is_handed_every_channel_and_message_the_file_gets() {
+        let dir = std::env::temp_dir().join(format!("silrig-mcap-sink-tap-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let meta = RecordingMeta {
+            run_id: "r".into(),
+            scenario_name: "s".into(),
+            scenario_toml: String::new(),
+            mode: "lockstep".into(),
+            ticks: 1,
+        };
+        let seen = std::sync::Arc::new(std::sync::Mutex::new(Seen::default()));
+        let mut sink = McapSink::create(&dir, &meta, Some(Box::new(Tap(seen.clone())))).unwrap();
+        let f16 = silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2]);
+        sink.plant(&PlantInfo::new(&f16).unwrap()).unwrap();
+        sink.start(&["t_s".to_string(), "alpha_deg".to_string()]).unwrap();
+        std::fs::write(dir.join("events.jsonl"), "{\"t_ns\":5,\"kind\":\"a\"}\nnot an event\n").unwrap();
+        sink.finish().unwrap();
+        let bytes = std::fs::read(sink.path()).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let seen = seen.lock().unwrap();
+        assert!(seen.finished);
+        let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+        assert_eq!(seen.channels.len(), summary.channels.len());
+        for (id, topic, encoding, schema_name, schema) in &seen.channels {
+            let c = &summary.channels[id];
+            let s = c.schema.as_ref().unwrap();
+            assert_eq!((&c.topic, &c.message_encoding, &s.name), (topic, encoding, schema_name));
+            assert_eq!(&s.data[..], &schema[..], "{topic}");
+        }
+        let file: Vec<(u16, u64, Vec<u8>)> = mcap::MessageStream::new(&bytes)
+            .unwrap()
+            .map(|m| m.map(|m| (m.channel.id, m.log_time, m.data.into_owned())).unwrap())
+            .collect();
+        // The announcement and the one whole event line.
+        assert_eq!(file.len(), 2);
+        assert_eq!(seen.messages, file);
     }
 
     #[test]

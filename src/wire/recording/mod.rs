@@ -2,7 +2,8 @@
 //! `timing.csv` in [`csv`], the MCAP recording in [`mcap_file`]), the binary form of wire samples and rows with their
 //! ROS 2 message definitions ([`cdr`], what the recording holds), the aircraft in 3-D for Foxglove ([`foxglove`]: a
 //! frame transform and a scene, protobuf), their JSON form ([`json`], what the first
-//! recordings held: replay still reads them), and the reader replay uses ([`reader`]).
+//! recordings held: replay still reads them), and the reader replay uses ([`reader`]). What the MCAP sink writes
+//! can also go, as it is written, to a [`RecordingTap`] (the logger's live Foxglove server).
 //!
 //! The logger decides what a row is (pairing, gaps, restarts); a sink only writes it, so a new format is a new sink,
 //! not a second copy of that logic.
@@ -16,6 +17,7 @@ pub mod reader;
 
 use crate::ipc::Received;
 use crate::wire::{CommandSample, PlantInfo, PlantSample};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// One row the logger writes: a plant sample as received, the command that answered it (if one did), and the
@@ -49,6 +51,38 @@ pub trait RowSink {
     fn finish(&mut self) -> std::io::Result<()> {
         self.flush()
     }
+}
+
+/// A recording channel, as the MCAP sink adds it: what a [`RecordingTap`] needs to advertise it.
+#[derive(Debug, Clone, Copy)]
+pub struct TapChannel<'a> {
+    /// The recording's channel id.
+    pub id: u16,
+    /// The topic, one of [`topics`].
+    pub topic: &'a str,
+    /// How each message is encoded (`cdr`, `protobuf`, `json`).
+    pub message_encoding: &'a str,
+    /// The schema's name.
+    pub schema_name: &'a str,
+    /// How the schema is written (`ros2msg`, `protobuf`, `jsonschema`).
+    pub schema_encoding: &'a str,
+    /// The schema itself (text, or a binary protobuf descriptor set).
+    pub schema_data: &'a [u8],
+    /// The channel's metadata (the trace's column names).
+    pub metadata: &'a BTreeMap<String, String>,
+}
+
+/// A second reader of the recording, handed each channel and each message as the MCAP sink writes them (the
+/// logger's live server, `silrig run --live foxglove`). Called from the logger's loop, after the file has the
+/// message: an implementation queues and returns, and never blocks on a reader of its own.
+pub trait RecordingTap: Send {
+    /// A new channel, before its first message.
+    fn channel(&mut self, channel: &TapChannel);
+    /// A message of channel `id`, stamped with its log time as the recording has it (wall clock, ns since the Unix
+    /// epoch).
+    fn message(&mut self, id: u16, log_time_ns: u64, data: &[u8]);
+    /// The recording is complete: nothing more comes.
+    fn finish(&mut self) {}
 }
 
 /// Columns of `timing.csv` (and fields of the recording's `/timing` messages).
