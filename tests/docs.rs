@@ -115,9 +115,7 @@ fn lines_match(expected: &[String], actual: &[&str]) -> bool {
     match expected.split_first() {
         None => actual.is_empty(),
         Some((first, rest)) if first == "..." => (0..=actual.len()).any(|skip| lines_match(rest, &actual[skip..])),
-        Some((first, rest)) => {
-            !actual.is_empty() && line_matches(first, actual[0]) && lines_match(rest, &actual[1..])
-        }
+        Some((first, rest)) => !actual.is_empty() && line_matches(first, actual[0]) && lines_match(rest, &actual[1..]),
     }
 }
 
@@ -234,7 +232,12 @@ fn every_console_example_prints_what_the_docs_say() {
         }
     });
     let failures = failures.into_inner().unwrap();
-    assert!(failures.is_empty(), "{} console example(s) differ from the docs:\n\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} console example(s) differ from the docs:\n\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }
 
 /// mdBook's anchor of a heading: lower case, spaces to `-`, only letters, digits, `-` and `_` kept.
@@ -343,7 +346,10 @@ fn the_example_matcher_leaves_open_only_what_it_is_told() {
     assert_eq!(parsed[0].command, "a \\\n  b");
     assert_eq!(parsed[0].expected, vec!["out"]);
     assert_eq!(parsed[0].status, 2);
-    assert_eq!(anchor_of("### FMUs: your modelling tool's plant (`--plant-fmu`)"), "fmus-your-modelling-tools-plant---plant-fmu");
+    assert_eq!(
+        anchor_of("### FMUs: your modelling tool's plant (`--plant-fmu`)"),
+        "fmus-your-modelling-tools-plant---plant-fmu"
+    );
 }
 
 /// The subcommands of `silrig` that have subcommands of their own.
@@ -411,7 +417,9 @@ fn commands_in_docs(text: &str) -> Vec<(usize, String, Vec<String>, Vec<String>)
                     .iter()
                     .filter(|w| w.starts_with("--") && w.len() > 2)
                     .map(|w| w.split('=').next().unwrap().trim_end_matches([',', '.', ':', '"', '\'']).to_string())
-                    .filter(|f| f.len() > 2 && f[2..].chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'))
+                    .filter(|f| {
+                        f.len() > 2 && f[2..].chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-')
+                    })
                     .collect();
                 found.push((pending_line, binary, subcommand, flags));
             }
@@ -437,7 +445,8 @@ fn every_flag_the_docs_write_exists() {
                 let out = Command::new(exe).args(&subcommand).arg("--help").output().unwrap();
                 out.status.success().then(|| String::from_utf8_lossy(&out.stdout).into_owned())
             });
-            let shown = format!("{}:{line}: `{binary} {}`", file.strip_prefix(ROOT).unwrap().display(), subcommand.join(" "));
+            let shown =
+                format!("{}:{line}: `{binary} {}`", file.strip_prefix(ROOT).unwrap().display(), subcommand.join(" "));
             let Some(help) = help else {
                 if binary != "silrig-bridge" {
                     wrong.push(format!("{shown}: no such command"));
