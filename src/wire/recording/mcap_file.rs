@@ -424,8 +424,8 @@ mod tests {
     use super::*;
     use silrig_flight::signals::{OutputSignal, PlantSignals};
 
-    /// The topics of the recording a sink writes for a plant announcing `plant`.
-    fn topics_for(plant: &PlantSignals, test: &str) -> Vec<String> {
+    /// An empty folder of this test's own and the metadata of a one-tick lockstep run.
+    fn fresh_recording(test: &str) -> (std::path::PathBuf, RecordingMeta) {
         let dir = std::env::temp_dir().join(format!("silrig-mcap-sink-{test}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
@@ -436,6 +436,12 @@ mod tests {
             mode: "lockstep".into(),
             ticks: 1,
         };
+        (dir, meta)
+    }
+
+    /// The topics of the recording a sink writes for a plant announcing `plant`.
+    fn topics_for(plant: &PlantSignals, test: &str) -> Vec<String> {
+        let (dir, meta) = fresh_recording(test);
         let mut sink = McapSink::create(&dir, &meta, None).unwrap();
         sink.plant(&PlantInfo::new(plant).unwrap()).unwrap();
         sink.finish().unwrap();
@@ -473,16 +479,7 @@ mod tests {
 
     #[test]
     fn a_tap_is_handed_every_channel_and_message_the_file_gets() {
-        let dir = std::env::temp_dir().join(format!("silrig-mcap-sink-tap-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let meta = RecordingMeta {
-            run_id: "r".into(),
-            scenario_name: "s".into(),
-            scenario_toml: String::new(),
-            mode: "lockstep".into(),
-            ticks: 1,
-        };
+        let (dir, meta) = fresh_recording("tap");
         let seen = std::sync::Arc::new(std::sync::Mutex::new(Seen::default()));
         let mut sink = McapSink::create(&dir, &meta, Some(Box::new(Tap(seen.clone())))).unwrap();
         let f16 = silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2]);
