@@ -42,7 +42,8 @@ pub const MISSING_COMMAND_WINDOW: u64 = 10;
 pub const FLUSH_PERIOD_NS: u64 = 100_000_000;
 /// Lockstep: the logger looks for new samples this often instead of being woken by each one, ns. Two wake-ups a
 /// tick of a third process on a two-core machine cost the plant and controller about a third of their speed
-/// (docs/src/explanations/timing.md, "Lockstep speed"); at 40,000 ticks/s this is 10 ticks a look, well inside the plant's window.
+/// (docs/src/explanations/timing.md, "Lockstep speed"); at 40,000 ticks/s this is 10 ticks a look, well inside the
+/// plant's window.
 pub const LOCKSTEP_POLL_NS: u64 = 250_000;
 
 const IPC_PLANT_TO_LOGGER: usize = 0;
