@@ -3,8 +3,10 @@
 //! `silrig-controller` in the other, which also gets a /dev/shm and /tmp of its own (a private mount namespace), so
 //! the run's iceoryx2 namespace exists twice, as on two machines. A realtime run answers nearly every tick; a link
 //! cut trips the plant's failsafe and the flight recovers when the link returns; a restarted controller-side bridge
-//! resumes the flight; an unreachable address, another run id and a second controller-side bridge get a clear error
-//! while the plant side flies on. Each test creates its namespaces, veth and processes and removes them in `Drop`,
+//! resumes the flight, and so does a plant-side one the launcher restarts; an unreachable address, another run id
+//! and a second controller-side bridge get a clear error while the plant side flies on. With the bridges' test
+//! impairment (`SILRIG_BRIDGE_TEST_*`: added delay, loss), same-tick across hosts is held to its budget and lost
+//! commands are counted as misses. Each test creates its namespaces, veth and processes and removes them in `Drop`,
 //! also when it fails; addresses exist only inside the namespaces. Needs root and iproute2; no timing bound is
 //! asserted.
 
@@ -135,7 +137,21 @@ fn run_id(test: &str) -> String {
 
 /// `silrig run --bridge-listen` on the plant's host.
 fn plant_host(hosts: &Hosts, run: &str, out: &Path, duration_s: &str) -> Proc {
-    Proc::spawn(Command::new("ip").args(["netns", "exec", &hosts.plant, SILRIG, "run", "--no-baseline"]).args([
+    plant_host_with(hosts, run, out, duration_s, &[], &[])
+}
+
+/// The same with more flags, and environment variables (the bridge's test impairment) for the launcher and so for
+/// the plant-side bridge it starts.
+fn plant_host_with(
+    hosts: &Hosts,
+    run: &str,
+    out: &Path,
+    duration_s: &str,
+    flags: &[&str],
+    env: &[(&str, &str)],
+) -> Proc {
+    let mut command = Command::new("ip");
+    command.args(["netns", "exec", &hosts.plant, SILRIG, "run", "--no-baseline"]).args([
         "--run-id",
         run,
         "--out",
@@ -146,7 +162,8 @@ fn plant_host(hosts: &Hosts, run: &str, out: &Path, duration_s: &str) -> Proc {
         "30",
         "--bridge-listen",
         PLANT_ADDR,
-    ]))
+    ]);
+    Proc::spawn(command.args(flags).envs(env.iter().copied()))
 }
 
 /// Mounts a private /dev/shm and /tmp, then execs its arguments. A checkout under /tmp (a CI clone) is bound back
@@ -164,11 +181,17 @@ exec "$@""#;
 /// `silrig-bridge --connect` on the controller's host, in a mount namespace of its own with a private /dev/shm and
 /// /tmp (the exec chain keeps the pid: it is the bridge's).
 fn controller_bridge(hosts: &Hosts, run: &str, out: &Path) -> Proc {
+    controller_bridge_with(hosts, run, out, &[])
+}
+
+/// The same with environment variables (the bridge's test impairment).
+fn controller_bridge_with(hosts: &Hosts, run: &str, out: &Path, env: &[(&str, &str)]) -> Proc {
     Proc::spawn(
         Command::new("ip")
             .args(["netns", "exec", &hosts.controller, "unshare", "--mount", "sh", "-c", PRIVATE_TMP, "sh"])
             .arg(env!("CARGO_MANIFEST_DIR"))
-            .args([BRIDGE, "--connect", PLANT_ADDR, "--run-id", run, "--out", out.to_str().unwrap()]),
+            .args([BRIDGE, "--connect", PLANT_ADDR, "--run-id", run, "--out", out.to_str().unwrap()])
+            .envs(env.iter().copied()),
     )
 }
 
@@ -328,6 +351,132 @@ fn a_link_cut_trips_the_failsafe_and_the_flight_recovers_also_after_a_bridge_res
     assert!(counter(&report(&out), "plant", "failsafe_ticks") > 0);
     assert!(ctl.running() || ctl.wait(Duration::from_secs(1)).0.success());
     let _ = restarted.wait_ended();
+    no_shared_memory_left(&run);
+    for dir in [out, ctl_out] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
+
+/// `name`'s summary in the report (a distribution of any process).
+fn latency<'a>(report: &'a Value, name: &str) -> &'a Value {
+    report["processes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|p| p["latencies"].as_array().unwrap())
+        .find(|l| l["name"] == name)
+        .map(|l| &l["summary"])
+        .unwrap_or_else(|| panic!("no {name} in the report"))
+}
+
+/// One flight across the hosts with the bridges' test impairment `env` on both sides and `flags` for `silrig run`;
+/// returns the plant side's report, its text and the controller-side bridge's report.
+fn impaired_flight(
+    hosts: &Hosts,
+    test: &str,
+    duration_s: &str,
+    flags: &[&str],
+    env: &[(&str, &str)],
+) -> (Value, String, Value) {
+    let (run, out, ctl_out) = (run_id(test), folder(test, "plant"), folder(test, "controller"));
+    let launcher = plant_host_with(hosts, &run, &out, duration_s, flags, env);
+    let mut bridge = controller_bridge_with(hosts, &run, &ctl_out, env);
+    let ctl = controller(bridge.pid(), &run, &ctl_out);
+    let (status, text) = launcher.wait(Duration::from_secs(120));
+    assert!(status.success(), "{text}");
+    let _ = ctl.wait(Duration::from_secs(30));
+    let (status, said) = std::mem::replace(&mut bridge, Proc(None)).wait(Duration::from_secs(30));
+    assert!(status.success(), "{said}");
+    // Both bridges said that their figures are a test's, not a network's.
+    assert!(said.contains("TEST impairment"), "{said}");
+    assert!(has_event(&out, "bridge", "bridge-test-impairment"));
+    let r = report(&out);
+    let ctl_report: Value =
+        serde_json::from_str(&std::fs::read_to_string(ctl_out.join("bridge.report.json")).unwrap()).unwrap();
+    no_shared_memory_left(&run);
+    for dir in [out, ctl_out] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    (r, text, ctl_report)
+}
+
+#[test]
+fn same_tick_across_hosts_is_held_to_its_budget_when_the_network_adds_delay() {
+    let _one = ONE_RIG.lock().unwrap_or_else(|e| e.into_inner());
+    let hosts = Hosts::new("d");
+    // 1 ms more each way: no command can come back within a 1 ms budget, so every tick holds the last command ...
+    let delay = [("SILRIG_BRIDGE_TEST_DELAY_MS", "1")];
+    let same_tick = |budget: &'static str| ["--command-timing", "same-tick", "--command-budget-ms", budget];
+    let (r, text, _) = impaired_flight(&hosts, "budget1", "3", &same_tick("1"), &delay);
+    // The plant's own sample-to-command time holds both delays. (`bridge.network_rtt`, that minus the time on the
+    // controller's host, came out as low as 4.8 ms with 3 ms each way in one run: see the bridge page.)
+    let round_trip = latency(&r, "plant.sense_to_actuate");
+    assert!(round_trip["min_us"].as_f64().unwrap() >= 2000.0, "the round trip has both delays: {round_trip}");
+    let (ticks, misses) = (counter(&r, "plant", "ticks"), counter(&r, "plant", "command_misses"));
+    assert_eq!(ticks, 301, "{text}");
+    assert_eq!(misses, ticks, "no command within 1 ms of its sample across 2 ms: {text}");
+    assert!(counter(&r, "plant", "failsafe_ticks") > 0, "the plant flew its failsafe: {text}");
+    // ... and a budget that covers the delay gets its commands on their own tick.
+    let (r, text, _) = impaired_flight(&hosts, "budget9", "3", &same_tick("9"), &delay);
+    let (ticks, misses) = (counter(&r, "plant", "ticks"), counter(&r, "plant", "command_misses"));
+    assert!(
+        misses * 2 < ticks,
+        "with a 9 ms budget most ticks get their own command: {misses} of {ticks} missed; {text}"
+    );
+    eprintln!("same-tick across hosts with 1 ms added each way and a 9 ms budget: {misses} of {ticks} missed");
+}
+
+#[test]
+fn losses_on_the_network_are_counted_as_misses_and_the_flight_goes_on() {
+    let _one = ONE_RIG.lock().unwrap_or_else(|e| e.into_inner());
+    let hosts = Hosts::new("e");
+    let loss = [("SILRIG_BRIDGE_TEST_LOSS", "0.2"), ("SILRIG_BRIDGE_TEST_SEED", "11")];
+    let (r, text, ctl_report) = impaired_flight(&hosts, "loss", "3", &[], &loss);
+    let ticks = counter(&r, "plant", "ticks");
+    assert_eq!(ticks, 301, "{text}");
+    // 20 % of the plant samples lost on the way out and 20 % of the commands on the way back: about 36 % of the
+    // ticks miss their command (expected 108, standard deviation about 8).
+    let (misses, lost_commands) = (counter(&r, "plant", "command_misses"), counter(&r, "bridge", "test_losses"));
+    let lost_samples = ctl_report["counters"]["test_losses"].as_u64().expect("the controller side counts its losses");
+    assert!(lost_commands >= 20 && lost_samples >= 20, "{lost_commands} commands, {lost_samples} samples lost");
+    assert!(misses >= lost_commands, "every lost command is a miss: {misses} misses, {lost_commands} lost; {text}");
+    assert!(misses * 10 >= ticks, "{misses} of {ticks}");
+}
+
+#[test]
+fn the_launcher_restarts_a_killed_plant_side_bridge_and_the_flight_resumes() {
+    let _one = ONE_RIG.lock().unwrap_or_else(|e| e.into_inner());
+    let hosts = Hosts::new("f");
+    let (run, out, ctl_out) = (run_id("restart"), folder("restart", "plant"), folder("restart", "controller"));
+    let launcher = plant_host(&hosts, &run, &out, "8");
+    let bridge = controller_bridge(&hosts, &run, &ctl_out);
+    let ctl = controller(bridge.pid(), &run, &ctl_out);
+    wait_for(Duration::from_secs(60), "the plant ticks", || has_event(&out, "plant", "ticking"));
+    std::thread::sleep(Duration::from_secs(1));
+    let started = events(&out)
+        .iter()
+        .find(|e| {
+            e["process"] == "launcher"
+                && e["kind"] == "process-started"
+                && e["detail"].as_str().unwrap().starts_with("bridge as pid ")
+        })
+        .map(|e| e["detail"].as_str().unwrap().to_string())
+        .expect("the launcher says which pid the plant-side bridge has");
+    let pid: i32 = started["bridge as pid ".len()..].split(',').next().unwrap().parse().unwrap();
+    let killed_ns = monotonic_ns();
+    // SAFETY: kill(2) on the plant-side bridge our launcher started and still supervises (it reaps it).
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGKILL) }, 0);
+    wait_for(Duration::from_secs(30), "the launcher restarts the bridge and the flight resumes", || {
+        let e = events(&out);
+        first_after(&e, "launcher", "process-restarted", killed_ns).is_some()
+            && first_after(&e, "plant", "controller-recovered", killed_ns).is_some()
+    });
+    let e = events(&out);
+    assert!(first_after(&e, "launcher", "process-died", killed_ns).is_some());
+    assert!(first_after(&e, "plant", "failsafe-engaged", killed_ns).is_some(), "commands stopped meanwhile");
+    let (status, text) = launcher.wait(Duration::from_secs(120));
+    assert!(status.success(), "a restarted bridge is not a failed run: {text}");
+    let _ = ctl.wait(Duration::from_secs(30));
     no_shared_memory_left(&run);
     for dir in [out, ctl_out] {
         let _ = std::fs::remove_dir_all(dir);

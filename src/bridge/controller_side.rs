@@ -201,6 +201,9 @@ impl ControllerSide {
                 self.link.say("bridge-peer-lost", text, false);
             }
         };
+        if let Some(n) = self.link.test_losses() {
+            self.rec.count("test_losses", n);
+        }
         Ok((self.rec, self.scenario, ended))
     }
 

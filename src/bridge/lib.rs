@@ -25,6 +25,7 @@
 //! - `error.rs`: [`BridgeError`], each failure phrased for the person running the bridge.
 //! - [`frame`]: what crosses the network, as bytes, checked on arrival; pure.
 //! - [`net`]: the Zenoh session, the run's keys and the inbox Zenoh's threads fill.
+//! - [`impair`]: the test-only delay and loss of arrivals (`SILRIG_BRIDGE_TEST_*`), for want of `sch_netem`.
 //! - [`peer`]: who is at the other end (joined, lost, replaced, a rival); pure.
 //! - `link.rs`: what both sides share: the Zenoh ends and the hello, the check of a peer's hello against this
 //!   run, an iceoryx2 listener's descriptor to poll.
@@ -35,6 +36,7 @@
 mod controller_side;
 mod error;
 pub mod frame;
+pub mod impair;
 mod link;
 pub mod net;
 mod options;

@@ -1,9 +1,11 @@
 //! What both sides of a bridge share: the Zenoh ends ([`Link`]: the session, the inbox its subscribers fill, the
 //! hello and what has been said), the check of a peer's hello against this run ([`read_hello`]), and an iceoryx2
-//! listener's descriptor to poll beside the inbox ([`listener_fd`]). Knows neither side, so both build on it.
+//! listener's descriptor to poll beside the inbox ([`listener_fd`]), and the test-only impairment between the two
+//! ([`super::impair`]). Knows neither side, so both build on it.
 
 use super::error::{BridgeError, zenoh_err};
 use super::frame::{Hello, Side};
+use super::impair::{Impairment, ImpairmentSpec};
 use super::net::{self, Arrival, Inbox, Keys};
 use super::options::HELLO_PERIOD;
 use silrig_rig::ProcessArgs;
@@ -30,11 +32,14 @@ pub(super) struct Link {
     pub(super) events: EventLog,
     /// Messages already said once (a rival, another run), so a hello every 100 ms does not repeat them.
     said: BTreeSet<String>,
+    /// The test-only delay and loss of arrivals, when the environment asks for them.
+    impairment: Option<Arc<Impairment>>,
 }
 
 impl Link {
     pub(super) fn open(side: Side, endpoint: &str, args: &ProcessArgs) -> Result<Self, BridgeError> {
         std::fs::create_dir_all(&args.out).map_err(|e| BridgeError::Io(format!("{}: {e}", args.out.display())))?;
+        let spec = ImpairmentSpec::from_env()?;
         let session = net::open_session(side, endpoint)?;
         let run = args.run_id.to_string();
         let keys = Keys::new(&run);
@@ -43,24 +48,36 @@ impl Link {
             .congestion_control(CongestionControl::Drop)
             .wait()
             .map_err(zenoh_err("hello publisher"))?;
-        Ok(Self {
+        let inbox = Inbox::new().map_err(|e| BridgeError::Io(format!("eventfd: {e}")))?;
+        let mut link = Self {
             endpoint: endpoint.into(),
             run,
             keys,
             session,
-            inbox: Inbox::new().map_err(|e| BridgeError::Io(format!("eventfd: {e}")))?,
+            impairment: spec.map(|spec| Arc::new(Impairment::new(spec, inbox.clone()))),
+            inbox,
             subscribers: Vec::new(),
             hello,
             epoch: ipc::new_epoch(),
             next_hello_ns: 0,
             events: EventLog::new(&args.out, "bridge"),
             said: BTreeSet::new(),
-        })
+        };
+        if let Some(spec) = spec {
+            link.say("bridge-test-impairment", format!("warning: {}", spec.describe()), false);
+        }
+        Ok(link)
+    }
+
+    /// Plant samples and commands the test impairment dropped (`None`: none asked for).
+    pub(super) fn test_losses(&self) -> Option<u64> {
+        self.impairment.as_ref().map(|i| i.lost())
     }
 
     /// Deliver what arrives on `key` to the inbox.
     pub(super) fn subscribe(&mut self, key: String, what: &'static str) -> Result<(), BridgeError> {
         let inbox = self.inbox.clone();
+        let impairment = self.impairment.clone();
         let finished = what == "finished";
         let hello = what == "hello";
         let subscriber = self
@@ -68,14 +85,18 @@ impl Link {
             .declare_subscriber(key)
             .callback(move |sample| {
                 let bytes = sample.payload().to_bytes().into_owned();
-                inbox.push(if finished {
+                let arrival = if finished {
                     Arrival::Finished
                 } else if hello {
                     Arrival::Hello { key: sample.key_expr().to_string(), bytes }
                 } else {
                     let attachment = sample.attachment().map(|a| a.to_bytes().into_owned());
                     Arrival::Sample { what, bytes, attachment }
-                });
+                };
+                match &impairment {
+                    Some(i) => i.deliver(&inbox, arrival),
+                    None => inbox.push(arrival),
+                }
             })
             .wait()
             .map_err(zenoh_err("subscriber"))?;

@@ -154,6 +154,9 @@ impl PlantSide {
             }
             self.open_command_ports()?;
         }
+        if let Some(n) = self.link.test_losses() {
+            self.rec.count("test_losses", n);
+        }
         Ok((self.rec, self.scenario, "terminated by signal".into()))
     }
 
