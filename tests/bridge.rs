@@ -280,6 +280,10 @@ fn a_controller_on_the_other_host_answers_nearly_every_tick() {
         .find(|l| l["name"] == "bridge.network_rtt")
         .unwrap();
     assert!(rtt["summary"]["count"].as_u64().unwrap() >= ticks - misses - 1, "{rtt}");
+    // The controller's report came back from its host: the run's report here has it, with its compute time.
+    assert!(has_event(&out, "bridge", "controller-report-received"), "{text}");
+    assert!(r["processes"].as_array().unwrap().iter().any(|p| p["process"] == "controller"), "{text}");
+    assert!(text.contains("controller.compute"), "{text}");
     let scenario = std::fs::read_to_string(ctl_out.join("scenario.toml")).unwrap();
     assert!(scenario.contains("command_timing = \"next-tick\""), "{scenario}");
     // The controller side ends by itself with the flight, and so does the controller.
@@ -287,6 +291,7 @@ fn a_controller_on_the_other_host_answers_nearly_every_tick() {
     assert!(status.success(), "{said}");
     let (status, said) = std::mem::replace(&mut bridge, Proc(None)).wait(Duration::from_secs(30));
     assert!(status.success(), "{said}");
+    assert!(said.contains("sent the controller's report") && !said.contains("did not confirm"), "{said}");
     let ctl_report: Value =
         serde_json::from_str(&std::fs::read_to_string(ctl_out.join("bridge.report.json")).unwrap()).unwrap();
     assert_eq!(ctl_report["ended"], "completed", "{ctl_report}");

@@ -7,7 +7,9 @@ use super::error::{BridgeError, zenoh_err};
 use super::frame::{self, CommandTrailer, Hello, RunInfo, Side};
 use super::link::{Link, listener_fd, read_hello};
 use super::net::{self, Arrival, Keys};
-use super::options::{BridgeOptions, FINISHED_GRACE, REFUSED_AFTER, RUN_INFO_TIMEOUT};
+use super::options::{
+    BridgeOptions, CONTROLLER_REPORT, FINISHED_GRACE, REFUSED_AFTER, REPORT_RECEIVED, REPORT_WAIT, RUN_INFO_TIMEOUT,
+};
 use super::peer::{PeerChange, PeerWatch};
 use super::stamps::TickStamps;
 use silrig_rig::report::Recorder;
@@ -17,6 +19,7 @@ use silrig_wire::topology::CONSUMER_BUFFER;
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{CommandSample, ControllerInfo, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use silrig_wire::{ipc, ipc::StreamPublisher, ipc::StreamSubscriber};
+use std::time::{Duration, Instant};
 use zenoh::Wait;
 use zenoh::qos::CongestionControl;
 
@@ -38,6 +41,8 @@ pub(super) struct ControllerSide {
     command_out: zenoh::pubsub::Publisher<'static>,
     info_out: zenoh::pubsub::Publisher<'static>,
     published: TickStamps,
+    /// This host's folder of the run, where the controller writes its report.
+    out: std::path::PathBuf,
     refused_since_ns: Option<u64>,
     finished_at_ns: Option<u64>,
     rec: Recorder,
@@ -53,6 +58,7 @@ impl ControllerSide {
         link.subscribe(link.keys.of("plant"), "plant")?;
         link.subscribe(link.keys.of("plant-info"), "plant-info")?;
         link.subscribe(link.keys.of("finished"), "finished")?;
+        link.subscribe(link.keys.of(REPORT_RECEIVED), REPORT_RECEIVED)?;
         link.subscribe(Keys::any_hello(Side::Plant), "hello")?;
         let mut peer = PeerWatch::new((opts.peer_timeout_ms * 1e6) as u64);
         Self::wait_for_plant_side(&mut link, &mut peer, opts.connect_timeout_s)?;
@@ -89,6 +95,7 @@ impl ControllerSide {
             command_out,
             info_out,
             published: TickStamps::new(),
+            out: args.out.clone(),
             refused_since_ns: None,
             finished_at_ns: None,
             rec,
@@ -201,10 +208,64 @@ impl ControllerSide {
                 self.link.say("bridge-peer-lost", text, false);
             }
         };
+        if ended == "completed" {
+            self.send_controller_report();
+        }
         if let Some(n) = self.link.test_losses() {
             self.rec.count("test_losses", n);
         }
         Ok((self.rec, self.scenario, ended))
+    }
+
+    /// The controller's report (`controller.report.json`, written when it ends, about with the flight) back to the
+    /// plant's host, so the run's report there is whole: waited for up to [`REPORT_WAIT`], sent (empty when there
+    /// is none: a controller that does not use the session library writes none), and its receipt waited for as long.
+    /// What happened is said here; the plant's host says it too.
+    fn send_controller_report(&mut self) {
+        let path = self.out.join("controller.report.json");
+        let run = self.link.run.clone();
+        let this_run = |text: &str| {
+            serde_json::from_str::<serde_json::Value>(text).is_ok_and(|v| v["run_id"].as_str() == Some(run.as_str()))
+        };
+        let deadline = Instant::now() + REPORT_WAIT;
+        let report = loop {
+            match std::fs::read_to_string(&path) {
+                Ok(text) if this_run(&text) => break Some(text),
+                _ if Instant::now() >= deadline => break None,
+                _ => std::thread::sleep(Duration::from_millis(20)),
+            }
+        };
+        let trailer = CommandTrailer { bridge_epoch: self.link.epoch, residence_ns: 0 };
+        let sent = self
+            .link
+            .session
+            .put(self.link.keys.of(CONTROLLER_REPORT), report.clone().unwrap_or_default())
+            .attachment(trailer.to_bytes().to_vec())
+            .congestion_control(CongestionControl::Block)
+            .wait();
+        let received = sent.is_ok() && {
+            let deadline = monotonic_ns() + REPORT_WAIT.as_nanos() as u64;
+            loop {
+                let arrivals = self.link.inbox.take();
+                if arrivals.iter().any(|a| matches!(a, Arrival::Sample { what: REPORT_RECEIVED, .. })) {
+                    break true;
+                }
+                if monotonic_ns() >= deadline {
+                    break false;
+                }
+                net::wait_readable(&[self.link.inbox.fd()], deadline);
+            }
+        };
+        let what = match &report {
+            Some(_) => format!("the controller's report ({})", path.display()),
+            None => format!("word that the controller wrote no report within {REPORT_WAIT:?} of the end"),
+        };
+        let text = if received {
+            format!("sent {what} to the plant's host")
+        } else {
+            format!("warning: sent {what} to the plant's host, which did not confirm it within {REPORT_WAIT:?}")
+        };
+        self.link.say("controller-report-sent", text, false);
     }
 
     fn on_arrival(&mut self, arrival: Arrival) -> anyhow::Result<()> {

@@ -45,7 +45,10 @@ mod plant_side;
 mod stamps;
 
 pub use error::BridgeError;
-pub use options::{BridgeOptions, FINISHED_GRACE, HELLO_PERIOD, REFUSED_AFTER, RUN_INFO_TIMEOUT};
+pub use options::{
+    BridgeOptions, CONTROLLER_REPORT, FINISHED_GRACE, HELLO_PERIOD, REFUSED_AFTER, REPORT_ABSENT, REPORT_RECEIVED,
+    REPORT_WAIT, RUN_INFO_TIMEOUT,
+};
 
 use controller_side::ControllerSide;
 use frame::Side;

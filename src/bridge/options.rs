@@ -15,6 +15,15 @@ pub const REFUSED_AFTER: Duration = Duration::from_millis(1500);
 pub const RUN_INFO_TIMEOUT: Duration = Duration::from_secs(5);
 /// The controller side ends this long after the plant's last sample (the controller has ended by then).
 pub const FINISHED_GRACE: Duration = Duration::from_millis(500);
+/// At the end the controller side waits this long for the controller's report, then as long for the plant side's
+/// receipt of it.
+pub const REPORT_WAIT: Duration = Duration::from_secs(3);
+/// Key of the controller's report on its way to the plant's host (empty: there is none).
+pub const CONTROLLER_REPORT: &str = "controller-report";
+/// Key of the plant side's receipt of it.
+pub const REPORT_RECEIVED: &str = "controller-report-received";
+/// The plant side's event when the report cannot be had: none was written, or it was unusable.
+pub const REPORT_ABSENT: &str = "controller-report-absent";
 
 /// What `silrig-bridge` is asked to do.
 #[derive(Debug, Clone, clap::Args)]

@@ -7,7 +7,7 @@ use super::error::zenoh_err;
 use super::frame::{self, CommandTrailer, Hello, RunInfo, Side};
 use super::link::{Link, listener_fd, read_hello};
 use super::net::{self, Arrival, Keys};
-use super::options::BridgeOptions;
+use super::options::{BridgeOptions, CONTROLLER_REPORT, REPORT_ABSENT, REPORT_RECEIVED};
 use super::peer::{PeerChange, PeerWatch};
 use super::stamps::TickStamps;
 use silrig_rig::report::Recorder;
@@ -41,6 +41,8 @@ pub(super) struct PlantSide {
     finished_out: zenoh::pubsub::Publisher<'static>,
     _queryable: zenoh::query::Queryable<()>,
     sent: TickStamps,
+    /// The run's folder, where the controller's report from the other host goes.
+    out: std::path::PathBuf,
     rec: Recorder,
     _plant_stream: ipc::StreamService<PlantSample>,
     // Dropped last: the services and ports above belong to it.
@@ -65,6 +67,7 @@ impl PlantSide {
         let mut link = Link::open(Side::Plant, endpoint, args)?;
         link.subscribe(link.keys.of("command"), "command")?;
         link.subscribe(link.keys.of("controller-info"), "controller-info")?;
+        link.subscribe(link.keys.of(CONTROLLER_REPORT), CONTROLLER_REPORT)?;
         link.subscribe(Keys::any_hello(Side::Controller), "hello")?;
         let info = RunInfo { scenario_toml, env: args.to_env() };
         let reply = serde_json::to_vec(&info)?;
@@ -109,6 +112,7 @@ impl PlantSide {
             finished_out,
             _queryable: queryable,
             sent: TickStamps::new(),
+            out: args.out.clone(),
             rec,
             link,
             _plant_stream: plant_stream,
@@ -194,6 +198,31 @@ impl PlantSide {
         Ok(())
     }
 
+    /// The controller's report from the other host, written beside the plant's as `controller.report.json` (the
+    /// launcher waits for it before it writes the run's report), or word that there is none; confirmed either way.
+    fn take_controller_report(&mut self, bytes: &[u8]) {
+        let path = self.out.join("controller.report.json");
+        let (kind, text) = if bytes.is_empty() {
+            (REPORT_ABSENT, "the controller on the other host wrote no report".to_string())
+        } else {
+            let checked = std::str::from_utf8(bytes)
+                .map_err(|e| e.to_string())
+                .and_then(|t| serde_json::from_str::<serde_json::Value>(t).map(|_| t).map_err(|e| e.to_string()))
+                .and_then(|t| silrig_flight::files::write_atomically(&path, t).map_err(|e| e.to_string()));
+            match checked {
+                Ok(()) => ("controller-report-received", format!("the controller's report, as {}", path.display())),
+                Err(e) => (REPORT_ABSENT, format!("the controller's report from the other host is unusable: {e}")),
+            }
+        };
+        self.link.say(kind, text, false);
+        let _ = self
+            .link
+            .session
+            .put(self.link.keys.of(REPORT_RECEIVED), Vec::<u8>::new())
+            .congestion_control(CongestionControl::Block)
+            .wait();
+    }
+
     /// The plant sees a command publisher only once a controller is there to answer: then it starts flying.
     fn open_command_ports(&mut self) -> anyhow::Result<()> {
         if self.commands.is_none() && self.peer.alive().is_some_and(|h| h.controller_connected) {
@@ -231,6 +260,10 @@ impl PlantSide {
                 let serving = self.peer.alive().map(|h| h.epoch);
                 if serving.is_none() || trailer.map(|t| t.bridge_epoch) != serving {
                     self.rec.count("samples_from_unserved_bridges", 1);
+                    return Ok(());
+                }
+                if what == CONTROLLER_REPORT {
+                    self.take_controller_report(&bytes);
                     return Ok(());
                 }
                 let Some((commands, infos)) = self.commands.as_mut() else { return Ok(()) };

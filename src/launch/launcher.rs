@@ -663,6 +663,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     faults.release_stopped(&mut sup);
     sup.stop_all()?;
     if let Some(b) = bridge.as_mut() {
+        b.wait_for_controller_report(&out);
         b.stop()?;
         sup.failures.extend(b.failure.take());
     }
@@ -685,8 +686,11 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     for role in Role::ALL {
         match read_report(&out, role.label()) {
             Ok(r) => processes.push(r),
-            // It reports on its own host.
-            Err(_) if role == Role::Controller && bridge.is_some() => {}
+            // It runs on the other host, which sends its report back at the end (see the bridge's events).
+            Err(_) if role == Role::Controller && bridge.is_some() => notes.push(
+                "controller: on the other host; its report did not come back (the controller-side bridge sends it                  when the flight ends: see events.jsonl), so the run's timing is what this host measured"
+                    .to_string(),
+            ),
             // A plant of the user's own that speaks the contract itself need not write one either; had it failed,
             // its exit is a failure already.
             Err(_) if role == Role::Plant && plant_external => notes.push(

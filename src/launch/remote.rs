@@ -6,8 +6,8 @@ use crate::program::binary_dir;
 use crate::supervision::{ChildProcess, end_with_launcher};
 use anyhow::Context;
 use silrig_rig::ProcessArgs;
-use silrig_rig::events::EventLog;
-use std::path::PathBuf;
+use silrig_rig::events::{EventLog, read_events};
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -35,6 +35,9 @@ pub(crate) struct RemoteBridge {
 const QUICK_DEATH: Duration = Duration::from_secs(5);
 /// See [`QUICK_DEATH`].
 const MAX_QUICK_DEATHS: u32 = 3;
+/// How long the launcher waits for the controller's report from the other host: the controller side's grace, its
+/// wait for the file and the network, with room.
+const REPORT_BACK_WAIT: Duration = Duration::from_secs(6);
 
 impl RemoteBridge {
     /// Start the plant-side bridge listening on `listen` for the run `args` describes.
@@ -103,6 +106,25 @@ impl RemoteBridge {
         eprintln!("silrig run: {died}; the controller's commands stop until it is back; restarting it in {pause:?}");
         self.restart_at = Some(Instant::now() + pause);
         Ok(())
+    }
+
+    /// Before it is stopped: the controller-side bridge sends the controller's report when the flight ends (after
+    /// a grace of 0.5 s, waiting up to 3 s for the controller to write it), and this side writes it into the run's
+    /// folder. Wait for it, or for word that there is none, up to [`REPORT_BACK_WAIT`] (only if the plant flew).
+    pub(crate) fn wait_for_controller_report(&mut self, out: &Path) {
+        let flew = read_events(out).iter().any(|e| e.process == "plant" && e.kind == "ticking");
+        let deadline = Instant::now() + REPORT_BACK_WAIT;
+        while flew && Instant::now() < deadline && matches!(self.child.poll(), Ok(None)) {
+            // The kinds the plant-side bridge emits (silrig-bridge's CONTROLLER_REPORT handling).
+            let done = read_events(out).iter().any(|e| {
+                e.process == "bridge"
+                    && (e.kind == "controller-report-received" || e.kind == "controller-report-absent")
+            });
+            if done {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
     }
 
     /// SIGTERM, and reap (SIGKILL after 5 s).
