@@ -280,6 +280,43 @@ surface = "elevator"
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// An elevator hard-over drives our controller's demand past the ±90 deg the plant accepts (the chaos soak's
+/// departure: its refused commands left the plant on the failsafe trim). Our controller limits its commands to the
+/// announced range, as a flight computer does, so nothing is refused and the rig still flies what `silrig sim` flies.
+#[test]
+fn our_controller_limits_its_demand_to_the_plants_range_after_a_hard_over() {
+    let dir = temp_dir("hard-over");
+    let scenario = dir.join("hard-over.toml");
+    let plan = "\n[[faults]]\nat_s = 1.0\nduration_s = 0.5\ntarget = \"plant\"\naction = \"actuator-hard-over\"\n\
+                surface = \"elevator\"\nlimit = \"min\"\n";
+    let base = std::fs::read_to_string(config("robust")).unwrap();
+    std::fs::write(&scenario, format!("{base}{plan}")).unwrap();
+    lockstep_matches_sim(scenario.to_str().unwrap(), "hard-over-rig");
+    // The same flight once more, for its report and trace.
+    let id = run_id("hard-over-limits");
+    let out = dir.join("again");
+    let child = silrig_run(&[
+        scenario.to_str().unwrap(),
+        "--mode",
+        "lockstep",
+        "--run-id",
+        &id,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let o = wait_with_watchdog(child, Duration::from_secs(60));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+    assert_eq!(process(&report(&out), "controller")["counters"]["commands_refused"], 0);
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let header: Vec<&str> = trace.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|c| *c == "elevator_cmd_deg").unwrap();
+    let elevator: Vec<f64> = trace.lines().skip(1).map(|l| l.split(',').nth(col).unwrap().parse().unwrap()).collect();
+    assert!(elevator.iter().all(|e| e.abs() <= 90.0), "within the range");
+    assert!(elevator.iter().any(|e| e.abs() == 90.0), "the demand reached the limit: the test tests something");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn two_rigs_with_different_run_ids_do_not_interfere() {
     let dir = temp_dir("two");

@@ -524,6 +524,8 @@ pub fn run(s: &Scenario) -> Result<Trace, SimError> {
     for tick in 0..=steps {
         let snap = plant.snapshot();
         let (surfaces, diag) = controller.step(&measurement(&snap), &setpoint, dt);
+        // Limited to what the plant accepts, as the rig's controller limits them (`AttitudeLaw`).
+        let surfaces = surfaces.limited(silrig_model::actuator::SURFACE_CMD_LIMIT_DEG);
         write_attitude_diagnostics(&mut diagnostics, &diag, &controller);
         // The throttle is held: the controller commands surfaces only.
         pending.push_back(ActuatorCommand { surfaces, throttle: acting.throttle });

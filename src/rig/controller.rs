@@ -66,6 +66,8 @@ pub struct AttitudeLaw {
     setpoint: [f64; 3],
     outputs: Option<F16Outputs>,
     surfaces: [usize; 3],
+    /// The plant's accepted range of each of `surfaces`, deg.
+    ranges: [(f64, f64); 3],
 }
 
 impl AttitudeLaw {
@@ -77,6 +79,7 @@ impl AttitudeLaw {
             setpoint: setpoint_rad(scenario),
             outputs: None,
             surfaces: [0, 1, 2],
+            ranges: [(f64::NEG_INFINITY, f64::INFINITY); 3],
         }
     }
 }
@@ -89,6 +92,7 @@ impl Controller for AttitudeLaw {
     fn connect(&mut self, plant: &PlantSignals) -> Result<(), String> {
         self.outputs = Some(F16Outputs::resolve(plant)?);
         self.surfaces = [plant.input("aileron")?, plant.input("elevator")?, plant.input("rudder")?];
+        self.ranges = self.surfaces.map(|i| (plant.inputs[i].min, plant.inputs[i].max));
         Ok(())
     }
 
@@ -97,8 +101,14 @@ impl Controller for AttitudeLaw {
         let snap = outputs.snapshot(sample.header.tick, sample.t_sim_s, sample.outputs());
         let (surfaces, diag) = self.controller.step(&measurement(&snap), &self.setpoint, dt_s);
         write_attitude_diagnostics(diagnostics, &diag, &self.controller);
-        let [a, e, r] = self.surfaces;
-        (command[a], command[e], command[r]) = (surfaces.aileron_deg, surfaces.elevator_deg, surfaces.rudder_deg);
+        // Limited to the range the plant accepts, as a flight computer limits its commands: a surface stuck
+        // hard-over drives the sliding surface, and with it the demand, past any travel (the soak's elevator
+        // hard-over: -91.8 deg against a ±90 range), and a refused command would leave the plant on its failsafe
+        // trim. The actuator saturates long before either limit; a NaN stays NaN and is refused.
+        let demanded = [surfaces.aileron_deg, surfaces.elevator_deg, surfaces.rudder_deg];
+        for ((&input, &(min, max)), value) in self.surfaces.iter().zip(&self.ranges).zip(demanded) {
+            command[input] = if value.is_nan() { value } else { value.clamp(min, max) };
+        }
     }
 
     fn checkpoint(&self) -> Option<String> {

@@ -127,6 +127,19 @@ pub struct SurfaceCommand {
     pub rudder_deg: f64,
 }
 
+impl SurfaceCommand {
+    /// Each surface limited to ±`limit_deg`, as a flight computer limits what it commands (a NaN stays NaN, to be
+    /// refused): a surface stuck hard-over drives the sliding surface, and the demand, past any travel.
+    pub fn limited(self, limit_deg: f64) -> Self {
+        let limit = |v: f64| if v.is_nan() { v } else { v.clamp(-limit_deg, limit_deg) };
+        Self {
+            aileron_deg: limit(self.aileron_deg),
+            elevator_deg: limit(self.elevator_deg),
+            rudder_deg: limit(self.rudder_deg),
+        }
+    }
+}
+
 /// Per-step values engineers plot (paper Fig. 2 and 3).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ControllerDiagnostics {
@@ -318,6 +331,15 @@ mod tests {
         assert!(u.elevator_deg < 0.0);
         // The weights moved by Gamma S h dt.
         assert!(c.networks()[1].weight_norm() > 0.0);
+    }
+
+    #[test]
+    fn a_limited_command_keeps_what_is_within_and_a_nan() {
+        let demand = SurfaceCommand { aileron_deg: 12.5, elevator_deg: -91.8, rudder_deg: f64::NAN };
+        let limited = demand.limited(90.0);
+        assert_eq!((limited.aileron_deg, limited.elevator_deg), (12.5, -90.0));
+        assert!(limited.rudder_deg.is_nan(), "a NaN is a bug to be refused, not a command to limit");
+        assert_eq!(SurfaceCommand { rudder_deg: 95.0, ..demand }.limited(90.0).rudder_deg, 90.0);
     }
 
     #[test]
