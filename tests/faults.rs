@@ -341,9 +341,10 @@ fn malformed_fault_plans_are_rejected_naming_the_problem() {
 }
 
 #[test]
-fn the_fault_table_is_in_simulated_time_with_the_wall_clock_beside_it_after_a_stall() {
-    // The plant stands still for 0.5 s from 1 s: simulated time falls 0.5 s behind the wall clock, and the
-    // controller kill the launcher sends 2 s after tick 0 lands near 1.5 s of flight.
+fn process_faults_land_on_their_simulated_time_after_a_stall_with_the_wall_clock_beside_it() {
+    // The plant stands still for 0.5 s from 1 s: simulated time falls 0.5 s behind the wall clock. The controller
+    // kill planned at 2 s still lands at 2 s of flight (the launcher waits for the plant's tick 200), which is about
+    // 2.5 s of wall time.
     let (code, text, r, _out) = run(
         "sim-time",
         &["--duration-s", "3", "--fault", "plant:stop@1s,for=0.5s", "--fault", "controller:kill@2s,restart_after=0.3s"],
@@ -351,7 +352,7 @@ fn the_fault_table_is_in_simulated_time_with_the_wall_clock_beside_it_after_a_st
     assert_eq!(code, Some(0), "{text}");
     let kill = r["faults"].as_array().unwrap().iter().find(|f| f["fault"].as_str().unwrap().contains("kill")).unwrap();
     let (sim, wall) = (kill["injected_at_s"].as_f64().unwrap(), kill["injected_at_wall_s"].as_f64().unwrap());
-    assert!((wall - 2.0).abs() < 0.1, "wall {wall}");
-    assert!(wall - sim > 0.3 && sim > 1.0, "simulated {sim} against wall {wall}");
+    assert!(sim >= 2.0, "not before its tick: simulated {sim}");
+    assert!(wall - sim > 0.3, "the stall held simulated time back: simulated {sim} against wall {wall}");
     assert!(text.contains("faults (simulated s)") && text.contains("of wall time)"), "{text}");
 }

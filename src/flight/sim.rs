@@ -356,7 +356,9 @@ impl PlantRunner {
         let deg = f64::to_radians;
         let envelope = [
             ("vt_fps", x.vt_fps, 1.0, 5_000.0),
-            ("alpha_rad", x.alpha_rad, -deg(90.0), deg(90.0)),
+            // The model flies any alpha (only |beta| is bounded): a tumbling aircraft passes 90 deg, and its
+            // checkpoint must resume (the soak's plant, restarted at alpha -139 deg, could not).
+            ("alpha_rad", x.alpha_rad, -1e3, 1e3),
             ("beta_rad", x.beta_rad, -deg(90.0), deg(90.0)),
             ("phi_rad", x.phi_rad, -1e3, 1e3),
             ("theta_rad", x.theta_rad, -deg(90.0), deg(90.0)),
@@ -575,6 +577,10 @@ mod tests {
         assert_eq!(refused(&|c| c.state.alt_ft = f64::NAN), "state.alt_ft = NaN is outside -10000..1e6");
         assert_eq!(refused(&|c| c.state.q_radps = 1e300), "state.q_radps = 1e300 is outside -100..100");
         assert!(refused(&|c| c.actuator_positions[1] = 90.0).starts_with("elevator position 90 is outside its travel"));
+        // A tumbling aircraft the model still flies resumes.
+        let mut tumbling = good;
+        tumbling.state.alpha_rad = (-139f64).to_radians();
+        assert_eq!(PlantRunner::new(&scenario).unwrap().restore(&tumbling, ticks), Ok(()));
         let mut later = good;
         later.tick = 500;
         assert_eq!(runner.restore(&later, ticks), Ok(()));

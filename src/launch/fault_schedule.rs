@@ -1,10 +1,15 @@
-//! The process faults of a run's plan (kill, term, stop), carried out by `silrig run` with signals at their time on
-//! the plant's clock (seconds from its tick 0, read from its `ticking` event), with their follow-ups: SIGCONT after
-//! a stop, a restart after a kill or term. Loop and plant-model faults are the processes' own business.
+//! The process faults of a run's plan (kill, term, stop), carried out by `silrig run` with signals at their
+//! simulated time: when the plant has published the tick of that time, read from its tick beacon
+//! ([`silrig_rig::tick_beacon`]; a plant that does not use our library has none, and then the time counts on the
+//! wall clock from its tick 0, read from its `ticking` event). Their follow-ups: SIGCONT after a stop (its length is
+//! wall time: a stopped plant's simulated time stands still), a restart after a kill or term. Loop and plant-model
+//! faults are the processes' own business.
 
 use super::supervision::Supervisor;
 use silrig_flight::fault::{Fault, FaultAction};
 use silrig_rig::events::EventLog;
+use silrig_rig::tick_beacon::TickBeacon;
+use silrig_wire::ipc::RunId;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -23,16 +28,20 @@ pub(crate) struct FaultSchedule {
     events: EventLog,
     /// CLOCK_MONOTONIC of the plant's tick 0, once it has started ticking.
     t0_ns: Option<u64>,
+    run: RunId,
+    dt_s: f64,
+    /// The plant's newest tick, once it has created the beacon.
+    beacon: Option<TickBeacon>,
 }
 
 impl FaultSchedule {
-    pub(crate) fn new(faults: &[Fault], out: &Path, events: EventLog) -> Self {
+    pub(crate) fn new(faults: &[Fault], out: &Path, events: EventLog, run: &RunId, dt_s: f64) -> Self {
         let plan = faults
             .iter()
             .filter(|f| f.action().is_process_fault())
             .map(|f| PlannedFault { fault: f.clone(), injected: false, follow_up: None })
             .collect();
-        Self { plan, out: out.to_path_buf(), events, t0_ns: None }
+        Self { plan, out: out.to_path_buf(), events, t0_ns: None, run: run.clone(), dt_s, beacon: None }
     }
 
     /// Inject the faults that are due and send the SIGCONTs that are due.
@@ -44,9 +53,18 @@ impl FaultSchedule {
             self.t0_ns = super::fault_report::plant_t0_ns(&self.out);
         }
         let Some(t0) = self.t0_ns else { return Ok(()) };
+        if self.beacon.is_none() {
+            self.beacon = TickBeacon::open(&self.run).ok();
+        }
         let now_ns = silrig_wire::clock::monotonic_ns();
+        let sim_s = self.beacon.as_ref().map(|b| b.newest().map_or(-1.0, |tick| tick as f64 * self.dt_s));
         for pf in self.plan.iter_mut() {
-            if !pf.injected && now_ns >= t0 + (pf.fault.at_s * 1e9) as u64 {
+            let due = match sim_s {
+                // The tick at or after the fault's time is out (a time between two ticks acts at the later one).
+                Some(sim_s) => sim_s >= pf.fault.at_s - 1e-9 * self.dt_s,
+                None => now_ns >= t0 + (pf.fault.at_s * 1e9) as u64,
+            };
+            if !pf.injected && due {
                 pf.injected = true;
                 inject(pf, sup, &self.events)?;
             }

@@ -652,7 +652,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), launch)?;
     sup.plant_fmu = scenario.plant.fmu.clone();
     sup.controller_fmu = scenario.controller.fmu.clone();
-    let mut faults = FaultSchedule::new(&scenario.faults, &out, events);
+    let mut faults = FaultSchedule::new(&scenario.faults, &out, events, &run_id, scenario.timing.dt_s);
     let mut live = (!opts.quiet).then(|| LiveLine::new(&run_id));
     let supervised = supervise(&mut sup, &mut faults, &scenario, &mut bridge, live.as_mut());
     if let Some(live) = live {

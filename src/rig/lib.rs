@@ -14,7 +14,8 @@
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
-//!   snapshots `silrig run` and `silrig top` read.
+//!   snapshots `silrig run` and `silrig top` read; [`tick_beacon`]: the plant's newest tick, by which the
+//!   launcher times process faults.
 //! - Here: the arguments and options every process takes ([`ProcessArgs`], [`ProcessOptions`]), the
 //!   checkpoint writer, and how a process ends.
 //!
@@ -43,6 +44,7 @@ pub mod report;
 pub mod session;
 pub mod signals;
 pub mod status;
+pub mod tick_beacon;
 
 use silrig_flight::files::write_atomically;
 use silrig_flight::scenario::Scenario;

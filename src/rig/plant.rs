@@ -24,6 +24,7 @@ use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::plant_model::{ActuatorFlags, PlantModel};
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
+use super::tick_beacon::TickBeacon;
 use super::{ProcessArgs, RigMode, signals};
 use anyhow::Context;
 use silrig_flight::role::Role;
@@ -187,6 +188,8 @@ pub struct PlantLoop {
     /// them to the logger's `timing.csv`.
     wake_lateness_ns: i64,
     step_exec_ns: u64,
+    /// Where the launcher reads the newest tick (see [`super::tick_beacon`]).
+    beacon: Option<TickBeacon>,
 }
 
 impl PlantLoop {
@@ -224,6 +227,11 @@ impl PlantLoop {
         ]);
         rec.start_status(&args.run_id);
         let events = EventLog::new(&args.out, Role::Plant.label());
+        // Without it the launcher schedules process faults on the wall clock from tick 0, as it must for a plant
+        // that does not use this library.
+        let beacon = TickBeacon::create(&args.run_id)
+            .map_err(|e| eprintln!("silrig-plant: warning: no tick beacon ({e}): process faults follow the wall clock"))
+            .ok();
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
         let info = PlantInfo::new(model.signals()).map_err(|e| anyhow::anyhow!("the plant's announcement: {e}"))?;
@@ -267,6 +275,7 @@ impl PlantLoop {
             rec,
             events,
             loop_faults,
+            beacon,
         })
     }
 
@@ -526,6 +535,9 @@ impl PlantLoop {
             ports.publisher.send(self.sim_tick, &sample)?
         };
         self.publish_ns[(self.sim_tick % PUBLISH_STAMPS as u64) as usize] = receipt.t_send_ns;
+        if let Some(beacon) = &self.beacon {
+            beacon.publish(self.sim_tick);
+        }
         Ok(receipt)
     }
 
