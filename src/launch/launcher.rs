@@ -688,7 +688,8 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
             Ok(r) => processes.push(r),
             // It runs on the other host, which sends its report back at the end (see the bridge's events).
             Err(_) if role == Role::Controller && bridge.is_some() => notes.push(
-                "controller: on the other host; its report did not come back (the controller-side bridge sends it                  when the flight ends: see events.jsonl), so the run's timing is what this host measured"
+                "controller: on the other host; its report did not come back (the controller-side bridge sends it \
+                 when the flight ends: see events.jsonl), so the run's timing is what this host measured"
                     .to_string(),
             ),
             // A plant of the user's own that speaks the contract itself need not write one either; had it failed,
