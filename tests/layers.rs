@@ -24,7 +24,7 @@ const LAYERS: [(&str, &[&str]); 8] = [
 /// Zenoh bridge, and the F-16 as an FMU (the model alone: an importer loads it into any process).
 const LEAVES: [(&str, &[&str]); 4] = [
     ("client", &["wire", "rig"]),
-    ("bridge", &["flight", "wire", "rig"]),
+    ("bridge", &["model", "flight", "wire", "rig"]),
     ("fmu_f16", &["model", "fmu-f16-description"]),
     ("fmu_f16_description", &["model"]),
 ];
