@@ -6,7 +6,7 @@
 //! resumes the flight, and so does a plant-side one the launcher restarts; an unreachable address, another run id
 //! and a second controller-side bridge get a clear error while the plant side flies on. With the bridges' test
 //! impairment (`SILRIG_BRIDGE_TEST_*`: added delay, loss), same-tick across hosts is held to its budget and lost
-//! commands are counted as misses. Each test creates its namespaces, veth and processes and removes them in `Drop`,
+//! commands are counted as misses; a bridge that says it speaks another wire layout is refused. Each test creates its namespaces, veth and processes and removes them in `Drop`,
 //! also when it fails; addresses exist only inside the namespaces. Needs root and iproute2; no timing bound is
 //! asserted.
 
@@ -538,6 +538,14 @@ fn another_run_id_and_a_second_controller_side_bridge_are_refused_while_the_plan
     let (status, said) = controller_bridge(&hosts, &run, &other_out).wait(Duration::from_secs(30));
     assert_eq!(status.code(), Some(2), "{said}");
     assert!(said.contains(&format!("run `{run}` already has a controller-side bridge")), "{said}");
+
+    // A controller-side bridge that speaks another wire layout, as a build of another commit would (a test-only
+    // setting makes it say so; the refusal is the real one).
+    let other_build = [("SILRIG_BRIDGE_TEST_LAYOUT_VERSION", "999")];
+    let (status, said) = controller_bridge_with(&hosts, &run, &other_out, &other_build).wait(Duration::from_secs(30));
+    assert_eq!(status.code(), Some(2), "{said}");
+    assert!(said.contains("speaks wire layout version") && said.contains("this build speaks 999"), "{said}");
+    assert!(said.contains("build silrig on both hosts from the same commit"), "{said}");
 
     let (status, text) = launcher.wait(Duration::from_secs(120));
     assert!(status.success(), "{text}");

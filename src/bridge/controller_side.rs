@@ -17,7 +17,7 @@ use silrig_rig::{ProcessArgs, SCENARIO_ENV, signals};
 use silrig_wire::clock::monotonic_ns;
 use silrig_wire::topology::CONSUMER_BUFFER;
 use silrig_wire::topology::Stream;
-use silrig_wire::wire::{CommandSample, ControllerInfo, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
+use silrig_wire::wire::{CommandSample, ControllerInfo, PlantInfo, PlantSample};
 use silrig_wire::{ipc, ipc::StreamPublisher, ipc::StreamSubscriber};
 use std::time::{Duration, Instant};
 use zenoh::Wait;
@@ -116,8 +116,8 @@ impl ControllerSide {
                     let (theirs, ours) = (h.run_id, link.run.clone());
                     return Err(BridgeError::OtherRun { endpoint: link.endpoint.clone(), theirs, ours });
                 }
-                if h.layout_version != WIRE_LAYOUT_VERSION {
-                    let (theirs, ours) = (h.layout_version, WIRE_LAYOUT_VERSION);
+                if h.layout_version != link.layout_version {
+                    let (theirs, ours) = (h.layout_version, link.layout_version);
                     return Err(BridgeError::OtherLayout { endpoint: link.endpoint.clone(), theirs, ours });
                 }
                 peer.heard(h, monotonic_ns());
@@ -188,11 +188,11 @@ impl ControllerSide {
             self.forward_commands()?;
             let connected =
                 self.plant_stream.number_of_subscribers() >= 1 && self.command_stream.number_of_publishers() >= 1;
-            let run_id = self.link.run.clone();
+            let (run_id, layout_version) = (self.link.run.clone(), self.link.layout_version);
             self.link.say_hello(|epoch| Hello {
                 side: Side::Controller,
                 run_id,
-                layout_version: WIRE_LAYOUT_VERSION,
+                layout_version,
                 epoch,
                 serving: None,
                 controller_connected: connected,
@@ -272,7 +272,7 @@ impl ControllerSide {
         let now = monotonic_ns();
         match arrival {
             Arrival::Hello { bytes, .. } => {
-                let h = match read_hello(&bytes, &self.link.run) {
+                let h = match read_hello(&bytes, &self.link.run, self.link.layout_version) {
                     Ok(h) => h,
                     Err(problem) => {
                         self.link.say("bridge-peer-refused", format!("{problem}: ignored"), true);

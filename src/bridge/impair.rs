@@ -1,5 +1,6 @@
 //! A bad network on demand, for tests: added delay and loss on what a bridge receives, set by environment variables
-//! (`SILRIG_BRIDGE_TEST_DELAY_MS`, `SILRIG_BRIDGE_TEST_LOSS`, `SILRIG_BRIDGE_TEST_SEED`). This kernel has no
+//! (`SILRIG_BRIDGE_TEST_DELAY_MS`, `SILRIG_BRIDGE_TEST_LOSS`, `SILRIG_BRIDGE_TEST_SEED`); and a peer that says it
+//! speaks another wire layout, as a build of another commit would (`SILRIG_BRIDGE_TEST_LAYOUT_VERSION`). This kernel has no
 //! `sch_netem` (the usual way to make a link slow or lossy), so the bridge does it to its own arrivals, between
 //! Zenoh's callback and the loop's inbox. An environment variable rather than a flag because `silrig run` starts the
 //! plant-side bridge itself and passes its environment on: one setting impairs both directions. Never meant for a
@@ -19,6 +20,20 @@ pub const DELAY_VAR: &str = "SILRIG_BRIDGE_TEST_DELAY_MS";
 pub const LOSS_VAR: &str = "SILRIG_BRIDGE_TEST_LOSS";
 /// Seed of the losses (a u64; default 1), so a lossy test run can be flown again.
 pub const SEED_VAR: &str = "SILRIG_BRIDGE_TEST_SEED";
+/// The wire layout version the bridge says it speaks, standing for a build of another commit.
+pub const LAYOUT_VAR: &str = "SILRIG_BRIDGE_TEST_LAYOUT_VERSION";
+
+/// The wire layout version this bridge says it speaks: [`LAYOUT_VAR`] if set (a test's stand-in for a build of
+/// another commit: the peer's refusal is then the real one), else its build's.
+pub fn layout_version_from_env() -> Result<u32, BridgeError> {
+    match std::env::var(LAYOUT_VAR) {
+        Err(_) => Ok(silrig_wire::wire::WIRE_LAYOUT_VERSION),
+        Ok(text) => text
+            .trim()
+            .parse::<u32>()
+            .map_err(|_| BridgeError::Usage(format!("{LAYOUT_VAR}={text:?}: give an unsigned integer"))),
+    }
+}
 
 /// What the environment asks for.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -5,7 +5,7 @@
 
 use super::error::{BridgeError, zenoh_err};
 use super::frame::{Hello, Side};
-use super::impair::{Impairment, ImpairmentSpec};
+use super::impair::{self, Impairment, ImpairmentSpec};
 use super::net::{self, Arrival, Inbox, Keys};
 use super::options::HELLO_PERIOD;
 use silrig_rig::ProcessArgs;
@@ -34,12 +34,15 @@ pub(super) struct Link {
     said: BTreeSet<String>,
     /// The test-only delay and loss of arrivals, when the environment asks for them.
     impairment: Option<Arc<Impairment>>,
+    /// The wire layout version this bridge says it speaks: its build's, or a test's stand-in for another build.
+    pub(super) layout_version: u32,
 }
 
 impl Link {
     pub(super) fn open(side: Side, endpoint: &str, args: &ProcessArgs) -> Result<Self, BridgeError> {
         std::fs::create_dir_all(&args.out).map_err(|e| BridgeError::Io(format!("{}: {e}", args.out.display())))?;
         let spec = ImpairmentSpec::from_env()?;
+        let layout_version = impair::layout_version_from_env()?;
         let session = net::open_session(side, endpoint)?;
         let run = args.run_id.to_string();
         let keys = Keys::new(&run);
@@ -55,6 +58,7 @@ impl Link {
             keys,
             session,
             impairment: spec.map(|spec| Arc::new(Impairment::new(spec, inbox.clone()))),
+            layout_version,
             inbox,
             subscribers: Vec::new(),
             hello,
@@ -65,6 +69,14 @@ impl Link {
         };
         if let Some(spec) = spec {
             link.say("bridge-test-impairment", format!("warning: {}", spec.describe()), false);
+        }
+        if layout_version != WIRE_LAYOUT_VERSION {
+            let text = format!(
+                "warning: TEST: saying it speaks wire layout version {layout_version}, not this build's \
+                 {WIRE_LAYOUT_VERSION} ({}), as a build of another commit would",
+                impair::LAYOUT_VAR
+            );
+            link.say("bridge-test-impairment", text, false);
         }
         Ok(link)
     }
@@ -141,7 +153,7 @@ impl Link {
 }
 
 /// A hello from the network, with what is wrong with it for this run (another run, another layout).
-pub(super) fn read_hello(bytes: &[u8], run: &str) -> Result<Hello, String> {
+pub(super) fn read_hello(bytes: &[u8], run: &str, ours: u32) -> Result<Hello, String> {
     let h = Hello::from_bytes(bytes)?;
     if h.run_id != run {
         return Err(format!(
@@ -150,10 +162,10 @@ pub(super) fn read_hello(bytes: &[u8], run: &str) -> Result<Hello, String> {
             h.run_id
         ));
     }
-    if h.layout_version != WIRE_LAYOUT_VERSION {
+    if h.layout_version != ours {
         return Err(format!(
-            "the {} bridge speaks wire layout version {}, this build speaks {WIRE_LAYOUT_VERSION}: build silrig on \
-             both hosts from the same commit",
+            "the {} bridge speaks wire layout version {}, this build speaks {ours}: build silrig on both hosts from \
+             the same commit",
             h.side.label(),
             h.layout_version
         ));

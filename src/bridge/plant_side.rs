@@ -15,7 +15,7 @@ use silrig_rig::signals;
 use silrig_wire::clock::monotonic_ns;
 use silrig_wire::topology::Stream;
 use silrig_wire::topology::{CONSUMER_BUFFER, LOGGER_BUFFER};
-use silrig_wire::wire::{CommandSample, ControllerInfo, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
+use silrig_wire::wire::{CommandSample, ControllerInfo, PlantInfo, PlantSample};
 use silrig_wire::{ipc, ipc::StreamPublisher, ipc::StreamSubscriber};
 use zenoh::Wait;
 use zenoh::qos::CongestionControl;
@@ -135,14 +135,14 @@ impl PlantSide {
                 self.on_arrival(arrival)?;
             }
             let serving = self.peer.alive().map(|h| h.epoch);
-            let run_id = self.link.run.clone();
+            let (run_id, layout_version) = (self.link.run.clone(), self.link.layout_version);
             if monotonic_ns() >= self.link.next_hello_ns {
                 self.forward_plant_info()?;
             }
             self.link.say_hello(|epoch| Hello {
                 side: Side::Plant,
                 run_id,
-                layout_version: WIRE_LAYOUT_VERSION,
+                layout_version,
                 epoch,
                 serving,
                 controller_connected: false,
@@ -235,7 +235,7 @@ impl PlantSide {
     fn on_arrival(&mut self, arrival: Arrival) -> anyhow::Result<()> {
         let now = monotonic_ns();
         match arrival {
-            Arrival::Hello { bytes, .. } => match read_hello(&bytes, &self.link.run) {
+            Arrival::Hello { bytes, .. } => match read_hello(&bytes, &self.link.run, self.link.layout_version) {
                 Err(problem) => self.link.say("bridge-peer-refused", format!("{problem}: ignored"), true),
                 Ok(h) => match self.peer.heard(h, now) {
                     Some(PeerChange::Joined { epoch, replaced }) => {

@@ -345,20 +345,49 @@ impl RoleProcess {
 /// How long a process that exited cleanly before the plant's end waits for that end before it counts as a death.
 const CLEAN_EXIT_GRACE: Duration = Duration::from_secs(2);
 
-/// A rig binary much older than the launcher was probably not rebuilt with it (`cargo run` builds only `silrig`).
-/// Cargo links the binaries of one build within seconds of each other, hence the tolerance.
+/// A rig binary built before its sources last changed was not rebuilt with the launcher (`cargo run` builds only
+/// `silrig`). Cargo's dep-info file beside it (`<binary>.d`) lists those sources; installed binaries have none and
+/// are not checked. (Comparing with the launcher's own build time, as before, warned in CI: on two cores cargo
+/// linked the binaries of one build up to a minute apart.)
 fn warn_if_stale(bin_dir: &Path) {
-    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
-    let Some(launcher) = std::env::current_exe().ok().and_then(|p| modified(&p)) else { return };
     for role in Role::ALL {
-        let stale = |t: std::time::SystemTime| launcher.duration_since(t).is_ok_and(|d| d > Duration::from_secs(30));
-        if modified(&bin_dir.join(role.binary())).is_some_and(stale) {
+        if let Some(source) = newer_source(&bin_dir.join(role.binary())) {
             eprintln!(
-                "silrig run: warning: {} is older than silrig; rebuild all binaries with `cargo build --release`",
-                role.binary()
+                "silrig run: warning: {} was built before {} changed; rebuild all binaries with `cargo build \
+                 --release`",
+                role.binary(),
+                source.display()
             );
         }
     }
+}
+
+/// A source of `binary` changed after it was built, by its dep-info file.
+fn newer_source(binary: &Path) -> Option<PathBuf> {
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    let built = modified(binary)?;
+    let mut dep_info = binary.as_os_str().to_owned();
+    dep_info.push(".d");
+    let text = std::fs::read_to_string(PathBuf::from(dep_info)).ok()?;
+    let (_, sources) = text.lines().next()?.split_once(": ")?;
+    dep_info_paths(sources).into_iter().find(|p| modified(p).is_some_and(|t| t > built))
+}
+
+/// The paths of a dep-info line, which escapes a space in a path as `\ `.
+fn dep_info_paths(line: &str) -> Vec<PathBuf> {
+    let (mut paths, mut path, mut chars) = (Vec::new(), String::new(), line.chars());
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' => path.extend(chars.next()),
+            ' ' if !path.is_empty() => paths.push(PathBuf::from(std::mem::take(&mut path))),
+            ' ' => {}
+            _ => path.push(c),
+        }
+    }
+    if !path.is_empty() {
+        paths.push(PathBuf::from(path));
+    }
+    paths
 }
 
 /// The controller the supervisor starts, if any.
@@ -736,5 +765,36 @@ impl Supervisor {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::{Duration, SystemTime};
+
+    #[test]
+    fn a_binary_is_stale_when_a_source_its_dep_info_lists_changed_after_it() {
+        assert_eq!(
+            dep_info_paths("/a/b.rs /c/with\\ space.rs  /d.toml"),
+            [PathBuf::from("/a/b.rs"), PathBuf::from("/c/with space.rs"), PathBuf::from("/d.toml")]
+        );
+        let dir = std::env::temp_dir().join(format!("silrig-stale-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (bin, source) = (dir.join("silrig-plant"), dir.join("plant.rs"));
+        let at =
+            |p: &Path, t: SystemTime| std::fs::File::options().write(true).open(p).unwrap().set_modified(t).unwrap();
+        std::fs::write(&bin, "").unwrap();
+        std::fs::write(&source, "").unwrap();
+        std::fs::write(dir.join("silrig-plant.d"), format!("{}: {}\n", bin.display(), source.display())).unwrap();
+        let now = SystemTime::now();
+        at(&source, now - Duration::from_secs(60));
+        at(&bin, now);
+        assert_eq!(newer_source(&bin), None, "built after its sources");
+        at(&source, now + Duration::from_secs(1));
+        assert_eq!(newer_source(&bin), Some(source.clone()), "a source changed after the build");
+        std::fs::remove_file(dir.join("silrig-plant.d")).unwrap();
+        assert_eq!(newer_source(&bin), None, "no dep-info (an installed binary): not checked");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
