@@ -30,7 +30,9 @@ pub fn beacon_path(run: &RunId) -> PathBuf {
 }
 
 impl TickBeacon {
-    /// The plant's end: the file created (or reopened by a restarted plant) and mapped for writing.
+    /// The plant's end: the file created (or reopened by a restarted plant) and mapped for writing, saying "no
+    /// tick yet" until the first publish: a restarted plant has flown nothing yet, and a file a crashed run of the
+    /// same id left must not fire the new run's faults at once.
     pub fn create(run: &RunId) -> std::io::Result<Self> {
         std::fs::create_dir_all(status_dir(run))?;
         let file = OpenOptions::new()
@@ -41,7 +43,10 @@ impl TickBeacon {
             .mode(0o600)
             .open(beacon_path(run))?;
         file.set_len(BYTES as u64)?;
-        Self::map(&file, libc::PROT_READ | libc::PROT_WRITE)
+        let beacon = Self::map(&file, libc::PROT_READ | libc::PROT_WRITE)?;
+        // SAFETY: as in `publish`.
+        unsafe { &*beacon.word }.store(0, Ordering::Release);
+        Ok(beacon)
     }
 
     /// The launcher's end, once the plant has created it.
@@ -88,7 +93,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_launcher_reads_what_the_plant_publishes_and_a_restart_continues_the_file() {
+    fn the_launcher_reads_what_the_plant_publishes_and_a_restarted_plant_starts_afresh() {
         let run = RunId::new(&format!("beacon-{}", std::process::id())).unwrap();
         assert!(TickBeacon::open(&run).is_err(), "nothing before the plant creates it");
         let plant = TickBeacon::create(&run).unwrap();
@@ -99,9 +104,9 @@ mod tests {
         plant.publish(105);
         assert_eq!(launcher.newest(), Some(105));
         drop(plant);
-        // A restarted plant resuming from its checkpoint goes back a few ticks.
+        // A restarted plant has flown nothing until its first publish, then goes back to its checkpoint's tick.
         let again = TickBeacon::create(&run).unwrap();
-        assert_eq!(launcher.newest(), Some(105), "reopening keeps what was published");
+        assert_eq!(launcher.newest(), None, "nothing flies while the plant restarts");
         again.publish(100);
         assert_eq!(launcher.newest(), Some(100));
         let _ = std::fs::remove_dir_all(run.root_dir());
