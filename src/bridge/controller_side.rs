@@ -235,11 +235,12 @@ impl ControllerSide {
                 _ => std::thread::sleep(Duration::from_millis(20)),
             }
         };
+        let had_report = report.is_some();
         let trailer = CommandTrailer { bridge_epoch: self.link.epoch, residence_ns: 0 };
         let sent = self
             .link
             .session
-            .put(self.link.keys.of(CONTROLLER_REPORT), report.clone().unwrap_or_default())
+            .put(self.link.keys.of(CONTROLLER_REPORT), report.unwrap_or_default())
             .attachment(trailer.to_bytes().to_vec())
             .congestion_control(CongestionControl::Block)
             .wait();
@@ -256,9 +257,10 @@ impl ControllerSide {
                 net::wait_readable(&[self.link.inbox.fd()], deadline);
             }
         };
-        let what = match &report {
-            Some(_) => format!("the controller's report ({})", path.display()),
-            None => format!("word that the controller wrote no report within {REPORT_WAIT:?} of the end"),
+        let what = if had_report {
+            format!("the controller's report ({})", path.display())
+        } else {
+            format!("word that the controller wrote no report within {REPORT_WAIT:?} of the end")
         };
         let text = if received {
             format!("sent {what} to the plant's host")

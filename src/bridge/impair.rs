@@ -91,7 +91,7 @@ impl ImpairmentSpec {
 pub struct Impairment {
     spec: ImpairmentSpec,
     rng: Mutex<SplitMix64>,
-    later: Option<Mutex<Sender<(Instant, Arrival)>>>,
+    later: Option<Sender<(Instant, Arrival)>>,
     lost: AtomicU64,
 }
 
@@ -109,7 +109,7 @@ impl Impairment {
                     }
                 })
                 .expect("a thread for the test delay");
-            Mutex::new(tx)
+            tx
         });
         Self { spec, rng: Mutex::new(SplitMix64::new(spec.seed)), later, lost: AtomicU64::new(0) }
     }
@@ -127,7 +127,7 @@ impl Impairment {
         match &self.later {
             Some(tx) => {
                 let due = Instant::now() + Duration::from_secs_f64(self.spec.delay_ms / 1e3);
-                let _ = tx.lock().unwrap_or_else(|e| e.into_inner()).send((due, arrival));
+                let _ = tx.send((due, arrival));
             }
             None => inbox.push(arrival),
         }

@@ -527,7 +527,8 @@ pub fn run(s: &Scenario) -> Result<Trace, SimError> {
         let snap = plant.snapshot();
         let (surfaces, diag) = controller.step(&measurement(&snap), &setpoint, dt);
         // Limited to what the plant accepts, as the rig's controller limits them (`AttitudeLaw`).
-        let surfaces = surfaces.limited(silrig_model::actuator::SURFACE_CMD_LIMIT_DEG);
+        let limit = silrig_model::actuator::SURFACE_CMD_LIMIT_DEG;
+        let surfaces = surfaces.limited([(-limit, limit); 3]);
         write_attitude_diagnostics(&mut diagnostics, &diag, &controller);
         // The throttle is held: the controller commands surfaces only.
         pending.push_back(ActuatorCommand { surfaces, throttle: acting.throttle });

@@ -105,10 +105,9 @@ impl Controller for AttitudeLaw {
         // hard-over drives the sliding surface, and with it the demand, past any travel (the soak's elevator
         // hard-over: -91.8 deg against a ±90 range), and a refused command would leave the plant on its failsafe
         // trim. The actuator saturates long before either limit; a NaN stays NaN and is refused.
-        let demanded = [surfaces.aileron_deg, surfaces.elevator_deg, surfaces.rudder_deg];
-        for ((&input, &(min, max)), value) in self.surfaces.iter().zip(&self.ranges).zip(demanded) {
-            command[input] = if value.is_nan() { value } else { value.clamp(min, max) };
-        }
+        let limited = surfaces.limited(self.ranges);
+        let [a, e, r] = self.surfaces;
+        (command[a], command[e], command[r]) = (limited.aileron_deg, limited.elevator_deg, limited.rudder_deg);
     }
 
     fn checkpoint(&self) -> Option<String> {

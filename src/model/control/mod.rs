@@ -128,14 +128,15 @@ pub struct SurfaceCommand {
 }
 
 impl SurfaceCommand {
-    /// Each surface limited to ±`limit_deg`, as a flight computer limits what it commands (a NaN stays NaN, to be
-    /// refused): a surface stuck hard-over drives the sliding surface, and the demand, past any travel.
-    pub fn limited(self, limit_deg: f64) -> Self {
-        let limit = |v: f64| if v.is_nan() { v } else { v.clamp(-limit_deg, limit_deg) };
+    /// Aileron, elevator and rudder each limited to its (min, max) range, deg, as a flight computer limits what it
+    /// commands (a NaN stays NaN, to be refused): a surface stuck hard-over drives the sliding surface, and the
+    /// demand, past any travel.
+    pub fn limited(self, ranges_deg: [(f64, f64); 3]) -> Self {
+        let limit = |v: f64, (min, max): (f64, f64)| if v.is_nan() { v } else { v.clamp(min, max) };
         Self {
-            aileron_deg: limit(self.aileron_deg),
-            elevator_deg: limit(self.elevator_deg),
-            rudder_deg: limit(self.rudder_deg),
+            aileron_deg: limit(self.aileron_deg, ranges_deg[0]),
+            elevator_deg: limit(self.elevator_deg, ranges_deg[1]),
+            rudder_deg: limit(self.rudder_deg, ranges_deg[2]),
         }
     }
 }
@@ -336,10 +337,10 @@ mod tests {
     #[test]
     fn a_limited_command_keeps_what_is_within_and_a_nan() {
         let demand = SurfaceCommand { aileron_deg: 12.5, elevator_deg: -91.8, rudder_deg: f64::NAN };
-        let limited = demand.limited(90.0);
+        let limited = demand.limited([(-90.0, 90.0); 3]);
         assert_eq!((limited.aileron_deg, limited.elevator_deg), (12.5, -90.0));
         assert!(limited.rudder_deg.is_nan(), "a NaN is a bug to be refused, not a command to limit");
-        assert_eq!(SurfaceCommand { rudder_deg: 95.0, ..demand }.limited(90.0).rudder_deg, 90.0);
+        assert_eq!(SurfaceCommand { rudder_deg: 95.0, ..demand }.limited([(-90.0, 90.0); 3]).rudder_deg, 90.0);
     }
 
     #[test]

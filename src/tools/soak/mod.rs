@@ -127,25 +127,13 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
 
 /// 1, 5 and 15 minute load averages.
 fn load_average() -> Vec<f64> {
-    let text = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
-    text.split_whitespace().take(3).filter_map(|v| v.parse().ok()).collect()
+    silrig_rig::report::MachineConditions::now().load_average.to_vec()
 }
 
 /// Now, as `YYYY-MM-DD hh:mm:ss UTC`.
 fn utc_now() -> String {
-    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
-    let (days, rem) = ((secs / 86_400) as i64, secs % 86_400);
-    // Howard Hinnant's days-to-civil.
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + (month <= 2) as i64;
-    format!("{year:04}-{month:02}-{day:02} {:02}:{:02}:{:02} UTC", rem / 3600, rem % 3600 / 60, rem % 60)
+    let iso = crate::check::verdict::utc_iso(crate::check::verdict::unix_now_s());
+    format!("{} UTC", iso.replace('T', " "))
 }
 
 #[cfg(test)]
