@@ -11,7 +11,7 @@ use silrig::scenario::Scenario;
 use std::path::Path;
 
 /// (scenario, FNV-1a 64 of trace.csv, rows, theta_deg in the last row).
-const GOLDEN: [(&str, u64, usize, f64); 8] = [
+const GOLDEN: [(&str, u64, usize, f64); 9] = [
     ("embedded default", 0x1d00_bb7d_2760_37ee, 1001, 9.947743275854997),
     ("faults-demo", 0xdb90_c6ec_4956_2b96, 1001, 9.948573807122512),
     ("paper", 0x1b6f_6ee5_0eb0_569c, 1001, 10.54604740751627),
@@ -21,6 +21,8 @@ const GOLDEN: [(&str, u64, usize, f64); 8] = [
     ("robust", 0x1d00_bb7d_2760_37ee, 1001, 9.947743275854997),
     // The robust scenario with 0.01 deg/s of gyro noise on q (and dispersions and criteria, which sim ignores).
     ("sweep-robust", 0xe21d_6e73_08b6_165a, 1001, 9.947334720841178),
+    // The robust scenario flown 140 s with the elevator hard-over at 60 s for 0.3 s.
+    ("sweep-hard-over", 0x95b7_db40_a84e_4af4, 14001, 10.068518443977899),
 ];
 
 fn fnv1a64(bytes: &[u8]) -> u64 {

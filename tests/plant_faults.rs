@@ -124,6 +124,33 @@ fn hard_over_reaches_its_limit_at_the_rate_limit_and_stays() {
 }
 
 #[test]
+fn the_anti_windup_keeps_the_soaks_elevator_hard_over_from_departing() {
+    // The chaos soak's fault (seed 1): the elevator driven to its lower stop for 0.232 s at 113.301 s. Learning
+    // from the sliding surface while the elevator cannot deliver winds the pitch weights up into a growing
+    // oscillation that leaves the model's envelope within 10 s; with the adaptation paused while a demand is past
+    // travel (robust.toml's `freeze_adaptation_when_saturated`), the flight stays in the envelope with alpha below
+    // 20 deg. Over 120 random elevator hard-overs (12..112 s, either stop, 0.2..0.4 s) the same tuning departed 67
+    // times without the pause and never with it (docs/src/guides/soak.md).
+    let mut s = robust_with(vec![]);
+    s.timing.duration_s = 133.3;
+    s.faults = vec![Fault {
+        limit: Some("min".into()),
+        ..surface_fault(FaultAction::ActuatorHardOver, "elevator", 113.301, Some(0.232))
+    }];
+    s.validate().unwrap();
+    assert!(s.controller.gains.freeze_adaptation_when_saturated, "robust.toml pauses its adaptation");
+    let trace = sim::run(&s).unwrap();
+    let alpha = column(&trace, "alpha_deg");
+    assert_eq!(alpha.len(), 13_331);
+    let peak = alpha.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    assert!(peak < 20.0, "alpha peaked at {peak} deg");
+
+    s.controller.gains.freeze_adaptation_when_saturated = false;
+    let departed = sim::run(&s).unwrap_err().to_string();
+    assert!(departed.contains("left the model's envelope"), "{departed}");
+}
+
+#[test]
 fn a_rate_frozen_surface_does_not_move() {
     let s = robust_with(vec![surface_fault(FaultAction::ActuatorRateFrozen, "aileron", 2.0, None)]);
     let trace = sim::run(&s).unwrap();
@@ -157,7 +184,7 @@ fn a_sensor_bias_shifts_the_reported_roll_and_the_loop_holds_the_measured_roll()
     // the true roll settles near -5.73 deg. Averaged over the last 3 s, as the sinusoidal disturbance keeps it moving.
     let mut runner = PlantRunner::new(&s).unwrap();
     let model = F16Model::new(s.plant.xcg);
-    let mut controller = AttitudeController::new(s.controller.gains.clone(), model.tables());
+    let mut controller = AttitudeController::new(s.controller.gains.clone(), model.tables()).with_travel(s.surface_travel_deg());
     let setpoint = sim::setpoint_rad(&s);
     let mut previous = runner.initial_command();
     let (mut measured_sum, mut true_sum, mut n) = (0.0, 0.0, 0.0);

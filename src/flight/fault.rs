@@ -352,14 +352,15 @@ pub fn parse_fault_flag(text: &str) -> Result<Fault, String> {
         let (k, v) = kv.split_once('=').ok_or_else(|| bad(format!("expected KEY=VALUE, got {kv:?}")))?;
         let (k, v) = (k.trim(), v.trim());
         let seconds = |unit| parse_duration_s(v, unit).map_err(|e| bad(format!("{k}: {e}")));
+        let in_unit = |unit| parse_duration_in(v, unit).map_err(|e| bad(format!("{k}: {e}")));
         let number = || v.parse::<f64>().map_err(|_| bad(format!("{k}: not a number: {v:?}")));
         let count = || v.parse::<u64>().map_err(|_| bad(format!("{k}: not a whole number: {v:?}")));
         match k {
             "for" | "duration" => fault.duration_s = Some(seconds(1.0)?),
             "restart_after" => fault.restart_after_s = Some(seconds(1.0)?),
-            "delay" => fault.delay_ms = Some(seconds(1e-3)? * 1e3),
+            "delay" => fault.delay_ms = Some(in_unit(1e-3)?),
             "every" => fault.every_ticks = Some(count()?),
-            "max" => fault.max_us = Some(seconds(1e-6)? * 1e6),
+            "max" => fault.max_us = Some(in_unit(1e-6)?),
             "ticks" => fault.ticks = Some(count()?),
             "p" | "probability" => fault.probability = Some(number()?),
             "channel" => fault.channel = Some(v.to_string()),
@@ -373,8 +374,22 @@ pub fn parse_fault_flag(text: &str) -> Result<Fault, String> {
     Ok(fault)
 }
 
+/// A duration with an optional unit (`s`, `ms`, `us`) in `unit_s` seconds, a bare number in that unit: `71ms` is
+/// exactly 71 ms, not 0.071 s times 1000 (71.00000000000001, as fault descriptions then said).
+fn parse_duration_in(text: &str, unit_s: f64) -> Result<f64, String> {
+    let (v, scale) = parse_duration_parts(text, unit_s)?;
+    // The units are powers of ten apart: their ratio as a whole number, so no rounding error of 1e-3 / 1e-6 enters.
+    Ok(if scale >= unit_s { v * (scale / unit_s).round() } else { v / (unit_s / scale).round() })
+}
+
 /// A duration with an optional unit (`s`, `ms`, `us`); a bare number is in `bare_unit_s` seconds.
 fn parse_duration_s(text: &str, bare_unit_s: f64) -> Result<f64, String> {
+    let (v, scale) = parse_duration_parts(text, bare_unit_s)?;
+    Ok(v * scale)
+}
+
+/// The number of a duration and its unit, s.
+fn parse_duration_parts(text: &str, bare_unit_s: f64) -> Result<(f64, f64), String> {
     let t = text.trim();
     let (num, scale) = if let Some(n) = t.strip_suffix("ms") {
         (n, 1e-3)
@@ -389,12 +404,22 @@ fn parse_duration_s(text: &str, bare_unit_s: f64) -> Result<f64, String> {
     if !v.is_finite() || v < 0.0 {
         return Err(format!("must be a finite duration >= 0, got {text:?}"));
     }
-    Ok(v * scale)
+    Ok((v, scale))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn delays_in_their_own_unit_are_exact() {
+        let f = parse_fault_flag("controller:delay@5s,delay=71ms").unwrap();
+        assert_eq!(f.delay_ms, Some(71.0));
+        assert_eq!(parse_fault_flag("plant:jitter@1s,max=26000us,for=1s").unwrap().max_us, Some(26000.0));
+        assert_eq!(parse_fault_flag("plant:jitter@1s,max=26ms,for=1s").unwrap().max_us, Some(26000.0));
+        assert!(f.describe().contains("delay 71 ms"), "{}", f.describe());
+        assert_eq!(parse_fault_flag("plant:delay@1s,delay=500us").unwrap().delay_ms, Some(0.5));
+    }
 
     #[test]
     fn flags_parse_into_the_same_faults_as_plans() {

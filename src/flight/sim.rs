@@ -512,7 +512,8 @@ pub fn run(s: &Scenario) -> Result<Trace, SimError> {
         }));
     }
     let mut plant = PlantRunner::new(s)?;
-    let mut controller = AttitudeController::new(s.controller.gains.clone(), plant.vehicle.model().tables());
+    let mut controller = AttitudeController::new(s.controller.gains.clone(), plant.vehicle.model().tables())
+        .with_travel(s.surface_travel_deg());
     let setpoint = setpoint_rad(s);
     let dt = s.timing.dt_s;
     let steps = s.timing.ticks();

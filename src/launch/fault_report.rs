@@ -95,20 +95,31 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
     let rel = |t_ns: u64| clock.sim_s(t_ns);
     let mut order: Vec<&Fault> = plan.iter().collect();
     order.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+    // Injection: the launcher's or the process's own `fault-injected`; a plant-model fault acts when the flight
+    // reaches `at_s`, which after stalls and restarts is seconds of wall time after t0 + at_s.
+    let injected: Vec<Option<u64>> = order
+        .iter()
+        .map(|f| {
+            let desc = f.describe();
+            events
+                .iter()
+                .find(|e| e.kind == "fault-injected" && e.detail.starts_with(&desc))
+                .map(|e| e.t_ns)
+                .or_else(|| f.action().is_plant_model_fault().then(|| clock.wall_ns(f.at_s)))
+        })
+        .collect();
     order
         .iter()
         .enumerate()
         .map(|(i, f)| {
             let desc = f.describe();
-            // Injection: the launcher's or the process's own `fault-injected`; plant-model faults act at `at_s`.
-            let injected_ns = events
-                .iter()
-                .find(|e| e.kind == "fault-injected" && e.detail.starts_with(&desc))
-                .map(|e| e.t_ns)
-                .or_else(|| f.action().is_plant_model_fault().then(|| t0 + (f.at_s * 1e9) as u64));
-            let Some(inj) = injected_ns else { return empty(f) };
-            // Only events before the next fault's injection belong to this one.
-            let next_ns = order.get(i + 1).map_or(u64::MAX, |n| t0 + (n.at_s * 1e9) as u64).max(inj);
+            let Some(inj) = injected[i] else { return empty(f) };
+            // Only events before the next fault's injection belong to this one; a next fault never injected
+            // would have come when the flight reached its time.
+            let next_ns = order
+                .get(i + 1)
+                .map_or(u64::MAX, |n| injected[i + 1].unwrap_or_else(|| clock.wall_ns(n.at_s)))
+                .max(inj);
             let window: Vec<&Event> = events.iter().filter(|e| e.t_ns >= inj && e.t_ns < next_ns).collect();
             // A peer's detection outranks the target's own, and the launcher's comes last: a stopped plant only
             // sees its outage once continued, the controller saw it at once. Another process's overrun is not a
@@ -176,6 +187,20 @@ impl SimClock {
         Self { sent, t0_ns, dt_s }
     }
 
+    /// The CLOCK_MONOTONIC instant the flight reached `sim_s`: the send time of the first logged tick at or past
+    /// it, less the periods between (a tick the logger lost happened that much earlier); past the last logged tick,
+    /// the last one's offset from simulated time carried on; without timing.csv, t0 + `sim_s`.
+    fn wall_ns(&self, sim_s: f64) -> u64 {
+        let dt_ns = self.dt_s * 1e9;
+        let tick = (sim_s / self.dt_s - 1e-9).ceil().max(0.0) as u64;
+        let first_at_or_past = self.sent.iter().find(|(_, t)| *t >= tick);
+        match (first_at_or_past, self.sent.last()) {
+            (Some(&(sent, t)), _) => sent.saturating_sub(((t - tick) as f64 * dt_ns) as u64),
+            (None, Some(&(sent, t))) => sent + ((tick - t) as f64 * dt_ns) as u64,
+            (None, None) => self.t0_ns + (sim_s.max(0.0) * 1e9) as u64,
+        }
+    }
+
     fn sim_s(&self, t_ns: u64) -> f64 {
         let k = self.sent.partition_point(|(sent, _)| *sent <= t_ns);
         match k.checked_sub(1).map(|i| self.sent[i]) {
@@ -234,6 +259,10 @@ mod tests {
         assert!((at(705) - 0.115).abs() < 1e-9, "{}", at(705));
         // Before tick 0: the wall clock.
         assert!((clock.sim_s(t0 - 5_000_000) + 0.005).abs() < 1e-9);
+        // And back: tick 15 came 0.5 s late, a time between ticks at the next tick, past the log the same offset.
+        assert_eq!(clock.wall_ns(0.15), t0 + 740_000_000);
+        assert_eq!(clock.wall_ns(0.0449), t0 + 50_000_000);
+        assert_eq!(clock.wall_ns(0.25), t0 + 840_000_000);
     }
 }
 
@@ -280,6 +309,43 @@ mod detection_tests {
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(r.detected_by, None);
         assert_eq!(r.recovered_at_s, Some(1.5));
+    }
+
+    #[test]
+    fn a_fault_late_in_a_stalled_flight_keeps_its_own_detection() {
+        // The plant stalled 1 s early on, so the flight reaches 1.5 s at 2.5 s of wall time. The plant stop planned
+        // at 1.5 s lands there; a hard-over planned at 1.54 s acts at 2.54 s of wall time, after the stop's
+        // detection. (Taken at t0 + 1.54 s, the hard-over's window opened before the stop and took its detection.)
+        let dir = run_with("stalled", &[]);
+        let t0: u64 = 1_000_000_000;
+        let mut timing = String::from("tick,a,b,t_plant_send_ns,c,d,e,f,g,h,i,command_missing\n");
+        for k in 0..300u64 {
+            let stall = if k >= 50 { 1_000_000_000 } else { 0 };
+            timing += &format!("{k},0,0,{},0,0,0,0,0,0,0,0\n", t0 + k * 10_000_000 + stall);
+        }
+        std::fs::write(dir.join("timing.csv"), timing).unwrap();
+        let mut events = std::fs::read_to_string(dir.join("events.jsonl")).unwrap();
+        for (ms, process, kind, detail) in [
+            (2500, "launcher", "fault-injected", "plant stop at 1.5 s, for 0.02 s (SIGSTOP to pid 7)"),
+            (2520, "launcher", "fault-ended", "SIGCONT to plant (pid 7)"),
+            (2530, "controller", "plant-stale", "no sample for 50 ms"),
+        ] {
+            events += &format!(
+                "{{\"t_ns\":{},\"process\":\"{process}\",\"kind\":\"{kind}\",\"detail\":\"{detail}\"}}\n",
+                t0 + ms * 1_000_000
+            );
+        }
+        std::fs::write(dir.join("events.jsonl"), events).unwrap();
+        let plan = [
+            parse_fault_flag("plant:stop@1.5s,for=0.02s").unwrap(),
+            parse_fault_flag("plant:actuator-hard-over@1.54s,surface=elevator,limit=min,for=0.2s").unwrap(),
+        ];
+        let r = fault_records(&plan, &dir, 0.01);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(r[0].detected_by.as_deref(), Some("controller (plant-stale)"));
+        assert_eq!(r[1].detected_by, None);
+        assert_eq!(r[1].injected_at_s, Some(1.54));
+        assert!((r[1].injected_at_wall_s.unwrap() - 2.54).abs() < 1e-9, "{:?}", r[1].injected_at_wall_s);
     }
 
     #[test]

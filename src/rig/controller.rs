@@ -75,7 +75,8 @@ impl AttitudeLaw {
     pub fn new(scenario: &Scenario) -> Self {
         let tables = silrig_model::plant::F16Model::new(scenario.plant.xcg).tables();
         Self {
-            controller: AttitudeController::new(scenario.controller.gains.clone(), tables),
+            controller: AttitudeController::new(scenario.controller.gains.clone(), tables)
+                .with_travel(scenario.surface_travel_deg()),
             setpoint: setpoint_rad(scenario),
             outputs: None,
             surfaces: [0, 1, 2],

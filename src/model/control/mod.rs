@@ -52,6 +52,11 @@ pub struct ControllerGains {
     /// RBF network layout, shared by the three channels.
     #[serde(default)]
     pub rbf: RbfLayout,
+    /// Pause the adaptation of every channel while a surface demand is past its travel (an anti-windup the paper
+    /// does not have): then S grows because the actuator cannot deliver, not because f_hat is wrong, and learning
+    /// from it winds the weights up into a growing oscillation (the soak's elevator hard-over).
+    #[serde(default)]
+    pub freeze_adaptation_when_saturated: bool,
 }
 
 fn default_nominal_alpha_deg() -> f64 {
@@ -69,6 +74,7 @@ impl Default for ControllerGains {
             adaptation_gain: [0.1; 3],
             nominal_alpha_deg: default_nominal_alpha_deg(),
             rbf: RbfLayout::default(),
+            freeze_adaptation_when_saturated: false,
         }
     }
 }
@@ -178,6 +184,8 @@ pub struct AttitudeController {
     networks: [RbfNetwork; 3],
     /// J^-1 diag(b, c, b) D_nom: angular acceleration per (qbar S_w) per degree.
     moment_map: Matrix3<f64>,
+    /// The (min, max) travel of aileron, elevator and rudder the controller believes its surfaces have, deg.
+    travel_deg: [(f64, f64); 3],
 }
 
 impl AttitudeController {
@@ -188,7 +196,14 @@ impl AttitudeController {
         let lever = Matrix3::from_diagonal(&Vector3::new(WING_SPAN_FT, MEAN_CHORD_FT, WING_SPAN_FT));
         let moment_map = inertia_inv * lever * nominal_control_derivatives(tables, gains.nominal_alpha_deg);
         let networks = std::array::from_fn(|_| RbfNetwork::new(&gains.rbf));
-        Self { gains, networks, moment_map }
+        Self { gains, networks, moment_map, travel_deg: [(f64::NEG_INFINITY, f64::INFINITY); 3] }
+    }
+
+    /// The travel of aileron, elevator and rudder, (min, max) deg, past which a demand counts as saturated
+    /// ([`ControllerGains::freeze_adaptation_when_saturated`]); unlimited until set.
+    pub fn with_travel(mut self, travel_deg: [(f64, f64); 3]) -> Self {
+        self.travel_deg = travel_deg;
+        self
     }
 
     /// The gains in use.
@@ -265,8 +280,11 @@ impl AttitudeController {
         let effectiveness = self.control_effectiveness(m);
         // g is well conditioned in the flight envelope; a singular g (qbar = 0) commands neutral surfaces.
         let u = effectiveness.lu().solve(&v).filter(|u| u.iter().all(|x| x.is_finite())).unwrap_or_else(Vector3::zeros);
-        for i in 0..3 {
-            self.networks[i].adapt(g.adaptation_gain[i], diag.sliding_surface[i], dt_s);
+        let saturated = u.iter().zip(&self.travel_deg).any(|(u, (min, max))| *u < *min || *u > *max);
+        if !(g.freeze_adaptation_when_saturated && saturated) {
+            for i in 0..3 {
+                self.networks[i].adapt(g.adaptation_gain[i], diag.sliding_surface[i], dt_s);
+            }
         }
         (SurfaceCommand { aileron_deg: u[0], elevator_deg: u[1], rudder_deg: u[2] }, diag)
     }
@@ -332,6 +350,32 @@ mod tests {
         assert!(u.elevator_deg < 0.0);
         // The weights moved by Gamma S h dt.
         assert!(c.networks()[1].weight_norm() > 0.0);
+    }
+
+    #[test]
+    fn adaptation_pauses_while_a_demand_is_past_its_travel_only_when_asked() {
+        // Far below the set point the demand is past a ±1 deg travel; the weights learn from it only without the
+        // anti-windup, and with it as soon as the demand is back within travel.
+        let m = Measurement {
+            euler_rad: [0.0, -0.3, 0.0],
+            body_rates_radps: [0.0; 3],
+            vt_fps: 492.0,
+            alt_ft: 25_000.0,
+        };
+        let setpoint = [0.0, 10f64.to_radians(), 0.0];
+        let travel = [(-1.0, 1.0); 3];
+        let norm = |c: &AttitudeController| c.networks()[1].weight_norm();
+        let mut learning = AttitudeController::new(ControllerGains::default(), &F16_TABLES).with_travel(travel);
+        let (u, _) = learning.step(&m, &setpoint, 0.01);
+        assert!(u.elevator_deg.abs() > 1.0, "the demand is past travel: {u:?}");
+        assert!(norm(&learning) > 0.0);
+        let gains = ControllerGains { freeze_adaptation_when_saturated: true, ..ControllerGains::default() };
+        let mut frozen = AttitudeController::new(gains.clone(), &F16_TABLES).with_travel(travel);
+        frozen.step(&m, &setpoint, 0.01);
+        assert_eq!(norm(&frozen), 0.0);
+        let mut within = AttitudeController::new(gains, &F16_TABLES).with_travel([(-90.0, 90.0); 3]);
+        within.step(&m, &setpoint, 0.01);
+        assert!(norm(&within) > 0.0);
     }
 
     #[test]
