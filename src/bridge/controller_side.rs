@@ -320,7 +320,7 @@ impl ControllerSide {
             Arrival::Sample { what, bytes, .. } => match frame::from_bytes::<PlantSample>(&bytes) {
                 Ok(s) if self.peer.alive().is_some() => {
                     self.plant.forward(&s)?;
-                    self.published.put(s.header.tick, monotonic_ns());
+                    self.published.put(s.header.tick, s.header.epoch, monotonic_ns());
                     self.rec.count("plant_samples_in", 1);
                 }
                 Ok(_) => self.rec.count("samples_from_unserved_bridges", 1),

@@ -189,7 +189,7 @@ impl PlantSide {
             let t_ns = monotonic_ns();
             match out.put(frame::to_bytes(&r.sample)).wait() {
                 Ok(()) => {
-                    sent.put(r.sample.header.tick, t_ns);
+                    sent.put(r.sample.header.tick, r.sample.header.epoch, t_ns);
                     rec.count("plant_samples_out", 1);
                 }
                 Err(_) => rec.count("plant_samples_not_sent", 1),
