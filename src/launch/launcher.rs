@@ -557,6 +557,10 @@ fn finish_baseline(
 ) -> std::io::Result<Option<BaselineReport>> {
     if failed {
         baseline.signal(libc::SIGKILL);
+    } else if signals::termination_requested() {
+        // A terminal's Ctrl-C reaches the baseline too; a SIGINT or SIGTERM to the launcher alone must end it as
+        // well, or the run waits out its planned duration. SIGINT, as Ctrl-C: cyclictest then prints its summary.
+        baseline.signal(libc::SIGINT);
     }
     baseline.finish(Duration::from_secs_f64(scenario.timing.duration_s + 10.0))?;
     if floor == FloorSource::Cyclictest {
