@@ -194,6 +194,36 @@ impl Trace {
     pub fn load(path: &Path) -> Result<Self, TraceReadError> {
         Self::read_csv(std::io::BufReader::new(std::fs::File::open(path)?))
     }
+
+    /// The columns and the last whole row of a CSV trace (none if it has no row yet), reading only its first line
+    /// and its end: a restarted logger needs no more, and parsing a 10-minute run's 40 MB left its heap that
+    /// large for the rest of its life.
+    pub fn load_last_row(path: &Path) -> Result<Self, TraceReadError> {
+        use std::io::{Read, Seek, SeekFrom};
+        let mut file = std::fs::File::open(path)?;
+        let len = file.seek(SeekFrom::End(0))?;
+        let mut header = String::new();
+        file.seek(SeekFrom::Start(0))?;
+        std::io::BufReader::new(&mut file).read_line(&mut header)?;
+        // Enough of the end to hold the last whole row and the newline before it; more until it does.
+        let mut tail_len: u64 = 64 * 1024;
+        loop {
+            let from = len.saturating_sub(tail_len);
+            let mut tail = Vec::new();
+            file.seek(SeekFrom::Start(from))?;
+            (&mut file).take(len - from).read_to_end(&mut tail)?;
+            let tail = String::from_utf8_lossy(&tail);
+            // Up to the last newline: a torn last line (a writer killed mid-line) is not a row.
+            let whole = &tail[..tail.rfind('\n').map_or(0, |i| i + 1)];
+            let body = whole.strip_suffix('\n').unwrap_or(whole);
+            match (body.rfind('\n'), from) {
+                (Some(i), _) => return Self::read_csv(format!("{header}{}", &whole[i + 1..]).as_bytes()),
+                // The whole file is one line or none: the header alone, or nothing usable.
+                (None, 0) => return Self::read_csv(whole.as_bytes()),
+                (None, _) => tail_len *= 4,
+            }
+        }
+    }
 }
 
 /// Append `v` exactly as `format!("{v:?}")` writes it (the text trace.csv has always held, which the golden
@@ -335,6 +365,42 @@ fn exact_tie(abs: f64, n: usize) -> Tie {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_last_row_is_read_from_the_end_alone() {
+        let dir = std::env::temp_dir().join(format!("silrig-trace-last-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("trace.csv");
+        // 2,000 rows of about 80 bytes: longer than the first look at the end.
+        let mut trace = Trace::new(vec!["t_s".into(), "x".into(), "flight_segment".into()]);
+        for k in 0..2000 {
+            trace.rows.push(vec![k as f64 * 0.01, (k as f64).sin() * 1e-7, 1.0 + (k / 1000) as f64]);
+        }
+        trace.save(&path).unwrap();
+        let last = Trace::load_last_row(&path).unwrap();
+        assert_eq!(last.columns, trace.columns);
+        assert_eq!(last.rows, vec![trace.rows[1999].clone()]);
+        // A torn last line is not a row.
+        let mut text = std::fs::read_to_string(&path).unwrap();
+        text.push_str("20.0,0.5");
+        std::fs::write(&path, &text).unwrap();
+        assert_eq!(Trace::load_last_row(&path).unwrap().rows, vec![trace.rows[1999].clone()]);
+        // One row, the header alone, nothing.
+        std::fs::write(&path, "t_s,x\n0.5,2.0\n").unwrap();
+        assert_eq!(Trace::load_last_row(&path).unwrap().rows, vec![vec![0.5, 2.0]]);
+        std::fs::write(&path, "t_s,x\n").unwrap();
+        let header_only = Trace::load_last_row(&path).unwrap();
+        assert_eq!((header_only.columns.len(), header_only.rows.len()), (2, 0));
+        std::fs::write(&path, "t_s,x").unwrap();
+        assert!(Trace::load_last_row(&path).is_err());
+        // A row long enough to need a second, larger look.
+        let wide: Vec<String> = (0..20_000).map(|i| format!("c{i}")).collect();
+        let row: Vec<String> = (0..20_000).map(|i| format!("{i}.5")).collect();
+        std::fs::write(&path, format!("{}\n{}\n{}\n", wide.join(","), row.join(","), row.join(","))).unwrap();
+        let last = Trace::load_last_row(&path).unwrap();
+        assert_eq!((last.rows.len(), last.rows[0][19_999]), (1, 19_999.5));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn numbers_are_written_as_debug_writes_them() {

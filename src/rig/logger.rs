@@ -264,7 +264,7 @@ impl LoggerLoop {
         std::fs::create_dir_all(&args.out)?;
         let events = EventLog::new(&args.out, Role::Logger.label());
         // What a previous logger of this run wrote, if anything.
-        let previous = Trace::load(&args.out.join("trace.csv")).ok();
+        let previous = Trace::load_last_row(&args.out.join("trace.csv")).ok();
         let resume_after = previous.as_ref().and_then(|p| last_logged_tick(p, scenario.timing.dt_s));
         // A restarted logger continues the segment count where its predecessor's last row left it.
         let previous_segment =
