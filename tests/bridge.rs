@@ -560,4 +560,3 @@ fn another_run_id_and_a_second_controller_side_bridge_are_refused_while_the_plan
         let _ = std::fs::remove_dir_all(dir);
     }
 }
-

@@ -184,7 +184,8 @@ fn a_sensor_bias_shifts_the_reported_roll_and_the_loop_holds_the_measured_roll()
     // the true roll settles near -5.73 deg. Averaged over the last 3 s, as the sinusoidal disturbance keeps it moving.
     let mut runner = PlantRunner::new(&s).unwrap();
     let model = F16Model::new(s.plant.xcg);
-    let mut controller = AttitudeController::new(s.controller.gains.clone(), model.tables()).with_travel(s.surface_travel_deg());
+    let mut controller =
+        AttitudeController::new(s.controller.gains.clone(), model.tables()).with_travel(s.surface_travel_deg());
     let setpoint = sim::setpoint_rad(&s);
     let mut previous = runner.initial_command();
     let (mut measured_sum, mut true_sum, mut n) = (0.0, 0.0, 0.0);

@@ -5,7 +5,7 @@
 //! outage; the injection's wall time from tick 0 is kept beside it.
 
 use serde::{Deserialize, Serialize};
-use silrig_flight::fault::Fault;
+use silrig_flight::fault::{Fault, FaultAction};
 use silrig_flight::role::Role;
 use silrig_rig::events::{Event, read_events};
 use std::path::Path;
@@ -125,14 +125,22 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
             // sees its outage once continued, the controller saw it at once. Another process's overrun is not a
             // detection of this fault: on a loaded machine any process overruns now and then (the CI run that
             // credited a stopped logger's fault to a plant overrun seconds later).
+            // The rig has no detector of sensor or actuator faults: whatever a process notices in a plant-model
+            // fault's window (a command missed on a loaded machine) is not its detection, nor the failsafe and
+            // recovery that follow it.
             let target = f.target().label();
+            let detectable = !f.action().is_plant_model_fault();
+            // A delayed or jittered plant sees it itself, at once, as an overrun (the rig's detector for it); a
+            // peer that misses a command then is a consequence, first or not.
+            let own_first = f.target() == Role::Plant && matches!(f.action(), FaultAction::Delay | FaultAction::Jitter);
             let detection = window
                 .iter()
                 .filter(|e| DETECTIONS.contains(&e.kind.as_str()) && (e.kind != "overrun" || e.process == target))
-                .min_by_key(|e| (e.process == "launcher", e.process == target, e.t_ns));
-            let failsafe = window.iter().find(|e| e.kind == "failsafe-engaged");
+                .filter(|_| detectable)
+                .min_by_key(|e| (e.process == "launcher", (e.process == target) != own_first, e.t_ns));
+            let failsafe = window.iter().filter(|_| detectable).find(|e| e.kind == "failsafe-engaged");
             // A restarted logger says it resumed before it sees (and reports) the gap its absence left.
-            let recovery = window.iter().find(|e| {
+            let recovery = window.iter().filter(|_| detectable).find(|e| {
                 RECOVERIES.contains(&e.kind.as_str())
                     && (e.kind == "logger-resumed" || detection.is_none_or(|d| e.t_ns >= d.t_ns))
             });
@@ -309,6 +317,40 @@ mod detection_tests {
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(r.detected_by, None);
         assert_eq!(r.recovered_at_s, Some(1.5));
+    }
+
+    #[test]
+    fn a_delayed_plant_detects_its_delay_itself_before_a_peer_misses_a_command() {
+        // A docs run on the loaded machine credited the plant's 15 ms delay to the logger's missing command.
+        let fault = parse_fault_flag("plant:delay@1s,delay=15ms").unwrap();
+        let dir = run_with(
+            "delay",
+            &[
+                (1000, "plant", "fault-injected", "plant delay at 1 s, delay 15 ms"),
+                (1009, "logger", "commands-missing", "rows written without a command from here"),
+                (1015, "plant", "overrun", "woke 15 ms late"),
+            ],
+        );
+        let r = &fault_records(&[fault], &dir, 0.01)[0];
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(r.detected_by.as_deref(), Some("plant (overrun)"));
+    }
+
+    #[test]
+    fn nothing_noticed_in_a_plant_model_faults_window_is_its_detection() {
+        // The CI run where a command missed on the loaded machine 1.6 s into a stuck rudder's window was shown as
+        // the stuck rudder "detected by logger (commands-missing)".
+        let fault = parse_fault_flag("plant:actuator-stuck@1s,surface=rudder,for=1s").unwrap();
+        let dir = run_with(
+            "model",
+            &[
+                (2600, "logger", "commands-missing", "rows written without a command from here"),
+                (2610, "logger", "commands-resumed", "1 rows without a command"),
+            ],
+        );
+        let r = &fault_records(&[fault], &dir, 0.01)[0];
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!((r.injected_at_s, r.detected_by.as_deref(), r.recovered_at_s), (Some(1.0), None, None));
     }
 
     #[test]

@@ -356,12 +356,8 @@ mod tests {
     fn adaptation_pauses_while_a_demand_is_past_its_travel_only_when_asked() {
         // Far below the set point the demand is past a ±1 deg travel; the weights learn from it only without the
         // anti-windup, and with it as soon as the demand is back within travel.
-        let m = Measurement {
-            euler_rad: [0.0, -0.3, 0.0],
-            body_rates_radps: [0.0; 3],
-            vt_fps: 492.0,
-            alt_ft: 25_000.0,
-        };
+        let m =
+            Measurement { euler_rad: [0.0, -0.3, 0.0], body_rates_radps: [0.0; 3], vt_fps: 492.0, alt_ft: 25_000.0 };
         let setpoint = [0.0, 10f64.to_radians(), 0.0];
         let travel = [(-1.0, 1.0); 3];
         let norm = |c: &AttitudeController| c.networks()[1].weight_norm();
