@@ -95,8 +95,7 @@ fn actuator_limit_hits(s: &Scenario) -> Vec<[silrig::actuator::LimitHits; 3]> {
     use silrig::sim::{ActuatorCommand, PlantRunner, measurement, setpoint_rad};
     assert_eq!(s.timing.command_delay_ticks(), 0);
     let mut plant = PlantRunner::new(s).unwrap();
-    let mut controller = silrig::control::AttitudeController::new(s.controller.gains.clone(), s.plant.model().tables())
-        .with_travel(s.surface_travel_deg());
+    let mut controller = silrig::sim::attitude_controller(s, s.plant.model().tables());
     let throttle = plant.initial_command().throttle;
     (0..=s.timing.ticks())
         .map(|k| {

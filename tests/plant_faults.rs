@@ -3,7 +3,7 @@
 //! faults change what the plant reports and never the true state, noise is reproducible from the seed, windows
 //! end, and malformed plans are refused naming the entry.
 
-use silrig::control::{AttitudeController, SurfaceCommand};
+use silrig::control::SurfaceCommand;
 use silrig::fault::{Fault, FaultAction};
 use silrig::plant::F16Model;
 use silrig::scenario::{Scenario, ScenarioError};
@@ -184,8 +184,7 @@ fn a_sensor_bias_shifts_the_reported_roll_and_the_loop_holds_the_measured_roll()
     // the true roll settles near -5.73 deg. Averaged over the last 3 s, as the sinusoidal disturbance keeps it moving.
     let mut runner = PlantRunner::new(&s).unwrap();
     let model = F16Model::new(s.plant.xcg);
-    let mut controller =
-        AttitudeController::new(s.controller.gains.clone(), model.tables()).with_travel(s.surface_travel_deg());
+    let mut controller = sim::attitude_controller(&s, model.tables());
     let setpoint = sim::setpoint_rad(&s);
     let mut previous = runner.initial_command();
     let (mut measured_sum, mut true_sum, mut n) = (0.0, 0.0, 0.0);

@@ -447,12 +447,6 @@ impl Scenario {
             throttle: get(3, book.throttle),
         }
     }
-
-    /// The (min, max) travel of aileron, elevator and rudder, deg: what our controller believes its surfaces have.
-    pub fn surface_travel_deg(&self) -> [(f64, f64); 3] {
-        let a = self.f16_actuators();
-        [a.aileron_deg, a.elevator_deg, a.rudder_deg].map(|l| (l.min, l.max))
-    }
 }
 
 /// A scenario that cannot be used, with where the problem is.

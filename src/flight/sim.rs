@@ -26,6 +26,7 @@ use crate::trace::{self, Trace};
 use silrig_model::actuator::ActuatorFault;
 use silrig_model::control::{AttitudeController, ControllerDiagnostics, Measurement, SurfaceCommand};
 use silrig_model::plant::envelope::EnvelopeError;
+use silrig_model::plant::tables::F16Tables;
 use silrig_model::plant::{ExternalForcing, F16State, STATE_NAMES};
 use silrig_model::rng::SplitMix64;
 use silrig_model::units::deg_to_rad;
@@ -483,6 +484,14 @@ pub fn write_attitude_diagnostics(
     n
 }
 
+/// Our controller for `s`: its gains, the nominal control derivatives from `tables`, and the travel of the
+/// scenario's surfaces, which its anti-windup compares each demand with.
+pub fn attitude_controller(s: &Scenario, tables: &F16Tables) -> AttitudeController {
+    let a = s.f16_actuators();
+    let travel_deg = [a.aileron_deg, a.elevator_deg, a.rudder_deg].map(|l| (l.min, l.max));
+    AttitudeController::new(s.controller.gains.clone(), tables).with_travel(travel_deg)
+}
+
 /// The set points in rad.
 pub fn setpoint_rad(s: &Scenario) -> [f64; 3] {
     [deg_to_rad(s.setpoint.phi_deg), deg_to_rad(s.setpoint.theta_deg), deg_to_rad(s.setpoint.psi_deg)]
@@ -512,8 +521,7 @@ pub fn run(s: &Scenario) -> Result<Trace, SimError> {
         }));
     }
     let mut plant = PlantRunner::new(s)?;
-    let mut controller = AttitudeController::new(s.controller.gains.clone(), plant.vehicle.model().tables())
-        .with_travel(s.surface_travel_deg());
+    let mut controller = attitude_controller(s, plant.vehicle.model().tables());
     let setpoint = setpoint_rad(s);
     let dt = s.timing.dt_s;
     let steps = s.timing.ticks();

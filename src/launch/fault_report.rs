@@ -97,57 +97,57 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
     order.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
     // Injection: the launcher's or the process's own `fault-injected`; a plant-model fault acts when the flight
     // reaches `at_s`, which after stalls and restarts is seconds of wall time after t0 + at_s.
-    let injected: Vec<Option<u64>> = order
+    let injected: Vec<(String, Option<u64>)> = order
         .iter()
         .map(|f| {
             let desc = f.describe();
-            events
+            let at = events
                 .iter()
                 .find(|e| e.kind == "fault-injected" && e.detail.starts_with(&desc))
                 .map(|e| e.t_ns)
-                .or_else(|| f.action().is_plant_model_fault().then(|| clock.wall_ns(f.at_s)))
+                .or_else(|| f.action().is_plant_model_fault().then(|| clock.wall_ns(f.at_s)));
+            (desc, at)
         })
         .collect();
     order
         .iter()
         .enumerate()
         .map(|(i, f)| {
-            let desc = f.describe();
-            let Some(inj) = injected[i] else { return empty(f) };
+            let (desc, Some(inj)) = injected[i].clone() else { return empty(f) };
             // Only events before the next fault's injection belong to this one; a next fault never injected
             // would have come when the flight reached its time.
             let next_ns = order
                 .get(i + 1)
-                .map_or(u64::MAX, |n| injected[i + 1].unwrap_or_else(|| clock.wall_ns(n.at_s)))
+                .map_or(u64::MAX, |n| injected[i + 1].1.unwrap_or_else(|| clock.wall_ns(n.at_s)))
                 .max(inj);
             let window: Vec<&Event> = events.iter().filter(|e| e.t_ns >= inj && e.t_ns < next_ns).collect();
-            // A peer's detection outranks the target's own, and the launcher's comes last: a stopped plant only
-            // sees its outage once continued, the controller saw it at once. Another process's overrun is not a
-            // detection of this fault: on a loaded machine any process overruns now and then (the CI run that
-            // credited a stopped logger's fault to a plant overrun seconds later).
             // The rig has no detector of sensor or actuator faults: whatever a process notices in a plant-model
             // fault's window (a command missed on a loaded machine) is not its detection, nor the failsafe and
             // recovery that follow it.
+            let model_fault = f.action().is_plant_model_fault();
+            let noticed: &[&Event] = if model_fault { &[] } else { &window };
+            // A peer's detection outranks the target's own, and the launcher's comes last: a stopped plant only
+            // sees its outage once continued, the controller saw it at once. But a delayed or jittered plant sees it
+            // itself, at once, as an overrun (the rig's detector for it); a peer missing a command then is a
+            // consequence. Another process's overrun is never a detection of this fault: on a loaded machine any
+            // process overruns now and then (the CI run that credited a stopped logger's fault to a plant overrun
+            // seconds later).
             let target = f.target().label();
-            let detectable = !f.action().is_plant_model_fault();
-            // A delayed or jittered plant sees it itself, at once, as an overrun (the rig's detector for it); a
-            // peer that misses a command then is a consequence, first or not.
             let own_first = f.target() == Role::Plant && matches!(f.action(), FaultAction::Delay | FaultAction::Jitter);
-            let detection = window
+            let detection = noticed
                 .iter()
                 .filter(|e| DETECTIONS.contains(&e.kind.as_str()) && (e.kind != "overrun" || e.process == target))
-                .filter(|_| detectable)
                 .min_by_key(|e| (e.process == "launcher", (e.process == target) != own_first, e.t_ns));
-            let failsafe = window.iter().filter(|_| detectable).find(|e| e.kind == "failsafe-engaged");
+            let failsafe = noticed.iter().find(|e| e.kind == "failsafe-engaged");
             // A restarted logger says it resumed before it sees (and reports) the gap its absence left.
-            let recovery = window.iter().filter(|_| detectable).find(|e| {
+            let recovery = noticed.iter().find(|e| {
                 RECOVERIES.contains(&e.kind.as_str())
                     && (e.kind == "logger-resumed" || detection.is_none_or(|d| e.t_ns >= d.t_ns))
             });
             let end_ns = recovery.map_or(next_ns.min(inj + 2_000_000_000), |e| e.t_ns);
             let (plant_lost, command_lost) = losses(&timing, inj, end_ns);
             // A plant-model fault acts at its planned simulated time, whatever the wall clock says.
-            let injected_at_s = if f.action().is_plant_model_fault() { f.at_s } else { rel(inj) };
+            let injected_at_s = if model_fault { f.at_s } else { rel(inj) };
             FaultRecord {
                 fault: desc,
                 injected_at_s: Some(injected_at_s),

@@ -75,8 +75,7 @@ impl AttitudeLaw {
     pub fn new(scenario: &Scenario) -> Self {
         let tables = silrig_model::plant::F16Model::new(scenario.plant.xcg).tables();
         Self {
-            controller: AttitudeController::new(scenario.controller.gains.clone(), tables)
-                .with_travel(scenario.surface_travel_deg()),
+            controller: silrig_flight::sim::attitude_controller(scenario, tables),
             setpoint: setpoint_rad(scenario),
             outputs: None,
             surfaces: [0, 1, 2],
