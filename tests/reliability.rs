@@ -238,11 +238,12 @@ fn two_runs_started_together_never_share_a_folder_or_a_run_id() {
 fn every_number_that_enters_is_range_checked_with_our_message_and_exit_2() {
     let dir = temp_dir("ranges");
     let robust = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/robust.toml")).unwrap();
-    let flags: [(&[&str], &str); 9] = [
+    let flags: [(&[&str], &str); 10] = [
         (&["--command-budget-ms", "0"], "--command-budget-ms must be within 0.01..1000 ms, got 0"),
         (&["--command-budget-ms", "NaN"], "--command-budget-ms must be within 0.01..1000 ms, got NaN"),
         (&["--command-budget-ms", "-1"], "--command-budget-ms must be within 0.01..1000 ms, got -1"),
         (&["--command-spin-us", "1e12"], "--command-spin-us must be within 0..10000 us"),
+        (&["--sample-poll-us", "-5"], "--sample-poll-us must be within 0..10000 us, got -5"),
         (&["--restart-backoff-ms", "nan"], "--restart-backoff-ms must be within 0..60000 ms, got NaN"),
         (&["--startup-timeout-s", "1e30"], "--startup-timeout-s must be within 0.1..3600 s"),
         (&["--fault", "controller:stop@1s,for=1e9s"], "`faults[0].duration_s`: must be at most 10"),

@@ -46,6 +46,10 @@ enum Resumed {
 /// With a fault plan, the session asks for a checkpoint every this many ticks.
 const CHECKPOINT_EVERY_TICKS: u64 = 10;
 
+/// Realtime: how long before the plant's next deadline the session starts looking for its sample, so that its own
+/// wake-up (late by about as much as the plant's) is over when the sample comes.
+const SAMPLE_LOOK_LEAD_NS: u64 = 50_000;
+
 const IPC_PLANT_TO_CONTROLLER: usize = 0;
 const COMPUTE: usize = 1;
 
@@ -267,6 +271,10 @@ pub struct ControllerSession {
     blend: Option<u64>,
     plant_stale: bool,
     stale_after: Duration,
+    /// Realtime: when the plant's next sample is due (the deadline of the tick after the last one taken, on this
+    /// host's clock) and how long after it to keep looking before blocking; see [`Self::look_near_deadline`].
+    next_deadline_ns: Option<u64>,
+    sample_poll_ns: u64,
     /// (epoch, tick) of the last sample handed out.
     last_tick: Option<(u64, u64)>,
     pending: Option<Pending>,
@@ -358,6 +366,8 @@ impl ControllerSession {
             blend: None,
             plant_stale: false,
             stale_after,
+            next_deadline_ns: None,
+            sample_poll_ns: if realtime { (args.options.sample_poll_us * 1e3) as u64 } else { 0 },
             last_tick: None,
             pending: None,
             last_sent: None,
@@ -433,6 +443,11 @@ impl ControllerSession {
         if !self.wait_for_plant()? {
             return Ok(self.stop(StopReason::TerminationRequested));
         }
+        if let Some(deadline_ns) = self.next_deadline_ns.take() {
+            if let Some(sample) = self.look_near_deadline(deadline_ns)? {
+                return Ok(Next::Sample(sample));
+            }
+        }
         // Every sample waiting is taken at each wake-up, so waiting first costs nothing: a sample that came since
         // has left a wake-up behind.
         loop {
@@ -452,6 +467,41 @@ impl ControllerSession {
                 WaitOutcome::TimedOut => self.on_plant_silent()?,
             }
         }
+    }
+
+    /// Realtime: block until shortly before the plant's next deadline (a sample that comes earlier, after a stall
+    /// or a restart, is taken at once), then look for it again and again until `sample_poll_ns` past the deadline.
+    /// A controller that blocks until the sample's notification pays an idle vCPU's wake-up on every tick (about
+    /// 90 µs p50, 320 µs p99 on this kind of VM); one already awake takes the sample within a few µs. Costs at most
+    /// `SAMPLE_LOOK_LEAD_NS` + `sample_poll_ns` of CPU a tick; `None` leaves the rest to the blocking wait.
+    fn look_near_deadline(&mut self, deadline_ns: u64) -> Result<Option<PlantSample>, SessionError> {
+        let look_from = deadline_ns.saturating_sub(SAMPLE_LOOK_LEAD_NS);
+        loop {
+            let now = monotonic_ns();
+            if now >= look_from || signals::termination_requested() {
+                break;
+            }
+            match self.samples.wait(Duration::from_nanos(look_from - now))? {
+                WaitOutcome::Notified => {
+                    if let Some(sample) = self.take_newest()? {
+                        return Ok(Some(sample));
+                    }
+                }
+                WaitOutcome::Interrupted => return Ok(None),
+                WaitOutcome::TimedOut => break,
+            }
+        }
+        let look_until = deadline_ns + self.sample_poll_ns;
+        while monotonic_ns() < look_until {
+            if signals::termination_requested() || self.plant_ended {
+                return Ok(None);
+            }
+            if let Some(sample) = self.take_newest()? {
+                return Ok(Some(sample));
+            }
+            std::hint::spin_loop();
+        }
+        Ok(None)
     }
 
     /// The plant's signals as it announced them, waiting for the announcement if it has not come yet (as long as
@@ -566,6 +616,12 @@ impl ControllerSession {
             *slot = input.held_output.and_then(|o| r.sample.outputs().get(o).copied()).unwrap_or(f64::NAN);
         }
         self.pending = Some(Pending { tick: h.tick, held, delivered_ns: monotonic_ns() });
+        if self.sample_poll_ns > 0 {
+            // The plant publishes right after it wakes for its tick's deadline: the next deadline is a period after
+            // this one, which is the send time less the wake-up's lateness.
+            let deadline_ns = h.t_send_ns.saturating_add_signed(-r.sample.wake_lateness_ns);
+            self.next_deadline_ns = Some(deadline_ns + self.scenario.timing.period_ns());
+        }
         Ok(Some(r.sample))
     }
 
