@@ -410,7 +410,7 @@ fn bench_ipc(args: &silrig::bench::ipc::IpcBenchArgs) -> anyhow::Result<ExitCode
 
 fn soak(args: &silrig::soak::SoakArgs) -> anyhow::Result<ExitCode> {
     if args.print_schedule {
-        for flag in silrig::soak::schedule::flags(args.seed, args.duration_s) {
+        for flag in silrig::soak::schedule::flags(args.seed, args.duration_s, args.bridge) {
             println!("--fault {flag}");
         }
         return Ok(ExitCode::SUCCESS);

@@ -562,3 +562,57 @@ fn another_run_id_and_a_second_controller_side_bridge_are_refused_while_the_plan
         let _ = std::fs::remove_dir_all(dir);
     }
 }
+
+/// Both hosts' halves on one machine (no network namespaces): the controller side in a namespace of its own
+/// (`--local-run-id`), its controller started with the command the bridge prints. The flight is answered, the
+/// controller's report comes back, and the controller-side bridge leaves nothing of its host's namespace.
+#[test]
+fn both_hosts_on_one_machine_fly_with_a_local_run_id_and_leave_nothing() {
+    let _one = ONE_RIG.lock().unwrap_or_else(|e| e.into_inner());
+    let (run, out, ctl_out) = (run_id("local"), folder("local", "plant"), folder("local", "controller"));
+    let local = format!("{run}-c");
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let addr = format!("127.0.0.1:{port}");
+    let launcher = Proc::spawn(Command::new(SILRIG).args(["run", "--no-baseline", "--duration-s", "3"]).args([
+        "--run-id",
+        &run,
+        "--out",
+        out.to_str().unwrap(),
+        "--bridge-listen",
+        &addr,
+    ]));
+    let bridge = Proc::spawn(Command::new(BRIDGE).args(["--connect", &addr, "--run-id", &run]).args([
+        "--local-run-id",
+        &local,
+        "--out",
+        ctl_out.to_str().unwrap(),
+    ]));
+    wait_for(Duration::from_secs(30), "the controller-side bridge writes controller.env", || {
+        ctl_out.join("controller.env").exists()
+    });
+    let env = std::fs::read_to_string(ctl_out.join("controller.env")).unwrap();
+    assert!(env.contains(&format!("export SILRIG_RUN_ID='{local}'")), "{env}");
+    let ctl = Proc::spawn(
+        Command::new(CONTROLLER)
+            .arg(ctl_out.join("scenario.toml"))
+            .args(["--run-id", &local])
+            .args(["--out", ctl_out.to_str().unwrap()]),
+    );
+    // Reaped as soon as it ends, before the bridge looks for live processes in its namespace.
+    let (status, text) = ctl.wait(Duration::from_secs(60));
+    assert!(status.success(), "{text}");
+    let (status, text) = launcher.wait(Duration::from_secs(60));
+    assert!(status.success(), "{text}");
+    let (status, said) = bridge.wait(Duration::from_secs(30));
+    assert!(status.success(), "{said}");
+    let r = report(&out);
+    assert_eq!(counter(&r, "plant", "ticks"), 301, "{text}");
+    assert!(counter(&r, "plant", "command_misses") < 30, "{text}");
+    let ctl_report = r["processes"].as_array().unwrap().iter().find(|p| p["process"] == "controller").unwrap();
+    assert_eq!(ctl_report["run_id"], local.as_str(), "the controller's report came back from its host");
+    no_shared_memory_left(&run);
+    no_shared_memory_left(&local);
+    for dir in [out, ctl_out] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}

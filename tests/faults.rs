@@ -328,6 +328,8 @@ fn malformed_fault_plans_are_rejected_naming_the_problem() {
     bad(&["--fault", "controller:kill@60s"], "beyond the run");
     bad(&["--fault", "controller:stop@1s"], "duration_s");
     bad(&["--mode", "lockstep", "--fault", "controller:kill@1s"], "needs realtime mode");
+    bad(&["--fault", "bridge:kill@1s"], "bridge kill at 1 s needs a plant-side bridge: a run with --bridge-listen");
+    bad(&["--fault", "bridge:drop@1s,ticks=5"], "the bridge can be killed, terminated or stopped");
     bad(
         &["--fault", "controller:kill@1s", "--fault", "controller:kill@1s"],
         "`faults[1]`: controller kill at 1 s is faults[0] again: give it once",

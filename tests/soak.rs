@@ -84,8 +84,10 @@ fn a_short_soak_s_figures_agree_with_the_run_s_files() {
     let per_kind: u64 = soak["kinds"].as_array().unwrap().iter().map(|k| n(&k["injected"])).sum();
     assert_eq!(per_kind, 4);
     assert_eq!(n(&soak["failsafe_engagements"]), of_kind("failsafe-engaged").len() as u64);
-    // The killed plant came back from its checkpoint (a restart), and so did the logger.
+    // The killed plant came back from its checkpoint (a restart), and so did the logger, which went on with the
+    // trace's own columns (it once said it took them from the scenario, which it did not).
     assert_eq!(of_kind("process-restarted").len(), 2);
+    assert!(of_kind("controller-unannounced").is_empty(), "{context}");
 
     // Rows: the counts are the files', nothing torn, every tick missing from timing.csv inside a fault's window.
     let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
@@ -136,5 +138,74 @@ fn a_short_soak_s_figures_agree_with_the_run_s_files() {
     }
     no_shared_memory_left(&run_id);
     assert!(!std::path::Path::new(&format!("/tmp/silrig_{run_id}.lock")).exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The controller behind the bridge, its host on this machine: the plant-side bridge killed and stopped as the
+/// schedule of seed 5 says, each seen by the plant's watchdog and recovered from by the flight, the controller's
+/// report back on the plant's host, and nothing of either namespace left.
+#[cfg(feature = "bridge")]
+#[test]
+fn a_soak_behind_the_bridge_kills_and_stops_the_plant_side_bridge_and_the_flight_recovers() {
+    let dir = temp_dir("soak", "bridge");
+    let out = dir.join("out");
+    let run_id = format!("soakb{}", std::process::id());
+    let child = Command::new(SILRIG)
+        .args(["soak", "--bridge", "--duration-s", "36", "--seed", "5", "--run-id", &run_id])
+        .args(["--out", out.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let o = wait_with_watchdog(child, Duration::from_secs(300));
+    let stdout = String::from_utf8_lossy(&o.stdout).to_string();
+    let context = format!("{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    let soak: Value = serde_json::from_str(&std::fs::read_to_string(out.join("soak.json")).unwrap()).unwrap();
+    assert!(soak["problems"].as_array().unwrap().is_empty(), "{context}");
+    assert_eq!(o.status.code(), Some(0), "{context}");
+    let n = |v: &Value| v.as_u64().unwrap();
+    let faults = soak["faults"].as_array().unwrap();
+    let kinds: Vec<&str> = faults.iter().map(|f| f["kind"].as_str().unwrap()).collect();
+    assert_eq!(kinds, ["plant:drop", "bridge:kill", "logger:kill", "bridge:stop"]);
+    for f in faults.iter().filter(|f| f["kind"].as_str().unwrap().starts_with("bridge:")) {
+        // The plant misses the commands and says so; the flight gets them back.
+        assert_eq!(f["watched"], true, "{f}");
+        assert!(f["detected_by"].as_str().unwrap().starts_with("plant"), "{f}");
+        assert!(f["recovered_at_s"].as_f64().unwrap() > f["detected_at_s"].as_f64().unwrap(), "{f}");
+    }
+    let events: Vec<Value> = std::fs::read_to_string(out.join("events.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let launcher_said = |kind: &str, start: &str| {
+        events.iter().any(|e| {
+            e["process"] == "launcher" && e["kind"] == kind && e["detail"].as_str().unwrap().starts_with(start)
+        })
+    };
+    assert!(launcher_said("fault-injected", "bridge kill at "), "{context}");
+    assert!(launcher_said("process-ended", "bridge killed by signal 9 (planned)"), "{context}");
+    assert!(launcher_said("process-restarted", "bridge as pid "), "{context}");
+    assert!(launcher_said("fault-ended", "SIGCONT to bridge"), "{context}");
+    assert!(!events.iter().any(|e| e["kind"] == "controller-unannounced"), "the restarted logger: {context}");
+    // The controller's host: one bridge and one controller all along, in a namespace of its own, whose report
+    // came back to the plant's host.
+    let host = &soak["controller_host"];
+    assert_eq!((n(&host["bridge_starts"]), n(&host["controller_starts"])), (1, 1), "{host}");
+    let local = host["local_run_id"].as_str().unwrap();
+    assert_eq!(local, format!("{run_id}-c"));
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("controller.report.json")).unwrap()).unwrap();
+    assert_eq!(report["run_id"], local);
+    let start = soak["processes_start"].as_array().unwrap();
+    for name in ["bridge", "bridge@ctl-host", "controller"] {
+        assert!(start.iter().any(|p| p["process"] == name && n(&p["shm_files"]) > 0), "{name}: {start:?}");
+    }
+    let left = &soak["leftovers"];
+    for k in ["processes", "shm_files", "lock_files"] {
+        assert!(left[k].as_array().unwrap().is_empty(), "{left}");
+    }
+    no_shared_memory_left(&run_id);
+    no_shared_memory_left(local);
     std::fs::remove_dir_all(&dir).unwrap();
 }

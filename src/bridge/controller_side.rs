@@ -15,6 +15,7 @@ use super::stamps::TickStamps;
 use silrig_rig::report::Recorder;
 use silrig_rig::{ProcessArgs, SCENARIO_ENV, signals};
 use silrig_wire::clock::monotonic_ns;
+use silrig_wire::ipc::namespace::RunId;
 use silrig_wire::topology::CONSUMER_BUFFER;
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{CommandSample, ControllerInfo, PlantInfo, PlantSample};
@@ -43,6 +44,8 @@ pub(super) struct ControllerSide {
     published: TickStamps,
     /// This host's folder of the run, where the controller writes its report.
     out: std::path::PathBuf,
+    /// The namespace of the run's half on this host: the id in its controller's report.
+    local_run: RunId,
     refused_since_ns: Option<u64>,
     finished_at_ns: Option<u64>,
     rec: Recorder,
@@ -62,8 +65,9 @@ impl ControllerSide {
         link.subscribe(Keys::any_hello(Side::Plant), "hello")?;
         let mut peer = PeerWatch::new((opts.peer_timeout_ms * 1e6) as u64);
         Self::wait_for_plant_side(&mut link, &mut peer, opts.connect_timeout_s)?;
-        let scenario = Self::fetch_run(&link, args)?;
-        let node = ipc::create_node(&args.run_id, "bridge")?;
+        let local_run = opts.local_run_id();
+        let scenario = Self::fetch_run(&link, args, local_run)?;
+        let node = ipc::create_node(local_run, "bridge")?;
         let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
         let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
         let info_stream = ipc::open_stream::<ControllerInfo>(&node, Stream::ControllerInfo)?;
@@ -96,6 +100,7 @@ impl ControllerSide {
             info_out,
             published: TickStamps::new(),
             out: args.out.clone(),
+            local_run: local_run.clone(),
             refused_since_ns: None,
             finished_at_ns: None,
             rec,
@@ -132,7 +137,7 @@ impl ControllerSide {
 
     /// The run's scenario and arguments from the plant side, written to `<out>/scenario.toml` and
     /// `<out>/controller.env` (with this host's paths) for the controller that runs here.
-    fn fetch_run(link: &Link, args: &ProcessArgs) -> anyhow::Result<String> {
+    fn fetch_run(link: &Link, args: &ProcessArgs, local_run: &RunId) -> anyhow::Result<String> {
         let replies = link
             .session
             .get(link.keys.of("run"))
@@ -149,8 +154,9 @@ impl ControllerSide {
         let mut env: Vec<(String, String)> = info
             .env
             .into_iter()
-            .filter(|(k, _)| k != SCENARIO_ENV && k != "SILRIG_OUT" && k != "SILRIG_RESUME")
+            .filter(|(k, _)| ![SCENARIO_ENV, "SILRIG_OUT", "SILRIG_RESUME", "SILRIG_RUN_ID"].contains(&k.as_str()))
             .collect();
+        env.push(("SILRIG_RUN_ID".into(), local_run.to_string()));
         env.push((SCENARIO_ENV.into(), scenario_path.display().to_string()));
         env.push(("SILRIG_OUT".into(), args.out.display().to_string()));
         let local =
@@ -223,7 +229,7 @@ impl ControllerSide {
     /// What happened is said here; the plant's host says it too.
     fn send_controller_report(&mut self) {
         let path = self.out.join("controller.report.json");
-        let run = self.link.run.clone();
+        let run = self.local_run.to_string();
         let this_run = |text: &str| {
             serde_json::from_str::<serde_json::Value>(text).is_ok_and(|v| v["run_id"].as_str() == Some(run.as_str()))
         };

@@ -73,9 +73,30 @@ pub fn run_bridge(opts: &BridgeOptions) -> anyhow::Result<ProcessReport> {
     let scheduling = silrig_wire::clock::current_policy().to_string();
     let (mut rec, scenario, ended) = match side {
         Side::Plant => PlantSide::start(opts, &endpoint)?.run()?,
-        Side::Controller => ControllerSide::start(opts, &endpoint)?.run()?,
+        Side::Controller => {
+            let ended = ControllerSide::start(opts, &endpoint)?.run()?;
+            clean_controller_host(opts.local_run_id());
+            ended
+        }
     };
     rec.declare(&["peer_losses"]);
     let meta = ReportMeta::new(args, &scenario, scheduling, ended);
     Ok(rec.finish(meta, &args.out)?)
+}
+
+/// The controller's host has no launcher to remove the iceoryx2 files of its half of the run: the bridge, ending
+/// after the flight (its own node gone), removes them once no process there is alive. A controller still running
+/// keeps them, and is named.
+fn clean_controller_host(local: &silrig_wire::ipc::namespace::RunId) {
+    match silrig_wire::ipc::namespace::cleanup_run(local) {
+        Ok(r) if !r.alive.is_empty() => {
+            let who: Vec<String> = r.alive.iter().map(|n| format!("{} (pid {})", n.name, n.pid)).collect();
+            eprintln!(
+                "silrig-bridge: {} still running in namespace {local}: its iceoryx2 files are left to it",
+                who.join(", ")
+            );
+        }
+        Ok(_) => {}
+        Err(e) => eprintln!("silrig-bridge: warning: cleaning namespace {local}: {e}"),
+    }
 }

@@ -41,6 +41,11 @@ pub struct BridgeOptions {
     /// The other bridge counts as lost after this long without its hello (sent every 100 ms), ms.
     #[arg(long, default_value_t = 500.0, allow_negative_numbers = true)]
     pub peer_timeout_ms: f64,
+    /// Controller side: the iceoryx2 namespace of the run's half on this host, for its controller's
+    /// `--run-id` (default: the run id). Another id puts both hosts' halves on one machine, as `silrig soak
+    /// --bridge` does.
+    #[arg(long, value_name = "RUN_ID", requires = "connect")]
+    pub local_run_id: Option<silrig_wire::ipc::namespace::RunId>,
     /// The run: its id, and on the plant side its scenario, mode and tuning (the controller side takes those from
     /// the plant side and writes them to <out>/scenario.toml and <out>/controller.env for its controller).
     #[command(flatten)]
@@ -48,6 +53,11 @@ pub struct BridgeOptions {
 }
 
 impl BridgeOptions {
+    /// The namespace of the run's half on this host.
+    pub fn local_run_id(&self) -> &silrig_wire::ipc::namespace::RunId {
+        self.local_run_id.as_ref().unwrap_or(&self.process.run_id)
+    }
+
     /// The side and the Zenoh endpoint, checked.
     pub fn side(&self) -> Result<(Side, String), BridgeError> {
         silrig_rig::flag_in_range("connect-timeout-s", self.connect_timeout_s, 0.1, 3600.0, "s")

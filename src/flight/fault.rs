@@ -6,6 +6,67 @@
 use crate::role::Role;
 use serde::{Deserialize, Serialize};
 
+/// What a fault targets: one of the rig's processes, or the plant-side bridge of a run whose controller is on
+/// another host (`silrig run --bridge-listen`), which the launcher starts and restarts like a process of the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FaultTarget {
+    /// The plant.
+    Plant,
+    /// The controller.
+    Controller,
+    /// The logger.
+    Logger,
+    /// The plant-side bridge (process faults only).
+    Bridge,
+}
+
+impl FaultTarget {
+    /// Every target, as plans name them.
+    pub const ALL: [FaultTarget; 4] =
+        [FaultTarget::Plant, FaultTarget::Controller, FaultTarget::Logger, FaultTarget::Bridge];
+
+    /// Name in plans, reports and events.
+    pub fn label(self) -> &'static str {
+        match self.role() {
+            Some(role) => role.label(),
+            None => "bridge",
+        }
+    }
+
+    /// The rig process targeted; None for the bridge.
+    pub fn role(self) -> Option<Role> {
+        match self {
+            FaultTarget::Plant => Some(Role::Plant),
+            FaultTarget::Controller => Some(Role::Controller),
+            FaultTarget::Logger => Some(Role::Logger),
+            FaultTarget::Bridge => None,
+        }
+    }
+}
+
+impl From<Role> for FaultTarget {
+    fn from(role: Role) -> Self {
+        match role {
+            Role::Plant => FaultTarget::Plant,
+            Role::Controller => FaultTarget::Controller,
+            Role::Logger => FaultTarget::Logger,
+        }
+    }
+}
+
+impl PartialEq<Role> for FaultTarget {
+    fn eq(&self, role: &Role) -> bool {
+        self.role() == Some(*role)
+    }
+}
+
+impl std::fmt::Display for FaultTarget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.label())
+    }
+}
+
 /// What happens.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -103,7 +164,7 @@ pub struct Fault {
     /// When, s of simulated time from the start of the run.
     pub at_s: f64,
     /// Which process.
-    pub target: Option<Role>,
+    pub target: Option<FaultTarget>,
     /// What happens.
     pub action: Option<FaultAction>,
     /// Length of a stop, or of a delay/jitter/drop/sensor/actuator window (default: to the end of the run), s.
@@ -146,8 +207,8 @@ pub struct Fault {
 
 impl Fault {
     /// The target (validated faults always have one).
-    pub fn target(&self) -> Role {
-        self.target.unwrap_or(Role::Plant)
+    pub fn target(&self) -> FaultTarget {
+        self.target.unwrap_or(FaultTarget::Plant)
     }
 
     /// The action (validated faults always have one).
@@ -186,7 +247,9 @@ impl Fault {
     /// Check the fault against a run of `duration_s`; the error names the key and the problem.
     pub fn validate(&self, duration_s: f64) -> Result<(), (String, String)> {
         let err = |k: &str, p: String| Err((k.to_string(), p));
-        let Some(target) = self.target else { return err("target", "missing: plant, controller or logger".into()) };
+        let Some(target) = self.target else {
+            return err("target", "missing: plant, controller, logger or bridge".into());
+        };
         let Some(action) = self.action else {
             let names: Vec<&str> = FaultAction::ALL.iter().map(|a| a.label()).collect();
             return err("action", format!("missing: one of {}", names.join(", ")));
@@ -229,6 +292,12 @@ impl Fault {
             if !present && required.contains(&key) {
                 return err(key, format!("is required for action \"{}\"", action.label()));
             }
+        }
+        if target == FaultTarget::Bridge && !action.is_process_fault() {
+            return err(
+                "target",
+                format!("the bridge can be killed, terminated or stopped; \"{}\" is not one of those", action.label()),
+            );
         }
         if action == FaultAction::Drop && target == Role::Logger {
             return err("target", "drop needs a publisher the loop depends on: plant or controller".into());
@@ -331,10 +400,10 @@ pub fn parse_fault_flag(text: &str) -> Result<Fault, String> {
     let bad = |why: String| format!("--fault {text:?}: {why}");
     let (head, rest) = text.split_once('@').ok_or_else(|| bad("expected TARGET:ACTION@TIME".into()))?;
     let (target, action) = head.split_once(':').ok_or_else(|| bad("expected TARGET:ACTION before '@'".into()))?;
-    let target = Role::ALL
+    let target = FaultTarget::ALL
         .into_iter()
         .find(|r| r.label() == target.trim())
-        .ok_or_else(|| bad(format!("unknown target {:?}; plant, controller or logger", target.trim())))?;
+        .ok_or_else(|| bad(format!("unknown target {:?}; plant, controller, logger or bridge", target.trim())))?;
     let action = FaultAction::ALL
         .iter()
         .copied()
@@ -424,7 +493,7 @@ mod tests {
     #[test]
     fn flags_parse_into_the_same_faults_as_plans() {
         let f = parse_fault_flag("controller:kill@3s,restart_after=0.5s").unwrap();
-        assert_eq!(f.target, Some(Role::Controller));
+        assert_eq!(f.target, Some(FaultTarget::Controller));
         assert_eq!(f.action, Some(FaultAction::Kill));
         assert_eq!((f.at_s, f.restart_after_s), (3.0, Some(0.5)));
         let f = parse_fault_flag("plant:delay@2s,delay=15ms").unwrap();
@@ -460,6 +529,11 @@ mod tests {
         assert!(e.1.contains("the F-16 has no channel \"roll\"; one of vt_fps"), "{}", e.1);
         let f = parse_fault_flag("plant:drop@1s").unwrap();
         assert!(f.validate(10.0).unwrap_err().1.contains("either ticks or probability"));
+        let f = parse_fault_flag("bridge:delay@1s,delay=5ms").unwrap();
+        assert!(f.validate(10.0).unwrap_err().1.contains("the bridge can be killed, terminated or stopped"));
+        let f = parse_fault_flag("bridge:stop@1s,for=0.5s").unwrap();
+        assert_eq!(f.target, Some(FaultTarget::Bridge));
+        f.validate(10.0).unwrap();
     }
 
     #[test]

@@ -3,9 +3,10 @@
 //! ([`silrig_rig::tick_beacon`]; a plant that does not use our library has none, and then the time counts on the
 //! wall clock from its tick 0, read from its `ticking` event). Their follow-ups: SIGCONT after a stop (its length is
 //! wall time: a stopped plant's simulated time stands still), a restart after a kill or term. Loop and plant-model
-//! faults are the processes' own business.
+//! faults are the processes' own business. The plant-side bridge of a run across hosts takes process faults too.
 
-use super::supervision::Supervisor;
+use super::remote::RemoteBridge;
+use super::supervision::{ChildProcess, Supervisor};
 use silrig_flight::fault::{Fault, FaultAction};
 use silrig_rig::events::EventLog;
 use silrig_rig::tick_beacon::TickBeacon;
@@ -45,7 +46,7 @@ impl FaultSchedule {
     }
 
     /// Inject the faults that are due and send the SIGCONTs that are due.
-    pub(crate) fn poll(&mut self, sup: &mut Supervisor) -> std::io::Result<()> {
+    pub(crate) fn poll(&mut self, sup: &mut Supervisor, mut bridge: Option<&mut RemoteBridge>) -> std::io::Result<()> {
         if self.plan.is_empty() {
             return Ok(());
         }
@@ -66,35 +67,58 @@ impl FaultSchedule {
             };
             if !pf.injected && due {
                 pf.injected = true;
-                inject(pf, sup, &self.events)?;
+                inject(pf, sup, bridge.as_deref_mut(), &self.events)?;
             }
             if let Some(at) = pf.follow_up
                 && Instant::now() >= at
             {
                 pf.follow_up = None;
-                let p = &mut sup.process_mut(pf.fault.target()).process;
-                p.signal(libc::SIGCONT);
-                let detail = format!("SIGCONT to {} (pid {})", pf.fault.target(), p.pid());
-                self.events.emit(None, "fault-ended", detail);
+                if let Some(p) = target_process(&pf.fault, sup, bridge.as_deref_mut()) {
+                    p.signal(libc::SIGCONT);
+                    let detail = format!("SIGCONT to {} (pid {})", pf.fault.target(), p.pid());
+                    self.events.emit(None, "fault-ended", detail);
+                }
             }
         }
         Ok(())
     }
 
     /// A process left stopped by an interrupted plan must be continued to hear SIGTERM.
-    pub(crate) fn release_stopped(&self, sup: &mut Supervisor) {
+    pub(crate) fn release_stopped(&self, sup: &mut Supervisor, mut bridge: Option<&mut RemoteBridge>) {
         for pf in self.plan.iter().filter(|pf| pf.follow_up.is_some()) {
-            sup.process_mut(pf.fault.target()).process.signal(libc::SIGCONT);
+            if let Some(p) = target_process(&pf.fault, sup, bridge.as_deref_mut()) {
+                p.signal(libc::SIGCONT);
+            }
         }
     }
 }
 
+/// The process the fault targets: a rig process, or the plant-side bridge (None in a run without one).
+fn target_process<'a>(
+    f: &Fault,
+    sup: &'a mut Supervisor,
+    bridge: Option<&'a mut RemoteBridge>,
+) -> Option<&'a mut ChildProcess> {
+    match f.target().role() {
+        Some(role) => Some(&mut sup.process_mut(role).process),
+        None => bridge.map(|b| b.child_mut()),
+    }
+}
+
 /// Send the fault's signal to its target, or skip it (with a warning and an event) when the target is not running.
-fn inject(pf: &mut PlannedFault, sup: &mut Supervisor, events: &EventLog) -> std::io::Result<()> {
+fn inject(
+    pf: &mut PlannedFault,
+    sup: &mut Supervisor,
+    mut bridge: Option<&mut RemoteBridge>,
+    events: &EventLog,
+) -> std::io::Result<()> {
     let f = &pf.fault;
     let target = f.target();
-    let p = sup.process_mut(target);
-    if p.process.poll()?.is_some() {
+    let running = match target_process(f, sup, bridge.as_deref_mut()) {
+        Some(p) => p.poll()?.is_none(),
+        None => false,
+    };
+    if !running {
         eprintln!("silrig run: warning: {} skipped: {target} is not running", f.describe());
         events.emit(None, "fault-skipped", format!("{}: {target} is not running", f.describe()));
         return Ok(());
@@ -104,15 +128,24 @@ fn inject(pf: &mut PlannedFault, sup: &mut Supervisor, events: &EventLog) -> std
         FaultAction::Term => (libc::SIGTERM, "SIGTERM"),
         _ => (libc::SIGSTOP, "SIGSTOP"),
     };
-    events.emit(None, "fault-injected", format!("{} ({name} to pid {})", f.describe(), p.process.pid()));
-    p.process.signal(signal);
+    let p = target_process(f, sup, bridge.as_deref_mut()).expect("running");
+    events.emit(None, "fault-injected", format!("{} ({name} to pid {})", f.describe(), p.pid()));
+    p.signal(signal);
     if f.action() == FaultAction::Stop {
         pf.follow_up = Some(Instant::now() + Duration::from_secs_f64(f.duration_s.unwrap_or(0.0)));
-    } else {
-        p.planned_exit = true;
-        if let Some(r) = f.restart_after_s {
-            p.restart_at = Some(Instant::now() + Duration::from_secs_f64(r));
+        return Ok(());
+    }
+    let restart_at = f.restart_after_s.map(|r| Instant::now() + Duration::from_secs_f64(r));
+    match (target.role(), bridge) {
+        (Some(role), _) => {
+            let p = sup.process_mut(role);
+            p.planned_exit = true;
+            if restart_at.is_some() {
+                p.restart_at = restart_at;
+            }
         }
+        (None, Some(b)) => b.planned_death(restart_at),
+        (None, None) => {}
     }
     Ok(())
 }

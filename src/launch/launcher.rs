@@ -11,7 +11,7 @@ use crate::floor::{timer_baseline, timer_baseline::BaselineArgs, timer_baseline:
 use crate::program::check_command;
 use crate::supervision::{ChildProcess, ControllerLaunch, SupervisionOptions, Supervisor};
 use anyhow::Context;
-use silrig_flight::fault::Fault;
+use silrig_flight::fault::{Fault, FaultTarget};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::summary::summarize;
@@ -394,6 +394,11 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     {
         anyhow::bail!("fault plan: {} needs a controller the launcher starts, not --controller external", f.describe());
     }
+    if opts.bridge_listen.is_none()
+        && let Some(f) = scenario.faults.iter().find(|f| f.target() == FaultTarget::Bridge)
+    {
+        anyhow::bail!("fault plan: {} needs a plant-side bridge: a run with --bridge-listen", f.describe());
+    }
     if opts.plant == PlantKind::External
         && let Some(f) = scenario.faults.iter().find(|f| f.target() == Role::Plant && f.action().is_process_fault())
     {
@@ -520,7 +525,7 @@ fn supervise(
 ) -> anyhow::Result<()> {
     let timeout = Duration::from_secs_f64(scenario.timing.duration_s * 3.0 + 30.0);
     loop {
-        faults.poll(sup)?;
+        faults.poll(sup, bridge.as_mut())?;
         if let Some(b) = bridge.as_mut() {
             b.poll()?;
         }
@@ -664,7 +669,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     }
     supervised?;
     let ended_by_plan = sup.ended_by_plan();
-    faults.release_stopped(&mut sup);
+    faults.release_stopped(&mut sup, bridge.as_mut());
     sup.stop_all()?;
     if let Some(b) = bridge.as_mut() {
         b.wait_for_controller_report(&out);

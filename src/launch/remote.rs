@@ -26,6 +26,9 @@ pub(crate) struct RemoteBridge {
     /// Deaths in a row, each soon after its start: a bridge that cannot run at all is not restarted for ever.
     quick_deaths: u32,
     restart_at: Option<Instant>,
+    /// A fault of the plan ends this life: restart it then (the usual pause when None), and do not count the death
+    /// as one of a bridge that cannot run.
+    planned: Option<Option<Instant>>,
     /// Why the bridge was given up on, for the run's failures.
     pub(crate) failure: Option<String>,
 }
@@ -65,6 +68,7 @@ impl RemoteBridge {
             started,
             quick_deaths: 0,
             restart_at: None,
+            planned: None,
             failure: None,
         })
     }
@@ -88,6 +92,12 @@ impl RemoteBridge {
             return Ok(());
         }
         let Some(status) = self.child.poll()? else { return Ok(()) };
+        if let Some(restart_at) = self.planned.take() {
+            let detail = format!("bridge {} (planned)", super::supervision::describe(status));
+            self.events.emit(None, "process-ended", detail);
+            self.restart_at = Some(restart_at.unwrap_or_else(|| Instant::now() + Duration::from_millis(200)));
+            return Ok(());
+        }
         let young = self.started.elapsed() < QUICK_DEATH;
         self.quick_deaths = if young { self.quick_deaths + 1 } else { 0 };
         let died = format!("bridge {}", super::supervision::describe(status));
@@ -106,6 +116,16 @@ impl RemoteBridge {
         eprintln!("silrig run: {died}; the controller's commands stop until it is back; restarting it in {pause:?}");
         self.restart_at = Some(Instant::now() + pause);
         Ok(())
+    }
+
+    /// The bridge's process, for a fault of the plan.
+    pub(crate) fn child_mut(&mut self) -> &mut ChildProcess {
+        &mut self.child
+    }
+
+    /// A fault of the plan killed or terminated the bridge: restart it at `restart_at` (or after the usual pause).
+    pub(crate) fn planned_death(&mut self, restart_at: Option<Instant>) {
+        self.planned = Some(restart_at);
     }
 
     /// Before it is stopped: the controller-side bridge sends the controller's report when the flight ends (after

@@ -501,6 +501,8 @@ impl LoggerLoop {
         }
         let names = match &self.announced {
             Some(names) => names.clone(),
+            // A restarted logger continues the trace's own columns, whoever announced them.
+            None if self.writer.previous_columns.is_some() => Vec::new(),
             None => {
                 let detail = "no controller announced its diagnostics before the first row; columns from the scenario";
                 self.events.emit(Some(tick), "controller-unannounced", detail);

@@ -142,10 +142,27 @@ pub struct SoakReport {
     pub run_shm_end: Vec<String>,
     /// What was left after the run (must be empty).
     pub leftovers: Leftovers,
+    /// With `--bridge`: the controller's host on this machine.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller_host: Option<ControllerHostFigures>,
     /// Each fault.
     pub faults: Vec<FaultOutcome>,
     /// Why the soak failed (empty: it passed).
     pub problems: Vec<String>,
+}
+
+/// The controller's host of a soak with the bridge: its namespace and folder, and how often its bridge and
+/// controller were started (once each, when nothing there failed: the soak faults nothing on that host).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ControllerHostFigures {
+    /// The iceoryx2 namespace of the controller's half.
+    pub local_run_id: String,
+    /// Its folder (the controller's report, events and logs).
+    pub folder: String,
+    /// Starts of the controller-side bridge.
+    pub bridge_starts: u32,
+    /// Starts of the controller.
+    pub controller_starts: u32,
 }
 
 /// What the soak measured while the run went, for [`report`].
@@ -174,6 +191,8 @@ pub struct Measured {
     pub lives: Vec<LifeProbe>,
     /// After the run.
     pub leftovers: Leftovers,
+    /// With `--bridge`.
+    pub controller_host: Option<ControllerHostFigures>,
 }
 
 /// The figures and the verdict of a soak of `plan` (loop period `dt_s`) from its run folder and measurements.
@@ -260,6 +279,7 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         run_shm_start: m.start.map(|s| s.1).unwrap_or_default(),
         run_shm_end: m.end.map(|s| s.1).unwrap_or_default(),
         leftovers: m.leftovers,
+        controller_host: m.controller_host,
         faults,
         problems: Vec::new(),
     };
@@ -328,6 +348,14 @@ fn problems(r: &SoakReport) -> Vec<String> {
     }
     if r.leftovers.count() > 0 {
         p.push(format!("left after the run: {:?}", r.leftovers));
+    }
+    if let Some(h) = &r.controller_host
+        && (h.bridge_starts, h.controller_starts) != (1, 1)
+    {
+        p.push(format!(
+            "the controller's host, where nothing was faulted, started its bridge {} times and its controller {}              (see {})",
+            h.bridge_starts, h.controller_starts, h.folder
+        ));
     }
     p
 }
@@ -473,6 +501,13 @@ pub fn to_text(r: &SoakReport) -> String {
         "silrig soak: seed {}, {} s realtime, run {} ({}), load average {:?} at the start, {:?} at the end\n",
         r.seed, r.duration_s, r.run_id, r.out_dir, r.load_average_start, r.load_average_end
     );
+    if let Some(h) = &r.controller_host {
+        s += &format!(
+            "the controller behind the bridge, its host on this machine: namespace {}, folder {}; its bridge \
+             started {} times, its controller {}\n",
+            h.local_run_id, h.folder, h.bridge_starts, h.controller_starts
+        );
+    }
     s += &format!(
         "faults: {} scheduled, {} injected ({} fault-injected events), {} detected ({} of kinds the rig watches), \
          {} recovered, the flight back after {}; failsafe engaged {} times\n",

@@ -2,14 +2,17 @@
 //! seed ([`schedule`]): every process killed, terminated, stopped, delayed, jittered and restarted, the plant's
 //! and controller's publishing dropped, the plant's sensors and actuators faulted, at times a few seconds apart.
 //! The soak watches the run's processes from outside while it flies ([`probe`]), then reads the run folder and
-//! gives its figures and verdict ([`figures`]), printed and written as `soak.json` in the run folder.
+//! gives its figures and verdict ([`figures`]), printed and written as `soak.json` in the run folder. With
+//! `--bridge` the controller flies behind the bridge, its host emulated on this machine ([`controller_host`]).
 
+pub mod controller_host;
 pub mod figures;
 pub mod probe;
 pub mod schedule;
 
 use anyhow::Context;
-use figures::{Measured, SoakReport};
+use controller_host::ControllerHost;
+use figures::{ControllerHostFigures, Measured, SoakReport};
 use probe::ProcessProbe;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -39,6 +42,12 @@ pub struct SoakArgs {
     /// Print the schedule's `--fault` flags and stop.
     #[arg(long)]
     pub print_schedule: bool,
+    /// Fly the controller behind the bridge: the plant's host (`silrig run --bridge-listen` on 127.0.0.1) and the
+    /// controller's host (`silrig-bridge --connect` and the controller, in a namespace of their own) on this
+    /// machine; the plant-side bridge is killed, terminated and stopped in place of the controller's faults. Needs
+    /// a build with the `bridge` feature.
+    #[arg(long)]
+    pub bridge: bool,
 }
 
 /// Run a soak with the `silrig` binary `silrig`; the report (also in `<out>/soak.json`).
@@ -49,7 +58,7 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         "--duration-s must be within {lo}..{hi} s, got {}",
         args.duration_s
     );
-    let plan = schedule::schedule(args.seed, args.duration_s);
+    let plan = schedule::schedule(args.seed, args.duration_s, args.bridge);
     let run_id = args.run_id.clone().unwrap_or_else(|| format!("soak{}-{}", args.seed % 100_000, std::process::id()));
     silrig_wire::ipc::namespace::RunId::new(&run_id).with_context(|| format!("--run-id {run_id:?}"))?;
     let out = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("soak-{run_id}")));
@@ -57,9 +66,19 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
     let mut command: Vec<String> = ["run", "--quiet", "--duration-s"].map(String::from).to_vec();
     command.extend([args.duration_s.to_string(), "--out".into(), out.display().to_string()]);
     command.extend(["--run-id".into(), run_id.clone()]);
-    for f in schedule::flags(args.seed, args.duration_s) {
+    for f in schedule::flags(args.seed, args.duration_s, args.bridge) {
         command.extend(["--fault".into(), f]);
     }
+    let mut host = if args.bridge {
+        let endpoint = format!("127.0.0.1:{}", free_tcp_port()?);
+        command.extend(["--bridge-listen".into(), endpoint.clone()]);
+        let bin_dir = silrig.parent().context("the silrig binary's folder")?;
+        Some(ControllerHost::new(bin_dir, &endpoint, &run_id, &out)?)
+    } else {
+        None
+    };
+    let host_prefix = host.as_ref().map(|h| h.local.prefix());
+    let mut host_trouble = String::new();
     let started_utc = utc_now();
     let load_start = load_average();
     let mut child =
@@ -79,7 +98,17 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         if t0_ns.is_none() {
             t0_ns = silrig_launch::fault_report::plant_t0_ns(&out);
         }
-        let probes = probe::probe_run(launcher, &shm_prefix);
+        let mut probes = probe::probe_run(launcher, &shm_prefix);
+        if let Some(h) = host.as_mut() {
+            if let Err(e) = h.keep_up() {
+                let said = format!("silrig soak: the controller's host: {e:#}");
+                if said != host_trouble {
+                    eprintln!("{said}");
+                    host_trouble = said;
+                }
+            }
+            probes.extend(h.probes());
+        }
         seen.extend(probes.iter().map(|p| p.pid));
         // Wall seconds from tick 0; measurements stop a second before the end, when the launcher ends the rig.
         let wall_s = t0_ns.map(|t0| silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9);
@@ -90,7 +119,8 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         if let Some(wall_s) = wall_s
             && rig_up
         {
-            let shm = probe::shm_entries(&shm_prefix);
+            let mut shm = probe::shm_entries(&shm_prefix);
+            shm.extend(host_prefix.iter().flat_map(|p| probe::shm_entries(p)));
             if start.is_none() && (probe::SETTLE_S..schedule::FIRST_FAULT_S - 0.5).contains(&wall_s) {
                 start = Some((probes.clone(), shm.clone()));
             }
@@ -101,7 +131,18 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         }
         std::thread::sleep(POLL);
     };
-    let leftovers = probe::Leftovers::find(&run_id, &out, &seen);
+    let mut leftovers = probe::Leftovers::find(&run_id, &out, &seen);
+    let controller_host = host.as_mut().map(|h| {
+        // The bridge ends after sending the controller's report, the controller with the flight.
+        h.finish(Duration::from_secs(10));
+        leftovers.extend(probe::Leftovers::find(h.local.as_str(), &h.out, &h.pids));
+        ControllerHostFigures {
+            local_run_id: h.local.to_string(),
+            folder: h.out.display().to_string(),
+            bridge_starts: h.starts.0,
+            controller_starts: h.starts.1,
+        }
+    });
     let measured = Measured {
         seed: args.seed,
         duration_s: args.duration_s,
@@ -115,6 +156,7 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         end,
         lives: lives.into_vec(),
         leftovers,
+        controller_host,
     };
     let report = figures::report(&plan, dt_s, measured);
     if out.is_dir() {
@@ -123,6 +165,12 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(report)
+}
+
+/// A TCP port of 127.0.0.1 nobody listens on now, for the plant-side bridge.
+fn free_tcp_port() -> anyhow::Result<u16> {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").context("finding a free TCP port for the bridge")?;
+    Ok(listener.local_addr()?.port())
 }
 
 /// 1, 5 and 15 minute load averages.

@@ -114,7 +114,9 @@ fn process_name(pid: u32) -> String {
     }
 }
 
-fn probe(pid: u32, name: &str, shm_prefix: &str) -> Option<ProcessProbe> {
+/// Measure process `pid` as `name`, counting the shared-memory files whose names start with `shm_prefix` (None:
+/// it has gone).
+pub fn probe(pid: u32, name: &str, shm_prefix: &str) -> Option<ProcessProbe> {
     let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
     let rss_kib = status
         .lines()
@@ -196,6 +198,13 @@ impl Leftovers {
             shm_files: shm_entries(&format!("sr_{run_id}_")),
             lock_files,
         }
+    }
+
+    /// Add what another namespace of the run left (the controller's host of a soak with the bridge).
+    pub fn extend(&mut self, other: Leftovers) {
+        self.processes.extend(other.processes);
+        self.shm_files.extend(other.shm_files);
+        self.lock_files.extend(other.lock_files);
     }
 
     /// How many things are left in all.
