@@ -422,7 +422,7 @@ fn the_fault_actions_table_says_what_the_validation_does() {
             continue;
         }
         let targets = row.cell("targets").unwrap();
-        for role in ["plant", "controller", "logger"] {
+        for role in ["plant", "controller", "logger", "bridge"] {
             let mut f = example.clone();
             f.insert("target".into(), role.into());
             let listed = targets == "any" || targets.split(", ").any(|t| t == role);

@@ -6,67 +6,6 @@
 use crate::role::Role;
 use serde::{Deserialize, Serialize};
 
-/// What a fault targets: one of the rig's processes, or the plant-side bridge of a run whose controller is on
-/// another host (`silrig run --bridge-listen`), which the launcher starts and restarts like a process of the run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum FaultTarget {
-    /// The plant.
-    Plant,
-    /// The controller.
-    Controller,
-    /// The logger.
-    Logger,
-    /// The plant-side bridge (process faults only).
-    Bridge,
-}
-
-impl FaultTarget {
-    /// Every target, as plans name them.
-    pub const ALL: [FaultTarget; 4] =
-        [FaultTarget::Plant, FaultTarget::Controller, FaultTarget::Logger, FaultTarget::Bridge];
-
-    /// Name in plans, reports and events.
-    pub fn label(self) -> &'static str {
-        match self.role() {
-            Some(role) => role.label(),
-            None => "bridge",
-        }
-    }
-
-    /// The rig process targeted; None for the bridge.
-    pub fn role(self) -> Option<Role> {
-        match self {
-            FaultTarget::Plant => Some(Role::Plant),
-            FaultTarget::Controller => Some(Role::Controller),
-            FaultTarget::Logger => Some(Role::Logger),
-            FaultTarget::Bridge => None,
-        }
-    }
-}
-
-impl From<Role> for FaultTarget {
-    fn from(role: Role) -> Self {
-        match role {
-            Role::Plant => FaultTarget::Plant,
-            Role::Controller => FaultTarget::Controller,
-            Role::Logger => FaultTarget::Logger,
-        }
-    }
-}
-
-impl PartialEq<Role> for FaultTarget {
-    fn eq(&self, role: &Role) -> bool {
-        self.role() == Some(*role)
-    }
-}
-
-impl std::fmt::Display for FaultTarget {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.label())
-    }
-}
-
 /// What happens.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -144,6 +83,67 @@ impl FaultAction {
         FaultAction::ActuatorHardOver,
         FaultAction::ActuatorRateFrozen,
     ];
+}
+
+/// What a fault targets: one of the rig's processes, or the plant-side bridge of a run whose controller is on
+/// another host (`silrig run --bridge-listen`), which the launcher starts and restarts like a process of the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FaultTarget {
+    /// The plant.
+    Plant,
+    /// The controller.
+    Controller,
+    /// The logger.
+    Logger,
+    /// The plant-side bridge (process faults only).
+    Bridge,
+}
+
+impl FaultTarget {
+    /// Every target, as plans name them.
+    pub const ALL: [FaultTarget; 4] =
+        [FaultTarget::Plant, FaultTarget::Controller, FaultTarget::Logger, FaultTarget::Bridge];
+
+    /// Name in plans, reports and events.
+    pub fn label(self) -> &'static str {
+        match self.role() {
+            Some(role) => role.label(),
+            None => "bridge",
+        }
+    }
+
+    /// The rig process targeted; None for the bridge.
+    pub fn role(self) -> Option<Role> {
+        match self {
+            FaultTarget::Plant => Some(Role::Plant),
+            FaultTarget::Controller => Some(Role::Controller),
+            FaultTarget::Logger => Some(Role::Logger),
+            FaultTarget::Bridge => None,
+        }
+    }
+}
+
+impl From<Role> for FaultTarget {
+    fn from(role: Role) -> Self {
+        match role {
+            Role::Plant => FaultTarget::Plant,
+            Role::Controller => FaultTarget::Controller,
+            Role::Logger => FaultTarget::Logger,
+        }
+    }
+}
+
+impl PartialEq<Role> for FaultTarget {
+    fn eq(&self, role: &Role) -> bool {
+        self.role() == Some(*role)
+    }
+}
+
+impl std::fmt::Display for FaultTarget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.label())
+    }
 }
 
 /// The F-16's channels a sensor fault can hit (its state as the plant measures it); on a plant of your own a
