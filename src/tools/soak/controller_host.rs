@@ -111,14 +111,17 @@ impl ControllerHost {
 
     /// After the run: the bridge and the controller end by themselves once the flight has ended (the bridge sends
     /// the controller's report first); whatever is still running after `grace` is terminated, then killed, and
-    /// reaped. The namespace's files are removed.
-    pub fn finish(&mut self, grace: Duration) {
+    /// reaped, and named in what this returns. The namespace's files are removed.
+    pub fn finish(&mut self, grace: Duration) -> Vec<String> {
         let deadline = Instant::now() + grace;
-        for child in [self.bridge.as_mut(), self.controller.as_mut()].into_iter().flatten() {
+        let mut ended_by_us = Vec::new();
+        for (child, name) in [(self.bridge.as_mut(), "bridge"), (self.controller.as_mut(), "controller")] {
+            let Some(child) = child else { continue };
             while Instant::now() < deadline && matches!(child.try_wait(), Ok(None)) {
                 std::thread::sleep(Duration::from_millis(50));
             }
             if matches!(child.try_wait(), Ok(None)) {
+                ended_by_us.push(format!("{name} (pid {})", child.id()));
                 // SAFETY: kill(2) on a child of ours that has not been reaped, so its pid is still its own.
                 unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) };
                 let term = Instant::now() + Duration::from_secs(3);
@@ -130,6 +133,7 @@ impl ControllerHost {
             let _ = child.wait();
         }
         let _ = silrig_wire::ipc::namespace::cleanup_run(&self.local);
+        ended_by_us
     }
 }
 

@@ -163,6 +163,9 @@ pub struct ControllerHostFigures {
     pub bridge_starts: u32,
     /// Starts of the controller.
     pub controller_starts: u32,
+    /// What was still running 10 s after the run and had to be ended (must be empty).
+    #[serde(default)]
+    pub still_running: Vec<String>,
 }
 
 /// What the soak measured while the run went, for [`report`].
@@ -355,6 +358,12 @@ fn problems(r: &SoakReport) -> Vec<String> {
         p.push(format!(
             "the controller's host, where nothing was faulted, started its bridge {} times and its controller {}              (see {})",
             h.bridge_starts, h.controller_starts, h.folder
+        ));
+    }
+    if let Some(h) = r.controller_host.as_ref().filter(|h| !h.still_running.is_empty()) {
+        p.push(format!(
+            "on the controller's host, still running 10 s after the run and ended by the soak: {}",
+            h.still_running.join(", ")
         ));
     }
     p

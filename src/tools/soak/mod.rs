@@ -131,18 +131,22 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         }
         std::thread::sleep(POLL);
     };
-    let mut leftovers = probe::Leftovers::find(&run_id, &out, &seen);
+    // The controller's host first: the bridge ends after sending the controller's report, the controller with the
+    // flight; what had to be ended is a problem of its own, not a leftover.
     let controller_host = host.as_mut().map(|h| {
-        // The bridge ends after sending the controller's report, the controller with the flight.
-        h.finish(Duration::from_secs(10));
-        leftovers.extend(probe::Leftovers::find(h.local.as_str(), &h.out, &h.pids));
+        let still_running = h.finish(Duration::from_secs(10));
         ControllerHostFigures {
             local_run_id: h.local.to_string(),
             folder: h.out.display().to_string(),
             bridge_starts: h.starts.0,
             controller_starts: h.starts.1,
+            still_running,
         }
     });
+    let mut leftovers = probe::Leftovers::find(&run_id, &out, &seen);
+    if let Some(h) = &host {
+        leftovers.extend(probe::Leftovers::find(h.local.as_str(), &h.out, &h.pids));
+    }
     let measured = Measured {
         seed: args.seed,
         duration_s: args.duration_s,

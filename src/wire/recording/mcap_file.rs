@@ -150,8 +150,17 @@ impl McapSink {
             .expect("some recording file name is free");
         let file = file.map_err(|e| std::io::Error::new(e.kind(), format!("creating {}: {e}", path.display())))?;
         let named = |e: mcap::McapError| named_error(&path, e);
+        // Realtime: the smaller file, zstd at level 1 (Foxglove's own recorder writes zstd): the default run's
+        // recording 0.75 MB against 0.86 MB with lz4, for about the same CPU (the 0.1 s chunks are small, and a
+        // higher level spends more on setting up each chunk than it saves). Lockstep: lz4, the cheaper per message,
+        // since the logger's CPU there bounds the loop. Worker threads would only add hand-offs for chunks of tens
+        // of KB.
+        let (compression, level) =
+            if meta.mode == "lockstep" { (mcap::Compression::Lz4, 0) } else { (mcap::Compression::Zstd, 1) };
         let options = mcap::WriteOptions::new()
-            .compression(Some(mcap::Compression::Lz4))
+            .compression(Some(compression))
+            .compression_level(level)
+            .compression_threads(0)
             // Message indexes stay (16 bytes a message, about 0.11 MB of a 10 s run's 0.86 MB): Foxglove's indexed
             // reader refuses a chunk without them ("a chunk index without message indexes").
             .profile("")

@@ -133,8 +133,11 @@ impl Codecs {
 fn first_impossible_record(bytes: &[u8]) -> Option<(usize, String)> {
     const OP_FOOTER: u8 = 0x02;
     const OP_CHUNK: u8 = 0x06;
-    // LZ4 expands at most about 255 times; anything far beyond that is a damaged size field.
-    const MAX_EXPANSION: u64 = 256;
+    // LZ4 expands at most about 255 times; zstd in principle by far more (a run of zeros), so its chunks are held
+    // only to what a chunk of ours could not reach (the logger closes one every 0.1 s). Anything beyond is a
+    // damaged size field.
+    const MAX_EXPANSION_LZ4: u64 = 256;
+    const MAX_EXPANSION_OTHER: u64 = 1 << 16;
     let u64_at = |at: usize| bytes.get(at..at + 8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")));
     let mut at = mcap::MAGIC.len();
     while at + 9 <= bytes.len() {
@@ -148,9 +151,12 @@ fn first_impossible_record(bytes: &[u8]) -> Option<(usize, String)> {
             return Some((at, why));
         }
         if opcode == OP_CHUNK {
-            // message_start_time, message_end_time, uncompressed_size: the third u64 of the chunk.
+            // message_start_time, message_end_time, uncompressed_size: the third u64 of the chunk; then its CRC
+            // (u32) and its compression (a u32-prefixed string).
             let uncompressed = u64_at(at + 9 + 16).unwrap_or(0);
-            if uncompressed > len.saturating_mul(MAX_EXPANSION) + (1 << 20) {
+            let lz4 = bytes.get(at + 9 + 32..at + 9 + 35) == Some(b"lz4".as_slice());
+            let expansion = if lz4 { MAX_EXPANSION_LZ4 } else { MAX_EXPANSION_OTHER };
+            if uncompressed > len.saturating_mul(expansion) + (1 << 20) {
                 return Some((
                     at,
                     format!("the chunk at byte {at} claims {uncompressed} bytes uncompressed from {len} bytes"),
