@@ -4,11 +4,10 @@
 //! end, and malformed plans are refused naming the entry.
 
 use silrig::control::SurfaceCommand;
-use silrig::fault::{Fault, FaultAction};
+use silrig::fault::{Fault, FaultAction, FaultTarget};
 use silrig::plant::F16Model;
 use silrig::scenario::{Scenario, ScenarioError};
 use silrig::sim::{self, ActuatorCommand, PlantRunner, SetupError, measurement};
-use silrig::topology::Role;
 use silrig::trace::Trace;
 use silrig::units::rad_to_deg;
 use std::path::PathBuf;
@@ -27,7 +26,7 @@ fn robust_with(faults: Vec<Fault>) -> Scenario {
 }
 
 fn plant_fault(action: FaultAction, at_s: f64, duration_s: Option<f64>) -> Fault {
-    Fault { at_s, duration_s, target: Some(Role::Plant), action: Some(action), ..Fault::default() }
+    Fault { at_s, duration_s, target: Some(FaultTarget::Plant), action: Some(action), ..Fault::default() }
 }
 
 fn surface_fault(action: FaultAction, surface: &str, at_s: f64, duration_s: Option<f64>) -> Fault {
