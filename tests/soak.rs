@@ -34,23 +34,41 @@ fn the_schedule_is_a_pure_function_of_the_seed() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--duration-s must be within 15..86400 s, got 5"));
 }
 
-#[test]
-fn a_short_soak_s_figures_agree_with_the_run_s_files() {
-    let dir = temp_dir("soak", "short");
+/// A soak flown by a test, passed: its folder, the run's folder, `soak.json`, what it printed.
+struct Soak {
+    dir: std::path::PathBuf,
+    out: std::path::PathBuf,
+    soak: Value,
+    stdout: String,
+    /// stdout and stderr, for assertion messages.
+    context: String,
+}
+
+/// `silrig soak FLAGS` with run id `run_id` in a folder of the test's own; it must pass.
+fn fly_soak(name: &str, run_id: &str, flags: &[&str]) -> Soak {
+    let dir = temp_dir("soak", name);
     let out = dir.join("out");
-    let run_id = format!("soak{}-t", std::process::id());
     let child = Command::new(SILRIG)
-        .args(["soak", "--duration-s", "30", "--seed", "10", "--run-id", &run_id, "--out", out.to_str().unwrap()])
+        .arg("soak")
+        .args(flags)
+        .args(["--run-id", run_id, "--out", out.to_str().unwrap()])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     let o = wait_with_watchdog(child, Duration::from_secs(300));
     let stdout = String::from_utf8_lossy(&o.stdout).to_string();
-    let soak: Value = serde_json::from_str(&std::fs::read_to_string(out.join("soak.json")).unwrap()).unwrap();
     let context = format!("{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    let soak: Value = serde_json::from_str(&std::fs::read_to_string(out.join("soak.json")).unwrap()).unwrap();
     assert!(soak["problems"].as_array().unwrap().is_empty(), "{context}");
     assert_eq!(o.status.code(), Some(0), "{context}");
+    Soak { dir, out, soak, stdout, context }
+}
+
+#[test]
+fn a_short_soak_s_figures_agree_with_the_run_s_files() {
+    let run_id = format!("soak{}-t", std::process::id());
+    let Soak { dir, out, soak, stdout, context } = fly_soak("short", &run_id, &["--duration-s", "30", "--seed", "10"]);
     assert!(stdout.contains("soak passed"), "{context}");
     let n = |v: &Value| v.as_u64().unwrap();
 
@@ -147,22 +165,9 @@ fn a_short_soak_s_figures_agree_with_the_run_s_files() {
 #[cfg(feature = "bridge")]
 #[test]
 fn a_soak_behind_the_bridge_kills_and_stops_the_plant_side_bridge_and_the_flight_recovers() {
-    let dir = temp_dir("soak", "bridge");
-    let out = dir.join("out");
     let run_id = format!("soakb{}", std::process::id());
-    let child = Command::new(SILRIG)
-        .args(["soak", "--bridge", "--duration-s", "36", "--seed", "5", "--run-id", &run_id])
-        .args(["--out", out.to_str().unwrap()])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let o = wait_with_watchdog(child, Duration::from_secs(300));
-    let stdout = String::from_utf8_lossy(&o.stdout).to_string();
-    let context = format!("{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
-    let soak: Value = serde_json::from_str(&std::fs::read_to_string(out.join("soak.json")).unwrap()).unwrap();
-    assert!(soak["problems"].as_array().unwrap().is_empty(), "{context}");
-    assert_eq!(o.status.code(), Some(0), "{context}");
+    let Soak { dir, out, soak, context, .. } =
+        fly_soak("bridge", &run_id, &["--bridge", "--duration-s", "36", "--seed", "5"]);
     let n = |v: &Value| v.as_u64().unwrap();
     let faults = soak["faults"].as_array().unwrap();
     let kinds: Vec<&str> = faults.iter().map(|f| f["kind"].as_str().unwrap()).collect();

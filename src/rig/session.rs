@@ -509,7 +509,8 @@ impl ControllerSession {
             if signals::termination_requested() || self.plant_ended {
                 return Ok(None);
             }
-            if let Some(sample) = self.take_newest()? {
+            // The queue only: consuming wake-ups while a notification lands can lose the wake-up for good.
+            if let Some(sample) = self.take_newest_from(false)? {
                 return Ok(Some(sample));
             }
             std::hint::spin_loop();
@@ -593,12 +594,18 @@ impl ControllerSession {
 
     /// Take what waits; hand out the newest valid sample of a tick not handed out yet.
     fn take_newest(&mut self) -> Result<Option<PlantSample>, SessionError> {
+        self.take_newest_from(true)
+    }
+
+    /// [`Self::take_newest`]; with `consume_wakeups` false the wake-ups are left to the next wait (see
+    /// [`StreamSubscriber::receive_queued`]).
+    fn take_newest_from(&mut self, consume_wakeups: bool) -> Result<Option<PlantSample>, SessionError> {
         self.take_announcements()?;
         let mut newest = None;
         let mut fresh = 0u64;
         let mut invalid = 0u64;
         let mut ended = false;
-        self.samples.drain(|r| {
+        let mut on_sample = |r: &ipc::Received<PlantSample>| {
             if r.invalid.is_some() {
                 invalid += 1;
             } else if r.sample.flags & wire::FLAG_END_OF_RUN != 0 {
@@ -608,7 +615,12 @@ impl ControllerSession {
                 fresh += 1;
                 newest = Some(*r);
             }
-        })?;
+        };
+        if consume_wakeups {
+            self.samples.drain(&mut on_sample)?;
+        } else {
+            self.samples.receive_queued(&mut on_sample)?;
+        }
         self.plant_ended |= ended;
         self.rec.count("samples_invalid", invalid);
         // After a stall several samples wait; acting on stale ones would only delay the newest.

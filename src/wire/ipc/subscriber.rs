@@ -177,7 +177,16 @@ impl<T: WireSample> StreamSubscriber<T> {
         self.receive_all(on_sample)
     }
 
-    /// [`StreamSubscriber::drain`] without consuming wake-ups.
+    /// [`StreamSubscriber::drain`] without consuming wake-ups: for a consumer that polls its queue between waits.
+    /// iceoryx2 0.10's listener can lose its wake-up for good when it consumes its wake-ups while a notifier is
+    /// half-way through a notification (it resets its state, a second notification completes, then it empties the
+    /// socket of that notification's byte too: the state says notified, no byte is left, and no notifier sends one
+    /// again until someone consumes the state without a byte). Polling with [`Self::drain`] at the moment samples
+    /// arrive makes that window likely; this leaves the wake-ups to the next wait.
+    pub fn receive_queued(&self, on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
+        self.receive_all(on_sample)
+    }
+
     fn receive_all(&self, mut on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
         let stream = self.stream;
         let mut stats = self.stats.get();
