@@ -444,10 +444,10 @@ impl ControllerSession {
         if !self.wait_for_plant()? {
             return Ok(self.stop(StopReason::TerminationRequested));
         }
-        if let Some(deadline_ns) = self.next_deadline_ns.take() {
-            if let Some(sample) = self.look_near_deadline(deadline_ns)? {
-                return Ok(Next::Sample(sample));
-            }
+        if let Some(deadline_ns) = self.next_deadline_ns.take()
+            && let Some(sample) = self.look_near_deadline(deadline_ns)?
+        {
+            return Ok(Next::Sample(sample));
         }
         // Every sample waiting is taken at each wake-up, so waiting first costs nothing: a sample that came since
         // has left a wake-up behind.
