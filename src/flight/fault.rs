@@ -124,16 +124,6 @@ impl FaultTarget {
     }
 }
 
-impl From<Role> for FaultTarget {
-    fn from(role: Role) -> Self {
-        match role {
-            Role::Plant => FaultTarget::Plant,
-            Role::Controller => FaultTarget::Controller,
-            Role::Logger => FaultTarget::Logger,
-        }
-    }
-}
-
 impl PartialEq<Role> for FaultTarget {
     fn eq(&self, role: &Role) -> bool {
         self.role() == Some(*role)
