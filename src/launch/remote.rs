@@ -26,9 +26,9 @@ pub(crate) struct RemoteBridge {
     /// Deaths in a row, each soon after its start: a bridge that cannot run at all is not restarted for ever.
     quick_deaths: u32,
     restart_at: Option<Instant>,
-    /// A fault of the plan ends this life: restart it then (the usual pause when None), and do not count the death
-    /// as one of a bridge that cannot run.
-    planned: Option<Option<Instant>>,
+    /// A fault of the plan ends this life: when to start it again; the death is not one of a bridge that cannot
+    /// run.
+    planned_restart_at: Option<Instant>,
     /// Why the bridge was given up on, for the run's failures.
     pub(crate) failure: Option<String>,
 }
@@ -38,6 +38,8 @@ pub(crate) struct RemoteBridge {
 const QUICK_DEATH: Duration = Duration::from_secs(5);
 /// See [`QUICK_DEATH`].
 const MAX_QUICK_DEATHS: u32 = 3;
+/// A dead bridge is started again after this pause, doubled for each quick death in a row before it.
+const RESTART_PAUSE: Duration = Duration::from_millis(200);
 /// How long the launcher waits for the controller's report from the other host: the controller side's grace, its
 /// wait for the file and the network, with room.
 const REPORT_BACK_WAIT: Duration = Duration::from_secs(6);
@@ -68,7 +70,7 @@ impl RemoteBridge {
             started,
             quick_deaths: 0,
             restart_at: None,
-            planned: None,
+            planned_restart_at: None,
             failure: None,
         })
     }
@@ -92,10 +94,10 @@ impl RemoteBridge {
             return Ok(());
         }
         let Some(status) = self.child.poll()? else { return Ok(()) };
-        if let Some(restart_at) = self.planned.take() {
+        if let Some(restart_at) = self.planned_restart_at.take() {
             let detail = format!("bridge {} (planned)", super::supervision::describe(status));
             self.events.emit(None, "process-ended", detail);
-            self.restart_at = Some(restart_at.unwrap_or_else(|| Instant::now() + Duration::from_millis(200)));
+            self.restart_at = Some(restart_at);
             return Ok(());
         }
         let young = self.started.elapsed() < QUICK_DEATH;
@@ -112,7 +114,7 @@ impl RemoteBridge {
             self.failure = Some(failure);
             return Ok(());
         }
-        let pause = Duration::from_millis(200) * 2u32.pow(self.quick_deaths);
+        let pause = RESTART_PAUSE * 2u32.pow(self.quick_deaths);
         eprintln!("silrig run: {died}; the controller's commands stop until it is back; restarting it in {pause:?}");
         self.restart_at = Some(Instant::now() + pause);
         Ok(())
@@ -123,9 +125,9 @@ impl RemoteBridge {
         &mut self.child
     }
 
-    /// A fault of the plan killed or terminated the bridge: restart it at `restart_at` (or after the usual pause).
+    /// A fault of the plan killed or terminated the bridge: restart it at `restart_at`, or after [`RESTART_PAUSE`].
     pub(crate) fn planned_death(&mut self, restart_at: Option<Instant>) {
-        self.planned = Some(restart_at);
+        self.planned_restart_at = Some(restart_at.unwrap_or_else(|| Instant::now() + RESTART_PAUSE));
     }
 
     /// Before it is stopped: the controller-side bridge sends the controller's report when the flight ends (after

@@ -174,7 +174,7 @@ impl<T: WireSample> StreamSubscriber<T> {
         self.listener
             .try_wait(|activation| self.note_event(activation.id.as_value()))
             .map_err(|e| IpcError::Transfer { stream, op: "listener wait", detail: format!("{e:?}") })?;
-        self.receive_all(on_sample)
+        self.receive_queued(on_sample)
     }
 
     /// [`StreamSubscriber::drain`] without consuming wake-ups: for a consumer that polls its queue between waits.
@@ -183,11 +183,7 @@ impl<T: WireSample> StreamSubscriber<T> {
     /// socket of that notification's byte too: the state says notified, no byte is left, and no notifier sends one
     /// again until someone consumes the state without a byte). Polling with [`Self::drain`] at the moment samples
     /// arrive makes that window likely; this leaves the wake-ups to the next wait.
-    pub fn receive_queued(&self, on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
-        self.receive_all(on_sample)
-    }
-
-    fn receive_all(&self, mut on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
+    pub fn receive_queued(&self, mut on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
         let stream = self.stream;
         let mut stats = self.stats.get();
         let mut tracker = self.tracker.get();
