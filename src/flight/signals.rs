@@ -204,6 +204,23 @@ impl PlantSignals {
         diagnostics: &[f64],
     ) -> Vec<f64> {
         let mut row = Vec::with_capacity(1 + self.outputs.len() + self.inputs.len() + 1 + diagnostics.len());
+        self.fill_trace_row(&mut row, t_s, outputs, command, next_outputs, flight_segment, diagnostics);
+        row
+    }
+
+    /// [`Self::trace_row`] into `row` (cleared first): a writer of one row a tick reuses its allocation.
+    #[allow(clippy::too_many_arguments)]
+    pub fn fill_trace_row(
+        &self,
+        row: &mut Vec<f64>,
+        t_s: f64,
+        outputs: &[f64],
+        command: Option<&[f64]>,
+        next_outputs: Option<&[f64]>,
+        flight_segment: u32,
+        diagnostics: &[f64],
+    ) {
+        row.clear();
         row.push(t_s);
         let traced = |k: &usize| self.outputs[*k].in_trace;
         row.extend((0..self.outputs.len()).filter(traced).filter(|k| !self.is_held(*k)).map(|k| outputs[k]));
@@ -220,7 +237,6 @@ impl PlantSignals {
         );
         row.push(f64::from(flight_segment));
         row.extend_from_slice(diagnostics);
-        row
     }
 }
 

@@ -247,6 +247,13 @@ pub fn push_f64_debug(out: &mut String, v: f64, digits: &mut zmij::Buffer) {
         out.push_str(if v.is_sign_negative() { "-0.0" } else { "0.0" });
         return;
     }
+    // zmij writes 1e-5 <= |v| < 1e16 in plain decimals, as `Debug` does from 1e-4 on; the two pick different
+    // digits only at an exact tie, which needs a value of few significant bits. Most numbers of a trace (measured,
+    // integrated) are neither, and take zmij's text as it is.
+    if (1e-4..1e16).contains(&abs) && !may_tie(abs) {
+        out.push_str(digits.format_finite(v));
+        return;
+    }
     // zmij's text of |v| (`1.234`, `0.0001`, `1e16`, `1.5e-5`, `123.0`): its digits and where the point goes.
     let text = digits.format_finite(abs).as_bytes();
     // One pass: the significant digits into `buf`, the point's position among them, the exponent after `e`.
@@ -335,22 +342,30 @@ enum Tie {
     Unknown,
 }
 
-fn exact_tie(abs: f64, n: usize) -> Tie {
+/// `abs` (finite, > 0) as `mantissa × 2^exp2` exactly, the mantissa odd.
+fn odd_mantissa(abs: f64) -> (u64, i32) {
     let bits = abs.to_bits();
     let (raw_exp, fraction) = ((bits >> 52) as i32, bits & ((1 << 52) - 1));
-    let (mut mantissa, mut exp2) =
-        if raw_exp == 0 { (fraction, -1074) } else { (fraction | (1 << 52), raw_exp - 1075) };
-    let zeros = mantissa.trailing_zeros() as i32;
-    mantissa >>= zeros;
-    exp2 += zeros;
-    // abs = mantissa × 2^exp2 exactly, mantissa odd; its exact decimal digits, trailing zeros dropped.
+    let (mantissa, exp2) = if raw_exp == 0 { (fraction, -1074) } else { (fraction | (1 << 52), raw_exp - 1075) };
+    let zeros = mantissa.trailing_zeros();
+    (mantissa >> zeros, exp2 + zeros as i32)
+}
+
+/// Whether [`exact_tie`] can find a tie: below 2^-31 a value's exact decimal has at least 22 significant digits
+/// (5^32 has 23), and no shortest (at most 17 digit) number lies halfway at such a precision.
+fn may_tie(abs: f64) -> bool {
+    odd_mantissa(abs).1 >= -31
+}
+
+fn exact_tie(abs: f64, n: usize) -> Tie {
+    let (mantissa, exp2) = odd_mantissa(abs);
+    // Its exact decimal digits, trailing zeros dropped.
     let mut exact: u128 = if exp2 >= 0 {
         if exp2 > 127 - 53 {
             return Tie::Unknown;
         }
         u128::from(mantissa) << exp2
-    } else if -exp2 > 31 {
-        // At least 22 significant digits (5^32 has 23): no tie of a shortest (at most 17 digit) number.
+    } else if !may_tie(abs) {
         return Tie::No;
     } else {
         u128::from(mantissa) * 5u128.pow((-exp2) as u32)

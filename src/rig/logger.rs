@@ -71,6 +71,8 @@ struct Writer {
     unflushed: u64,
     /// The row's diagnostics, reused from row to row.
     diagnostics: Vec<f64>,
+    /// The row's trace values, reused from row to row.
+    trace_row: Vec<f64>,
 }
 
 impl Writer {
@@ -119,7 +121,8 @@ impl Writer {
             let n = given.len().min(diagnostics.len());
             diagnostics[..n].copy_from_slice(&given[..n]);
         }
-        let trace = plant.trace_row(
+        plant.fill_trace_row(
+            &mut self.trace_row,
             sample.sample.t_sim_s,
             sample.sample.outputs(),
             command.map(|c| c.sample.inputs()),
@@ -127,7 +130,7 @@ impl Writer {
             self.flight_segment,
             &self.diagnostics,
         );
-        let row = LoggedRow { plant: sample, command, step_exec_ns, trace: &trace };
+        let row = LoggedRow { plant: sample, command, step_exec_ns, trace: &self.trace_row };
         for sink in &mut self.sinks {
             sink.row(&row)?;
         }
@@ -215,6 +218,16 @@ impl LoggerPorts {
         let acks = ack_stream.publisher()?;
         Ok(Self { inputs: LoggerInputs { plant, commands, info, plant_info }, acks, _node: node })
     }
+}
+
+/// Every pending sample of `stream`, oldest first, to `on_sample`; with its pending wake-ups too when
+/// `consume_wakeups` (a stream that wakes a WaitSet).
+fn take<T: wire::WireSample>(
+    stream: &StreamSubscriber<T>,
+    consume_wakeups: bool,
+    on_sample: impl FnMut(&Received<T>),
+) -> Result<usize, ipc::IpcError> {
+    if consume_wakeups { stream.drain(on_sample) } else { stream.receive_queued(on_sample) }
 }
 
 /// The streams the logger reads.
@@ -306,6 +319,7 @@ impl LoggerLoop {
             flushed_ns: monotonic_ns(),
             unflushed: 0,
             diagnostics: Vec::new(),
+            trace_row: Vec::new(),
         };
         let mut rec = Recorder::new(
             Role::Logger.label(),
@@ -422,19 +436,24 @@ impl LoggerLoop {
 
     fn take_samples(&mut self, inputs: &LoggerInputs) -> anyhow::Result<()> {
         // Announcements first: a plant announces before its first sample, a controller before its first command.
+        // Their listeners wake nothing (no WaitSet has them), so their wake-ups are left unconsumed: a listener
+        // left notified costs its notifiers no further system call, and taking it costs this one none.
         let mut announced = Vec::new();
-        inputs.plant_info.drain(|r| announced.push(*r))?;
+        inputs.plant_info.receive_queued(|r| announced.push(*r))?;
         for r in announced {
             self.on_plant_announcement(&r)?;
         }
-        inputs.info.drain(|r| match &r.invalid {
+        // Lockstep looks on a timer, so the same holds for the sample streams there; realtime is woken by them and
+        // must consume the wake-ups, or the WaitSet spins.
+        let consume_wakeups = !self.lockstep;
+        inputs.info.receive_queued(|r| match &r.invalid {
             Some(e) => {
                 self.rec.count("invalid_samples", 1);
                 self.events.emit(None, "controller-info-invalid", e.to_string());
             }
             None => self.on_announcement(r.sample.names()),
         })?;
-        inputs.plant.drain(|r| {
+        take(&inputs.plant, consume_wakeups, |r| {
             if r.invalid.is_some() {
                 self.rec.count("invalid_samples", 1);
                 return;
@@ -446,7 +465,7 @@ impl LoggerLoop {
                 self.pending_plant.insert(r.sample.header.tick, *r);
             }
         })?;
-        inputs.commands.drain(|r| {
+        take(&inputs.commands, consume_wakeups, |r| {
             if r.invalid.is_some() {
                 self.rec.count("invalid_samples", 1);
                 return;

@@ -31,7 +31,7 @@ use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_wire::clock::{self, TickSchedule, monotonic_ns};
-use silrig_wire::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
+use silrig_wire::ipc::{self, Received, StreamPublisher, StreamService, StreamSubscriber};
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{self, CommandSample, LogAckSample, PlantInfo, PlantSample};
 use std::collections::VecDeque;
@@ -43,6 +43,9 @@ pub const CHECKPOINT_EVERY_TICKS: u64 = 10;
 /// In lockstep the plant stays at most this many ticks ahead of the rows the logger has written (its queue holds
 /// [`silrig_wire::topology::LOGGER_BUFFER`]).
 pub const LOCKSTEP_LOGGER_WINDOW: u64 = 64;
+/// In lockstep the plant looks for each command this long before it blocks, ns (yielding between looks): the
+/// controller's answer takes a few µs, an idle vCPU's wake-up tens.
+pub const LOCKSTEP_LOOK_NS: u64 = 50_000;
 /// In lockstep, a peer silent for this long is an error rather than a slow peer.
 pub const LOCKSTEP_PEER_TIMEOUT: Duration = Duration::from_secs(5);
 
@@ -247,7 +250,7 @@ impl PlantLoop {
         Ok(Self {
             ticks: scenario.timing.ticks(),
             budget_ns: (o.command_budget_ms * 1e6) as u64,
-            spin_ns: if realtime { (o.command_spin_us * 1e3) as u64 } else { 0 },
+            spin_ns: if realtime { (o.command_spin_us * 1e3) as u64 } else { LOCKSTEP_LOOK_NS },
             signals: model.signals().clone(),
             info,
             announced: false,
@@ -547,14 +550,21 @@ impl PlantLoop {
     fn gather_commands(&mut self, ports: &PlantPorts, t_send_ns: u64) -> anyhow::Result<()> {
         let wait_until =
             t_send_ns + if self.realtime { self.budget_ns } else { LOCKSTEP_PEER_TIMEOUT.as_nanos() as u64 };
+        // Wake-ups are consumed only after a blocking wait: consuming them while a notification lands can lose the
+        // wake-up for good (iceoryx2 0.10), and the next blocking wait would then sleep to its timeout.
+        let mut woken = false;
         loop {
-            self.take_commands(ports)?;
+            self.take_commands(ports, woken)?;
             if self.received.iter().any(|c| c.answers_tick == self.sim_tick) || signals::termination_requested() {
                 return Ok(());
             }
             let now = monotonic_ns();
             if now < t_send_ns + self.spin_ns.min(self.budget_ns) {
-                std::hint::spin_loop();
+                match self.realtime {
+                    true => std::hint::spin_loop(),
+                    // Two vCPUs for three processes: a look that yields lets the logger have its turn.
+                    false => std::thread::yield_now(),
+                }
                 continue;
             }
             if now >= wait_until {
@@ -567,14 +577,16 @@ impl PlantLoop {
             }
             // EINTR (SIGSTOP/SIGCONT, SIGTERM) just ends this wait early; the loop looks again.
             ports.commands.wait_readable_until(wait_until);
+            woken = true;
         }
     }
 
-    /// Drain the command queue: count, time and keep the newest valid commands.
-    fn take_commands(&mut self, ports: &PlantPorts) -> anyhow::Result<()> {
+    /// Drain the command queue, and its wake-ups with `consume_wakeups`: count, time and keep the newest valid
+    /// commands.
+    fn take_commands(&mut self, ports: &PlantPorts, consume_wakeups: bool) -> anyhow::Result<()> {
         let tick = self.sim_tick;
         let steady_from = silrig_wire::timing::WARM_UP_NS / self.scenario.timing.period_ns();
-        ports.commands.drain(|r| {
+        let on_command = |r: &Received<CommandSample>| {
             let invalid = match &r.invalid {
                 Some(e) => Some(e.to_string()),
                 None if r.sample.flags & wire::FLAG_COMMAND_REFUSED != 0 => None,
@@ -606,7 +618,11 @@ impl PlantLoop {
                 self.received.pop_front();
             }
             self.received.push_back(r.sample);
-        })?;
+        };
+        match consume_wakeups {
+            true => ports.commands.drain(on_command)?,
+            false => ports.commands.receive_queued(on_command)?,
+        };
         Ok(())
     }
 

@@ -49,6 +49,8 @@ const CHECKPOINT_EVERY_TICKS: u64 = 10;
 /// Realtime: how long before the plant's next deadline the session starts looking for its sample, so that its own
 /// wake-up (late by about as much as the plant's) is over when the sample comes.
 const SAMPLE_LOOK_LEAD_NS: u64 = 50_000;
+/// Lockstep: how long a controller looks for the next sample before it blocks, ns (yielding between looks).
+const LOCKSTEP_LOOK_NS: u64 = 50_000;
 
 const IPC_PLANT_TO_CONTROLLER: usize = 0;
 const COMPUTE: usize = 1;
@@ -275,6 +277,8 @@ pub struct ControllerSession {
     /// host's clock) and how long after it to keep looking before blocking; see [`Self::look_near_deadline`].
     next_deadline_ns: Option<u64>,
     sample_poll_ns: u64,
+    /// Lockstep: looks for each sample for a while before blocking ([`Self::look_lockstep`]).
+    lockstep: bool,
     /// (epoch, tick) of the last sample handed out.
     last_tick: Option<(u64, u64)>,
     pending: Option<Pending>,
@@ -368,6 +372,7 @@ impl ControllerSession {
             plant_stale: false,
             stale_after,
             next_deadline_ns: None,
+            lockstep: !realtime,
             sample_poll_ns: if realtime { (args.options.sample_poll_us * 1e3) as u64 } else { 0 },
             last_tick: None,
             pending: None,
@@ -449,6 +454,9 @@ impl ControllerSession {
         {
             return Ok(Next::Sample(sample));
         }
+        if let Some(sample) = self.look_lockstep()? {
+            return Ok(Next::Sample(sample));
+        }
         // Every sample waiting is taken at each wake-up, so waiting first costs nothing: a sample that came since
         // has left a wake-up behind.
         loop {
@@ -514,6 +522,26 @@ impl ControllerSession {
                 return Ok(Some(sample));
             }
             std::hint::spin_loop();
+        }
+        Ok(None)
+    }
+
+    /// Lockstep: look for the next sample again and again, yielding the CPU between looks, for up to
+    /// [`LOCKSTEP_LOOK_NS`] before blocking. The plant's step takes a few µs: a controller still on its CPU takes its
+    /// sample then, where one asleep pays an idle vCPU's wake-up (tens of µs on this kind of VM) every tick.
+    fn look_lockstep(&mut self) -> Result<Option<PlantSample>, SessionError> {
+        if !self.lockstep {
+            return Ok(None);
+        }
+        let look_until = monotonic_ns() + LOCKSTEP_LOOK_NS;
+        while monotonic_ns() < look_until {
+            if signals::termination_requested() || self.plant_ended {
+                return Ok(None);
+            }
+            if let Some(sample) = self.take_newest_from(false)? {
+                return Ok(Some(sample));
+            }
+            std::thread::yield_now();
         }
         Ok(None)
     }
