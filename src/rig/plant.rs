@@ -43,8 +43,8 @@ pub const CHECKPOINT_EVERY_TICKS: u64 = 10;
 /// In lockstep the plant stays at most this many ticks ahead of the rows the logger has written (its queue holds
 /// [`silrig_wire::topology::LOGGER_BUFFER`]).
 pub const LOCKSTEP_LOGGER_WINDOW: u64 = 64;
-/// In lockstep the plant looks for each command this long before it blocks, ns (yielding between looks): the
-/// controller's answer takes a few µs, an idle vCPU's wake-up tens.
+/// In lockstep the plant looks for each command, and the controller's session for each sample, this long before it
+/// blocks, ns (yielding between looks): the other side's step takes a few µs, an idle vCPU's wake-up tens.
 pub const LOCKSTEP_LOOK_NS: u64 = 50_000;
 /// In lockstep, a peer silent for this long is an error rather than a slow peer.
 pub const LOCKSTEP_PEER_TIMEOUT: Duration = Duration::from_secs(5);

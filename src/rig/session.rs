@@ -14,6 +14,7 @@
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
+use super::plant::LOCKSTEP_LOOK_NS;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, signals};
 use silrig_flight::role::Role;
@@ -49,8 +50,6 @@ const CHECKPOINT_EVERY_TICKS: u64 = 10;
 /// Realtime: how long before the plant's next deadline the session starts looking for its sample, so that its own
 /// wake-up (late by about as much as the plant's) is over when the sample comes.
 const SAMPLE_LOOK_LEAD_NS: u64 = 50_000;
-/// Lockstep: how long a controller looks for the next sample before it blocks, ns (yielding between looks).
-const LOCKSTEP_LOOK_NS: u64 = 50_000;
 
 const IPC_PLANT_TO_CONTROLLER: usize = 0;
 const COMPUTE: usize = 1;
