@@ -216,7 +216,7 @@ fn a_missing_library_is_named_with_the_command_that_builds_it() {
     // A copy of `silrig` in a folder without the library.
     let dir = temp_dir("fmu_export", "missing");
     let copy = dir.join("silrig");
-    std::fs::copy(SILRIG, &copy).unwrap();
+    common::copy_program(Path::new(SILRIG), &copy);
     let o = Command::new(&copy).args(["export-fmu", "--out"]).arg(dir.join("f16.fmu")).output().unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{stderr}");

@@ -23,7 +23,7 @@ fn world_readable_rig(test: &str) -> PathBuf {
     std::fs::create_dir_all(&bin).unwrap();
     let built = Path::new(SILRIG).parent().unwrap();
     for name in ["silrig", "silrig-plant", "silrig-controller", "silrig-logger"] {
-        std::fs::copy(built.join(name), bin.join(name)).unwrap();
+        common::copy_program(&built.join(name), &bin.join(name));
     }
     std::fs::copy(common::client_lib(SILRIG), bin.join("libsilrig_client.so")).unwrap();
     let python = dir.join("python");

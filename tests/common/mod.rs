@@ -9,6 +9,15 @@ use std::process::{Child, Command, Output};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
+/// Copy a program to be run from `to` with `cp`, not `std::fs::copy`: a copy this process held open for writing is
+/// inherited by every child another test thread forks meanwhile, until that child execs, and running the copy then
+/// fails with "Text file busy" (ETXTBSY).
+#[allow(dead_code)]
+pub fn copy_program(from: &Path, to: &Path) {
+    let status = Command::new("cp").arg(from).arg(to).status().expect("cp runs");
+    assert!(status.success(), "cp {} {} failed", from.display(), to.display());
+}
+
 /// `libsilrig_client.so` beside the binary `silrig` under test (cargo test builds the binaries, not the cdylib):
 /// built once per test binary with `cargo build --release -p silrig-client`.
 #[allow(dead_code)]
