@@ -511,16 +511,23 @@ impl ControllerSession {
                 WaitOutcome::TimedOut => break,
             }
         }
-        let look_until = deadline_ns + self.sample_poll_ns;
-        while monotonic_ns() < look_until {
+        self.look_until(deadline_ns + self.sample_poll_ns, false)
+    }
+
+    /// Look at the sample queue again and again until `until_ns`, spinning or (`yield_cpu`) yielding between looks.
+    /// The queue only: consuming wake-ups while a notification lands can lose the wake-up for good.
+    fn look_until(&mut self, until_ns: u64, yield_cpu: bool) -> Result<Option<PlantSample>, SessionError> {
+        while monotonic_ns() < until_ns {
             if signals::termination_requested() || self.plant_ended {
                 return Ok(None);
             }
-            // The queue only: consuming wake-ups while a notification lands can lose the wake-up for good.
             if let Some(sample) = self.take_newest_from(false)? {
                 return Ok(Some(sample));
             }
-            std::hint::spin_loop();
+            match yield_cpu {
+                true => std::thread::yield_now(),
+                false => std::hint::spin_loop(),
+            }
         }
         Ok(None)
     }
@@ -532,17 +539,7 @@ impl ControllerSession {
         if !self.lockstep {
             return Ok(None);
         }
-        let look_until = monotonic_ns() + LOCKSTEP_LOOK_NS;
-        while monotonic_ns() < look_until {
-            if signals::termination_requested() || self.plant_ended {
-                return Ok(None);
-            }
-            if let Some(sample) = self.take_newest_from(false)? {
-                return Ok(Some(sample));
-            }
-            std::thread::yield_now();
-        }
-        Ok(None)
+        self.look_until(monotonic_ns() + LOCKSTEP_LOOK_NS, true)
     }
 
     /// The plant's signals as it announced them, waiting for the announcement if it has not come yet (as long as
