@@ -191,26 +191,12 @@ impl PlantSignals {
         columns
     }
 
-    /// One row of `trace.csv` in the order of [`Self::trace_columns`]: the outputs of tick k, the command answering
-    /// it (`None`: it never came, NaN), the outputs of the sample that closes the tick (`None`: never came, NaN), the
-    /// flight segment and the diagnostics (padded with NaN to `diagnostics_len`).
-    pub fn trace_row(
-        &self,
-        t_s: f64,
-        outputs: &[f64],
-        command: Option<&[f64]>,
-        next_outputs: Option<&[f64]>,
-        flight_segment: u32,
-        diagnostics: &[f64],
-    ) -> Vec<f64> {
-        let mut row = Vec::with_capacity(1 + self.outputs.len() + self.inputs.len() + 1 + diagnostics.len());
-        self.fill_trace_row(&mut row, t_s, outputs, command, next_outputs, flight_segment, diagnostics);
-        row
-    }
-
-    /// [`Self::trace_row`] into `row` (cleared first): a writer of one row a tick reuses its allocation.
+    /// One row of `trace.csv`, into `row` (cleared first, so a writer of one row a tick reuses its allocation), in
+    /// the order of [`Self::trace_columns`]: the outputs of tick k, the command answering it (`None`: it never came,
+    /// NaN), the outputs of the sample that closes the tick (`None`: never came, NaN), the flight segment and the
+    /// diagnostics (padded with NaN to `diagnostics_len`).
     #[allow(clippy::too_many_arguments)]
-    pub fn fill_trace_row(
+    pub fn trace_row(
         &self,
         row: &mut Vec<f64>,
         t_s: f64,
@@ -289,9 +275,10 @@ mod tests {
         assert_eq!(p.check(32, 16), Ok(()));
         let columns = p.trace_columns(&["e".to_string()]);
         assert_eq!(columns, ["t_s", "x_m", "v_mps", "steer_cmd_deg", "speed_cmd", "steer_deg", "flight_segment", "e"]);
-        let row = p.trace_row(0.5, &[1.0, 2.0, 3.0], Some(&[4.0, 5.0]), Some(&[6.0, 7.0, 8.0]), 0, &[9.0]);
+        let mut row = Vec::new();
+        p.trace_row(&mut row, 0.5, &[1.0, 2.0, 3.0], Some(&[4.0, 5.0]), Some(&[6.0, 7.0, 8.0]), 0, &[9.0]);
         assert_eq!(row, [0.5, 1.0, 3.0, 4.0, 5.0, 7.0, 0.0, 9.0]);
-        let row = p.trace_row(0.5, &[1.0, 2.0, 3.0], None, None, 1, &[]);
+        p.trace_row(&mut row, 0.5, &[1.0, 2.0, 3.0], None, None, 1, &[]);
         assert!(row[3].is_nan() && row[4].is_nan() && row[5].is_nan() && row[6] == 1.0);
     }
 

@@ -153,7 +153,9 @@ pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn
         // The trace shows what the session sends: the command, or for a refused one the last valid command and no
         // diagnostics.
         let shown_diagnostics = if valid { &diagnostics } else { &no_diagnostics };
-        trace.rows.push(signals.trace_row(t_s, &outputs, Some(&last_sent), Some(&next), 0, shown_diagnostics));
+        let mut row = Vec::with_capacity(trace.columns.len());
+        signals.trace_row(&mut row, t_s, &outputs, Some(&last_sent), Some(&next), 0, shown_diagnostics);
+        trace.rows.push(row);
         if let Err(why) = stepped {
             ended_early = Some(EndedEarly { by: EndedBy::Plant, tick, t_s, why });
             break;

@@ -121,7 +121,7 @@ impl Writer {
             let n = given.len().min(diagnostics.len());
             diagnostics[..n].copy_from_slice(&given[..n]);
         }
-        plant.fill_trace_row(
+        plant.trace_row(
             &mut self.trace_row,
             sample.sample.t_sim_s,
             sample.sample.outputs(),
@@ -218,16 +218,6 @@ impl LoggerPorts {
         let acks = ack_stream.publisher()?;
         Ok(Self { inputs: LoggerInputs { plant, commands, info, plant_info }, acks, _node: node })
     }
-}
-
-/// Every pending sample of `stream`, oldest first, to `on_sample`; with its pending wake-ups too when
-/// `consume_wakeups` (a stream that wakes a WaitSet).
-fn take<T: wire::WireSample>(
-    stream: &StreamSubscriber<T>,
-    consume_wakeups: bool,
-    on_sample: impl FnMut(&Received<T>),
-) -> Result<usize, ipc::IpcError> {
-    if consume_wakeups { stream.drain(on_sample) } else { stream.receive_queued(on_sample) }
 }
 
 /// The streams the logger reads.
@@ -453,7 +443,7 @@ impl LoggerLoop {
             }
             None => self.on_announcement(r.sample.names()),
         })?;
-        take(&inputs.plant, consume_wakeups, |r| {
+        inputs.plant.take(consume_wakeups, |r| {
             if r.invalid.is_some() {
                 self.rec.count("invalid_samples", 1);
                 return;
@@ -465,7 +455,7 @@ impl LoggerLoop {
                 self.pending_plant.insert(r.sample.header.tick, *r);
             }
         })?;
-        take(&inputs.commands, consume_wakeups, |r| {
+        inputs.commands.take(consume_wakeups, |r| {
             if r.invalid.is_some() {
                 self.rec.count("invalid_samples", 1);
                 return;

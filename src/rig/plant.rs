@@ -619,10 +619,7 @@ impl PlantLoop {
             }
             self.received.push_back(r.sample);
         };
-        match consume_wakeups {
-            true => ports.commands.drain(on_command)?,
-            false => ports.commands.receive_queued(on_command)?,
-        };
+        ports.commands.take(consume_wakeups, on_command)?;
         Ok(())
     }
 

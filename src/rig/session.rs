@@ -640,11 +640,7 @@ impl ControllerSession {
                 newest = Some(*r);
             }
         };
-        if consume_wakeups {
-            self.samples.drain(&mut on_sample)?;
-        } else {
-            self.samples.receive_queued(&mut on_sample)?;
-        }
+        self.samples.take(consume_wakeups, &mut on_sample)?;
         self.plant_ended |= ended;
         self.rec.count("samples_invalid", invalid);
         // After a stall several samples wait; acting on stale ones would only delay the newest.

@@ -177,6 +177,12 @@ impl<T: WireSample> StreamSubscriber<T> {
         self.receive_queued(on_sample)
     }
 
+    /// [`Self::drain`] when `consume_wakeups` (a consumer about to block on the listener, or one a WaitSet wakes),
+    /// else [`Self::receive_queued`] (one looking between waits, or never waiting on this listener).
+    pub fn take(&self, consume_wakeups: bool, on_sample: impl FnMut(&Received<T>)) -> Result<usize, IpcError> {
+        if consume_wakeups { self.drain(on_sample) } else { self.receive_queued(on_sample) }
+    }
+
     /// [`StreamSubscriber::drain`] without consuming wake-ups: for a consumer that polls its queue between waits.
     /// iceoryx2 0.10's listener can lose its wake-up for good when it consumes its wake-ups while a notifier is
     /// half-way through a notification (it resets its state, a second notification completes, then it empties the
