@@ -247,8 +247,8 @@ pub struct LoggerLoop {
     missing_since: Option<u64>,
     /// The diagnostic names the newest controller epoch announced.
     announced: Option<Vec<String>>,
-    /// What the plant announced: the trace's columns come from it.
-    plant: Option<PlantSignals>,
+    /// What the plant announced: the trace's columns come from it. Shared, so writing rows needs no copy of it.
+    plant: Option<std::rc::Rc<PlantSignals>>,
     /// A restarted plant re-flying ticks already written (its checkpoint is older than its predecessor's last
     /// tick, or it had none): those samples are not written, and the first row it adds is a discontinuity.
     reflown: Option<Reflown>,
@@ -473,9 +473,9 @@ impl LoggerLoop {
         match &self.plant {
             None => {
                 self.writer.announce_plant(&r.sample)?;
-                self.plant = Some(signals);
+                self.plant = Some(std::rc::Rc::new(signals));
             }
-            Some(known) if *known != signals => anyhow::bail!(
+            Some(known) if **known != signals => anyhow::bail!(
                 "a restarted plant (epoch {}) announces plant {} with other signals than plant {} whose rows the \
                  trace holds",
                 r.sample.header.epoch,

@@ -9,8 +9,9 @@
 //! protobuf, stamped with the plant's send time. The run's identity and scenario
 //! are MCAP metadata.
 //!
-//! Chunks are LZ4-compressed and closed at every flush (the logger flushes every 0.1 s), so a killed logger leaves a
-//! file a reader can read up to its last flush; a restarted logger writes the next `recording-<n>.mcap`, never over
+//! The file is written by [`super::mcap_writer`]: chunks (zstd in realtime, LZ4 in lockstep) closed at every flush
+//! (the logger flushes every 0.1 s) or at 1 MiB, so a killed logger leaves a file a reader can read up to its last
+//! flush; a restarted logger writes the next `recording-<n>.mcap`, never over
 //! an earlier one. Message log times are wall-clock (the monotonic stamps shifted by the offset between the clocks
 //! when the file was opened), so a viewer shows when the run flew; the monotonic stamps themselves are in the
 //! messages. Each message is encoded into one reused buffer: writing a row allocates nothing. A [`RecordingTap`]
@@ -18,6 +19,7 @@
 
 use super::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
 use super::foxglove::{self as fox, BodySignals, ProtoBuffer};
+use super::mcap_writer::{ChunkCompression, McapWriter};
 use super::{
     LoggedRow, RecordingMeta, RecordingTap, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, TapChannel, meta_keys,
     recording_file_name, timing_values, topics,
@@ -53,7 +55,7 @@ struct Channels {
 /// The run's MCAP recording, being written.
 pub struct McapSink {
     path: PathBuf,
-    writer: mcap::Writer<BufWriter<File>>,
+    writer: McapWriter<BufWriter<File>>,
     channels: Channels,
     /// Per-channel message counters (MCAP's `sequence`), by channel id.
     sequence: Vec<u32>,
@@ -81,16 +83,9 @@ pub struct McapSink {
 
 const RECEIVE_STAMP: (&str, &str) = ("t_recv_ns", "CLOCK_MONOTONIC when the logger took the sample from its queue, ns");
 
-/// An MCAP error as an I/O error naming the file, with its causes: the library's own message for a failed
-/// compressed write does not say that the disk is full, its source does.
-fn named_error(path: &Path, e: mcap::McapError) -> std::io::Error {
-    let mut text = format!("writing {}: {e}", path.display());
-    let mut source = std::error::Error::source(&e);
-    while let Some(cause) = source {
-        text.push_str(&format!(": {cause}"));
-        source = cause.source();
-    }
-    std::io::Error::other(text)
+/// An I/O error naming the file.
+fn named_error(path: &Path, e: std::io::Error) -> std::io::Error {
+    std::io::Error::new(e.kind(), format!("writing {}: {e}", path.display()))
 }
 
 /// A channel of `topic` with its schema in the file, announced to the tap.
@@ -103,13 +98,9 @@ struct NewChannel<'a> {
     metadata: &'a BTreeMap<String, String>,
 }
 
-fn add_channel(
-    writer: &mut mcap::Writer<BufWriter<File>>,
-    tap: &mut Option<Box<dyn RecordingTap>>,
-    c: NewChannel,
-) -> mcap::McapResult<u16> {
-    let schema_id = writer.add_schema(c.schema_name, c.schema_encoding, c.schema_data)?;
-    let id = writer.add_channel(schema_id, c.topic, c.message_encoding, c.metadata)?;
+fn add_channel(writer: &mut McapWriter<BufWriter<File>>, tap: &mut Option<Box<dyn RecordingTap>>, c: NewChannel) -> u16 {
+    let schema_id = writer.add_schema(c.schema_name, c.schema_encoding, c.schema_data);
+    let id = writer.add_channel(schema_id, c.topic, c.message_encoding, c.metadata);
     if let Some(tap) = tap {
         tap.channel(&TapChannel {
             id,
@@ -121,7 +112,7 @@ fn add_channel(
             metadata: c.metadata,
         });
     }
-    Ok(id)
+    id
 }
 
 // `empty_columns` has a bit per timing column.
@@ -149,25 +140,16 @@ impl McapSink {
             })
             .expect("some recording file name is free");
         let file = file.map_err(|e| std::io::Error::new(e.kind(), format!("creating {}: {e}", path.display())))?;
-        let named = |e: mcap::McapError| named_error(&path, e);
+        let named = |e: std::io::Error| named_error(&path, e);
         // Realtime: the smaller file, zstd at level 1 (Foxglove's own recorder writes zstd): the default run's
-        // recording 0.75 MB against 0.86 MB with lz4, for about the same CPU (the 0.1 s chunks are small, and a
-        // higher level spends more on setting up each chunk than it saves). Lockstep: lz4, the cheaper per message,
-        // since the logger's CPU there bounds the loop. Worker threads would only add hand-offs for chunks of tens
-        // of KB.
-        let (compression, level) =
-            if meta.mode == "lockstep" { (mcap::Compression::Lz4, 0) } else { (mcap::Compression::Zstd, 1) };
-        let options = mcap::WriteOptions::new()
-            .compression(Some(compression))
-            .compression_level(level)
-            .compression_threads(0)
-            // Message indexes stay (16 bytes a message, about 0.11 MB of a 10 s run's 0.86 MB): Foxglove's indexed
-            // reader refuses a chunk without them ("a chunk index without message indexes").
-            .profile("")
-            .library(format!("silrig {}", env!("CARGO_PKG_VERSION")));
-        let mut writer = options.create(BufWriter::new(file)).map_err(named)?;
+        // recording 0.75 MB against 0.86 MB with lz4, for about the same CPU. Lockstep: lz4, the cheaper per byte,
+        // since the logger's CPU there bounds the loop. Message indexes are written (16 bytes a message, about 0.11
+        // MB of a 10 s run's 0.86 MB): Foxglove's indexed reader refuses a chunk without them.
+        let compression = if meta.mode == "lockstep" { ChunkCompression::Lz4 } else { ChunkCompression::Zstd(1) };
+        let library = format!("silrig {}", env!("CARGO_PKG_VERSION"));
+        let mut writer = McapWriter::new(BufWriter::new(file), "", &library, compression).map_err(named)?;
         let no_metadata = BTreeMap::new();
-        let mut add = |topic: &str, name: &str, msg: String| -> mcap::McapResult<u16> {
+        let mut add = |topic: &str, name: &str, msg: String| -> u16 {
             let channel = NewChannel {
                 topic,
                 message_encoding: MESSAGE_ENCODING,
@@ -195,11 +177,11 @@ impl McapSink {
         };
         let events = add_channel(&mut writer, &mut tap, events);
         let channels = Channels {
-            plant: plant.map_err(named)?,
-            plant_info: plant_info.map_err(named)?,
-            command: command.map_err(named)?,
-            timing: timing.map_err(named)?,
-            events: events.map_err(named)?,
+            plant,
+            plant_info,
+            command,
+            timing,
+            events,
             trace: None,
             body: None,
         };
@@ -212,13 +194,9 @@ impl McapSink {
             (meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string()),
             ("file".to_string(), path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
         ]);
-        writer
-            .write_metadata(&mcap::records::Metadata { name: meta_keys::RUN.into(), metadata: run })
-            .map_err(named)?;
+        writer.write_metadata(meta_keys::RUN, &run).map_err(named)?;
         let scenario = BTreeMap::from([(meta_keys::TOML.to_string(), meta.scenario_toml.clone())]);
-        writer
-            .write_metadata(&mcap::records::Metadata { name: meta_keys::SCENARIO.into(), metadata: scenario })
-            .map_err(named)?;
+        writer.write_metadata(meta_keys::SCENARIO, &scenario).map_err(named)?;
         let wall_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
         Ok(Self {
             events_path: out_dir.join("events.jsonl"),
@@ -249,7 +227,7 @@ impl McapSink {
         (i128::from(monotonic_ns) + self.wall_minus_monotonic_ns).clamp(0, i128::from(u64::MAX)) as u64
     }
 
-    fn named(&self, e: mcap::McapError) -> std::io::Error {
+    fn named(&self, e: std::io::Error) -> std::io::Error {
         named_error(&self.path, e)
     }
 
@@ -259,15 +237,12 @@ impl McapSink {
             self.sequence.resize(id + 1, 0);
         }
         self.sequence[id] = self.sequence[id].wrapping_add(1);
-        let header = mcap::records::MessageHeader {
-            channel_id: channel,
-            sequence: self.sequence[id],
-            log_time: self.wall_ns(t_log_ns),
-            publish_time: self.wall_ns(t_publish_ns),
-        };
-        self.writer.write_to_known_channel(&header, data).map_err(|e| named_error(&self.path, e))?;
+        let (log_time, publish_time) = (self.wall_ns(t_log_ns), self.wall_ns(t_publish_ns));
+        self.writer
+            .write_message(channel, self.sequence[id], log_time, publish_time, data)
+            .map_err(|e| named_error(&self.path, e))?;
         if let Some(tap) = &mut self.tap {
-            tap.message(channel, header.log_time, data);
+            tap.message(channel, log_time, data);
         }
         Ok(())
     }
@@ -289,8 +264,8 @@ impl McapSink {
     }
 
     /// Add `/body_transform` and `/aircraft`, with Foxglove's schemas.
-    fn add_body_channels(&mut self) -> mcap::McapResult<(u16, u16)> {
-        let mut add = |topic: &str, schema: &str| -> mcap::McapResult<u16> {
+    fn add_body_channels(&mut self) -> (u16, u16) {
+        let mut add = |topic: &str, schema: &str| -> u16 {
             let channel = NewChannel {
                 topic,
                 message_encoding: fox::MESSAGE_ENCODING,
@@ -301,7 +276,7 @@ impl McapSink {
             };
             add_channel(&mut self.writer, &mut self.tap, channel)
         };
-        Ok((add(topics::BODY_TRANSFORM, fox::FRAME_TRANSFORM)?, add(topics::AIRCRAFT, fox::SCENE_UPDATE)?))
+        (add(topics::BODY_TRANSFORM, fox::FRAME_TRANSFORM), add(topics::AIRCRAFT, fox::SCENE_UPDATE))
     }
 
     /// Record the lines other processes appended to `events.jsonl` since the last call (whole lines only).
@@ -355,7 +330,7 @@ impl RowSink for McapSink {
         self.body_signals = info.signals().ok().and_then(|signals| BodySignals::resolve(&signals));
         self.last_scene = None;
         if self.body_signals.is_some() && self.channels.body.is_none() {
-            self.channels.body = Some(self.add_body_channels().map_err(|e| self.named(e))?);
+            self.channels.body = Some(self.add_body_channels());
         }
         let t_send = info.header.t_send_ns;
         self.buffer.start();
@@ -378,8 +353,7 @@ impl RowSink for McapSink {
                 schema_data: msg.as_bytes(),
                 metadata: &columns,
             };
-            let channel = add_channel(&mut self.writer, &mut self.tap, channel);
-            self.channels.trace = Some(channel.map_err(|e| self.named(e))?);
+            self.channels.trace = Some(add_channel(&mut self.writer, &mut self.tap, channel));
         }
         Ok(())
     }

@@ -13,6 +13,7 @@ pub mod csv;
 pub mod foxglove;
 pub mod json;
 pub mod mcap_file;
+pub mod mcap_writer;
 pub mod reader;
 
 use crate::ipc::Received;
