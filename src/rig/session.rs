@@ -572,7 +572,9 @@ impl ControllerSession {
     /// the same, since this controller found its signals by name in the first.
     fn take_announcements(&mut self) -> Result<(), SessionError> {
         let mut announced = Vec::new();
-        self.plant_info.drain(|r| announced.push(*r))?;
+        // Nothing waits on this listener, so its wake-ups are left unconsumed: taking them is a `recvfrom` at every
+        // look of the lockstep and realtime polls, and a listener left notified costs the plant no `sendto` either.
+        self.plant_info.receive_queued(|r| announced.push(*r))?;
         for r in announced {
             let signals = r
                 .sample
@@ -642,9 +644,14 @@ impl ControllerSession {
         };
         self.samples.take(consume_wakeups, &mut on_sample)?;
         self.plant_ended |= ended;
-        self.rec.count("samples_invalid", invalid);
+        // Counted only when there is something to count: this runs at every look, and a counter is a lookup by name.
+        if invalid > 0 {
+            self.rec.count("samples_invalid", invalid);
+        }
         // After a stall several samples wait; acting on stale ones would only delay the newest.
-        self.rec.count("samples_skipped", fresh.saturating_sub(1));
+        if fresh > 1 {
+            self.rec.count("samples_skipped", fresh - 1);
+        }
         let Some(r) = newest else { return Ok(None) };
         let h = r.sample.header;
         if self.last_tick.is_some_and(|(epoch, tick)| epoch == h.epoch && tick >= h.tick) {
