@@ -98,7 +98,11 @@ struct NewChannel<'a> {
     metadata: &'a BTreeMap<String, String>,
 }
 
-fn add_channel(writer: &mut McapWriter<BufWriter<File>>, tap: &mut Option<Box<dyn RecordingTap>>, c: NewChannel) -> u16 {
+fn add_channel(
+    writer: &mut McapWriter<BufWriter<File>>,
+    tap: &mut Option<Box<dyn RecordingTap>>,
+    c: NewChannel,
+) -> u16 {
     let schema_id = writer.add_schema(c.schema_name, c.schema_encoding, c.schema_data);
     let id = writer.add_channel(schema_id, c.topic, c.message_encoding, c.metadata);
     if let Some(tap) = tap {
@@ -176,15 +180,7 @@ impl McapSink {
             metadata: &no_metadata,
         };
         let events = add_channel(&mut writer, &mut tap, events);
-        let channels = Channels {
-            plant,
-            plant_info,
-            command,
-            timing,
-            events,
-            trace: None,
-            body: None,
-        };
+        let channels = Channels { plant, plant_info, command, timing, events, trace: None, body: None };
         let run = BTreeMap::from([
             ("run_id".to_string(), meta.run_id.clone()),
             ("scenario".to_string(), meta.scenario_name.clone()),
