@@ -57,8 +57,6 @@ pub struct McapSink {
     path: PathBuf,
     writer: McapWriter<BufWriter<File>>,
     channels: Channels,
-    /// Per-channel message counters (MCAP's `sequence`), by channel id.
-    sequence: Vec<u32>,
     plant_codec: CdrCodec,
     command_codec: CdrCodec,
     /// The message being written, reused.
@@ -200,7 +198,6 @@ impl McapSink {
             path,
             writer,
             channels,
-            sequence: Vec::new(),
             plant_codec: CdrCodec::of::<PlantSample>(),
             command_codec: CdrCodec::of::<CommandSample>(),
             buffer: CdrBuffer::default(),
@@ -228,15 +225,8 @@ impl McapSink {
     }
 
     fn write(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64, data: &[u8]) -> std::io::Result<()> {
-        let id = usize::from(channel);
-        if self.sequence.len() <= id {
-            self.sequence.resize(id + 1, 0);
-        }
-        self.sequence[id] = self.sequence[id].wrapping_add(1);
         let (log_time, publish_time) = (self.wall_ns(t_log_ns), self.wall_ns(t_publish_ns));
-        self.writer
-            .write_message(channel, self.sequence[id], log_time, publish_time, data)
-            .map_err(|e| named_error(&self.path, e))?;
+        self.writer.write_message(channel, log_time, publish_time, data).map_err(|e| named_error(&self.path, e))?;
         if let Some(tap) = &mut self.tap {
             tap.message(channel, log_time, data);
         }

@@ -147,8 +147,6 @@ pub struct McapWriter<W: Write> {
     scratch: Vec<u8>,
     /// Schema records, for the summary; a schema's id is its position + 1.
     schemas: Vec<Vec<u8>>,
-    /// (name, encoding, data) of each schema, to give the same one the same id.
-    schema_contents: Vec<(String, String, Vec<u8>)>,
     /// Channel records, for the summary; a channel's id is its position + 1.
     channels: Vec<Vec<u8>>,
     /// Messages written, by channel id.
@@ -182,7 +180,6 @@ impl<W: Write> McapWriter<W> {
             compressed: Vec::new(),
             scratch: Vec::new(),
             schemas: Vec::new(),
-            schema_contents: Vec::new(),
             channels: Vec::new(),
             message_counts: Vec::new(),
             bounds: None,
@@ -211,9 +208,6 @@ impl<W: Write> McapWriter<W> {
 
     /// The id of a schema with this content, added (into the open chunk, and to the summary) if it is new.
     pub fn add_schema(&mut self, name: &str, encoding: &str, data: &[u8]) -> u16 {
-        if let Some(k) = self.schema_contents.iter().position(|(n, e, d)| n == name && e == encoding && d == data) {
-            return k as u16 + 1;
-        }
         let id = self.schemas.len() as u16 + 1;
         let mut record = Vec::new();
         record.record(op::SCHEMA, |b| {
@@ -223,9 +217,14 @@ impl<W: Write> McapWriter<W> {
             b.u32(data.len() as u32);
             b.extend_from_slice(data);
         });
+        // The same record but for the id (after the opcode and the length): the same schema.
+        const ID: std::ops::Range<usize> = 9..11;
+        let same = |known: &Vec<u8>| known[..ID.start] == record[..ID.start] && known[ID.end..] == record[ID.end..];
+        if let Some(k) = self.schemas.iter().position(same) {
+            return k as u16 + 1;
+        }
         self.chunk.extend_from_slice(&record);
         self.schemas.push(record);
-        self.schema_contents.push((name.into(), encoding.into(), data.into()));
         id
     }
 
@@ -276,12 +275,11 @@ impl<W: Write> McapWriter<W> {
         Ok(())
     }
 
-    /// A message on `channel` (an id [`Self::add_channel`] gave), copied into the open chunk; the chunk is closed
-    /// and written once it is [`CHUNK_SIZE`] long.
+    /// A message on `channel` (an id [`Self::add_channel`] gave), numbered 1, 2, ... on its channel (MCAP's
+    /// `sequence`) and copied into the open chunk; the chunk is closed and written once it is [`CHUNK_SIZE`] long.
     pub fn write_message(
         &mut self,
         channel: u16,
-        sequence: u32,
         log_time_ns: u64,
         publish_time_ns: u64,
         data: &[u8],
@@ -293,7 +291,7 @@ impl<W: Write> McapWriter<W> {
         c.push(op::MESSAGE);
         c.u64((2 + 4 + 8 + 8 + data.len()) as u64);
         c.u16(channel);
-        c.u32(sequence);
+        c.u32((self.message_counts[id] + 1) as u32);
         c.u64(log_time_ns);
         c.u64(publish_time_ns);
         c.extend_from_slice(data);
@@ -475,9 +473,9 @@ mod tests {
         w.write_metadata("run", &meta).unwrap();
         let payload = vec![7u8; 3000];
         for k in 0..1000u64 {
-            w.write_message(a, k as u32 + 1, 1_000 + k, 900 + k, &payload).unwrap();
+            w.write_message(a, 1_000 + k, 900 + k, &payload).unwrap();
             if k % 10 == 0 {
-                w.write_message(b, (k / 10) as u32 + 1, 1_000 + k, 1_000 + k, b"{}").unwrap();
+                w.write_message(b, 1_000 + k, 1_000 + k, b"{}").unwrap();
             }
             if k == 500 {
                 w.flush().unwrap();
