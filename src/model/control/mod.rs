@@ -5,11 +5,14 @@
 //! v = -K x2 - f_hat - rho * sw(S) with sw(S) = S / (|S| + eps) (or sign(S)), and the surface command
 //! u = g^-1 v, where g = T(phi, theta) J^-1 qbar S_w diag(b, c, b) D_nom maps deflections (deg) to Euler-angle
 //! accelerations. The weights adapt by W_dot = Gamma S h(x).
+//!
+//! [`quad`] is our reference controller for the second vehicle, the X quadrotor (a cascade with a mixer).
 
 /// The largest |RBF weight| a checkpoint may hand a restarted controller: adaptation in every scenario we fly keeps
 /// them below 1 (the paper's are about 1e-3), so anything near this is a damaged checkpoint, not a learnt state.
 pub const MAX_RESTORED_WEIGHT: f64 = 1e3;
 
+pub mod quad;
 pub mod rbf;
 
 use crate::plant::aero::{MEAN_CHORD_FT, WING_AREA_FT2, WING_SPAN_FT};
