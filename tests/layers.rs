@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The library crates from the bottom up, each with the crates it may depend on.
-const LAYERS: [(&str, &[&str]); 8] = [
+const LAYERS: [(&str, &[&str]); 9] = [
     ("model", &[]),
     // The FMU importer knows no silrig crate: it opens, instantiates and steps any co-simulation FMU.
     ("fmi", &[]),
@@ -15,6 +15,8 @@ const LAYERS: [(&str, &[&str]); 8] = [
     ("wire", &["model", "flight"]),
     ("plot", &["flight"]),
     ("rig", &["model", "flight", "wire", "fmi"]),
+    // What turns a foreign thing (a device over UDP, and next an FMU or a process) into a plant or a controller.
+    ("adapters", &["model", "flight", "wire", "rig", "fmi"]),
     ("launch", &["flight", "wire", "plot", "rig"]),
     // `silrig export-fmu` writes the description the FMU's binary checks its GUID with.
     ("tools", &["model", "flight", "wire", "plot", "rig", "launch", "fmu-f16-description"]),
