@@ -2,9 +2,10 @@
 //! `--plant-cmd CMD`, or both): a user's controller or plant in a process of its own (C, Python, JSBSim, anything
 //! that speaks the contract) flying the case's sampled scenario, exactly as `silrig run --mode lockstep` with the
 //! same commands flies that scenario, and judged by [`case::judge`] like a case flown in one process. Which
-//! commands a sweep flies, and what is refused before any case flies, is [`RigCommands`]. Each case is a rig of its own (its own run id, so its
-//! own iceoryx2 namespace and claims), so several fly side by side on a sweep's worker threads; a sweep's case runs
-//! in a scratch folder ([`Scratch`]) removed once it is judged, so a sweep of any length leaves no run folders.
+//! commands a sweep flies, and what is refused before any case flies, is [`RigCommands`]. Each case is a rig of its
+//! own (its own run id, so its own iceoryx2 namespace and claims), so several fly side by side on a sweep's worker
+//! threads; a sweep's case runs in a scratch folder ([`Scratch`]) removed once it is judged, so a sweep of any length
+//! leaves no run folders.
 //!
 //! Why `launcher::run` may run on several threads of one process: each run claims its own folder and run id (lock
 //! files holding this process's pid, which `remove_stale_claims` leaves alone since the pid is alive), waits for its
