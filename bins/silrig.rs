@@ -59,6 +59,10 @@ enum Command {
         /// --controller-cmd CMD` did (the rig's run, with its report, in the output folder).
         #[arg(long, value_name = "CMD", requires = "sample")]
         controller_cmd: Option<String>,
+        /// With --sample: fly the case through the lockstep rig with your plant, as `silrig sweep --plant-cmd CMD`
+        /// did (the rig's run, with its report, in the output folder).
+        #[arg(long, value_name = "CMD", requires = "sample")]
+        plant_cmd: Option<String>,
     },
     /// Monte Carlo: fly N dispersed cases of a scenario ([dispersions]) in parallel, judge each by its [criteria],
     /// and write cases.csv, sweep.json and the pass rate with the worst cases.
@@ -156,8 +160,9 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Trim { airspeed_mps, altitude_ft, xcg, json } => trim(airspeed_mps, altitude_ft, xcg, json),
         Command::Plant { command: PlantCommand::Derivative } => plant_derivative(),
-        Command::Sim { config, out, sample: Some(index), seed, fmus, controller_cmd } => {
-            sim_sample(config.as_deref(), out, index, seed, &fmus, controller_cmd.as_deref())
+        Command::Sim { config, out, sample: Some(index), seed, fmus, controller_cmd, plant_cmd } => {
+            let commands = silrig::campaign::RigCommands { controller_cmd, plant_cmd };
+            sim_sample(config.as_deref(), out, index, seed, &fmus, &commands)
         }
         Command::Sim { config, out, fmus, .. } => sim(config.as_deref(), out, &fmus),
         Command::Sweep(SweepCommand { action: None, local }) => sweep(&local),
@@ -227,10 +232,10 @@ fn sim_sample(
     index: u64,
     seed: Option<u64>,
     fmus: &silrig::rig::in_process::FmuFlags,
-    controller_cmd: Option<&str>,
+    commands: &silrig::campaign::RigCommands,
 ) -> anyhow::Result<ExitCode> {
     let path = config.ok_or_else(|| anyhow::anyhow!("--sample needs the sweep's scenario file"))?;
-    let campaign = silrig::campaign::Campaign::load(path, fmus, controller_cmd)?;
+    let campaign = silrig::campaign::Campaign::load(path, fmus, commands)?;
     let seed = seed.unwrap_or(campaign.scenario.seed);
     let out = out.unwrap_or_else(|| Path::new("out").join(format!("{}-sample-{index}", campaign.scenario.name)));
     let (text, files) = silrig::campaign::fly_one(&campaign, seed, index, &out)?;

@@ -239,3 +239,184 @@ fn a_plant_fmu_sweeps_under_a_controller_command() {
     assert!(csv.lines().skip(1).all(|l| l.contains(",pass,") || l.contains(",fail,")), "every case flown: {csv}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The Python toy plant (tests/clients/toy_plant.py, with libsilrig_client.so built for it).
+fn toy_plant() -> String {
+    common::client_lib(SILRIG);
+    format!("python3 {ROOT}/tests/clients/toy_plant.py")
+}
+
+/// A 3 s scenario for the toy plant written into `dir`: its gain and its start roll (a start value by signal name)
+/// dispersed as `plant.parameters.*`, the pitch set point as `setpoint.theta_deg`, criteria on its outputs by name.
+fn toy_config(dir: &Path) -> PathBuf {
+    let text = "name = \"toy-sweep\"\nseed = 3\n\
+                [setpoint]\ntheta_deg = 10.0\n\
+                [plant.parameters]\ngain_dps2_per_deg = 4.0\nphi_deg = 0.0\n\
+                [timing]\ndt_s = 0.01\nduration_s = 3.0\ncommand_timing = \"next-tick\"\n\
+                [dispersions]\n\
+                \"plant.parameters.gain_dps2_per_deg\" = { dist = \"uniform\", min = 0.5, max = 8.0 }\n\
+                \"plant.parameters.phi_deg\" = { dist = \"uniform\", min = -10.0, max = 10.0 }\n\
+                \"setpoint.theta_deg\" = { dist = \"uniform\", min = 5.0, max = 15.0 }\n\
+                [criteria.outputs.theta_deg]\nsettled = { within_s = 2.8, band = 0.5 }\n\
+                [criteria.outputs.phi_deg]\nabs_max = { after_s = 2.0, max = 1.0 }\n";
+    let path = dir.join("toy_sweep.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A column of a CSV's text by its header name: (header index, the rows' cells).
+fn csv_column(csv: &str, name: &str) -> Vec<String> {
+    let mut lines = csv.lines();
+    let at = lines.next().unwrap().split(',').position(|c| c == name).unwrap_or_else(|| panic!("no column {name}"));
+    lines.map(|l| l.split(',').nth(at).unwrap().to_string()).collect()
+}
+
+/// `silrig sweep` with these commands flown on one rig, on two, and as a 2-shard plan merged: the same bytes each
+/// time; returns the first sweep's stdout and `cases.csv`.
+fn same_sweep_three_ways(dir: &Path, config: &str, runs: &str, commands: &[&str]) -> (String, String) {
+    let out = |name: &str| dir.join(name).display().to_string();
+    let sweep = |jobs: &str, name: &str| {
+        let out = out(name);
+        ok(&[&["sweep", config, "--runs", runs, "--jobs", jobs, "--out", &out], commands].concat())
+    };
+    let stdout = sweep("1", "one");
+    sweep("2", "two");
+    let csv = read(&dir.join("one/cases.csv"));
+    assert_eq!(csv, read(&dir.join("two/cases.csv")), "one rig or two side by side: the same cases");
+    assert_eq!(read(&dir.join("one/sweep.json")), read(&dir.join("two/sweep.json")));
+    ok(&[&["sweep", "plan", config, "--runs", runs, "--shards", "2", "--out", &out("plan")], commands].concat());
+    for k in ["0", "1"] {
+        ok(&["sweep", "run", &out("plan"), "--index", k, "--jobs", "2"]);
+    }
+    ok(&["sweep", "merge", &out("plan")]);
+    assert_eq!(read(&dir.join("plan/cases.csv")), csv, "the merged shards: the same cases");
+    assert_eq!(read(&dir.join("plan/sweep.json")), read(&dir.join("one/sweep.json")));
+    (stdout, csv)
+}
+
+#[test]
+fn a_sweep_of_a_python_plant_is_the_same_on_one_rig_two_and_shards_and_its_dispersions_reach_the_plant() {
+    let dir = common::temp_dir(SUITE, "toy");
+    let config = toy_config(&dir);
+    let config = config.to_str().unwrap();
+    let (toy, pid) = (toy_plant(), python_pid());
+    let commands = ["--plant-cmd", toy.as_str(), "--controller-cmd", pid.as_str()];
+    let (stdout, csv) = same_sweep_three_ways(&dir, config, "6", &commands);
+    assert_eq!(csv.lines().count(), 7, "{csv}");
+    assert!(csv.lines().skip(1).all(|l| l.contains(",pass,") || l.contains(",fail,")), "every case flown: {csv}");
+    assert!(csv.lines().any(|l| l.contains(",pass,")) && csv.lines().any(|l| l.contains(",fail,")), "{csv}");
+    assert!(stdout.contains(&format!("--plant-cmd '{toy}' --sample ")), "{stdout}");
+    let manifest: Value = serde_json::from_str(&read(&dir.join("plan/manifest.json"))).unwrap();
+    assert_eq!((manifest["plant_cmd"].as_str(), manifest["controller_cmd"].as_str()), (Some(&*toy), Some(&*pid)));
+
+    // Case 4 flown alone is the sweep's case, and its dispersions reached the processes: the toy starts at the
+    // sampled roll (a start value by signal name), and the PID's pitch error at tick 0 is the sampled set point.
+    let case_dir = dir.join("case-4");
+    ok(&[&["sim", config, "--sample", "4", "--out", case_dir.to_str().unwrap()], &commands[..]].concat());
+    let alone: Value = serde_json::from_str(&read(&case_dir.join("case.json"))).unwrap();
+    assert_eq!(alone["outcome"].as_str(), csv_column(&csv, "outcome").get(4).map(String::as_str));
+    let trace = read(&case_dir.join("trace.csv"));
+    let first = |column: &str| csv_column(&trace, column)[0].parse::<f64>().unwrap();
+    let sampled = |column: &str| csv_column(&csv, column)[4].parse::<f64>().unwrap();
+    assert_eq!(first("phi_deg"), sampled("plant.parameters.phi_deg"));
+    assert_ne!(first("phi_deg"), 0.0);
+    assert_eq!(first("err_theta_deg"), sampled("setpoint.theta_deg"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_sweep_of_jsbsims_cessna_is_the_same_on_one_rig_two_and_shards_trimmed_where_each_case_says() {
+    let dir = common::temp_dir(SUITE, "jsbsim");
+    common::client_lib(SILRIG);
+    let python = common::venv_python("jsbsim", "jsbsim");
+    let jsbsim = format!("{} {ROOT}/examples/python/jsbsim_plant.py", python.display());
+    // examples/python/jsbsim_sweep.toml shortened to 3 s, its settling window with it.
+    let text = read(&Path::new(ROOT).join("examples/python/jsbsim_sweep.toml"))
+        .replace("duration_s = 10.0", "duration_s = 3.0")
+        .replace("within_s = 8.0", "within_s = 2.5");
+    let config = dir.join("jsbsim_sweep.toml");
+    std::fs::write(&config, text).unwrap();
+    let pid = python_pid();
+    let commands = ["--plant-cmd", jsbsim.as_str(), "--controller-cmd", pid.as_str()];
+    let (_, csv) = same_sweep_three_ways(&dir, config.to_str().unwrap(), "4", &commands);
+    assert!(csv.lines().skip(1).all(|l| l.contains(",pass,") || l.contains(",fail,")), "every case flown: {csv}");
+    // Each case trimmed at its own altitude: the outputs' criterion sees the airspeed of its own trim.
+    let altitudes: Vec<f64> =
+        csv_column(&csv, "plant.parameters.altitude_ft").iter().map(|v| v.parse().unwrap()).collect();
+    assert!(altitudes.iter().all(|a| (2000.0..=8000.0).contains(a)) && altitudes[0] != altitudes[1], "{altitudes:?}");
+    let case_dir = dir.join("case-1");
+    ok(&[&["sim", config.to_str().unwrap(), "--sample", "1", "--out", case_dir.to_str().unwrap()], &commands[..]]
+        .concat());
+    let alt_ft = csv_column(&read(&case_dir.join("trace.csv")), "alt_ft")[0].parse::<f64>().unwrap();
+    assert!((alt_ft - altitudes[1]).abs() < 1.0, "trimmed at {alt_ft} ft, the case says {}", altitudes[1]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_plant_command_sweeps_under_a_controller_fmu_and_under_ours_which_fails_naming_what_the_plant_lacks() {
+    let dir = common::temp_dir(SUITE, "plant-under");
+    let config = toy_config(&dir);
+    let config = config.to_str().unwrap();
+    let pid_fmu = common::fmu::cached_fmu(SUITE, "pid");
+    let toy = toy_plant();
+    let out = |name: &str| dir.join(name).display().to_string();
+    ok(&[
+        "sweep",
+        config,
+        "--runs",
+        "2",
+        "--jobs",
+        "2",
+        "--plant-cmd",
+        &toy,
+        "--controller-fmu",
+        &pid_fmu,
+        "--out",
+        &out("fmu"),
+    ]);
+    let csv = read(&dir.join("fmu/cases.csv"));
+    assert!(csv.lines().skip(1).all(|l| l.contains(",pass,") || l.contains(",fail,\"outputs.")), "{csv}");
+    // Our controller flies the F-16's states, which the toy does not announce: the case fails saying so.
+    ok(&["sweep", config, "--runs", "1", "--plant-cmd", &toy, "--out", &out("ours")]);
+    let csv = read(&dir.join("ours/cases.csv"));
+    assert!(csv.contains(",fail,") && csv.contains("plant toy has no output `vt_fps`"), "{csv}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_plant_command_is_refused_before_any_case_flies_beside_a_plant_fmu_or_an_f16_only_dispersion() {
+    let dir = common::temp_dir(SUITE, "plant-refused");
+    let config = toy_config(&dir);
+    let text = read(&config).replace("\"setpoint.theta_deg\"", "\"initial.phi_deg\"");
+    let f16_only = dir.join("f16_only.toml");
+    std::fs::write(&f16_only, text).unwrap();
+    let (config, f16_only) = (config.to_str().unwrap(), f16_only.to_str().unwrap());
+    let out = dir.join("out").display().to_string();
+    let toy = toy_plant();
+    for args in [
+        vec!["sweep", f16_only, "--runs", "4", "--plant-cmd", &toy, "--out", &out],
+        vec!["sweep", "plan", f16_only, "--runs", "4", "--shards", "2", "--plant-cmd", &toy, "--out", &out],
+        vec!["sim", f16_only, "--sample", "1", "--plant-cmd", &toy, "--out", &out],
+    ] {
+        let (code, stdout, stderr) = silrig(&args);
+        assert_eq!(code, Some(2), "{args:?}: {stdout}{stderr}");
+        assert!(
+            stderr.contains(
+                "dispersions.\"initial.phi_deg\": the plant is your process (--plant-cmd), which does not \
+                             read `initial.phi_deg`"
+            ) && stderr.contains("`plant.parameters.<name>`"),
+            "{stderr}"
+        );
+        assert!(!Path::new(&out).exists(), "{args:?} wrote {out}");
+    }
+    let (code, _, stderr) =
+        silrig(&["sweep", config, "--runs", "4", "--plant-cmd", "surely-no-such-plant", "--out", &out]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--plant-cmd: cannot find `surely-no-such-plant`"), "{stderr}");
+    let fmu = dir.join("plant.fmu").display().to_string();
+    let (code, _, stderr) = silrig(&["sweep", config, "--runs", "4", "--plant-cmd", &toy, "--plant-fmu", &fmu]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("flies the plant FMU") && stderr.contains("sweep one plant at a time"), "{stderr}");
+    assert!(!Path::new(&out).exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -149,7 +149,7 @@ fn fly_sweep(source: Source, runs: u64, seed: Option<u64>, jobs: Option<usize>) 
     }
     let campaign = match source {
         Source::Default => Campaign::from_scenario(Scenario::embedded_default(), "the embedded default scenario"),
-        Source::File(path) => Campaign::load(&path, &FmuFlags::default(), None),
+        Source::File(path) => Campaign::load(&path, &FmuFlags::default(), &campaign::RigCommands::default()),
         Source::Text(text) => Campaign::from_text(&text, TEXT_ORIGIN),
     }
     .map_err(error)?;

@@ -147,6 +147,16 @@ impl Distribution {
     }
 }
 
+/// Whether the scenario key `key` is read by the built-in F-16 alone: its initial condition (`initial.*`), its
+/// disturbance (`disturbance.*`) and its plant options (`plant.xcg`, `plant.mass_scale`, `plant.aero_scale.*`). A
+/// plant of your own (a process or an FMU) reads none of them: it reads its parameters and start values by name,
+/// `plant.parameters.<name>`.
+pub fn is_f16_only(key: &str) -> bool {
+    key.starts_with("initial.")
+        || key.starts_with("disturbance.")
+        || key.starts_with("plant.") && !key.starts_with("plant.parameters.")
+}
+
 /// FNV-1a: a stable hash of a key name (the stream of each key does not depend on the other keys).
 fn fnv1a(text: &str) -> u64 {
     text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
@@ -221,6 +231,16 @@ mod tests {
         assert!(bad(Distribution::Uniform { min: 2.0, max: 1.0 }).contains("above"));
         assert!(bad(Distribution::Choice { values: vec![], weights: None }).contains("empty"));
         assert!((normal_cdf(1.0) - 0.841_344_746).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_f16s_own_keys_are_told_from_those_any_plant_reads() {
+        for key in ["initial.phi_deg", "disturbance.amplitude_radps2", "plant.xcg", "plant.aero_scale.cm"] {
+            assert!(is_f16_only(key), "{key}");
+        }
+        for key in ["plant.parameters.altitude_ft", "setpoint.theta_deg", "actuators.elevator.min", "timing.dt_s"] {
+            assert!(!is_f16_only(key), "{key}");
+        }
     }
 
     #[test]

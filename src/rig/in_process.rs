@@ -247,14 +247,13 @@ impl Models {
     pub fn check_dispersed(&self, key: &str) -> Result<(), String> {
         let unread = |fmu: &Arc<Fmu>, side: &str| {
             format!(
-                "the {side} is the FMU {}: it does not read `{key}`; disperse its parameters as                  `{side}.parameters.<variable>`",
+                "the {side} is the FMU {}: it does not read `{key}`; disperse its parameters as \
+                 `{side}.parameters.<variable>`",
                 fmu.file()
             )
         };
         if let Some(fmu) = &self.plant_fmu
-            && (key.starts_with("plant.") && !key.starts_with("plant.parameters.")
-                || key.starts_with("initial.")
-                || key.starts_with("disturbance."))
+            && silrig_flight::dispersion::is_f16_only(key)
         {
             return Err(unread(fmu, "plant"));
         }

@@ -5,7 +5,10 @@ moment) and the F-16's signal names, so the example PID flies it unchanged.
     python3 toy_plant.py [MODE]     MODE: ok (default), nan (output phi_deg is NaN at ticks 300..=309),
                                     twice (announces phi_deg twice), none (announces no outputs)
 
-It keeps checkpoints (`save`, `restore`), so a restarted toy goes on with the flight.
+It keeps checkpoints (`save`, `restore`), so a restarted toy goes on with the flight. The scenario's
+`[plant.parameters]` may set its gain and damping (`gain_dps2_per_deg`, `damping_per_s`, as examples/c/toy_plant.c)
+and its start values by signal name (`phi_deg`, `theta_deg`, `psi_deg`; default 0), so a sweep disperses them as
+`plant.parameters.<name>`.
 """
 
 import json
@@ -15,10 +18,11 @@ import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "python"))
 
-from silrig_client import PlantModel, serve_plant  # noqa: E402
+from silrig_client import PlantModel, plant_parameter, serve_plant  # noqa: E402
 
 GAIN = 4.0  # deg/s^2 of angular acceleration per deg of surface
 DAMPING = 1.0  # 1/s
+ANGLES = ["phi_deg", "theta_deg", "psi_deg"]
 
 
 class Toy(PlantModel):
@@ -31,7 +35,9 @@ class Toy(PlantModel):
 
     def __init__(self, mode):
         self.mode = mode
-        self.angle = [0.0, 0.0, 0.0]
+        self.gain = plant_parameter("gain_dps2_per_deg", GAIN)
+        self.damping = plant_parameter("damping_per_s", DAMPING)
+        self.angle = [plant_parameter(name, 0.0) for name in ANGLES]
         self.rate = [0.0, 0.0, 0.0]
         self.surface = [0.0, 0.0, 0.0]
         self.tick = 0
@@ -50,7 +56,7 @@ class Toy(PlantModel):
     def step(self, inputs, dt_s):
         self.surface = list(inputs)
         for c in range(3):
-            accel = -GAIN * inputs[c] - DAMPING * self.rate[c]
+            accel = -self.gain * inputs[c] - self.damping * self.rate[c]
             self.rate[c] += accel * dt_s
             self.angle[c] += self.rate[c] * dt_s
         self.tick += 1

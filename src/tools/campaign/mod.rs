@@ -1,9 +1,9 @@
 //! Monte Carlo campaigns (`silrig sweep`): the scenario's dispersions sampled case by case
 //! ([`silrig_flight::dispersion`]), each case flown in the single-process loop ([`case`]), or with a user's
-//! controller command through the three-process lockstep rig ([`rig_case`]), judged by the scenario's `[criteria]`,
-//! in parallel over the cores with a progress line, each case written as it comes ([`SweepWriter`]: memory bounded
-//! whatever the number of cases), and summarised with the pass rate, its interval and the worst cases ([`report`],
-//! [`figures`]).
+//! controller or plant command through the three-process lockstep rig ([`rig_case`]), judged by the scenario's
+//! `[criteria]`, in parallel over the cores with a progress line, each case written as it comes ([`SweepWriter`]:
+//! memory bounded whatever the number of cases), and summarised with the pass rate, its interval and the worst cases
+//! ([`report`], [`figures`]).
 
 pub mod case;
 pub mod figures;
@@ -13,6 +13,7 @@ pub mod shard;
 
 use anyhow::Context;
 use case::CaseResult;
+pub use rig_case::RigCommands;
 use std::collections::BTreeMap;
 use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};
@@ -78,6 +79,19 @@ pub struct SweepOptions {
     /// whose controller crashes, exits or never answers fails, with the rig's reason.
     #[arg(long, value_name = "CMD")]
     pub controller_cmd: Option<String>,
+    /// Sweep your own plant: fly every case through the three-process lockstep rig with this command in place of
+    /// silrig-plant (as `silrig run --mode lockstep --plant-cmd CMD`), under our controller, --controller-cmd or a
+    /// controller FMU. Disperse what it reads as `plant.parameters.<name>` and its set points as
+    /// `setpoint.<output>`. A case whose plant crashes or exits early fails, with the rig's reason.
+    #[arg(long, value_name = "CMD")]
+    pub plant_cmd: Option<String>,
+}
+
+impl SweepOptions {
+    /// `--controller-cmd` and `--plant-cmd`, as given.
+    pub fn commands(&self) -> RigCommands {
+        RigCommands { controller_cmd: self.controller_cmd.clone(), plant_cmd: self.plant_cmd.clone() }
+    }
 }
 
 /// Largest number of cases in one sweep.
@@ -93,40 +107,40 @@ pub struct Campaign {
     pub parameters: Vec<String>,
     /// The file as the user named it (for the commands printed).
     pub config: String,
-    /// `--plant-fmu`, `--controller-fmu`, `--controller-cmd` as given, repeated in the commands printed.
+    /// `--plant-fmu`, `--controller-fmu`, `--controller-cmd`, `--plant-cmd` as given, repeated in the commands
+    /// printed.
     pub flags: String,
-    /// The plant and controller every case flies (new instances per case).
+    /// The plant and controller every case flies in one process (new instances per case).
     pub models: Models,
-    /// `--controller-cmd`: the user's controller, every case flown through the lockstep rig with it.
-    pub controller_cmd: Option<String>,
+    /// The user's controller and plant commands: when either is given, every case flies through the lockstep rig.
+    pub commands: RigCommands,
 }
 
 impl Campaign {
     /// Load `config` (FMU paths taken relative to it), with the FMUs of `fmus` in place of its own and the
-    /// controller command `controller_cmd` (if any), and check it can be swept.
-    pub fn load(config: &Path, fmus: &FmuFlags, controller_cmd: Option<&str>) -> anyhow::Result<Self> {
+    /// `commands` of the user's own (if any), and check it can be swept.
+    pub fn load(config: &Path, fmus: &FmuFlags, commands: &RigCommands) -> anyhow::Result<Self> {
         let mut scenario = Scenario::load(config)?;
         fmus.apply(&mut scenario)?;
         let name = config.display().to_string();
-        if let Some(cmd) = controller_cmd {
-            // Before the FMUs are opened, so that this is what is said.
-            check_controller_cmd(cmd, &scenario, &name)?;
-        }
+        // Before the FMUs are opened, so that this is what is said.
+        commands.check(&scenario, &name)?;
         let mut campaign = Self::from_scenario(scenario, &name)?;
-        campaign.flags = fmus.to_args();
-        if let Some(cmd) = controller_cmd {
-            campaign.controller_cmd = Some(cmd.to_string());
-            campaign.flags += &format!(" --controller-cmd {}", silrig_launch::program::shell_quote(cmd));
-        }
+        campaign.commands = commands.clone();
+        campaign.flags = fmus.to_args() + &commands.to_args();
         Ok(campaign)
     }
 
-    /// Fly every case through the lockstep rig with the controller `cmd`: refused when its program cannot be found,
-    /// or beside a controller FMU.
-    pub fn fly_controller_cmd(&mut self, cmd: &str) -> anyhow::Result<()> {
-        check_controller_cmd(cmd, &self.scenario, &self.config)?;
-        self.controller_cmd = Some(cmd.to_string());
+    /// Fly every case through the lockstep rig with `commands`: refused as [`RigCommands::check`] says.
+    pub fn fly_commands(&mut self, commands: RigCommands) -> anyhow::Result<()> {
+        commands.check(&self.scenario, &self.config)?;
+        self.commands = commands;
         Ok(())
+    }
+
+    /// Fly every case through the lockstep rig with the controller `cmd` (as [`Self::fly_commands`]).
+    pub fn fly_controller_cmd(&mut self, cmd: &str) -> anyhow::Result<()> {
+        self.fly_commands(RigCommands { controller_cmd: Some(cmd.to_string()), plant_cmd: None })
     }
 
     /// A campaign from a scenario's text; `config` names it in errors and printed commands.
@@ -161,7 +175,7 @@ impl Campaign {
             config: config.to_string(),
             flags: String::new(),
             models,
-            controller_cmd: None,
+            commands: RigCommands::default(),
         })
     }
 
@@ -169,7 +183,7 @@ impl Campaign {
     /// per process (said on stderr) and the cases fly in this process (through the rig, each plant is a process).
     pub fn threads(&self, jobs: usize) -> usize {
         match self.models.one_instance_per_process() {
-            Some(fmu) if jobs > 1 && self.controller_cmd.is_none() => {
+            Some(fmu) if jobs > 1 && !self.commands.any() => {
                 eprintln!(
                     "silrig sweep: {fmu} can be instantiated only once per process \
                      (canBeInstantiatedOnlyOncePerProcess): flying its cases on one thread, not {jobs}"
@@ -200,8 +214,8 @@ impl Campaign {
         )
     }
 
-    /// Fly the cases `indices` under `seed` on `jobs` threads (with a controller command, `jobs` rigs side by
-    /// side), reporting progress on stderr, and hand each result to `sink` in index order as soon as the cases
+    /// Fly the cases `indices` under `seed` on `jobs` threads (with a controller or plant command, `jobs` rigs side
+    /// by side), reporting progress on stderr, and hand each result to `sink` in index order as soon as the cases
     /// before it are flown: at most [`REORDER_WINDOW`] results wait for their turn, so memory stays bounded
     /// whatever the number of cases. SIGINT or SIGTERM stops it: the cases in flight finish (a rig's case is
     /// stopped, and not handed on), no case is started, and it returns the interruption, every case before the
@@ -214,7 +228,7 @@ impl Campaign {
         mut sink: impl FnMut(CaseResult) -> anyhow::Result<()>,
     ) -> anyhow::Result<Option<rig_case::Interrupted>> {
         silrig_rig::signals::install_termination_flag();
-        let scratch = self.controller_cmd.as_ref().map(|_| rig_case::Scratch::new()).transpose()?;
+        let scratch = self.commands.any().then(rig_case::Scratch::new).transpose()?;
         let total = indices.end - indices.start;
         let (done, next, stop) = (AtomicU64::new(0), AtomicU64::new(indices.start), AtomicBool::new(false));
         // The first case not yet handed to `sink`: no worker starts a case a window or more past it.
@@ -242,9 +256,9 @@ impl Campaign {
                             first = turn.wait_timeout(first, Duration::from_millis(100)).expect("not poisoned").0;
                         }
                         drop(first);
-                        let r = match (&self.controller_cmd, scratch) {
-                            (Some(cmd), Some(scratch)) => scratch.fly(self, cmd, seed, i),
-                            _ => Ok(case::fly(&self.models, &self.scenario, &self.criteria, seed, i)),
+                        let r = match scratch {
+                            Some(scratch) => scratch.fly(self, seed, i),
+                            None => Ok(case::fly(&self.models, &self.scenario, &self.criteria, seed, i)),
                         };
                         done.fetch_add(1, Ordering::Relaxed);
                         if tx.send((i, r)).is_err() {
@@ -302,20 +316,6 @@ impl Drop for StopOnPanic<'_> {
 /// Cases flown ahead of the first one not yet written, at most: bounds the memory of the results waiting for the
 /// cases before them (a case of the rig may take seconds while the others fly on).
 pub const REORDER_WINDOW: u64 = 4096;
-
-/// Refuse the controller command `cmd` up front when its program cannot be found, or when `scenario` (named
-/// `config`) flies a controller FMU, which takes the controller's place in silrig-controller just as `cmd` would.
-fn check_controller_cmd(cmd: &str, scenario: &Scenario, config: &str) -> anyhow::Result<()> {
-    silrig_launch::program::check_command("controller-cmd", cmd).map_err(anyhow::Error::msg)?;
-    if let Some(fmu) = &scenario.controller.fmu {
-        anyhow::bail!(
-            "--controller-cmd flies your controller in place of ours, but {config} flies the controller FMU {} \
-             (--controller-fmu or its [controller] fmu): sweep one controller at a time (a plant FMU may stay)",
-            fmu.display()
-        );
-    }
-    Ok(())
-}
 
 /// Progress on stderr until `done` reaches `total`: a bar redrawn in place on a terminal, a plain line every few
 /// seconds otherwise (logs, CI, Slurm).
@@ -498,7 +498,7 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
         anyhow::bail!("silrig sweep needs a scenario file and --runs N (or a subcommand: plan, run, merge, slurm)");
     };
     check_runs(runs)?;
-    let campaign = Campaign::load(config, &opts.fmus, opts.controller_cmd.as_deref())?;
+    let campaign = Campaign::load(config, &opts.fmus, &opts.commands())?;
     let seed = opts.seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(jobs(opts.jobs)?);
     let out =
@@ -515,17 +515,16 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
 /// (the sampled values, the summary, each criterion as `cases.csv` has it) and the files written.
 pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow::Result<(String, Vec<PathBuf>)> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let (result, flight) = match &campaign.controller_cmd {
-        Some(cmd) => {
-            // The rig writes its run (trace, report, figures) into `out` itself.
-            anyhow::ensure!(
-                !out.join("trace.csv").exists(),
-                "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
-                out.display()
-            );
-            rig_case::fly(campaign, cmd, seed, index, out, None, true)?
-        }
-        None => case::fly_with_trace(&campaign.models, &campaign.scenario, &campaign.criteria, seed, index),
+    let (result, flight) = if campaign.commands.any() {
+        // The rig writes its run (trace, report, figures) into `out` itself.
+        anyhow::ensure!(
+            !out.join("trace.csv").exists(),
+            "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
+            out.display()
+        );
+        rig_case::fly(campaign, seed, index, out, None, true)?
+    } else {
+        case::fly_with_trace(&campaign.models, &campaign.scenario, &campaign.criteria, seed, index)
     };
     let mut text = format!("case {index} of {} (seed {seed}): {}\n", campaign.command_config(), result.outcome.label());
     for (key, value) in campaign.parameters.iter().zip(&result.values) {
@@ -538,9 +537,10 @@ pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow
         text += &format!("  infeasible: {}\n", result.reason);
         return Ok((text, vec![case_json]));
     };
-    let mut files = match &campaign.controller_cmd {
-        Some(_) => ["trace.csv", rig_case::CASE_SCENARIO, "report.json"].map(|f| out.join(f)).to_vec(),
-        None => crate::outputs::write_run(out, &scenario, &trace, &summary, plant.as_ref())?,
+    let mut files = if campaign.commands.any() {
+        ["trace.csv", rig_case::CASE_SCENARIO, "report.json"].map(|f| out.join(f)).to_vec()
+    } else {
+        crate::outputs::write_run(out, &scenario, &trace, &summary, plant.as_ref())?
     };
     files.push(case_json);
     text += &summary.to_text();

@@ -1,9 +1,11 @@
-//! One case of a campaign flown through the three-process lockstep rig (`silrig sweep --controller-cmd CMD`): a
-//! user's controller in a process of its own (C, Python, anything that speaks the contract) against the case's
-//! sampled scenario, flown exactly as `silrig run --mode lockstep --controller-cmd CMD` flies that scenario, and
-//! judged by [`case::judge`] like a case flown in one process. Each case is a rig of its own (its own run id, so its
-//! own iceoryx2 namespace and claims), so several fly side by side on a sweep's worker threads; a sweep's case runs
-//! in a scratch folder ([`Scratch`]) removed once it is judged, so a sweep of any length leaves no run folders.
+//! One case of a campaign flown through the three-process lockstep rig (`silrig sweep --controller-cmd CMD`,
+//! `--plant-cmd CMD`, or both): a user's controller or plant in a process of its own (C, Python, JSBSim, anything
+//! that speaks the contract) flying the case's sampled scenario, exactly as `silrig run --mode lockstep` with the
+//! same commands flies that scenario, and judged by [`case::judge`] like a case flown in one process. Which
+//! commands a sweep flies, and what is refused before any case flies, is [`RigCommands`]. Each case is a rig of its
+//! own (its own run id, so its own iceoryx2 namespace and claims), so several fly side by side on a sweep's worker
+//! threads; a sweep's case runs in a scratch folder ([`Scratch`]) removed once it is judged, so a sweep of any length
+//! leaves no run folders.
 //!
 //! Why `launcher::run` may run on several threads of one process: each run claims its own folder and run id (lock
 //! files holding this process's pid, which `remove_stale_claims` leaves alone since the pid is alive), waits for its
@@ -15,6 +17,8 @@
 
 use super::case::{self, CaseResult, Flight};
 use crate::outputs::FlownScenario;
+use serde::{Deserialize, Serialize};
+use silrig_flight::scenario::Scenario;
 use silrig_flight::trace::Trace;
 use silrig_launch::launcher::{self, LaunchOptions};
 use silrig_rig::signals;
@@ -37,12 +41,79 @@ pub fn check_interrupted() -> Result<(), Interrupted> {
     }
 }
 
-/// The options `silrig run --mode lockstep --quiet --controller-cmd CMD --run-id ID --out DIR CONFIG` is given, parsed
-/// as the command line parses them: every other flag at its default, so a case is that run, byte for byte (with
-/// `--no-figures` when the run's folder is thrown away once judged: the figures change nothing in it but the
-/// time). No restarts (the default): a controller that dies fails its case.
+/// The processes of the user's own that a sweep's cases fly in place of ours, through the lockstep rig: with
+/// neither, the cases fly in one process. A plant command flies under our controller, a controller command or a
+/// controller FMU (which silrig-controller flies).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RigCommands {
+    /// `--controller-cmd`: the user's controller, in place of silrig-controller.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller_cmd: Option<String>,
+    /// `--plant-cmd`: the user's plant, in place of silrig-plant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plant_cmd: Option<String>,
+}
+
+impl RigCommands {
+    /// Whether the cases fly through the rig (a command is given).
+    pub fn any(&self) -> bool {
+        self.controller_cmd.is_some() || self.plant_cmd.is_some()
+    }
+
+    /// The commands given, each with its flag's name.
+    fn given(&self) -> impl Iterator<Item = (&'static str, &str)> {
+        [("controller-cmd", &self.controller_cmd), ("plant-cmd", &self.plant_cmd)]
+            .into_iter()
+            .filter_map(|(flag, cmd)| cmd.as_deref().map(|cmd| (flag, cmd)))
+    }
+
+    /// The flags as a command line repeats them (` --controller-cmd '...'`), quoted for a shell; empty when none.
+    pub fn to_args(&self) -> String {
+        self.given().map(|(flag, cmd)| format!(" --{flag} {}", silrig_launch::program::shell_quote(cmd))).collect()
+    }
+
+    /// Refuse, before any case flies, a command whose program cannot be found; a command beside the FMU that would
+    /// take the same place (`scenario`, named `config`, flies a controller FMU under a controller command, or a
+    /// plant FMU under a plant command); and with a plant command, a dispersion of a key that only the built-in
+    /// F-16 reads, which would change nothing the plant process flies.
+    pub fn check(&self, scenario: &Scenario, config: &str) -> anyhow::Result<()> {
+        for (flag, cmd) in self.given() {
+            silrig_launch::program::check_command(flag, cmd).map_err(anyhow::Error::msg)?;
+        }
+        let one_at_a_time = |side: &str, fmu: &Path, other: &str| {
+            anyhow::anyhow!(
+                "--{side}-cmd flies your {side} in place of ours, but {config} flies the {side} FMU {} \
+                 (--{side}-fmu or its [{side}] fmu): sweep one {side} at a time (a {other} FMU may stay)",
+                fmu.display()
+            )
+        };
+        if let (Some(_), Some(fmu)) = (&self.controller_cmd, &scenario.controller.fmu) {
+            return Err(one_at_a_time("controller", fmu, "plant"));
+        }
+        if let (Some(_), Some(fmu)) = (&self.plant_cmd, &scenario.plant.fmu) {
+            return Err(one_at_a_time("plant", fmu, "controller"));
+        }
+        if self.plant_cmd.is_some()
+            && let Some(key) = scenario.dispersions.keys().find(|k| silrig_flight::dispersion::is_f16_only(k))
+        {
+            anyhow::bail!(
+                "{config}: dispersions.\"{key}\": the plant is your process (--plant-cmd), which does not read \
+                 `{key}` (only the built-in F-16 does); disperse what your plant reads with plant_parameter as \
+                 `plant.parameters.<name>` (its start values too, by the names it reads them with) and its set \
+                 points as `setpoint.<output>`"
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The options `silrig run --mode lockstep --quiet --controller-cmd CMD --plant-cmd CMD --run-id ID --out DIR
+/// CONFIG` is given (each command when there is one), parsed as the command line parses them: every other flag at
+/// its default, so a case is that run, byte for byte (with `--no-figures` when the run's folder is thrown away once
+/// judged: the figures change nothing in it but the time). No restarts (the default): a controller or plant that
+/// dies fails its case.
 fn launch_options(
-    cmd: &str,
+    commands: &RigCommands,
     config: &Path,
     out: &Path,
     run_id: Option<&RunId>,
@@ -54,7 +125,10 @@ fn launch_options(
         launch: LaunchOptions,
     }
     let mut argv = vec!["silrig-run".to_string(), "--mode".into(), "lockstep".into(), "--quiet".into()];
-    argv.extend(["--controller-cmd".into(), cmd.into(), "--out".into(), out.display().to_string()]);
+    for (flag, cmd) in commands.given() {
+        argv.extend([format!("--{flag}"), cmd.into()]);
+    }
+    argv.extend(["--out".into(), out.display().to_string()]);
     if let Some(id) = run_id {
         argv.extend(["--run-id".into(), id.to_string()]);
     }
@@ -65,13 +139,13 @@ fn launch_options(
     Ok(<Run as clap::Parser>::try_parse_from(argv)?.launch)
 }
 
-/// Fly case `index` of `campaign` under `seed` with the controller `cmd` through the lockstep rig in `run_dir`
-/// (created; it must not hold a run), as `run_id` (None: a fresh one), drawing the run's figures or not; returns the
-/// result and, when flown, the flight. A rig that could not be set up makes the case infeasible; a controller that crashed, exited or never
-/// answered fails it, the rig's failures as its reason. Err only when the user stopped the sweep.
+/// Fly case `index` of `campaign` under `seed` with its commands through the lockstep rig in `run_dir` (created;
+/// it must not hold a run), as `run_id` (None: a fresh one), drawing the run's figures or not; returns the result
+/// and, when flown, the flight. A rig that could not be set up makes the case infeasible; a controller or plant that
+/// crashed, exited or never answered fails it, the rig's failures as its reason. Err only when the user stopped the
+/// sweep.
 pub fn fly(
     campaign: &super::Campaign,
-    cmd: &str,
     seed: u64,
     index: u64,
     run_dir: &Path,
@@ -87,6 +161,7 @@ pub fn fly(
     // The built-in F-16 is trimmed in the plant's process, which would fail the case with only its stderr to say
     // why: a case that cannot be trimmed is infeasible, as in one process, with the same reason.
     if scenario.plant.fmu.is_none()
+        && campaign.commands.plant_cmd.is_none()
         && let Err(e) = silrig_flight::sim::PlantRunner::new(&scenario)
     {
         return Ok((case::infeasible(index, values, e.to_string()), None));
@@ -95,7 +170,7 @@ pub fn fly(
     let report = std::fs::create_dir_all(run_dir)
         .and_then(|()| std::fs::write(&config, scenario.to_toml()))
         .map_err(anyhow::Error::from)
-        .and_then(|()| launch_options(cmd, &config, run_dir, run_id, figures))
+        .and_then(|()| launch_options(&campaign.commands, &config, run_dir, run_id, figures))
         .and_then(|opts| launcher::run(&opts));
     let report = match report {
         Ok(report) => report,
@@ -104,7 +179,7 @@ pub fn fly(
         }
     };
     check_interrupted()?;
-    // A controller that died before the plant's first tick leaves no trace: the case is judged on none (every
+    // A controller or plant that died before the plant's first tick leaves no trace: the case is judged on none (every
     // criterion fails, its figures are empty), with the rig's failures as the reason.
     let trace = Trace::load(&run_dir.join("trace.csv")).unwrap_or_else(|_| Trace::new(Vec::new()));
     // A rig that failed fails the case. When its trace stops short of the scenario's end (in lockstep the plant
@@ -139,10 +214,10 @@ impl Scratch {
     }
 
     /// Fly case `index` in a run folder of its own, judge it and remove the folder.
-    pub fn fly(&self, campaign: &super::Campaign, cmd: &str, seed: u64, index: u64) -> Result<CaseResult, Interrupted> {
+    pub fn fly(&self, campaign: &super::Campaign, seed: u64, index: u64) -> Result<CaseResult, Interrupted> {
         let run_id = RunId::new(&format!("{}-{index:x}", self.run_id)).expect("a run id and a hex number make one");
         let run_dir = self.dir.join(format!("case-{index}"));
-        let flown = fly(campaign, cmd, seed, index, &run_dir, Some(&run_id), false);
+        let flown = fly(campaign, seed, index, &run_dir, Some(&run_id), false);
         let _ = std::fs::remove_dir_all(&run_dir);
         Ok(flown?.0)
     }

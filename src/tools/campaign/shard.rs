@@ -4,8 +4,8 @@
 //! shard of this plan is there and builds the outputs a single-machine sweep writes, byte for byte. `slurm` writes
 //! the `sbatch` array script.
 
-use super::Campaign;
 use super::case::CaseResult;
+use super::{Campaign, RigCommands};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -35,10 +35,10 @@ pub struct Manifest {
     pub runs: u64,
     /// Shards the cases are split into.
     pub shards: u64,
-    /// `--controller-cmd`: every case flown through the lockstep rig with this command, run by each worker from the
-    /// folder it starts in (absent: our controller, in one process).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub controller_cmd: Option<String>,
+    /// `--controller-cmd` and `--plant-cmd`: every case flown through the lockstep rig with these commands, run by
+    /// each worker from the folder it starts in (absent: ours, in one process).
+    #[serde(flatten)]
+    pub commands: RigCommands,
     /// FNV-1a of all of the above: shard files carry it, so slices of different plans never merge.
     pub fingerprint: String,
 }
@@ -73,20 +73,15 @@ fn fnv1a(parts: &[&str]) -> String {
 }
 
 impl Manifest {
-    fn new(
-        config: String,
-        scenario_toml: String,
-        seed: u64,
-        runs: u64,
-        shards: u64,
-        controller_cmd: Option<String>,
-    ) -> Self {
+    fn new(config: String, scenario_toml: String, seed: u64, runs: u64, shards: u64, commands: RigCommands) -> Self {
         let mut parts =
             vec![config.clone(), scenario_toml.clone(), seed.to_string(), runs.to_string(), shards.to_string()];
-        // Only when there is one, so the plans written before the field existed keep their fingerprints.
-        parts.extend(controller_cmd.clone());
+        // Only when there is one, so the plans written before the fields existed keep their fingerprints; the plant's
+        // named, so a plant command never fingerprints as the same controller command.
+        parts.extend(commands.controller_cmd.clone());
+        parts.extend(commands.plant_cmd.as_ref().map(|cmd| format!("--plant-cmd {cmd}")));
         let fingerprint = fnv1a(&parts.iter().map(String::as_str).collect::<Vec<_>>());
-        Self { config, scenario_toml, seed, runs, shards, controller_cmd, fingerprint }
+        Self { config, scenario_toml, seed, runs, shards, commands, fingerprint }
     }
 
     /// The cases of shard `k`: an even split, the first shards one case longer when it does not divide.
@@ -102,10 +97,8 @@ impl Manifest {
 
     fn campaign(&self) -> anyhow::Result<Campaign> {
         let mut campaign = Campaign::from_text(&self.scenario_toml, &self.config)?;
-        // `config` names the command already (it is the planned campaign's `command_config`).
-        if let Some(cmd) = &self.controller_cmd {
-            campaign.fly_controller_cmd(cmd)?;
-        }
+        // `config` names the commands already (it is the planned campaign's `command_config`).
+        campaign.fly_commands(self.commands.clone())?;
         Ok(campaign)
     }
 
@@ -116,14 +109,8 @@ impl Manifest {
             .with_context(|| format!("reading {} (write it with `silrig sweep plan`)", path.display()))?;
         let m: Manifest =
             serde_json::from_str(&text).with_context(|| format!("{}: not a sweep manifest", path.display()))?;
-        let expected = Manifest::new(
-            m.config.clone(),
-            m.scenario_toml.clone(),
-            m.seed,
-            m.runs,
-            m.shards,
-            m.controller_cmd.clone(),
-        );
+        let expected =
+            Manifest::new(m.config.clone(), m.scenario_toml.clone(), m.seed, m.runs, m.shards, m.commands.clone());
         anyhow::ensure!(
             expected.fingerprint == m.fingerprint,
             "{}: edited after planning (its fingerprint does not match)",
@@ -157,6 +144,10 @@ pub struct PlanOptions {
     /// this command from the folder it starts in, so it must find the program and its files from there.
     #[arg(long, value_name = "CMD")]
     pub controller_cmd: Option<String>,
+    /// Sweep your own plant through the lockstep rig (as `silrig sweep --plant-cmd`); every worker runs this
+    /// command from the folder it starts in, so it must find the program and its files from there.
+    #[arg(long, value_name = "CMD")]
+    pub plant_cmd: Option<String>,
 }
 
 /// `silrig sweep plan`: check the scenario, write the manifest.
@@ -177,7 +168,8 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
         opts.shards
     );
     let text = std::fs::read_to_string(&opts.config).with_context(|| format!("reading {}", opts.config.display()))?;
-    let campaign = Campaign::load(&opts.config, &opts.fmus, opts.controller_cmd.as_deref())?;
+    let commands = RigCommands { controller_cmd: opts.controller_cmd.clone(), plant_cmd: opts.plant_cmd.clone() };
+    let campaign = Campaign::load(&opts.config, &opts.fmus, &commands)?;
     let config = campaign.command_config();
     // Workers run from any folder: a plan that names FMUs carries the scenario with their paths made absolute.
     let text = if campaign.models.has_fmu() { campaign.scenario.to_toml() } else { text };
@@ -187,7 +179,7 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
         opts.out.display()
     );
     let seed = opts.seed.unwrap_or(campaign.scenario.seed);
-    let manifest = Manifest::new(config, text, seed, opts.runs, opts.shards, campaign.controller_cmd.clone());
+    let manifest = Manifest::new(config, text, seed, opts.runs, opts.shards, commands);
     std::fs::create_dir_all(opts.out.join(SHARDS_DIR)).with_context(|| format!("creating {}", opts.out.display()))?;
     silrig_flight::files::write_atomically(
         &opts.out.join(MANIFEST),
@@ -357,10 +349,12 @@ pub fn slurm_script(opts: &SlurmOptions) -> anyhow::Result<(PathBuf, String)> {
     let exe = std::env::current_exe()?;
     let name = manifest.campaign()?.scenario.name;
     let partition = opts.partition.as_ref().map(|p| format!("#SBATCH --partition={p}\n")).unwrap_or_default();
-    // A controller command names its program and files as seen from here (`python3 examples/...`): run it from here.
-    let chdir = match &manifest.controller_cmd {
-        Some(_) => format!("#SBATCH --chdir={}\n", std::env::current_dir()?.display()),
-        None => String::new(),
+    // A controller or plant command names its program and files as seen from here (`python3 examples/...`): run
+    // it from here.
+    let chdir = if manifest.commands.any() {
+        format!("#SBATCH --chdir={}\n", std::env::current_dir()?.display())
+    } else {
+        String::new()
     };
     let quote = |p: &Path| format!("'{}'", p.display().to_string().replace('\'', "'\\''"));
     let script = format!(
@@ -401,11 +395,31 @@ mod tests {
     #[test]
     fn shards_cover_every_case_once_in_order() {
         for (runs, shards) in [(10, 3), (7, 7), (1000, 8), (5, 1)] {
-            let m = Manifest::new("c".into(), "t".into(), 1, runs, shards, None);
+            let m = Manifest::new("c".into(), "t".into(), 1, runs, shards, RigCommands::default());
             let all: Vec<u64> = (0..shards).flat_map(|k| m.range(k)).collect();
             assert_eq!(all, (0..runs).collect::<Vec<_>>(), "{runs} in {shards}");
             let sizes: Vec<u64> = (0..shards).map(|k| m.range(k).end - m.range(k).start).collect();
             assert!(sizes.iter().max().unwrap() - sizes.iter().min().unwrap() <= 1);
         }
+    }
+
+    #[test]
+    fn a_plan_of_a_plant_command_is_told_from_one_of_the_same_controller_command() {
+        let with = |controller_cmd: Option<&str>, plant_cmd: Option<&str>| {
+            let commands = RigCommands {
+                controller_cmd: controller_cmd.map(String::from),
+                plant_cmd: plant_cmd.map(String::from),
+            };
+            Manifest::new("c".into(), "t".into(), 1, 10, 2, commands)
+        };
+        let (controller, plant, both) = (with(Some("x"), None), with(None, Some("x")), with(Some("x"), Some("x")));
+        assert_ne!(controller.fingerprint, plant.fingerprint);
+        assert_ne!(both.fingerprint, controller.fingerprint);
+        // The fields stand at the top level of manifest.json, each only when given.
+        let json = serde_json::to_value(&plant).unwrap();
+        assert_eq!(json["plant_cmd"], "x");
+        assert!(json.get("controller_cmd").is_none(), "{json}");
+        let back: Manifest = serde_json::from_value(serde_json::to_value(&both).unwrap()).unwrap();
+        assert_eq!(back, both);
     }
 }
