@@ -253,6 +253,19 @@ fn jsbsims_cessna_flies_lockstep_and_realtime_with_the_example_pid() {
     }
     let theta = rows.last().unwrap()[header.iter().position(|h| h == "theta_deg").unwrap()];
     assert!((theta - 5.0).abs() < 0.5, "theta ends at {theta}, set point 5");
+    // Its `[actuators.<input>]` apply, and the summary judges each of them: JSBSim reports no position of the rig's
+    // servos (its aileron_deg is its own surface's), so from their commands against their limits.
+    let names: Vec<(&str, Option<&str>, &str)> = r.report["control"]["actuators"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| (a["name"].as_str().unwrap(), a["position"].as_str(), a["command"].as_str().unwrap()))
+        .collect();
+    let by_command =
+        [("aileron", None, "aileron_cmd"), ("elevator", None, "elevator_cmd"), ("rudder", None, "rudder_cmd")];
+    assert_eq!(names, by_command, "{}", r.report["control"]);
+    assert!(r.stdout.contains("aileron, elevator, rudder: the plant reports no position"), "{}", r.stdout);
+    assert!(!r.stdout.contains("the scenario's actuator limits do not apply"), "{}", r.stdout);
     r.finish();
 
     // Realtime, trimmed where the scenario's [plant.parameters] says (6,000 ft instead of the example's 4,000).

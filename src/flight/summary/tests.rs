@@ -120,7 +120,7 @@ fn every_input_under_its_actuator_gets_rate_and_position_limit_fractions_and_sat
     assert_eq!((throttle.rms_rate_per_s, throttle.rms_rate_late_per_s), (None, None));
     assert!((throttle.rms_command_rate_per_s.unwrap() - 80.0 / 200f64.sqrt()).abs() < 1e-9, "{throttle:?}");
     let text = s.to_text();
-    assert!(text.contains("throttle: the plant reports no position"), "{text}");
+    assert!(text.contains("\n  throttle: the plant reports no position; the figures are the commands'"), "{text}");
     assert!(text.contains("19.9 %") && text.contains("55.2 %") && text.contains("1.50 s"), "{text}");
     // An input the scenario puts under no actuator gets no row.
     let mut bare = scenario("");

@@ -115,10 +115,11 @@ fn actuators_text(rows: &[ActuatorFigures], late: &str) -> String {
             figure(a.rms_command_rate_per_s)
         );
     }
-    for a in rows.iter().filter(|a| a.position.is_none()) {
+    let unplaced: Vec<&str> = rows.iter().filter(|a| a.position.is_none()).map(|a| a.name.as_str()).collect();
+    if !unplaced.is_empty() {
         out += &format!(
-            "  {}: the plant reports no position: its figures are its command's ({}) against the actuator's limits\n",
-            a.name, a.command
+            "  {}: the plant reports no position; the figures are the commands' against the actuators' limits\n",
+            unplaced.join(", ")
         );
     }
     out
