@@ -13,8 +13,13 @@ fn config(name: &str) -> PathBuf {
 fn run(name: &str) -> (Scenario, silrig::trace::Trace, Summary) {
     let s = Scenario::load(&config(name)).unwrap();
     let trace = silrig::sim::run(&s).unwrap();
-    let summary = summarize(&trace, &s);
+    let summary = summarize(&trace, &s, None);
     (s, trace, summary)
+}
+
+/// When an angle settles within 0.5 deg of its set point, s.
+fn settled_0p5deg(angle: &silrig::summary::SetpointFigures) -> f64 {
+    angle.settle_within_0p5deg.as_ref().and_then(|d| d.at_s).expect("settles")
 }
 
 fn value_at(trace: &silrig::trace::Trace, column: &str, t_s: f64) -> f64 {
@@ -26,12 +31,11 @@ fn value_at(trace: &silrig::trace::Trace, column: &str, t_s: f64) -> f64 {
 #[test]
 fn paper_ideal_converges_like_the_papers_figure_1() {
     let (_, trace, s) = run("paper-ideal");
-    let theta = &s.angles[1];
-    let psi = &s.angles[2];
-    assert!(theta.settle_within_0p5deg_s.unwrap() <= 3.0, "{theta:?}");
-    assert!(psi.settle_within_0p5deg_s.unwrap() <= 6.0, "{psi:?}");
-    for (name, v) in ["p", "q", "r"].iter().zip(s.body_rate_max_late_dps) {
-        assert!(v < 0.5, "|{name}| after 6 s reaches {v} deg/s");
+    let (theta, psi) = (&s.setpoints[1], &s.setpoints[2]);
+    assert!(settled_0p5deg(theta) <= 3.0, "{theta:?}");
+    assert!(settled_0p5deg(psi) <= 6.0, "{psi:?}");
+    for (name, v) in ["p", "q", "r"].iter().zip(s.body_rate_max_late_dps.unwrap()) {
+        assert!(v < 0.5, "|{name}| in the last 3 s reaches {v} deg/s");
     }
     let alpha_10s = value_at(&trace, "alpha_deg", 9.99);
     assert!((5.5..=8.0).contains(&alpha_10s), "alpha at 10 s: {alpha_10s}");
@@ -42,7 +46,7 @@ fn paper_ideal_converges_like_the_papers_figure_1() {
 
 #[test]
 fn sign_switching_chatters_about_sixty_times_more_than_the_sigmoid() {
-    let total = |s: &Summary| s.surfaces.iter().map(|x| x.rms_rate_dps.powi(2)).sum::<f64>().sqrt();
+    let total = |s: &Summary| s.actuators.iter().map(|x| x.rms_rate_per_s.unwrap().powi(2)).sum::<f64>().sqrt();
     let (_, _, sigmoid) = run("paper-ideal");
     let (_, _, sign) = run("paper-ideal-sign");
     let ratio = total(&sign) / total(&sigmoid);
@@ -71,9 +75,10 @@ fn row_k_shows_the_deflection_held_over_t_k_to_t_k_plus_1_row_0_included() {
     }
     // With nothing between command and surface but the stops, the surfaces move as commanded: the RMS rate of
     // the aileron and elevator (never at a stop) equals their RMS commanded rate.
-    for surface in &summary.surfaces[..2] {
+    for surface in &summary.actuators[..2] {
         assert_eq!(surface.ticks_at_position_limit, 0);
-        assert!((surface.rms_rate_dps / surface.rms_command_rate_dps - 1.0).abs() < 1e-12, "{surface:?}");
+        let ratio = surface.rms_rate_per_s.unwrap() / surface.rms_command_rate_per_s.unwrap();
+        assert!((ratio - 1.0).abs() < 1e-12, "{surface:?}");
     }
 }
 
@@ -85,8 +90,8 @@ fn a_ten_second_run_has_1001_samples_from_0_to_10_s_and_its_final_values_are_at_
     assert_eq!(summary.ticks, 1001);
     assert_eq!(t[0], 0.0);
     assert!((t[1000] - s.timing.duration_s).abs() < 1e-9, "last row at {} s", t[1000]);
-    assert_eq!(summary.angles[1].final_deg, *trace.column("theta_deg").unwrap().last().unwrap());
-    assert_eq!(summary.alpha_final_deg, *trace.column("alpha_deg").unwrap().last().unwrap());
+    assert_eq!(summary.setpoints[1].final_value, *trace.column("theta_deg").unwrap().last().unwrap());
+    assert_eq!(summary.alpha.unwrap().final_deg, *trace.column("alpha_deg").unwrap().last().unwrap());
 }
 
 /// The scenario's closed loop by hand, as `sim::run` flies it (same-tick, no delay): the limit hits each actuator
@@ -114,11 +119,11 @@ fn limit_hits_are_the_ticks_the_actuators_spent_at_their_limits() {
     let (s, trace, summary) = run("paper-ideal");
     let hits = actuator_limit_hits(&s);
     assert_eq!(hits.len(), trace.rows.len());
-    for (i, surface) in summary.surfaces.iter().enumerate() {
+    for (i, surface) in summary.actuators.iter().enumerate() {
         let at_stop = hits.iter().filter(|h| h[i].position).count() as u64;
         assert_eq!(surface.ticks_at_position_limit, at_stop, "{}", surface.name);
     }
-    assert_eq!(summary.surfaces[2].ticks_at_position_limit, 8);
+    assert_eq!(summary.actuators[2].ticks_at_position_limit, 8);
     // Rate: every tick whose update the rate limit cut, bar the first (the trace holds no deflection before row 0).
     let (s, _, summary) = run("paper");
     let s = Scenario {
@@ -126,13 +131,13 @@ fn limit_hits_are_the_ticks_the_actuators_spent_at_their_limits() {
         ..s
     };
     let trace = silrig::sim::run(&s).unwrap();
-    let summary_same_tick = summarize(&trace, &s);
+    let summary_same_tick = summarize(&trace, &s, None);
     let hits = actuator_limit_hits(&s);
-    for (i, surface) in summary_same_tick.surfaces.iter().enumerate() {
+    for (i, surface) in summary_same_tick.actuators.iter().enumerate() {
         let cut = hits[1..].iter().filter(|h| h[i].rate).count() as u64;
         assert_eq!(surface.ticks_at_rate_limit, cut, "{}", surface.name);
     }
-    assert!(summary.surfaces[1].ticks_at_rate_limit > 100, "{:?}", summary.surfaces[1]);
+    assert!(summary.actuators[1].ticks_at_rate_limit > 100, "{:?}", summary.actuators[1]);
 }
 
 /// Pearson's correlation of two series.
@@ -175,11 +180,11 @@ fn f_true_is_what_the_switching_term_carries_and_its_rms_error_is_in_the_summary
         }
         assert!(residual < 1e-6 * size, "{ch}: largest residual {residual:e} against {size}");
         let rms = silrig::f_true::rms_error(&fhat, &f_true[c]);
-        assert_eq!(summary.channels[c].rms_f_error_radps2, rms);
+        assert_eq!(summary.channels[c].rms_f_error_radps2, Some(rms));
         assert!(rms > 0.0 && f_true[c][1000].is_nan(), "{ch}: the last row has no step after it");
     }
     // The roll channel's f (about -1.2 rad/s^2, see the next test) is not learned at Gamma = 0.1.
-    assert!(summary.channels[0].rms_f_error_radps2 > 0.5, "{:?}", summary.channels[0]);
+    assert!(summary.channels[0].rms_f_error_radps2.unwrap() > 0.5, "{:?}", summary.channels[0]);
 }
 
 #[test]
@@ -205,25 +210,26 @@ fn roll_weights_follow_the_sideslip_the_paper_assumes_away() {
     let mut held = s.clone();
     held.plant.sideslip_hold = true;
     let trace = silrig::sim::run(&held).unwrap();
-    let summary = summarize(&trace, &held);
+    let summary = summarize(&trace, &held, None);
     let w_phi: Vec<Vec<f64>> = (1..=5).map(|k| trace.column(&format!("w_phi_{k}")).unwrap()).collect();
     for w in &w_phi {
         assert!(w[300] > 0.0 && w[..=300].iter().all(|v| v.abs() < 1e-3), "{:e}", w[300]);
     }
-    assert!(summary.angles[0].settle_within_0p5deg_s.is_some(), "{:?}", summary.angles[0]);
+    assert!(summary.setpoints[0].settle_within_0p5deg.as_ref().unwrap().at_s.is_some(), "{:?}", summary.setpoints[0]);
 }
 
 #[test]
 fn the_speed_hold_supplies_the_energy_of_the_climb_the_pitch_set_point_asks_for() {
     // theta 10 deg at alpha 7 deg puts the flight path about 3 deg up: 26 ft/s of climb at 150 m/s, held or not.
     let (s, _, held) = run("paper-ideal");
+    let held = held.flight_path.unwrap();
     assert!((150.0..220.0).contains(&held.altitude_change_ft), "{}", held.altitude_change_ft);
     assert_eq!(held.airspeed_change_mps, 0.0);
     assert!((held.energy_height_change_ft - held.altitude_change_ft).abs() < 1e-9);
     // Without the hold the same flight climbs nearly as much and pays for it with airspeed: the engine at its
     // fixed throttle gives less than the climb and the added drag take, and the hold makes up the difference.
     let free_scenario = Scenario { plant: silrig::scenario::PlantOptions { speed_hold: false, ..s.plant }, ..s };
-    let free = summarize(&silrig::sim::run(&free_scenario).unwrap(), &free_scenario);
+    let free = summarize(&silrig::sim::run(&free_scenario).unwrap(), &free_scenario, None).flight_path.unwrap();
     assert!((free.altitude_change_ft / held.altitude_change_ft - 1.0).abs() < 0.25, "{}", free.altitude_change_ft);
     assert!(free.airspeed_change_mps < -5.0, "{}", free.airspeed_change_mps);
     assert!(free.energy_height_change_ft < 0.0, "{}", free.energy_height_change_ft);
@@ -255,7 +261,7 @@ fn book_rate_limits_drive_the_published_gains_into_a_pitch_limit_cycle() {
     let theta = s.oscillations.iter().find(|o| o.signal == "theta_deg").unwrap();
     assert!(theta.sustained, "{theta:?}");
     assert!((3.0..7.0).contains(&theta.amplitude), "{theta:?}");
-    assert!((1.2..1.8).contains(&theta.period_s), "{theta:?}");
+    assert!((1.2..1.8).contains(&theta.period_s.unwrap()), "{theta:?}");
     let (_, _, s) = run("paper-next-tick");
     assert!(s.limit_cycle);
 }
@@ -265,12 +271,12 @@ fn robust_tuning_meets_its_four_targets_with_real_actuators_and_delay() {
     let (scenario, _, s) = run("robust");
     assert_eq!(scenario.timing.command_timing, silrig::scenario::CommandTiming::NextTick);
     assert!(scenario.f16_actuators().elevator_deg.rate_limit_per_s == Some(60.0));
-    assert!(s.angles[1].settle_within_0p5deg_s.unwrap() <= 3.0, "{:?}", s.angles[1]);
-    assert!(s.angles[0].settle_within_0p5deg_s.unwrap() <= 6.0, "{:?}", s.angles[0]);
-    assert!(s.angles[2].settle_within_0p5deg_s.unwrap() <= 6.0, "{:?}", s.angles[2]);
+    assert!(settled_0p5deg(&s.setpoints[1]) <= 3.0, "{:?}", s.setpoints[1]);
+    assert!(settled_0p5deg(&s.setpoints[0]) <= 6.0, "{:?}", s.setpoints[0]);
+    assert!(settled_0p5deg(&s.setpoints[2]) <= 6.0, "{:?}", s.setpoints[2]);
     assert!(!s.limit_cycle, "{:?}", s.oscillations);
-    for surface in &s.surfaces {
-        assert!(surface.rms_rate_late_dps < 5.0, "{surface:?}");
+    for surface in &s.actuators {
+        assert!(surface.rms_rate_late_per_s.unwrap() < 5.0, "{surface:?}");
     }
 }
 
@@ -390,15 +396,19 @@ fn an_output_with_a_set_point_of_its_own_gets_a_line_in_the_summary() {
     let mut s = Scenario::embedded_default();
     s.setpoint.outputs.insert("alt_ft".into(), 25_000.0);
     let (trace, _) = silrig::sim::fly(&s).unwrap();
-    let summary = summarize(&trace, &s);
-    let alt = &summary.outputs[0];
-    assert_eq!((alt.name.as_str(), alt.setpoint, alt.initial), ("alt_ft", 25_000.0, 25_000.0));
+    let summary = summarize(&trace, &s, None);
+    let alt = &summary.setpoints[3];
+    assert_eq!((alt.name.as_str(), alt.unit.as_str(), alt.setpoint, alt.initial), ("alt_ft", "ft", 25_000.0, 25_000.0));
     assert_eq!(alt.final_value, *trace.column("alt_ft").unwrap().last().unwrap());
+    // It starts at its set point: held, and judged by how far it strays.
+    assert_eq!(alt.response, silrig::summary::Response::Held);
+    let climbed = trace.column("alt_ft").unwrap().iter().fold(0.0f64, |m, v| m.max((v - 25_000.0).abs()));
+    assert_eq!(alt.max_error, climbed);
     let text = summary.to_text();
-    assert!(text.contains("  output        set       initial   final     overshoot  settle(2%)"), "{text}");
-    assert!(text.lines().any(|l| l.trim_start().starts_with("alt_ft") && l.contains("25000.000")), "{text}");
-    // Without such set points the summary is as it always was.
-    let plain = summarize(&trace, &Scenario::embedded_default());
-    assert!(plain.outputs.is_empty() && !plain.to_text().contains("output "));
-    assert!(!serde_json::to_string(&plain).unwrap().contains("\"outputs\""));
+    let line = text.lines().find(|l| l.trim_start().starts_with("alt_ft")).unwrap_or_else(|| panic!("{text}"));
+    assert!(line.contains("25000.000") && line.contains(&format!("held: largest error {climbed:.3}")), "{text}");
+    // Without such set points the summary has the attitude's rows alone.
+    let plain = summarize(&trace, &Scenario::embedded_default(), None);
+    assert_eq!(plain.setpoints.len(), 3);
+    assert!(!plain.to_text().contains("alt_ft") && !serde_json::to_string(&plain).unwrap().contains("\"alt_ft\""));
 }

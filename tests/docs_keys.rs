@@ -544,7 +544,7 @@ const STRUCTS: [(&str, &str, &[&str], &[&str]); 21] = [
     ("src/model/control/mod.rs", "ControllerGains", &["controller"], &[]),
     ("src/model/control/rbf.rs", "RbfLayout", &["controller.rbf"], &[]),
     ("src/model/actuator.rs", "ActuatorLimits", &["actuators.<input>"], &[]),
-    ("src/flight/scenario.rs", "Timing", &["timing"], &[]),
+    ("src/flight/timing.rs", "Timing", &["timing"], &[]),
     ("src/flight/fault.rs", "Fault", &["faults"], &[]),
     ("src/flight/dispersion.rs", "Distribution", &["dispersions.<key>"], &["cases.dispersions.<key>"]),
     // The rig's criteria have no row on the scenario page: see `rig_criteria_are_refused_in_a_scenario`.

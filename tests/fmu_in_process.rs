@@ -83,6 +83,21 @@ fn an_fmu_plant_and_controller_fly_in_one_process_as_in_the_lockstep_rig_with_ac
     assert!(text.lines().next().unwrap().starts_with("t_s,phi_deg"), "{}", &text[..200]);
     // A plant of the user's own gets the figure of all its signals.
     assert!(dir.join("sim/signals.png").is_file());
+    // Its summary.json names its signals alone: the rudder is its one input under the rig's `[actuators]`, judged
+    // from the position the FMU reports; it has an alpha but no altitude or airspeed of the F-16's names.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sim/summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["plant"], "airframe");
+    let actuators: Vec<(&str, &str)> = summary["actuators"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| (a["name"].as_str().unwrap(), a["position"].as_str().unwrap_or("-")))
+        .collect();
+    assert_eq!(actuators, [("rudder", "rudder_deg")], "{summary}");
+    assert!(summary["alpha"].is_object() && summary.get("flight_path").is_none(), "{summary}");
+    let text = summary.to_string();
+    assert!(!text.contains("aileron") && !text.contains("elevator"), "{text}");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -135,6 +150,12 @@ fn a_sweep_disperses_fmu_parameters_and_each_case_is_the_case_flown_alone_and_in
     let local = cases(&out.join("cases.csv"));
     let header = &local[0];
     let col = |name: &str| header.iter().position(|c| c == name).unwrap_or_else(|| panic!("no {name} in {header:?}"));
+    // The summary's columns name the airframe's signals: its attitude, alpha and rates; no actuator is the rig's.
+    for name in ["phi_settle_s", "theta_final_error_deg", "psi_max_error_deg", "alpha_peak_deg", "r_max_late_dps"] {
+        col(name);
+    }
+    assert!(!header.iter().any(|c| c.contains("limit_fraction")), "{header:?}");
+    assert!(local[1..].iter().all(|r| !r[col("phi_final_error_deg")].is_empty()), "every flown case has its figures");
     // The FMU's parameters were dispersed: every case flew other values, and the outcomes follow from them.
     let (mass, servo, outcome) = (col("plant.parameters.mass_kg"), col("plant.parameters.servo_tau_s"), col("outcome"));
     let masses: std::collections::BTreeSet<&str> = local[1..].iter().map(|r| r[mass].as_str()).collect();

@@ -93,7 +93,41 @@ fn a_python_plant_flies_lockstep_with_the_example_controller_unchanged() {
     for caption in ["theta_deg (set point 10, dashed)", "elevator command", "deg/s"] {
         assert!(svg.contains(caption), "{caption} missing from signals.svg");
     }
+    only_its_own_signals_summarised(&r);
     r.finish();
+}
+
+/// The toy's summary, printed and in report.json, names its signals alone: its attitude (roll and heading held at
+/// their start, 0 deg, pitch stepped to 10 deg) and the late body rates; none of the F-16's alpha, flight path or
+/// surfaces (the toy flies no actuator of the rig's), no NaN.
+fn only_its_own_signals_summarised(r: &Run) {
+    let control = &r.report["control"];
+    assert_eq!(control["plant"], "toy");
+    let rows: Vec<(&str, &str)> = control["setpoints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| (row["name"].as_str().unwrap(), row["response"].as_str().unwrap()))
+        .collect();
+    assert_eq!(rows, [("phi_deg", "held"), ("theta_deg", "stepped"), ("psi_deg", "held")], "{control}");
+    assert!(control["body_rate_max_late_dps"].is_array(), "the toy announces p, q and r: {control}");
+    for absent in ["alpha", "flight_path", "channels"] {
+        assert!(control.get(absent).is_none(), "{absent} in {control}");
+    }
+    assert_eq!(control["actuators"], serde_json::json!([]));
+    let json = control.to_string();
+    assert!(!json.contains("null") && !json.contains("NaN"), "{json}");
+    let from = r.stdout.find("scenario toy:").expect("the summary is printed");
+    let to = from + r.stdout[from..].find("limit cycle").expect("the summary ends with the limit cycles");
+    let summary = &r.stdout[from..to + r.stdout[to..].find('\n').unwrap_or(0)];
+    for said in
+        ["held: largest error", "step: settle(2%)", "max |p|, |q|, |r| in the last 3 s", "limit cycle (last 3 s)"]
+    {
+        assert!(summary.contains(said), "{said} missing:\n{summary}");
+    }
+    for absent in ["NaN", "alpha", "flight path", "surfaces", "actuator"] {
+        assert!(!summary.contains(absent), "{absent} in the summary:\n{summary}");
+    }
 }
 
 #[test]
@@ -219,6 +253,19 @@ fn jsbsims_cessna_flies_lockstep_and_realtime_with_the_example_pid() {
     }
     let theta = rows.last().unwrap()[header.iter().position(|h| h == "theta_deg").unwrap()];
     assert!((theta - 5.0).abs() < 0.5, "theta ends at {theta}, set point 5");
+    // Its `[actuators.<input>]` apply, and the summary judges each of them: JSBSim reports no position of the rig's
+    // servos (its aileron_deg is its own surface's), so from their commands against their limits.
+    let names: Vec<(&str, Option<&str>, &str)> = r.report["control"]["actuators"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| (a["name"].as_str().unwrap(), a["position"].as_str(), a["command"].as_str().unwrap()))
+        .collect();
+    let by_command =
+        [("aileron", None, "aileron_cmd"), ("elevator", None, "elevator_cmd"), ("rudder", None, "rudder_cmd")];
+    assert_eq!(names, by_command, "{}", r.report["control"]);
+    assert!(r.stdout.contains("aileron, elevator, rudder: the plant reports no position"), "{}", r.stdout);
+    assert!(!r.stdout.contains("the scenario's actuator limits do not apply"), "{}", r.stdout);
     r.finish();
 
     // Realtime, trimmed where the scenario's [plant.parameters] says (6,000 ft instead of the example's 4,000).
@@ -323,6 +370,17 @@ fn the_rigs_actuators_and_sensor_faults_act_on_the_named_signals_of_a_plant_of_y
     // Hard-over without `[actuators.aileron]`: instantly to the announced maximum, and held there.
     assert!(rows[at(8.99)][aileron] < 30.0);
     assert!(rows[at(9.01)..].iter().all(|row| row[aileron] == 30.0), "aileron after 9 s");
+    // The summary judges the elevator, the one input under `[actuators]`, against its actuator, from the position
+    // the toy reports: the ticks the trace shows at the rate limit.
+    let actuators = r.report["control"]["actuators"].as_array().unwrap();
+    assert_eq!(actuators.len(), 1, "{actuators:?}");
+    let elevator_row = &actuators[0];
+    assert_eq!((&elevator_row["name"], &elevator_row["position"]), (&"elevator".into(), &"elevator_deg".into()));
+    let cut = steps.iter().filter(|d| **d >= 0.2 * (1.0 - 1e-9)).count() as u64;
+    assert_eq!(elevator_row["ticks_at_rate_limit"].as_u64(), Some(cut), "{elevator_row}");
+    assert_eq!(elevator_row["rate_limit_fraction"].as_f64(), Some(cut as f64 / rows.len() as f64));
+    let table = r.stdout.lines().skip_while(|l| !l.trim_start().starts_with("actuator")).nth(1).unwrap_or_default();
+    assert!(table.trim_start().starts_with("elevator") && table.contains(" deg "), "{}", r.stdout);
     r.finish();
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -93,7 +93,7 @@ fn simulate(source: Source) -> Result<Simulated, String> {
     };
     let models = Models::open(&scenario).map_err(|e| format!("{e:#}"))?;
     let flight = silrig_tools::outputs::fly_one_process(&models, &scenario)?;
-    let summary = silrig_flight::summary::summarize(&flight.trace, &scenario);
+    let summary = silrig_flight::summary::summarize(&flight.trace, &scenario, flight.plant.as_ref());
     let summary_json = serde_json::to_string(&summary).map_err(|e| e.to_string())?;
     let trace = flight.trace;
     let values = (0..trace.columns.len()).map(|k| trace.rows.iter().map(|row| row[k]).collect()).collect();
@@ -158,11 +158,12 @@ fn fly_sweep(source: Source, runs: u64, seed: Option<u64>, jobs: Option<usize>) 
     let started = std::time::Instant::now();
     // As `silrig sweep` writes them, case by case in index order: cases.csv's rows and sweep.json's tally.
     let names = campaign.criterion_names();
-    let mut cases_csv = report::cases_csv_header(&campaign.parameters, &names);
+    let columns = campaign.figure_columns().map_err(error)?;
+    let mut cases_csv = report::cases_csv_header(&campaign.parameters, &columns, &names);
     let mut tally = campaign.tally(seed, &names);
     let interrupted = campaign
         .fly_each(seed, 0..runs, jobs, |case| {
-            report::case_csv_row(&mut cases_csv, &case, names.len());
+            report::case_csv_row(&mut cases_csv, &case, &columns, names.len());
             tally.add(&case);
             Ok(())
         })

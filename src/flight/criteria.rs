@@ -37,7 +37,8 @@ pub struct Criteria {
     pub rate_limit_fraction_max: Option<f64>,
     /// Ticks in which a surface sat at a position limit, as a fraction of the ticks flown (worst surface).
     pub position_limit_fraction_max: Option<f64>,
-    /// No sustained oscillation of an angle or surface in the last 3 s (the summary's limit-cycle detector).
+    /// No sustained oscillation of an output with a set point or an actuator in the late window (the summary's
+    /// limit-cycle detector; `timing.late_window_s`, the last 3 s of a 10 s run by default).
     #[serde(default)]
     pub no_sustained_oscillation: bool,
     /// After each restarted or resumed process (kill/term with `restart_after`, stop), the loop flies again within
@@ -74,8 +75,8 @@ pub struct OutputCriteria {
     pub min: Option<f64>,
     /// Largest |value| from `after_s` on.
     pub abs_max: Option<AbsMax>,
-    /// No oscillation in the last 3 s that swings more than this either way, sustained (at least two whole
-    /// periods, not decaying: the summary's limit-cycle detector with this amplitude).
+    /// No oscillation in the late window (`timing.late_window_s`) that swings more than this either way, sustained
+    /// (at least two whole periods, not decaying: the summary's limit-cycle detector with this amplitude).
     pub oscillation_max: Option<f64>,
 }
 

@@ -66,7 +66,7 @@ pub fn judge_flight(
         out.push(saturation_fraction(summary, f, Saturation::Position));
     }
     if criteria.no_sustained_oscillation {
-        out.push(no_sustained_oscillation(summary));
+        out.push(no_sustained_oscillation(summary, scenario));
     }
     for (name, c) in &criteria.outputs {
         out.extend(judge_output(name, c, scenario, trace));
@@ -98,7 +98,8 @@ fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Opti
         asked.push(("abs_max", format!("|value| at most {} after {} s", a.max, a.after_s)));
     }
     if let Some(o) = c.oscillation_max {
-        asked.push(("oscillation_max", format!("none sustained beyond +-{o} in the last 3 s")));
+        let late = crate::summary::seconds(scenario.timing.late_window_s());
+        asked.push(("oscillation_max", format!("none sustained beyond +-{o} in the last {late} s")));
     }
     let label = |key: &str| format!("outputs.{name}.{key}");
     let (t, x) = match trace.map(|tr| (tr.column("t_s"), tr.column(name), tr)) {
@@ -194,16 +195,19 @@ fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Opti
                 }
                 _ => {
                     let threshold = c.oscillation_max.expect("asked");
-                    let o = crate::summary::oscillation_above(name, &t, &x, threshold);
+                    let window_s = scenario.timing.late_window_s();
+                    let o = crate::summary::oscillation_above(name, &t, &x, threshold, window_s);
+                    let period_s = o.period_s.unwrap_or(f64::NAN);
                     let failure = o.sustained.then(|| {
                         format!(
-                            "{name} did not come to rest: +-{} every {:.2} s in the last 3 s of the run, not decaying",
+                            "{name} did not come to rest: +-{} every {period_s:.2} s in the last {} s of the run, not \
+                             decaying",
                             figure(o.amplitude),
-                            o.period_s
+                            crate::summary::seconds(window_s)
                         )
                     });
                     let measured = if o.sustained {
-                        format!("+-{} every {:.2} s", figure(o.amplitude), o.period_s)
+                        format!("+-{} every {period_s:.2} s", figure(o.amplitude))
                     } else {
                         format!("none sustained (swing +-{})", figure(o.amplitude))
                     };
@@ -360,12 +364,16 @@ fn saturation_fraction(summary: Option<&Summary>, max: f64, kind: Saturation) ->
     };
     let limit = format!("{:.1} % of ticks", max * 100.0);
     let Some(s) = summary else { return no_evidence(criterion, limit, "no trace was logged") };
-    let ticks_at = |f: &crate::summary::SurfaceFigures| match kind {
+    let ticks_at = |f: &crate::summary::ActuatorFigures| match kind {
         Saturation::Rate => f.ticks_at_rate_limit,
         Saturation::Position => f.ticks_at_position_limit,
     };
-    let Some(worst) = s.surfaces.iter().max_by_key(|f| ticks_at(f)) else {
-        return no_evidence(criterion, limit, "no surfaces in the summary");
+    let Some(worst) = s.actuators.iter().max_by_key(|f| ticks_at(f)) else {
+        return no_evidence(
+            criterion,
+            limit,
+            "no actuator in the summary (an input under [actuators.<input>] whose command is in the trace)",
+        );
     };
     let fraction = ticks_at(worst) as f64 / s.ticks.max(1) as f64;
     let failure = (fraction > max).then(|| {
@@ -380,19 +388,22 @@ fn saturation_fraction(summary: Option<&Summary>, max: f64, kind: Saturation) ->
     judgement(criterion, format!("{} {:.1} %", worst.name, fraction * 100.0), limit, failure).with_value(fraction)
 }
 
-fn no_sustained_oscillation(summary: Option<&Summary>) -> Judgement {
-    let limit = "none in the last 3 s".to_string();
+fn no_sustained_oscillation(summary: Option<&Summary>, scenario: &Scenario) -> Judgement {
+    let late = crate::summary::seconds(summary.map_or(scenario.timing.late_window_s(), |s| s.late_window_s));
+    let limit = format!("none in the last {late} s");
     let Some(s) = summary else {
         return no_evidence("no_sustained_oscillation", limit, "no trace was logged");
     };
     let mut oscillating: Vec<&crate::summary::Oscillation> = s.oscillations.iter().filter(|o| o.sustained).collect();
     // The strongest first, relative to what counts for its kind of signal.
     oscillating.sort_by(|a, b| {
-        let strength = |o: &crate::summary::Oscillation| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal);
+        let strength = |o: &crate::summary::Oscillation| o.amplitude / o.threshold;
         strength(b).total_cmp(&strength(a))
     });
-    let sustained: Vec<String> =
-        oscillating.iter().map(|o| format!("{} +-{:.2} every {:.2} s", o.signal, o.amplitude, o.period_s)).collect();
+    let sustained: Vec<String> = oscillating
+        .iter()
+        .map(|o| format!("{} +-{:.2} every {:.2} s", o.signal, o.amplitude, o.period_s.unwrap_or(f64::NAN)))
+        .collect();
     let measured = match sustained.len() {
         0 => "none".to_string(),
         1 => sustained[0].clone(),
@@ -400,13 +411,13 @@ fn no_sustained_oscillation(summary: Option<&Summary>) -> Judgement {
     };
     let failure = (!sustained.is_empty()).then(|| {
         format!(
-            "the loop did not come to rest: {} in the last 3 s of the run, not decaying (a limit cycle, typically \
-             from too much gain against the actuators' rate limits or the loop's delay)",
+            "the loop did not come to rest: {} in the last {late} s of the run, not decaying (a limit cycle, \
+             typically from too much gain against the actuators' rate limits or the loop's delay)",
             sustained.join(", ")
         )
     });
     // How far past what counts the strongest sustained oscillation is (0 without one).
-    let strength = oscillating.first().map_or(0.0, |o| o.amplitude / crate::summary::limit_cycle_threshold(&o.signal));
+    let strength = oscillating.first().map_or(0.0, |o| o.amplitude / o.threshold);
     judgement("no_sustained_oscillation", measured, limit, failure).with_value(strength)
 }
 

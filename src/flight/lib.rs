@@ -2,7 +2,7 @@
 //! how it went and whether that was good enough. Files yes, IPC and clocks no.
 //!
 //! - [`scenario`]: TOML scenarios (initial condition, set points, disturbance, plant and controller options,
-//!   actuator limits, timing) with `validate`; [`fault`]: the fault plan as data, targeting a [`role`] (a rig
+//!   actuator limits, [`timing`]) with `validate`; [`fault`]: the fault plan as data, targeting a [`role`] (a rig
 //!   process); [`dispersion`]: seeded per-key distributions for sweeps.
 //! - [`sim`]: the single-process loop (plant, actuators, controller in lockstep), whose pieces the rig's processes
 //!   reuse so both give the same trace; [`trace`]: the trace rows and `trace.csv`.
@@ -28,4 +28,5 @@ pub mod signal_chain;
 pub mod signals;
 pub mod sim;
 pub mod summary;
+pub mod timing;
 pub mod trace;

@@ -306,59 +306,7 @@ impl PlantOptions {
     }
 }
 
-/// Most ticks in one run: a trace row of 39 numbers per tick stays in memory (about 300 MB at this many).
-pub const MAX_TICKS: u64 = 1_000_000;
-
-/// Largest extra transport delay, ticks (the rig's plant keeps the last 8 commands).
-pub const MAX_TRANSPORT_DELAY_TICKS: u64 = 5;
-
-/// When a command computed from the sample of tick k acts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum CommandTiming {
-    /// From tick k: no transport delay (the paper's simulation).
-    SameTick,
-    /// From tick k+1: one sample of transport delay, as in a multi-process loop.
-    NextTick,
-}
-
-/// Step, duration and command timing.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Timing {
-    /// Loop period, s.
-    pub dt_s: f64,
-    /// Run length, s.
-    pub duration_s: f64,
-    /// Command timing.
-    pub command_timing: CommandTiming,
-    /// Extra transport delay, whole ticks on top of `command_timing` (0..=5): the command computed from the sample
-    /// of tick k acts from tick k + d (same-tick) or k + 1 + d (next-tick).
-    #[serde(default)]
-    pub transport_delay_ticks: u64,
-}
-
-impl Timing {
-    /// Ticks between the sample a command answers and the first tick it acts on.
-    pub fn command_delay_ticks(&self) -> u64 {
-        let offset = match self.command_timing {
-            CommandTiming::SameTick => 0,
-            CommandTiming::NextTick => 1,
-        };
-        offset + self.transport_delay_ticks
-    }
-
-    /// Number of ticks in the run.
-    pub fn ticks(&self) -> u64 {
-        (self.duration_s / self.dt_s).round() as u64
-    }
-
-    /// The loop period, ns: the one figure every clock of the rig (the plant's ticks, the consumers' staleness
-    /// deadlines, the OS-floor baseline beside a run) takes its period from.
-    pub fn period_ns(&self) -> u64 {
-        (self.dt_s * 1e9).round() as u64
-    }
-}
+pub use crate::timing::{CommandTiming, MAX_TICKS, MAX_TRANSPORT_DELAY_TICKS, Timing};
 
 /// Find the value at a dotted key (`initial.phi_deg`, `actuators.elevator_deg.rate_limit_per_s`,
 /// `controller.adaptation_gain.0`, `faults.1.std`) in a scenario's TOML tree.
@@ -630,31 +578,7 @@ impl Scenario {
             }
         }
         let t = &self.timing;
-        if !(t.dt_s >= 1e-4 && t.dt_s <= 0.1) {
-            return err("timing.dt_s", format!("must be within 0.0001..0.1 s (10 kHz to 10 Hz), got {}", t.dt_s));
-        }
-        if !(t.duration_s > 0.0 && t.duration_s <= 3600.0) {
-            return err("timing.duration_s", format!("must be within (0, 3600] s, got {}", t.duration_s));
-        }
-        if t.duration_s < t.dt_s {
-            return err("timing.duration_s", format!("is shorter than one step ({} s)", t.dt_s));
-        }
-        if t.ticks() > MAX_TICKS {
-            return err(
-                "timing.duration_s",
-                format!(
-                    "is {} ticks of {} s; a run has at most {MAX_TICKS} (its trace is kept in memory)",
-                    t.ticks(),
-                    t.dt_s
-                ),
-            );
-        }
-        if t.transport_delay_ticks > MAX_TRANSPORT_DELAY_TICKS {
-            return err(
-                "timing.transport_delay_ticks",
-                format!("must be within 0..={MAX_TRANSPORT_DELAY_TICKS}, got {}", t.transport_delay_ticks),
-            );
-        }
+        t.validate()?;
         for (i, f) in self.faults.iter().enumerate() {
             f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
             // The same fault twice would be injected twice; a plan that means it twice gives two times.

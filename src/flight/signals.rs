@@ -155,12 +155,17 @@ impl PlantSignals {
     }
 
     /// The trace column of input `k`'s command: `<name>_cmd_<unit>` when the unit is a word (`aileron_cmd_deg`),
-    /// `<name>_cmd` otherwise (`throttle_cmd` for a unit of `1` or `m/s`).
+    /// `<name>_cmd` otherwise (`throttle_cmd` for a unit of `1` or `m/s`). A name that already ends in its unit
+    /// keeps it once, at the end: input `aileron_deg` in deg commands `aileron_cmd_deg`, not `aileron_deg_cmd_deg`.
     pub fn command_column(&self, k: usize) -> String {
         let i = &self.inputs[k];
         let word =
             !i.unit.is_empty() && i.unit != "1" && i.unit.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_');
-        if word { format!("{}_cmd_{}", i.name, i.unit) } else { format!("{}_cmd", i.name) }
+        if !word {
+            return format!("{}_cmd", i.name);
+        }
+        let stem = i.name.strip_suffix(&format!("_{}", i.unit)).filter(|s| !s.is_empty()).unwrap_or(&i.name);
+        format!("{stem}_cmd_{}", i.unit)
     }
 
     /// Whether output `k` reports what an input's actuator holds.
@@ -280,6 +285,23 @@ mod tests {
         assert_eq!(row, [0.5, 1.0, 3.0, 4.0, 5.0, 7.0, 0.0, 9.0]);
         p.trace_row(&mut row, 0.5, &[1.0, 2.0, 3.0], None, None, 1, &[]);
         assert!(row[3].is_nan() && row[4].is_nan() && row[5].is_nan() && row[6] == 1.0);
+    }
+
+    #[test]
+    fn a_command_column_carries_its_unit_once() {
+        let mut p = plant();
+        // An FMU's inputs often carry their unit in the name already.
+        p.inputs[0].name = "steer_deg".into();
+        p.inputs[0].held_output = None;
+        assert_eq!(p.command_column(0), "steer_cmd_deg");
+        p.inputs[0].name = "steer".into();
+        assert_eq!(p.command_column(0), "steer_cmd_deg");
+        // A name that is only its unit is left whole, and a unit that is no word is never appended.
+        p.inputs[0].name = "deg".into();
+        assert_eq!(p.command_column(0), "deg_cmd_deg");
+        p.inputs[1].name = "speed_mps".into();
+        assert_eq!(p.command_column(1), "speed_mps_cmd");
+        assert_eq!(p.check(32, 16), Ok(()));
     }
 
     #[test]

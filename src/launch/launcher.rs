@@ -14,7 +14,6 @@ use anyhow::Context;
 use silrig_flight::fault::{Fault, FaultTarget};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
-use silrig_flight::summary::summarize;
 use silrig_flight::trace::Trace;
 use silrig_rig::events::EventLog;
 use silrig_rig::report::{MachineConditions, ProcessReport, read_report};
@@ -171,6 +170,11 @@ pub enum PlantKind {
 }
 
 impl LaunchOptions {
+    /// Whether the plant is the built-in F-16 (no `--plant-cmd`, `--plant external` or plant FMU).
+    fn flies_builtin_f16(&self, scenario: &Scenario) -> bool {
+        self.plant_cmd.is_none() && self.plant != PlantKind::External && scenario.plant.fmu.is_none()
+    }
+
     fn controller_launch(&self) -> ControllerLaunch {
         match (&self.controller_cmd, self.controller) {
             _ if self.bridge_listen.is_some() => ControllerLaunch::External,
@@ -406,7 +410,7 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     }
     // The built-in F-16 is known now; a plant of your own is checked against the signals it announces when it joins
     // (its `[actuators]`, sensor and actuator faults by its own names: `silrig_flight::signal_chain`).
-    if opts.plant_cmd.is_none() && opts.plant != PlantKind::External && scenario.plant.fmu.is_none() {
+    if opts.flies_builtin_f16(&scenario) {
         silrig_flight::sim::check_for_f16(&scenario)
             .map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
     }
@@ -733,7 +737,9 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     super::run_report::merge_lives(&mut processes, &sup.lives, &out, &mut notes);
     mark_stopped_at_end(&mut processes, &sup.lives);
     let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
-    let control = trace.as_ref().map(|t| summarize(t, &scenario));
+    let (control, unsummarised) =
+        super::run_report::control_summary(&out, trace.as_ref(), &scenario, opts.flies_builtin_f16(&scenario));
+    notes.extend(unsummarised);
     let flown_s = trace
         .as_ref()
         .and_then(|t| t.column("t_s"))

@@ -5,7 +5,7 @@
 use super::fault_report::{Discontinuity, FaultRecord};
 use crate::floor::timer_baseline::BaselineReport;
 use serde::{Deserialize, Serialize};
-use silrig_flight::summary::Summary;
+use silrig_flight::summary::{Summary, summarize};
 use silrig_flight::trace::Trace;
 use silrig_rig::report::{MachineConditions, ProcessReport};
 use silrig_wire::timing::{LatencyHistogram, LatencySummary, WARM_UP_NS, summary_line, summary_table_header};
@@ -126,6 +126,32 @@ pub fn phase_splits(out: &Path, dt_s: f64, realtime: bool) -> Vec<PhaseSplit> {
             PhaseSplit { name: name.into(), warm_up: warm_up.summary(), steady: steady.summary() }
         })
         .collect()
+}
+
+/// The control quality of the logged `trace` in `out`, with the plant's own announcement (read from the recording)
+/// for a plant of your own, the built-in F-16's otherwise; for a plant of your own whose announcement cannot be read,
+/// no summary and a note saying why (its rows would be guesses).
+pub(crate) fn control_summary(
+    out: &Path,
+    trace: Option<&Trace>,
+    scenario: &silrig_flight::scenario::Scenario,
+    builtin_f16: bool,
+) -> (Option<Summary>, Option<String>) {
+    let Some(trace) = trace else { return (None, None) };
+    if builtin_f16 {
+        return (Some(summarize(trace, scenario, None)), None);
+    }
+    let announced = silrig_wire::recording::reader::RecordedRun::read(out).and_then(|r| r.plant_signals());
+    match announced {
+        Ok(plant) => (Some(summarize(trace, scenario, Some(&plant))), None),
+        Err(e) => (
+            None,
+            Some(format!(
+                "control quality not summarised: the plant's announcement of its signals (their units, which input \
+                 each actuator drives) could not be read from the recording: {e}"
+            )),
+        ),
+    }
 }
 
 /// One life of a process the launcher started: from its start to its exit (each restart starts a new life).

@@ -231,6 +231,19 @@ impl Models {
         self.plant_fmu.is_some() || self.controller_fmu.is_some()
     }
 
+    /// `plant`, a flight's announcement, when the plant is one of your own (an FMU); `None` for the built-in F-16
+    /// under any controller, whose actuators are its own: what the summary and the figures take.
+    pub fn own_plant(&self, plant: PlantSignals) -> Option<PlantSignals> {
+        self.plant_fmu.is_some().then_some(plant)
+    }
+
+    /// The plant FMU's signals under `scenario`, as it announces them when it flies; `None` for the built-in F-16
+    /// (what the summary takes: `silrig_flight::summary::summarize`).
+    pub fn plant_signals(&self, scenario: &Scenario) -> Result<Option<PlantSignals>, String> {
+        let Some(fmu) = &self.plant_fmu else { return Ok(None) };
+        super::fmu_plant::fmu_signals(fmu.file(), &fmu.description, scenario).map(|f| Some(f.signals))
+    }
+
     /// The FMU whose binary allows one instance per process (`canBeInstantiatedOnlyOncePerProcess`), if any:
     /// its flights must be flown one after the other.
     pub fn one_instance_per_process(&self) -> Option<String> {

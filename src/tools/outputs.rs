@@ -6,7 +6,7 @@ use anyhow::Context;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::sim::LeftEnvelope;
-use silrig_flight::summary::Summary;
+use silrig_flight::summary::{Response, Summary};
 use silrig_flight::trace::Trace;
 use silrig_plot::plot_title;
 use silrig_rig::in_process::Models;
@@ -49,7 +49,7 @@ pub fn write_run(
 pub struct FlownScenario {
     /// Its trace, as `silrig run --mode lockstep` writes it.
     pub trace: Trace,
-    /// The plant's signals when the generic loop flew it (the figures of a plant of the user's own come from them).
+    /// The plant's signals when it is not the built-in F-16 (its figures and its summary's rows come from them).
     pub plant: Option<PlantSignals>,
     /// When (s) and why it ended before the scenario's end; the trace holds it up to there.
     pub ended_early: Option<(f64, String)>,
@@ -71,7 +71,7 @@ pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<FlownScen
     let flown = models.fly(scenario).map_err(|e| e.to_string())?;
     let refusals = flown.refusals();
     let ended_early = flown.ended_early.map(|e| (e.t_s, e.to_string()));
-    Ok(FlownScenario { trace: flown.trace, plant: Some(flown.plant), ended_early, refusals })
+    Ok(FlownScenario { trace: flown.trace, plant: models.own_plant(flown.plant), ended_early, refusals })
 }
 
 /// What [`simulate`] flew and wrote.
@@ -94,7 +94,7 @@ pub struct Simulated {
 pub fn simulate(scenario: &Scenario, out_dir: &Path) -> anyhow::Result<Simulated> {
     let models = Models::open(scenario)?;
     let flight = fly_one_process(&models, scenario).map_err(anyhow::Error::msg)?;
-    let summary = silrig_flight::summary::summarize(&flight.trace, scenario);
+    let summary = silrig_flight::summary::summarize(&flight.trace, scenario, flight.plant.as_ref());
     let files = write_run(out_dir, scenario, &flight.trace, &summary, flight.plant.as_ref())?;
     Ok(Simulated { summary, files, ended_early: flight.ended_early.map(|(_, why)| why), refusals: flight.refusals })
 }
@@ -119,7 +119,7 @@ pub fn compare(scenarios: &[Scenario], out_dir: &Path) -> anyhow::Result<Compari
     for scenario in scenarios {
         let (trace, left) = silrig_flight::sim::fly(scenario)?;
         left_envelope.extend(left.map(|exit| (scenario.name.clone(), exit)));
-        let summary = silrig_flight::summary::summarize(&trace, scenario);
+        let summary = silrig_flight::summary::summarize(&trace, scenario, None);
         write_run(&out_dir.join(&scenario.name), scenario, &trace, &summary, None)?;
         summaries.push(summary);
         traces.push((scenario.name.clone(), trace));
@@ -144,29 +144,45 @@ pub fn compare_table(summaries: &[Summary]) -> String {
         out.push('\n');
     };
     let opt = |v: Option<f64>| v.map_or("never".into(), |x| format!("{x:.2}"));
-    for (i, name) in ["phi", "theta", "psi"].iter().enumerate() {
-        line(&format!("{name} settle 0.5 deg (s)"), &|s| opt(s.angles[i].settle_within_0p5deg_s));
-        line(&format!("{name} settle 2 % (s)"), &|s| opt(s.angles[i].settle_within_2pct_s));
-        line(&format!("{name} final (deg)"), &|s| format!("{:.3}", s.angles[i].final_deg));
-    }
-    line("alpha final / peak (deg)", &|s| format!("{:.2}/{:.2}", s.alpha_final_deg, s.alpha_peak_deg));
-    for (i, name) in ["aileron", "elevator", "rudder"].iter().enumerate() {
-        line(&format!("{name} peak (deg)"), &|s| format!("{:.2}", s.surfaces[i].peak_deg));
-        line(&format!("{name} ticks rate/pos limit"), &|s| {
-            format!("{}/{}", s.surfaces[i].ticks_at_rate_limit, s.surfaces[i].ticks_at_position_limit)
+    // `silrig compare` flies the built-in F-16: its attitude and its surfaces, looked up by name.
+    let angle = |s: &'_ Summary, name: &str| s.setpoints.iter().find(|r| r.name == format!("{name}_deg")).cloned();
+    let surface = |s: &'_ Summary, name: &str| s.actuators.iter().find(|a| a.name == name).cloned();
+    let figure = |v: Option<f64>, decimals: usize| v.map_or("-".to_string(), |v| format!("{v:.decimals$}"));
+    for name in ["phi", "theta", "psi"] {
+        line(&format!("{name} settle 0.5 deg (s)"), &|s| {
+            angle(s, name).and_then(|a| a.settle_within_0p5deg).map_or("-".into(), |d| opt(d.at_s))
         });
-        line(&format!("{name} rms rate (dps)"), &|s| format!("{:.3}", s.surfaces[i].rms_rate_dps));
-        line(&format!("{name} rms rate after 5 s (dps)"), &|s| format!("{:.3}", s.surfaces[i].rms_rate_late_dps));
+        line(&format!("{name} settle 2 % (s)"), &|s| match angle(s, name).map(|a| a.response) {
+            Some(Response::Stepped { settle_within_2pct_s, .. }) => opt(settle_within_2pct_s),
+            Some(Response::Held) => "held".into(),
+            None => "-".into(),
+        });
+        line(&format!("{name} final (deg)"), &|s| figure(angle(s, name).map(|a| a.final_value), 3));
     }
-    let total_rms = |s: &Summary, late: bool| {
-        s.surfaces.iter().map(|x| if late { x.rms_rate_late_dps } else { x.rms_rate_dps }.powi(2)).sum::<f64>().sqrt()
+    line("alpha final / peak (deg)", &|s| {
+        s.alpha.as_ref().map_or("-".into(), |a| format!("{:.2}/{:.2}", a.final_deg, a.peak_deg))
+    });
+    for name in ["aileron", "elevator", "rudder"] {
+        line(&format!("{name} peak (deg)"), &|s| figure(surface(s, name).map(|a| a.peak), 2));
+        line(&format!("{name} ticks rate/pos limit"), &|s| {
+            surface(s, name).map_or("-".into(), |a| format!("{}/{}", a.ticks_at_rate_limit, a.ticks_at_position_limit))
+        });
+        line(&format!("{name} rms rate (dps)"), &|s| figure(surface(s, name).and_then(|a| a.rms_rate_per_s), 3));
+        line(&format!("{name} rms rate, late (dps)"), &|s| {
+            figure(surface(s, name).and_then(|a| a.rms_rate_late_per_s), 3)
+        });
+    }
+    let total = |s: &Summary, of: &dyn Fn(&silrig_flight::summary::ActuatorFigures) -> Option<f64>| {
+        s.actuators.iter().map(|a| of(a).unwrap_or(f64::NAN).powi(2)).sum::<f64>().sqrt()
     };
-    let total_cmd = |s: &Summary| s.surfaces.iter().map(|x| x.rms_command_rate_dps.powi(2)).sum::<f64>().sqrt();
+    let total_rms =
+        |s: &Summary, late: bool| total(s, &|a| if late { a.rms_rate_late_per_s } else { a.rms_rate_per_s });
+    let total_cmd = |s: &Summary| total(s, &|a| a.rms_command_rate_per_s);
     let first = summaries.first().cloned();
     line("all surfaces rms rate (dps)", &|s| format!("{:.3}", total_rms(s, false)));
     if let Some(first) = first {
         line("  ratio to first run", &|s| format!("{:.2}x", total_rms(s, false) / total_rms(&first, false)));
-        line("  after 5 s, ratio to first run", &|s| format!("{:.2}x", total_rms(s, true) / total_rms(&first, true)));
+        line("  late window, ratio to first run", &|s| format!("{:.2}x", total_rms(s, true) / total_rms(&first, true)));
         line("  commanded, ratio to first run", &|s| format!("{:.2}x", total_cmd(s) / total_cmd(&first)));
     }
     line("limit cycle", &|s| {
@@ -174,7 +190,8 @@ pub fn compare_table(summaries: &[Summary]) -> String {
         if found.is_empty() { "none".into() } else { format!("YES({})", found.len()) }
     });
     line("final |S| phi/theta/psi", &|s| {
-        format!("{:.0e}/{:.0e}/{:.0e}", s.channels[0].final_abs_s, s.channels[1].final_abs_s, s.channels[2].final_abs_s)
+        let finals: Vec<String> = s.channels.iter().map(|c| format!("{:.0e}", c.final_abs_s)).collect();
+        if finals.is_empty() { "-".into() } else { finals.join("/") }
     });
     out
 }

@@ -39,16 +39,9 @@ impl Outcome {
 /// Figures of a flown case (beside its criteria), from the summary.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CaseFigures {
-    /// Settling time within 0.5 deg of phi, theta, psi, s (None: never).
-    pub settle_0p5deg_s: [Option<f64>; 3],
-    /// phi, theta, psi minus their set points at the end, deg (None: not a number, the flight left the model).
-    pub final_error_deg: [Option<f64>; 3],
-    /// Largest angle of attack, deg (None: not a number).
-    pub alpha_peak_deg: Option<f64>,
-    /// Largest |p|, |q|, |r| after the summary's late window starts, deg/s (None: not a number).
-    pub body_rate_max_late_dps: [Option<f64>; 3],
-    /// Largest fraction of ticks any surface spent at its rate limit.
-    pub rate_limit_fraction: f64,
+    /// The summary's figures by `cases.csv` column, named by the plant's signals
+    /// ([`silrig_flight::summary::Summary::case_figures`]); `None`: no such number (never settled, not a number).
+    pub figures: Vec<(String, Option<f64>)>,
     /// A sustained oscillation at the end.
     pub limit_cycle: bool,
     /// When the aircraft left the aerodynamic data (alpha or beta beyond the tables, or a non-finite state), or
@@ -58,22 +51,13 @@ pub struct CaseFigures {
 
 impl CaseFigures {
     fn new(s: &Summary, departure: Option<(f64, String)>) -> Self {
-        let ticks = s.ticks.max(1) as f64;
-        Self {
-            settle_0p5deg_s: [0, 1, 2].map(|i| s.angles[i].settle_within_0p5deg_s),
-            final_error_deg: [0, 1, 2].map(|i| finite(s.angles[i].final_deg - s.angles[i].setpoint_deg)),
-            alpha_peak_deg: finite(s.alpha_peak_deg),
-            body_rate_max_late_dps: s.body_rate_max_late_dps.map(finite),
-            rate_limit_fraction: s.surfaces.iter().map(|f| f.ticks_at_rate_limit as f64 / ticks).fold(0.0, f64::max),
-            limit_cycle: s.limit_cycle,
-            departed_at_s: departure.map(|(t, _)| t),
-        }
+        Self { figures: s.case_figures(), limit_cycle: s.limit_cycle, departed_at_s: departure.map(|(t, _)| t) }
     }
-}
 
-/// A figure that is a number, or None (JSON has no NaN, and the CSV shows an empty cell).
-fn finite(v: f64) -> Option<f64> {
-    v.is_finite().then_some(v)
+    /// The figure of column `name`, if the flight has one.
+    pub fn figure(&self, name: &str) -> Option<f64> {
+        self.figures.iter().find(|(n, _)| n == name).and_then(|(_, v)| *v)
+    }
 }
 
 /// The first tick at which the flight leaves what the F-16's model knows: alpha or |beta| beyond the aerodynamic
@@ -172,7 +156,7 @@ pub fn judge(
     flown: FlownScenario,
 ) -> (CaseResult, Flight) {
     let FlownScenario { trace, plant, ended_early, refusals } = flown;
-    let summary = summarize(&trace, &case);
+    let summary = summarize(&trace, &case, plant.as_ref());
     let judgements = judge_flight(criteria, &case, Some(&trace), Some(&summary));
     // A flight that left the model's envelope (or whose FMU failed) ended there; if it had not left the data
     // before, that is when.

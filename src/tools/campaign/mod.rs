@@ -202,6 +202,12 @@ impl Campaign {
             .collect()
     }
 
+    /// The summary's columns of `cases.csv`, named by the plant's signals (the F-16's, or its plant FMU's).
+    pub fn figure_columns(&self) -> anyhow::Result<Vec<String>> {
+        let plant = self.models.plant_signals(&self.scenario).map_err(anyhow::Error::msg)?;
+        Ok(silrig_flight::summary::case_columns(&self.scenario, plant.as_ref()))
+    }
+
     /// An empty `sweep.json` of this campaign under `seed`, whose cases are judged as `criterion_names` (theirs).
     pub fn tally(&self, seed: u64, criterion_names: &[String]) -> report::Tally {
         report::Tally::new(
@@ -375,6 +381,8 @@ pub struct SweepWriter<'a> {
     csv_path: PathBuf,
     csv: std::io::BufWriter<std::fs::File>,
     row: String,
+    /// The summary's columns of `cases.csv`.
+    columns: Vec<String>,
     criteria: usize,
     tally: report::Tally,
     figures: figures::Figures,
@@ -387,10 +395,11 @@ impl<'a> SweepWriter<'a> {
     pub fn create(campaign: &'a Campaign, seed: u64, out: &Path, staged: bool) -> anyhow::Result<Self> {
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
         let names = campaign.criterion_names();
+        let columns = campaign.figure_columns()?;
         let csv_path = out.join(if staged { "cases.csv.partial" } else { "cases.csv" });
         let file = std::fs::File::create(&csv_path).with_context(|| format!("writing {}", csv_path.display()))?;
         let mut csv = std::io::BufWriter::with_capacity(1 << 16, file);
-        csv.write_all(report::cases_csv_header(&campaign.parameters, &names).as_bytes())
+        csv.write_all(report::cases_csv_header(&campaign.parameters, &columns, &names).as_bytes())
             .with_context(|| format!("writing {}", csv_path.display()))?;
         let tally = campaign.tally(seed, &names);
         Ok(Self {
@@ -399,6 +408,7 @@ impl<'a> SweepWriter<'a> {
             csv_path,
             csv,
             row: String::new(),
+            columns,
             criteria: names.len(),
             tally,
             figures: figures::Figures::default(),
@@ -408,7 +418,7 @@ impl<'a> SweepWriter<'a> {
     /// The next case, in index order.
     pub fn add(&mut self, case: &CaseResult) -> anyhow::Result<()> {
         self.row.clear();
-        report::case_csv_row(&mut self.row, case, self.criteria);
+        report::case_csv_row(&mut self.row, case, &self.columns, self.criteria);
         self.csv.write_all(self.row.as_bytes()).with_context(|| format!("writing {}", self.csv_path.display()))?;
         self.tally.add(case);
         self.figures.add(case);

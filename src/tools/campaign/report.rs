@@ -231,15 +231,16 @@ fn opt(v: Option<f64>) -> String {
     v.map_or(String::new(), |x| x.to_string())
 }
 
-/// The header of `cases.csv`: one row per case follows ([`case_csv_row`]). Numbers are written in Rust's shortest
-/// round-trip form; an empty cell is a figure that does not exist (never settled, or a case that was not flown).
-pub fn cases_csv_header(parameters: &[String], criterion_names: &[String]) -> String {
+/// The header of `cases.csv`: one row per case follows ([`case_csv_row`]): the sampled values, the summary's
+/// `figures` (named by the plant's signals: [`silrig_flight::summary::case_columns`]), the limit cycle, the departure
+/// and each criterion. Numbers are written in Rust's shortest round-trip form; an empty cell is a figure that does
+/// not exist (never settled, or a case that was not flown).
+pub fn cases_csv_header(parameters: &[String], figures: &[String], criterion_names: &[String]) -> String {
     let mut out = String::from("index,outcome,reason");
-    for p in parameters {
-        out += &format!(",{p}");
+    for name in parameters.iter().chain(figures) {
+        out += &format!(",{name}");
     }
-    out += ",phi_settle_s,theta_settle_s,psi_settle_s,phi_final_error_deg,theta_final_error_deg,psi_final_error_deg,\
-            alpha_peak_deg,p_max_late_dps,q_max_late_dps,r_max_late_dps,rate_limit_fraction,limit_cycle,departed_at_s";
+    out += ",limit_cycle,departed_at_s";
     for c in criterion_names {
         out += &format!(",{c},{c}_passed");
     }
@@ -247,8 +248,8 @@ pub fn cases_csv_header(parameters: &[String], criterion_names: &[String]) -> St
     out
 }
 
-/// A case's row of `cases.csv`, with `criteria` criteria columns, appended to `out`.
-pub fn case_csv_row(out: &mut String, case: &CaseResult, criteria: usize) {
+/// A case's row of `cases.csv` under the header of `figures` and `criteria` criteria, appended to `out`.
+pub fn case_csv_row(out: &mut String, case: &CaseResult, figures: &[String], criteria: usize) {
     // Reasons may hold commas; quote them as CSV does.
     let _ = write!(out, "{},{},\"{}\"", case.index, case.outcome.label(), case.reason.replace('"', "\"\""));
     for v in &case.values {
@@ -256,15 +257,14 @@ pub fn case_csv_row(out: &mut String, case: &CaseResult, criteria: usize) {
     }
     match &case.figures {
         Some(f) => {
-            for s in f.settle_0p5deg_s {
-                let _ = write!(out, ",{}", opt(s));
+            // By name: a case whose trace lacks a column (a controller that died before the first tick) leaves
+            // its cells empty.
+            for name in figures {
+                let _ = write!(out, ",{}", opt(f.figure(name)));
             }
-            for v in f.final_error_deg.iter().chain([f.alpha_peak_deg].iter()).chain(f.body_rate_max_late_dps.iter()) {
-                let _ = write!(out, ",{}", opt(*v));
-            }
-            let _ = write!(out, ",{},{},{}", f.rate_limit_fraction, u8::from(f.limit_cycle), opt(f.departed_at_s));
+            let _ = write!(out, ",{},{}", u8::from(f.limit_cycle), opt(f.departed_at_s));
         }
-        None => *out += &",".repeat(13),
+        None => *out += &",".repeat(figures.len() + 2),
     }
     for k in 0..criteria {
         match case.judgements.get(k) {

@@ -191,7 +191,9 @@ pub fn fly(
         failures if short && !failures.is_empty() => (Some((last_t_s.unwrap_or(0.0), failures.join("; "))), vec![]),
         failures => (None, failures),
     };
-    let flown = FlownScenario { trace, plant: None, ended_early, refusals };
+    // The plant's signals for its summary: an FMU's as it announces them, none for the built-in F-16.
+    let plant = campaign.models.plant_signals(&scenario).ok().flatten();
+    let flown = FlownScenario { trace, plant, ended_early, refusals };
     let (result, flight) = case::judge(&campaign.criteria, index, values, scenario, flown);
     Ok((result, Some(flight)))
 }

@@ -70,7 +70,7 @@ fn fly(models: &Models, scenario: &Scenario) -> anyhow::Result<(Flight, Option<s
     let flown = models.fly(scenario)?;
     let ended_early = flown.ended_early.as_ref().map(|e| (e.t_s, e.by, e.to_string()));
     let flight = Flight { trace: flown.trace, ended_early, commands_refused: flown.commands_refused };
-    Ok((flight, Some(flown.plant)))
+    Ok((flight, models.own_plant(flown.plant)))
 }
 
 /// Fly the case (twice when it must be deterministic, the second into `run-2/`) into `case_dir` and judge it.
@@ -85,7 +85,7 @@ pub fn fly_and_judge(case: &Case, case_dir: &Path) -> anyhow::Result<(Vec<Judgem
     for i in 1..=runs {
         let dir = if runs == 1 { case_dir.to_path_buf() } else { case_dir.join(format!("run-{i}")) };
         let (flight, plant) = fly(&models, scenario)?;
-        let summary = silrig_flight::summary::summarize(&flight.trace, scenario);
+        let summary = silrig_flight::summary::summarize(&flight.trace, scenario, plant.as_ref());
         crate::outputs::write_run(&dir, scenario, &flight.trace, &summary, plant.as_ref())?;
         dirs.push(dir.display().to_string());
         flights.push((flight, summary));
