@@ -104,6 +104,29 @@ fn the_c_example_pid_flies_the_airframe_fmu() {
 }
 
 #[test]
+fn a_foreign_attitude_fmu_flies_lockstep_under_the_python_pid() {
+    // tests/fmu/attitude names its inputs with their unit (`aileron_deg`), reports no surface position and has a
+    // dimensionless throttle: the PID finds its surfaces by those names and leaves the throttle where it is.
+    let plant = fmu("attitude");
+    let scenario = format!("{ROOT}/tests/scenarios/attitude.toml");
+    let r =
+        run("attitude", &["--mode", "lockstep", "--plant-fmu", &plant, "--controller-cmd", &python_pid(), &scenario]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 1001);
+    assert_eq!(r.counter("plant", "command_misses"), 0);
+    let (header, rows) = r.trace();
+    assert_eq!(&header[..7], ["t_s", "phi_deg", "theta_deg", "psi_deg", "p_dps", "q_dps", "r_dps"]);
+    let throttle = header.iter().position(|c| c.starts_with("throttle")).expect("the throttle's command is traced");
+    assert!(rows.iter().all(|row| row[throttle] == 0.5), "the PID moved the throttle off its hold value");
+    let last = rows.last().unwrap();
+    let (phi, theta, psi) =
+        (last[column(&header, "phi_deg")], last[column(&header, "theta_deg")], last[column(&header, "psi_deg")]);
+    assert!((phi - 10.0).abs() < 0.5 && (theta - 5.0).abs() < 0.5, "not settled on the set points: {phi} {theta}");
+    assert!(psi.abs() < 0.5, "heading not held: {psi}");
+    r.finish();
+}
+
+#[test]
 fn a_parameter_set_by_name_reaches_the_fmu() {
     // The airframe flies at its trim airspeed, a parameter, and reports it as an output.
     let dir = common::temp_dir("fmu-plant", "parameter-files");
