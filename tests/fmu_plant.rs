@@ -127,6 +127,33 @@ fn a_foreign_attitude_fmu_flies_lockstep_under_the_python_pid() {
 }
 
 #[test]
+fn a_fault_run_of_the_foreign_attitude_fmu_completes_and_says_once_which_figures_it_left_out() {
+    // The paper's fig1 needs the F-16's states and surfaces, which this plant does not announce: the run leaves it
+    // out, says why in report.json and report.html (not on every run's console), and draws faults.png and
+    // signals.png from the plant's own signals.
+    let plant = fmu("attitude");
+    let scenario = format!("{ROOT}/tests/scenarios/attitude.toml");
+    let args = ["--plant-fmu", &plant, "--controller-cmd", &python_pid(), "--fault", "controller:kill@3s", &scenario];
+    let r = run("attitude-fault", &args);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.failures(), "[]");
+    assert!(r.report["faults"][0]["injected_at_s"].is_number(), "the kill did not happen: {}", r.report["faults"]);
+    let left = r.report["figures_left_out"].as_array().expect("report.json lists the figures left out");
+    assert_eq!(left.len(), 1, "{left:?}");
+    assert_eq!(left[0]["figure"], "fig1_states.png");
+    let reason = left[0]["reason"].as_str().unwrap();
+    assert!(reason.contains("has no column `") && reason.contains("signals.png shows every signal"), "{reason}");
+    for figure in ["faults.png", "faults.svg", "signals.png", "signals.svg"] {
+        assert!(r.out.join(figure).exists(), "{figure} was not drawn");
+    }
+    assert!(!r.out.join("fig1_states.png").exists());
+    assert!(!r.stdout.contains("not drawn"), "a warning line on the console: {}", r.stdout);
+    let html = std::fs::read_to_string(r.out.join("report.html")).unwrap();
+    assert!(html.contains("fig1_states.png not drawn: the trace has no column"), "report.html does not say it");
+    r.finish();
+}
+
+#[test]
 fn a_parameter_set_by_name_reaches_the_fmu() {
     // The airframe flies at its trim airspeed, a parameter, and reports it as an output.
     let dir = common::temp_dir("fmu-plant", "parameter-files");
