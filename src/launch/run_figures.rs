@@ -4,22 +4,12 @@
 //! `report.json` and `report.html` ([`FigureLeftOut`]): it never fails the flight. Only a file that cannot be
 //! written (a full disk) is an error.
 
-use super::run_report::{RigReport, per_tick_values_us};
-use serde::{Deserialize, Serialize};
+use super::run_report::{FigureLeftOut, RigReport, per_tick_values_us};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
 use silrig_plot::PlotError;
 use std::path::Path;
-
-/// A figure the run did not draw, and why.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FigureLeftOut {
-    /// The figure's file, without its folder (`fig1_states.png`).
-    pub figure: String,
-    /// Why, in words.
-    pub reason: String,
-}
 
 /// The error of a figure the data cannot give as its entry in the left-out list, with `context` after the
 /// reason; any other error (a file that cannot be written) as it is.

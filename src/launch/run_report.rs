@@ -1,6 +1,6 @@
 //! The merged report of one `silrig run` (`report.json` and the text it prints): the processes' reports, the OS
-//! floor measured beside them, control quality of the logged trace, the fault table, failures and leftovers (the
-//! figures are [`super::run_figures`]'s).
+//! floor measured beside them, control quality of the logged trace, the fault table, failures, the figures left
+//! out and leftovers.
 
 use super::fault_report::{Discontinuity, FaultRecord};
 use crate::floor::timer_baseline::BaselineReport;
@@ -57,13 +57,22 @@ pub struct RigReport {
     pub notes: Vec<String>,
     /// The figures the run did not draw, each with why (a plant without the paper's signals has no fig1).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub figures_left_out: Vec<super::run_figures::FigureLeftOut>,
+    pub figures_left_out: Vec<FigureLeftOut>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
     pub leftovers: Vec<String>,
     /// The plant's per-tick distributions and the controller's compute time split into warm-up (the first second)
     /// and steady state.
     #[serde(default)]
     pub phases: Vec<PhaseSplit>,
+}
+
+/// A figure the run did not draw (see [`super::run_figures`]), and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FigureLeftOut {
+    /// The figure's file, without its folder (`fig1_states.png`).
+    pub figure: String,
+    /// Why, in words.
+    pub reason: String,
 }
 
 /// One of the plant's per-tick distributions, split at the end of the warm-up.
