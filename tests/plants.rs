@@ -83,14 +83,18 @@ fn a_python_plant_flies_lockstep_with_the_example_controller_unchanged() {
     assert_eq!(rows.len(), 1001);
     let theta = rows.last().unwrap()[2];
     assert!((theta - 10.0).abs() < 1.0, "theta ends at {theta}, set point 10");
-    // The figures of the F-16's states do not fit this plant: said, not failed; the signals figure shows its own.
-    assert!(r.stdout.contains("not drawn: the plant's trace has no column `alpha_deg`"), "{}", r.stdout);
+    // The figures of the F-16's states do not fit this plant: said once in report.json, not failed and not on the
+    // console; the signals figure shows its own.
+    let left = &r.report["figures_left_out"][0];
+    assert_eq!(left["figure"], "fig1_states.png", "{}", r.report["figures_left_out"]);
+    assert!(left["reason"].as_str().unwrap().starts_with("the trace has no column `alpha_deg`"), "{left}");
+    assert!(!r.stdout.contains("not drawn"), "{}", r.stdout);
     for file in ["signals.png", "signals.svg"] {
         let bytes = std::fs::read(r.out.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert!(bytes.len() > 10_000, "{file}: {} bytes", bytes.len());
     }
     let svg = std::fs::read_to_string(r.out.join("signals.svg")).unwrap();
-    for caption in ["theta_deg (set point 10, dashed)", "elevator command", "deg/s"] {
+    for caption in ["theta_deg (set point 10, dashed)", "elevator: position, command dashed", "deg/s"] {
         assert!(svg.contains(caption), "{caption} missing from signals.svg");
     }
     r.finish();
