@@ -20,7 +20,9 @@
 #[cfg(feature = "bridge")]
 pub use silrig_bridge as bridge;
 
-pub use silrig_flight::{criteria, dispersion, f_true, fault, files, judge, role, scenario, sim, summary, trace};
+pub use silrig_flight::{
+    criteria, dispersion, f_true, f16_signals, fault, files, judge, role, scenario, signals, sim, summary, trace,
+};
 pub use silrig_launch as launch;
 pub use silrig_model::{actuator, control, f16_outputs, integrator, plant, rng, units, vehicle};
 pub use silrig_plot as plot;

@@ -104,6 +104,56 @@ fn the_c_example_pid_flies_the_airframe_fmu() {
 }
 
 #[test]
+fn a_foreign_attitude_fmu_flies_lockstep_under_the_python_pid() {
+    // tests/fmu/attitude names its inputs with their unit (`aileron_deg`), reports no surface position and has a
+    // dimensionless throttle: the PID finds its surfaces by those names and leaves the throttle where it is.
+    let plant = fmu("attitude");
+    let scenario = format!("{ROOT}/tests/scenarios/attitude.toml");
+    let r =
+        run("attitude", &["--mode", "lockstep", "--plant-fmu", &plant, "--controller-cmd", &python_pid(), &scenario]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.counter("plant", "ticks"), 1001);
+    assert_eq!(r.counter("plant", "command_misses"), 0);
+    let (header, rows) = r.trace();
+    assert_eq!(&header[..7], ["t_s", "phi_deg", "theta_deg", "psi_deg", "p_dps", "q_dps", "r_dps"]);
+    let throttle = header.iter().position(|c| c.starts_with("throttle")).expect("the throttle's command is traced");
+    assert!(rows.iter().all(|row| row[throttle] == 0.5), "the PID moved the throttle off its hold value");
+    let last = rows.last().unwrap();
+    let (phi, theta, psi) =
+        (last[column(&header, "phi_deg")], last[column(&header, "theta_deg")], last[column(&header, "psi_deg")]);
+    assert!((phi - 10.0).abs() < 0.5 && (theta - 5.0).abs() < 0.5, "not settled on the set points: {phi} {theta}");
+    assert!(psi.abs() < 0.5, "heading not held: {psi}");
+    r.finish();
+}
+
+#[test]
+fn a_fault_run_of_the_foreign_attitude_fmu_completes_and_says_once_which_figures_it_left_out() {
+    // The paper's fig1 needs the F-16's states and surfaces, which this plant does not announce: the run leaves it
+    // out, says why in report.json and report.html (not on every run's console), and draws faults.png and
+    // signals.png from the plant's own signals.
+    let plant = fmu("attitude");
+    let scenario = format!("{ROOT}/tests/scenarios/attitude.toml");
+    let args = ["--plant-fmu", &plant, "--controller-cmd", &python_pid(), "--fault", "controller:kill@3s", &scenario];
+    let r = run("attitude-fault", &args);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.failures(), "[]");
+    assert!(r.report["faults"][0]["injected_at_s"].is_number(), "the kill did not happen: {}", r.report["faults"]);
+    let left = r.report["figures_left_out"].as_array().expect("report.json lists the figures left out");
+    assert_eq!(left.len(), 1, "{left:?}");
+    assert_eq!(left[0]["figure"], "fig1_states.png");
+    let reason = left[0]["reason"].as_str().unwrap();
+    assert!(reason.contains("has no column `") && reason.contains("signals.png shows every signal"), "{reason}");
+    for figure in ["faults.png", "faults.svg", "signals.png", "signals.svg"] {
+        assert!(r.out.join(figure).exists(), "{figure} was not drawn");
+    }
+    assert!(!r.out.join("fig1_states.png").exists());
+    assert!(!r.stdout.contains("not drawn"), "a warning line on the console: {}", r.stdout);
+    let html = std::fs::read_to_string(r.out.join("report.html")).unwrap();
+    assert!(html.contains("fig1_states.png not drawn: the trace has no column"), "report.html does not say it");
+    r.finish();
+}
+
+#[test]
 fn a_parameter_set_by_name_reaches_the_fmu() {
     // The airframe flies at its trim airspeed, a parameter, and reports it as an output.
     let dir = common::temp_dir("fmu-plant", "parameter-files");

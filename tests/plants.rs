@@ -83,14 +83,18 @@ fn a_python_plant_flies_lockstep_with_the_example_controller_unchanged() {
     assert_eq!(rows.len(), 1001);
     let theta = rows.last().unwrap()[2];
     assert!((theta - 10.0).abs() < 1.0, "theta ends at {theta}, set point 10");
-    // The figures of the F-16's states do not fit this plant: said, not failed; the signals figure shows its own.
-    assert!(r.stdout.contains("not drawn: the plant's trace has no column `alpha_deg`"), "{}", r.stdout);
+    // The figures of the F-16's states do not fit this plant: said once in report.json, not failed and not on the
+    // console; the signals figure shows its own.
+    let left = &r.report["figures_left_out"][0];
+    assert_eq!(left["figure"], "fig1_states.png", "{}", r.report["figures_left_out"]);
+    assert!(left["reason"].as_str().unwrap().starts_with("the trace has no column `alpha_deg`"), "{left}");
+    assert!(!r.stdout.contains("not drawn"), "{}", r.stdout);
     for file in ["signals.png", "signals.svg"] {
         let bytes = std::fs::read(r.out.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert!(bytes.len() > 10_000, "{file}: {} bytes", bytes.len());
     }
     let svg = std::fs::read_to_string(r.out.join("signals.svg")).unwrap();
-    for caption in ["theta_deg (set point 10, dashed)", "elevator command", "deg/s"] {
+    for caption in ["theta_deg (set point 10, dashed)", "elevator: position, command dashed", "deg/s"] {
         assert!(svg.contains(caption), "{caption} missing from signals.svg");
     }
     only_its_own_signals_summarised(&r);
@@ -195,10 +199,67 @@ fn nan_outputs_are_refused_counted_and_the_last_valid_ones_published() {
     let refused = r.event("plant", "outputs-refused").expect("an outputs-refused event");
     assert!(refused["detail"].as_str().unwrap().contains("output phi_deg is NaN"), "{refused}");
     assert!(r.event("plant", "outputs-accepted").is_some());
-    let (_, rows) = r.trace();
+    let (header, rows) = r.trace();
     assert_eq!(rows.len(), 1001);
     assert!(rows.iter().all(|row| row[1].is_finite()), "a NaN reached the trace");
+    // Every held row is flagged, in trace.csv's last column and in timing.csv's plant_flags; 10 of 1001 ticks is
+    // within the default share (1 %), so the run passes.
+    assert_eq!(header.last().map(String::as_str), Some("outputs_held"));
+    let held: Vec<usize> = (0..rows.len()).filter(|k| rows[*k][header.len() - 1] == 1.0).collect();
+    assert_eq!(held, (300..=309).collect::<Vec<_>>());
+    assert!(rows.iter().all(|row| [0.0, 1.0].contains(&row[header.len() - 1])));
+    let timing = std::fs::read_to_string(r.out.join("timing.csv")).unwrap();
+    let flags = timing.lines().next().unwrap().split(',').position(|c| c == "plant_flags").unwrap();
+    let flagged: Vec<usize> = timing
+        .lines()
+        .skip(1)
+        .enumerate()
+        .filter(|(_, line)| line.split(',').nth(flags).unwrap().parse::<u32>().unwrap() & 64 != 0)
+        .map(|(k, _)| k)
+        .collect();
+    assert_eq!(flagged, held, "timing.csv flags other rows than trace.csv");
     r.finish();
+}
+
+#[test]
+fn a_plant_holding_its_outputs_past_the_share_fails_the_run_with_the_count() {
+    // phi_deg is NaN from tick 334 on: 667 of 1001 ticks held, far past the default 1 %.
+    let r = run(
+        "degraded",
+        &["--mode", "lockstep", "--plant-cmd", &toy("degraded"), "--controller-cmd", &python_pid(), &toy_scenario()],
+    );
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    let failures = r.failures();
+    assert!(
+        failures.contains("held at the last valid ones on 667 of 1001 ticks (66.6 %)")
+            && failures.contains("plant.outputs_held_fraction_max"),
+        "{failures}"
+    );
+    assert!(r.stdout.contains("667 of 1001 ticks"), "the printed report does not say it: {}", r.stdout);
+    let (header, rows) = r.trace();
+    let held = rows.iter().filter(|row| row[header.len() - 1] == 1.0).count();
+    assert_eq!(held, 667);
+    r.finish();
+    // The same flight with the key raised past two thirds passes.
+    let dir = common::temp_dir("plants", "degraded-scenario");
+    let scenario = dir.join("toy.toml");
+    let text = std::fs::read_to_string(toy_scenario()).unwrap() + "\n[plant]\noutputs_held_fraction_max = 0.7\n";
+    std::fs::write(&scenario, text).unwrap();
+    let r = run(
+        "degraded-allowed",
+        &[
+            "--mode",
+            "lockstep",
+            "--plant-cmd",
+            &toy("degraded"),
+            "--controller-cmd",
+            &python_pid(),
+            scenario.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    r.finish();
+    std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]

@@ -1,16 +1,20 @@
 //! Plots: every figure is written as a real PNG and SVG, with its legends, from a synthetic trace that has sines,
 //! constant and all-zero columns and a NaN; a missing column is an error naming it; a trace without our controller's
-//! columns still gets its states figure.
+//! columns still gets its states figure; a plant that is not the F-16 gets its faults and signals figures, commands
+//! beside positions, set points drawn, dimensionless units blank and held rows shaded.
 //!
 //! Set `SILRIG_PLOT_DIR=/some/dir` to keep the figures there for a look instead of a removed temp dir.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use silrig::f16_signals::f16_signals;
 use silrig::plot::{
-    PlotError, TimelineEvent, plot_closed_loop, plot_overlay, plot_percentile_distributions, plot_timeline,
+    PlotError, TimelineEvent, plot_closed_loop, plot_overlay, plot_percentile_distributions, plot_signals,
+    plot_timeline,
 };
-use silrig::trace::{Trace, columns};
+use silrig::signals::{InputSignal, OutputSignal, PlantSignals};
+use silrig::trace::{OUTPUTS_HELD_COLUMN, Trace, columns};
 
 /// An output directory unique to the test; removed when dropped unless `SILRIG_PLOT_DIR` is set.
 struct OutDir {
@@ -97,6 +101,108 @@ fn synthetic(rows: usize, phase: f64) -> Trace {
         trace.rows.push(row);
     }
     trace
+}
+
+/// The F-16's announcement (the synthetic trace's columns are its trace's).
+fn f16() -> PlantSignals {
+    f16_signals([0.0; 4])
+}
+
+/// The F-16 scenario's set points: the attitude, wings level at 5 deg of pitch.
+fn f16_setpoint(name: &str) -> Option<f64> {
+    [("phi_deg", 0.0), ("theta_deg", 5.0), ("psi_deg", 0.0)].iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
+}
+
+/// A foreign three-axis vehicle as tests/fmu/attitude announces itself: inputs named with their unit, no output
+/// reporting a surface's position, a dimensionless throttle.
+fn attitude() -> PlantSignals {
+    let output = |name: &str, unit: &str| OutputSignal { name: name.into(), unit: unit.into(), in_trace: true };
+    let input = |name: &str, unit: &str, hold| InputSignal {
+        name: name.into(),
+        unit: unit.into(),
+        min: -25.0,
+        max: 25.0,
+        hold,
+        held_output: None,
+        command_in_trace: true,
+    };
+    PlantSignals {
+        plant: "attitude".into(),
+        outputs: ["phi_deg", "theta_deg", "psi_deg"]
+            .map(|n| output(n, "deg"))
+            .into_iter()
+            .chain(["p_dps", "q_dps", "r_dps"].map(|n| output(n, "deg/s")))
+            .collect(),
+        inputs: vec![
+            input("aileron_deg", "deg", 0.0),
+            input("elevator_deg", "deg", 0.0),
+            input("rudder_deg", "deg", 0.0),
+            input("throttle", "", 0.5),
+        ],
+    }
+}
+
+/// 10 s of the attitude vehicle rolling to 10 deg: the controller killed at 3 s (no command after it, NaN), the
+/// outputs held from 6 to 7 s (flagged in `outputs_held`).
+fn attitude_trace(plant: &PlantSignals) -> Trace {
+    let mut names = plant.trace_columns(&[]);
+    names.push(OUTPUTS_HELD_COLUMN.into());
+    let mut trace = Trace::new(names.clone());
+    for k in 0..=1000 {
+        let t = k as f64 * 0.01;
+        let roll = 10.0 * (1.0 - (-t).exp());
+        let commanded = |v: f64| if t < 3.0 { v } else { f64::NAN };
+        let held = (600..700).contains(&k);
+        let row = names
+            .iter()
+            .map(|c| match c.as_str() {
+                "t_s" => t,
+                "phi_deg" if held => 10.0 * (1.0 - (-6.0f64).exp()),
+                "phi_deg" => roll,
+                "theta_deg" => 5.0 * (1.0 - (-2.0 * t).exp()),
+                "p_dps" => 10.0 * (-t).exp(),
+                "aileron_deg_cmd_deg" => commanded(-5.0 * (-t).exp()),
+                "throttle_cmd" => commanded(0.5),
+                c if c.ends_with("_cmd_deg") => commanded(0.0),
+                OUTPUTS_HELD_COLUMN => f64::from(u8::from(held)),
+                _ => 0.0,
+            })
+            .collect();
+        trace.rows.push(row);
+    }
+    trace
+}
+
+#[test]
+fn faults_and_signals_of_a_plant_that_is_not_the_f16() {
+    let dir = OutDir::new("foreign");
+    let plant = attitude();
+    let trace = attitude_trace(&plant);
+    let setpoint = |name: &str| [("phi_deg", 10.0), ("theta_deg", 5.0)].iter().find(|(n, _)| *n == name).map(|p| p.1);
+    let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into() }];
+    let faults = plot_timeline(&trace, &plant, &setpoint, &events, &dir.path, "faults", "attitude: faults").unwrap();
+    let signals =
+        plot_signals(&trace, Some(&plant), &setpoint, &dir.path, "signals", "attitude: every signal").unwrap();
+    check_files(
+        &[faults, signals].concat(),
+        &["faults", "signals"],
+        &[
+            &["controller kill at 3 s", "phi_deg set point", "theta_deg set point", "aileron_deg cmd", "throttle cmd"],
+            &["phi_deg (set point 10, dashed)", "aileron_deg command", "throttle command", "p_dps"],
+        ],
+    );
+    for stem in ["faults", "signals"] {
+        let svg = std::fs::read_to_string(dir.path.join(format!("{stem}.svg"))).unwrap();
+        assert!(svg.contains("shaded: outputs held"), "{stem}.svg does not say what is shaded");
+        // Only the output with no set point (psi) is left without a dashed set point line.
+        assert!(
+            !svg.contains("psi_deg set point") && !svg.contains("psi_deg (set point"),
+            "{stem}: a set point for psi"
+        );
+    }
+    // The paper's states figure needs the F-16's columns: the run leaves it out with this reason.
+    let missing = plot_closed_loop(&trace, None, &dir.path, "x").unwrap_err();
+    assert!(matches!(missing, PlotError::MissingColumn { .. }), "{missing}");
 }
 
 /// Every file exists; PNGs are real, non-trivial PNGs; SVGs are SVG and contain `needles` (legend text).
@@ -215,12 +321,22 @@ fn timeline_marks_events() {
         TimelineEvent { t_s: 9.8, label: "controller restarted".into() },
         TimelineEvent { t_s: 42.0, label: "after the end".into() },
     ];
-    let paths =
-        timed("timeline", || plot_timeline(&trace, &events, &dir.path, "faults", "Fault injection")).expect("timeline");
+    let paths = timed("timeline", || {
+        plot_timeline(&trace, &f16(), &f16_setpoint, &events, &dir.path, "faults", "Fault injection")
+    })
+    .expect("timeline");
     check_files(
         &paths,
         &["faults"],
-        &[&["aileron stuck", "sensor dropout", "elevator 50 % effective", "Euler angles", "φ roll", "rudder"]],
+        &[&[
+            "aileron stuck",
+            "sensor dropout",
+            "elevator 50 % effective",
+            "outputs (solid) and their set points (dashed)",
+            "phi_deg set point",
+            "rudder cmd",
+            "throttle",
+        ]],
     );
     let svg = std::fs::read_to_string(&paths[1]).unwrap();
     assert!(!svg.contains("after the end"), "an event outside the trace was drawn");
@@ -263,7 +379,7 @@ fn a_missing_column_is_an_error_naming_it() {
         "cmp.png",
     );
     assert!(message.contains("run `bad run`"), "{message}");
-    expect_missing(plot_timeline(&without("t_s"), &[], &dir.path, "tl", "x"), "t_s", "tl.png");
+    expect_missing(plot_timeline(&without("t_s"), &f16(), &f16_setpoint, &[], &dir.path, "tl", "x"), "t_s", "tl.png");
 
     // Nothing to draw is an error too, not a panic or an empty picture.
     assert!(matches!(plot_overlay(&[], &dir.path, "none"), Err(PlotError::NoData { .. })));
@@ -329,8 +445,8 @@ fn extreme_and_non_finite_values_do_not_panic() {
     let paths = plot_closed_loop(&trace, None, &dir.path, "extreme").expect("figures");
     assert!(paths.iter().all(|p| p.exists()));
     let one_row = synthetic(1, 0.0);
-    plot_timeline(&one_row, &[TimelineEvent { t_s: 0.0, label: "start".into() }], &dir.path, "one", "one row")
-        .expect("a one-row trace");
+    let start = [TimelineEvent { t_s: 0.0, label: "start".into() }];
+    plot_timeline(&one_row, &f16(), &f16_setpoint, &start, &dir.path, "one", "one row").expect("a one-row trace");
     plot_percentile_distributions(&[("empty".into(), Vec::new())], &dir.path, "empty", "no points").expect("empty");
 }
 
@@ -340,7 +456,7 @@ fn an_unwritable_output_directory_is_an_error_naming_it() {
     std::fs::create_dir_all(&dir.path).unwrap();
     let file = dir.path.join("a-file");
     std::fs::write(&file, "not a directory").unwrap();
-    let err = plot_timeline(&synthetic(50, 0.0), &[], &file.join("sub"), "tl", "x").unwrap_err();
+    let err = plot_timeline(&synthetic(50, 0.0), &f16(), &f16_setpoint, &[], &file.join("sub"), "tl", "x").unwrap_err();
     assert!(matches!(err, PlotError::CreateDir { .. }), "{err}");
     assert!(err.to_string().contains(&file.join("sub").display().to_string()), "{err}");
 }

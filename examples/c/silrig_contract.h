@@ -40,6 +40,8 @@
 #define SILRIG_FLAG_COMMAND_REFUSED 16u
 /* the plant's last sample: last tick, its positions */
 #define SILRIG_FLAG_END_OF_RUN 32u
+/* outputs refused (NaN/inf): the last valid held */
+#define SILRIG_FLAG_OUTPUTS_HELD 64u
 /* outputs a plant sample carries at most */
 #define SILRIG_MAX_OUTPUTS 32u
 /* inputs a command sample carries at most */

@@ -3,7 +3,8 @@
 Each channel is a PID on the Euler angle error with the body rate as the derivative: roll (phi) on the
 aileron, pitch (theta) on the elevator, yaw (psi) on the rudder. The integrators start from the surfaces' positions
 when the controller connects, so taking over is bumpless, and they carry the trim. It reads and commands the
-plant's signals by name; the throttle, which it does not command, stays where it is.
+plant's signals by name (a surface as `aileron` or `aileron_deg`); the throttle, which it does not command, stays
+where it is.
 
 The gains are tuned per plant (the announced plant name picks them): for the F-16 in deg of surface per deg of
 error (per deg/s of rate, per deg*s of integral), with the Stevens & Lewis sign convention (a positive deflection
@@ -36,21 +37,25 @@ class PidAttitude(Controller):
         self.setpoint_deg = (0.0, 0.0, 0.0)
         self.integral = None  # the command carried by the integrators, per channel
         self.gains = F16
+        self.names = INPUTS  # the plant's names of the three surfaces
         self.session = None
 
     def start(self, session):
         self.setpoint_deg = tuple(session.setpoint(name) for name in ANGLES)
         self.session = session
         plant = session.plant
+        # Each surface by its name, or by its name and unit (`aileron_deg`), as tools outside silrig name them.
+        have = [name for name, *_ in plant.inputs]
+        self.names = [name + "_deg" if name not in have and name + "_deg" in have else name for name in INPUTS]
         # A plant of the F-16's kind (surfaces in deg) flies with its gains; any other needs a tuning of its own.
-        degrees = all(unit == "deg" for name, unit, *_ in plant.inputs if name in INPUTS)
+        degrees = all(unit == "deg" for name, unit, *_ in plant.inputs if name in self.names)
         if plant.name not in GAINS and not degrees:
             raise SystemExit(f"pid_attitude: no gains for plant {plant.name}; tuned for: {', '.join(GAINS)}")
         self.gains = GAINS.get(plant.name, F16)
         # Fail now, naming what the plant has, if it lacks a signal this law needs.
         for name in ANGLES + RATES:
             session.output(name)
-        self.inputs = [session.input(name) for name in INPUTS]
+        self.inputs = [session.input(name) for name in self.names]
 
     def step(self, sample, dt_s):
         KP, KD, KI, TRAVEL = self.gains
@@ -70,7 +75,7 @@ class PidAttitude(Controller):
                 self.integral[c] = integral
             surfaces[c] = max(-TRAVEL[c], min(TRAVEL[c], self.integral[c] - KP[c] * error + KD[c] * rate))
             errors[c] = error
-        return dict(zip(INPUTS, surfaces)), errors
+        return dict(zip(self.names, surfaces)), errors
 
     def checkpoint(self):
         return json.dumps(self.integral)

@@ -23,6 +23,7 @@ FLAG_FAILSAFE = 4  # the failsafe output is active
 FLAG_RATE_LIMITED = 8  # an actuator moved at its rate limit this tick
 FLAG_COMMAND_REFUSED = 16  # command refused (NaN/out of range): hold
 FLAG_END_OF_RUN = 32  # the plant's last sample: last tick, its positions
+FLAG_OUTPUTS_HELD = 64  # outputs refused (NaN/inf): the last valid held
 MAX_OUTPUTS = 32  # outputs a plant sample carries at most
 MAX_INPUTS = 16  # inputs a command sample carries at most
 MAX_DIAGNOSTICS = 64  # diagnostics a command sample carries at most

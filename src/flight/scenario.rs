@@ -172,6 +172,21 @@ pub struct PlantOptions {
     /// relative to the scenario file's folder.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fmu: Option<std::path::PathBuf>,
+    /// The largest fraction of ticks whose outputs the rig may refuse (NaN, infinity) and hold at the last valid
+    /// ones before the run fails: past it, the flight is more the rig's stand-in than the model's.
+    #[serde(default = "default_outputs_held", skip_serializing_if = "is_default_outputs_held")]
+    pub outputs_held_fraction_max: f64,
+}
+
+/// One tick in a hundred: a model's rare hiccup passes, one that broke down does not.
+const OUTPUTS_HELD_FRACTION_MAX: f64 = 0.01;
+
+fn default_outputs_held() -> f64 {
+    OUTPUTS_HELD_FRACTION_MAX
+}
+
+fn is_default_outputs_held(v: &f64) -> bool {
+    *v == OUTPUTS_HELD_FRACTION_MAX
 }
 
 fn default_xcg() -> f64 {
@@ -192,6 +207,7 @@ impl Default for PlantOptions {
             mass_scale: 1.0,
             parameters: BTreeMap::new(),
             fmu: None,
+            outputs_held_fraction_max: OUTPUTS_HELD_FRACTION_MAX,
         }
     }
 }
@@ -553,6 +569,13 @@ impl Scenario {
         }
         if !(self.plant.mass_scale >= 0.5 && self.plant.mass_scale <= 2.0) {
             return err("plant.mass_scale", format!("must be within 0.5..2, got {}", self.plant.mass_scale));
+        }
+        let held = self.plant.outputs_held_fraction_max;
+        if !(0.0..=1.0).contains(&held) {
+            return err(
+                "plant.outputs_held_fraction_max",
+                format!("must be a fraction of the ticks in 0..1, got {held}"),
+            );
         }
         self.controller.validate().map_err(|e| {
             let key = e.split([' ', '[', ':']).next().unwrap_or("").to_string();

@@ -36,6 +36,11 @@ pub const LOOP_COLUMNS: [&str; 21] = [
     "flight_segment",
 ];
 
+/// The last column of the trace of a run whose plant held its outputs on some row (written only then, so every
+/// other trace keeps its columns): 1 on a row whose outputs are the last valid ones, held in place of refused ones
+/// (NaN, infinity), 0 on a row of the model's own.
+pub const OUTPUTS_HELD_COLUMN: &str = "outputs_held";
+
 /// Controller channels in column-name form.
 pub const CHANNELS: [&str; 3] = ["phi", "theta", "psi"];
 

@@ -6,7 +6,8 @@
 //! conditions.
 
 use super::fault_schedule::FaultSchedule;
-use super::run_report::{ProcessLife, RigReport, write_plots};
+use super::run_figures::write_plots;
+use super::run_report::{ProcessLife, RigReport};
 use crate::floor::{timer_baseline, timer_baseline::BaselineArgs, timer_baseline::BaselineReport};
 use crate::program::check_command;
 use crate::supervision::{ChildProcess, ControllerLaunch, SupervisionOptions, Supervisor};
@@ -736,6 +737,7 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
     }
     super::run_report::merge_lives(&mut processes, &sup.lives, &out, &mut notes);
     mark_stopped_at_end(&mut processes, &sup.lives);
+    failures.extend(super::held_outputs::flag_held_rows(&out, &scenario));
     let trace = Trace::load(&out.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
     let (control, unsummarised) =
         super::run_report::control_summary(&out, trace.as_ref(), &scenario, opts.flies_builtin_f16(&scenario));
@@ -800,15 +802,19 @@ pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
         stopped_by,
         failures,
         notes,
+        figures_left_out: Vec::new(),
         leftovers,
         phases: super::run_report::phase_splits(&out, scenario.timing.dt_s, opts.mode == RigMode::Realtime),
     };
     // A full disk must not cost the user the report: it is printed whatever happens to the files.
-    if !opts.no_figures
-        && let Err(e) = write_plots(&report, &out, &scenario)
-    {
-        report.failures.push(format!("silrig run: the figures: {e:#}"));
-        remove_empty_figures(&out);
+    if !opts.no_figures {
+        match write_plots(&report, &out, &scenario) {
+            Ok(left_out) => report.figures_left_out = left_out,
+            Err(e) => {
+                report.failures.push(format!("silrig run: the figures: {e:#}"));
+                remove_empty_figures(&out);
+            }
+        }
     }
     if let Err(e) = silrig_flight::files::write_atomically(
         &out.join("report.json"),

@@ -4,8 +4,8 @@
 //! - [`launcher`]: `silrig run` from options to report; [`supervision`]: the processes, their lives and restarts;
 //!   [`program`]: finding the binaries and splitting a user's command.
 //! - [`fault_schedule`]: carrying out process faults (signals) on time; [`fault_report`]: what each fault did.
-//! - [`run_report`]: `report.json`, the timing tables and the run's figures; [`floor`]: the OS timer floor measured
-//!   beside a run (ours and cyclictest's).
+//! - [`run_report`]: `report.json` and the timing tables; [`run_figures`]: the run's figures, or why one is left out; [`floor`]: the OS timer floor measured
+//!   beside a run (ours and cyclictest's); [`held_outputs`]: the ticks a degraded plant held, flagged and judged.
 //! - [`remote`]: the plant-side bridge for a controller on another host.
 //!
 //! Layers: uses `silrig-rig` (the processes it starts), `silrig-plot`, `silrig-wire` and `silrig-flight`.
@@ -13,8 +13,10 @@
 pub mod fault_report;
 pub mod fault_schedule;
 pub mod floor;
+pub mod held_outputs;
 pub mod launcher;
 pub mod program;
 pub mod remote;
+pub mod run_figures;
 pub mod run_report;
 pub mod supervision;

@@ -1,6 +1,6 @@
 //! The merged report of one `silrig run` (`report.json` and the text it prints): the processes' reports, the OS
-//! floor measured beside them, control quality of the logged trace, the fault table, failures and leftovers; and
-//! the run's figures.
+//! floor measured beside them, control quality of the logged trace, the fault table, failures, the figures left
+//! out and leftovers.
 
 use super::fault_report::{Discontinuity, FaultRecord};
 use crate::floor::timer_baseline::BaselineReport;
@@ -56,12 +56,24 @@ pub struct RigReport {
     /// What the run wants the reader to know that is not a failure (a controller started by hand without a report).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
+    /// The figures the run did not draw, each with why (a plant without the paper's signals has no fig1).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub figures_left_out: Vec<FigureLeftOut>,
     /// What was left of the run's iceoryx2 resources after cleanup (empty when clean).
     pub leftovers: Vec<String>,
     /// The plant's per-tick distributions and the controller's compute time split into warm-up (the first second)
     /// and steady state.
     #[serde(default)]
     pub phases: Vec<PhaseSplit>,
+}
+
+/// A figure the run did not draw (see [`super::run_figures`]), and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FigureLeftOut {
+    /// The figure's file, without its folder (`fig1_states.png`).
+    pub figure: String,
+    /// Why, in words.
+    pub reason: String,
 }
 
 /// One of the plant's per-tick distributions, split at the end of the warm-up.
@@ -76,7 +88,7 @@ pub struct PhaseSplit {
 }
 
 /// The plant's per-tick wake-up lateness (realtime) and step execution time from `timing.csv`, µs.
-fn per_tick_values_us(out: &Path, realtime: bool) -> Vec<(String, Vec<f64>)> {
+pub(crate) fn per_tick_values_us(out: &Path, realtime: bool) -> Vec<(String, Vec<f64>)> {
     let Ok(text) = std::fs::read_to_string(out.join("timing.csv")) else { return Vec::new() };
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
@@ -257,112 +269,6 @@ pub struct StoppedBy {
     pub at_s: f64,
     /// The launcher's exit status (128 + the signal, as a shell reports it).
     pub exit_status: u8,
-}
-
-/// The closed-loop figures of the logged trace and the latency distributions of every process, each figure drawn on
-/// a thread of its own (drawing is most of the time from a run's end, or a Ctrl-C, to its report); the first error
-/// in the figures' order is returned.
-pub(crate) fn write_plots(
-    report: &RigReport,
-    out: &Path,
-    scenario: &silrig_flight::scenario::Scenario,
-) -> anyhow::Result<()> {
-    let trace = match report.control {
-        Some(_) => Some(Trace::load(&out.join("trace.csv"))?),
-        None => None,
-    };
-    let trace = trace.as_ref();
-    type Figure<'a> = Box<dyn FnOnce() -> anyhow::Result<()> + Send + 'a>;
-    let mut figures: Vec<Figure> = Vec::new();
-    if let Some(trace) = trace {
-        figures.push(Box::new(move || {
-            // Rows without a command (a lost controller) have NaN command columns, which the plots skip.
-            let f_true = silrig_flight::f_true::from_trace(trace, scenario);
-            match silrig_plot::plot_closed_loop(trace, f_true.as_ref(), out, &silrig_plot::plot_title(scenario)) {
-                // A plant of the user's own names its signals itself: the F-16's states figure may not fit it; the
-                // signals figure shows every one of its signals.
-                Err(silrig_plot::PlotError::MissingColumn { column, file, .. })
-                    if !silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) =>
-                {
-                    println!(
-                        "figures: {} not drawn: the plant's trace has no column `{column}` (the closed-loop figures \
-                         show the F-16's states; signals.png shows this plant's)",
-                        file.display()
-                    );
-                    Ok(())
-                }
-                other => other.map(|_| ()).map_err(anyhow::Error::from),
-            }
-        }));
-        figures.push(Box::new(move || {
-            // The units are in the plant's announcement, which the recording keeps (a run without one draws bare
-            // names).
-            let plant =
-                silrig_wire::recording::reader::RecordedRun::read(out).ok().and_then(|r| r.plant_signals().ok());
-            let plant_name = plant.as_ref().map_or(String::new(), |p| format!(", plant {}", p.plant));
-            let title = format!("{}{plant_name}: every signal, commands in orange", scenario.name);
-            let setpoint = |name: &str| scenario.setpoint.get(name);
-            silrig_plot::plot_signals(trace, plant.as_ref(), &setpoint, out, "signals", &title)?;
-            Ok(())
-        }));
-    }
-    let mut series: Vec<(String, Vec<(f64, f64)>)> = report
-        .processes
-        .iter()
-        .flat_map(|p| &p.latencies)
-        .filter(|l| {
-            l.summary.count > 0
-                && !["step_exec", "compute", "checkpoint_write", "_steady"].iter().any(|work| l.name.ends_with(work))
-        })
-        .map(|l| (l.name.clone(), l.percentile_points.clone()))
-        .collect();
-    if let Some(b) = &report.timer_baseline {
-        series.push(("os-floor.wake_lateness".into(), b.percentile_points.clone()));
-    }
-    if !series.is_empty() {
-        figures.push(Box::new(move || {
-            let title = format!("{} ({}, run {}): latency distributions", report.scenario, report.mode, report.run_id);
-            silrig_plot::plot_percentile_distributions(&series, out, "latency", &title)?;
-            Ok(())
-        }));
-    }
-    figures.push(Box::new(move || {
-        let per_tick = per_tick_values_us(out, report.mode == "realtime");
-        if per_tick.iter().any(|(_, v)| !v.is_empty()) {
-            let title = format!("{} ({}, run {}): per-tick histograms", report.scenario, report.mode, report.run_id);
-            silrig_plot::plot_latency_histograms(&per_tick, 5.0, out, "latency_histogram", &title)?;
-        }
-        Ok(())
-    }));
-    if let Some(trace) = trace.filter(|_| !(report.faults.is_empty() && report.discontinuities.is_empty())) {
-        figures.push(Box::new(move || {
-            let mut marks = Vec::new();
-            for f in &report.faults {
-                let short = f.fault.split(',').next().unwrap_or(&f.fault).to_string();
-                if let Some(t) = f.injected_at_s {
-                    marks.push(silrig_plot::TimelineEvent { t_s: t, label: short.clone() });
-                }
-                if let Some(t) = f.failsafe_at_s {
-                    marks.push(silrig_plot::TimelineEvent { t_s: t, label: "failsafe".into() });
-                }
-                if let Some(t) = f.recovered_at_s {
-                    marks.push(silrig_plot::TimelineEvent { t_s: t, label: "recovered".into() });
-                }
-            }
-            for d in &report.discontinuities {
-                marks.push(silrig_plot::TimelineEvent { t_s: d.at_s, label: "discontinuity".into() });
-            }
-            let title = format!("{} ({}, run {}): faults", report.scenario, report.mode, report.run_id);
-            silrig_plot::plot_timeline(trace, &marks, out, "faults", &title)?;
-            Ok(())
-        }));
-    }
-    std::thread::scope(|scope| {
-        let drawing: Vec<_> = figures.into_iter().map(|f| scope.spawn(f)).collect();
-        drawing.into_iter().map(|d| d.join().expect("drawing a figure does not panic")).collect::<Vec<_>>()
-    })
-    .into_iter()
-    .collect()
 }
 
 /// Command ages in doubling buckets (1, 2, 3-4, 5-8, ...), so a long outage is a few entries on one line and not

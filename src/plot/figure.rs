@@ -132,6 +132,10 @@ pub(super) struct Panel {
     pub(super) events: Vec<(f64, String)>,
     /// Write the markers' labels above this panel.
     pub(super) event_labels: bool,
+    /// Time spans shaded behind the data (rows whose outputs the plant held).
+    pub(super) shaded: Vec<(f64, f64)>,
+    /// The x range to show whatever the data spans (the whole flight for a command that stops coming early).
+    pub(super) x_span: Option<(f64, f64)>,
 }
 
 impl Panel {
@@ -146,6 +150,8 @@ impl Panel {
             y_from_zero: false,
             events: Vec::new(),
             event_labels: false,
+            shaded: Vec::new(),
+            x_span: None,
         }
     }
 
@@ -171,7 +177,8 @@ impl Panel {
     }
 
     pub(super) fn x_range(&self) -> (f64, f64) {
-        let (lo, hi) = min_max(self.finite().map(|p| p.0));
+        let span = self.x_span.iter().flat_map(|(lo, hi)| [*lo, *hi]);
+        let (lo, hi) = min_max(self.finite().map(|p| p.0).chain(span));
         match self.x_scale {
             XScale::Linear => match (lo, hi) {
                 (Some(lo), Some(hi)) if hi - lo > 1e-9 * lo.abs().max(hi.abs()) => (lo, hi),

@@ -12,8 +12,9 @@
 //!
 //! The engine: `figure.rs` (the data), `axis.rs`, `layout.rs` (pixel sizes) and `render.rs` (both backends, the font,
 //! the files). Each figure family is one file that turns trace columns (`columns.rs`) into figures: `closed_loop.rs`,
-//! `smc_rbf.rs`, `overlay.rs`, `latency.rs`, `timeline.rs`, `sweep.rs`, and `signals.rs` (any plant's outputs and
-//! commands by name).
+//! `smc_rbf.rs`, `overlay.rs`, `latency.rs`, `timeline.rs` (faults over any plant's signals), `sweep.rs`, and
+//! `signals.rs` (any plant's outputs and commands by name); `plant_series.rs` is what the last two read from a
+//! plant's announcement (units, commands beside positions, held rows).
 
 use silrig_flight::scenario::Scenario;
 use std::path::PathBuf;
@@ -25,6 +26,7 @@ mod figure;
 mod latency;
 mod layout;
 mod overlay;
+mod plant_series;
 mod render;
 mod signals;
 mod smc_rbf;

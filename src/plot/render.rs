@@ -21,6 +21,8 @@ use super::layout::{
 
 /// Event markers and their labels.
 const EVENT_COLOR: RGBColor = RGBColor(190, 30, 30);
+/// Shaded spans: a light warm grey that every palette colour stays readable on.
+const SHADE_COLOR: RGBColor = RGBColor(236, 226, 214);
 
 type DrawResult<DB> = Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
 
@@ -158,6 +160,13 @@ fn draw_data<DB: DrawingBackend>(
     events: &[(f64, String)],
     (x, y): (&Axis, &Axis),
 ) -> DrawResult<DB> {
+    // Shading first, under everything, cut to the time axis.
+    for (from, to) in &panel.shaded {
+        let (from, to) = (from.max(x.lo), to.min(x.hi));
+        if from < to {
+            chart.draw_series(std::iter::once(Rectangle::new([(from, y.lo), (to, y.hi)], SHADE_COLOR.filled())))?;
+        }
+    }
     // Zero line, when zero is inside a range that is not all positive.
     if y.lo < 0.0 && y.hi > 0.0 {
         chart.draw_series(std::iter::once(PathElement::new(vec![(x.lo, 0.0), (x.hi, 0.0)], BLACK.mix(0.35))))?;

@@ -1,15 +1,18 @@
-//! The figure of any plant: every traced output and every commanded input against time, one small panel each,
-//! in the order the plant announced them, with the set point dashed where the scenario gives one. The closed-loop
-//! figures show the F-16's states; this one shows whatever a plant of your own calls its signals.
+//! The figure of any plant: one small panel per measured output (its set point dashed where the scenario gives
+//! one) and one per input (its command dashed over the position it moves, where the plant reports one), in the
+//! order the plant announced them, a dimensionless unit left blank and the rows whose outputs the plant held
+//! shaded. The closed-loop figures show the F-16's states; this one shows whatever a plant of your own calls its
+//! signals.
 
 use std::path::{Path, PathBuf};
 
 use super::PlotError;
 use super::columns::{Columns, zip};
 use super::figure::{Figure, FigureLegend, Panel, Series, palette};
+use super::plant_series::{held_spans, input_lines, measured_outputs, shading_note, time_span, unit_label};
 use super::render::write_figure;
 use silrig_flight::signals::PlantSignals;
-use silrig_flight::trace::Trace;
+use silrig_flight::trace::{OUTPUTS_HELD_COLUMN, Trace};
 
 /// Panels side by side: three, four past 24 panels, so up to 48 stay readable on one page.
 fn columns_for(panels: usize) -> usize {
@@ -19,52 +22,55 @@ fn columns_for(panels: usize) -> usize {
 /// Height of one row of panels, px.
 const ROW_HEIGHT_PX: u32 = 230;
 
-/// One panel: a trace column, its caption and unit, its set point.
-struct Signal {
+/// One line of a panel: a trace column, drawn solid (a measurement, a position) or dashed (a command).
+struct Line {
     column: String,
-    caption: String,
-    unit: String,
-    setpoint: Option<f64>,
+    label: String,
     command: bool,
 }
 
-/// What to draw: with the plant's announcement, its traced outputs (with units) then its traced commands; without
-/// it (a run with no recording), every trace column but time and the flight segment.
+/// One panel: its caption, the axis label of its unit, its lines and the set point it is held to.
+struct Signal {
+    caption: String,
+    unit: String,
+    lines: Vec<Line>,
+    setpoint: Option<f64>,
+}
+
+/// What to draw: with the plant's announcement, its measured outputs then its inputs (position and command
+/// together); without it (a run with no recording), every trace column but time, the flight segment and the held
+/// flag, unit-less.
 fn signals(trace: &Trace, plant: Option<&PlantSignals>, setpoint: &dyn Fn(&str) -> Option<f64>) -> Vec<Signal> {
-    match plant {
-        Some(p) => {
-            let outputs = p.outputs.iter().filter(|o| o.in_trace).map(|o| Signal {
-                column: o.name.clone(),
-                caption: o.name.clone(),
-                unit: o.unit.clone(),
-                setpoint: setpoint(&o.name),
-                command: false,
-            });
-            let commands = (0..p.inputs.len()).filter(|k| p.inputs[*k].command_in_trace).map(|k| {
-                let input = &p.inputs[k];
-                Signal {
-                    column: p.command_column(k),
-                    caption: format!("{} command", input.name),
-                    unit: input.unit.clone(),
-                    setpoint: None,
-                    command: true,
-                }
-            });
-            outputs.chain(commands).collect()
-        }
-        None => trace
+    let line = |column: &str, label: &str, command| Line { column: column.into(), label: label.into(), command };
+    let Some(p) = plant else {
+        return trace
             .columns
             .iter()
-            .filter(|c| !["t_s", "flight_segment"].contains(&c.as_str()))
+            .filter(|c| !["t_s", "flight_segment", OUTPUTS_HELD_COLUMN].contains(&c.as_str()))
             .map(|c| Signal {
-                column: c.clone(),
                 caption: c.clone(),
                 unit: String::new(),
+                lines: vec![line(c, c, false)],
                 setpoint: setpoint(c),
-                command: false,
             })
-            .collect(),
-    }
+            .collect();
+    };
+    let outputs = measured_outputs(p).into_iter().map(|(name, unit)| Signal {
+        caption: name.clone(),
+        unit: unit_label(&unit).into(),
+        setpoint: setpoint(&name),
+        lines: vec![line(&name, &name, false)],
+    });
+    let inputs = input_lines(p).into_iter().map(|i| {
+        let caption = match i.position {
+            Some(_) => format!("{}: position, command dashed", i.name),
+            None => format!("{} command", i.name),
+        };
+        let mut lines: Vec<Line> = i.position.iter().map(|c| line(c, &i.name, false)).collect();
+        lines.extend(i.command.iter().map(|c| line(c, &format!("{} command", i.name), true)));
+        Signal { caption, unit: unit_label(&i.unit).into(), lines, setpoint: None }
+    });
+    outputs.chain(inputs).collect()
 }
 
 /// Draw `<stem>.{png,svg}` in `out_dir`: a grid of panels, one per signal (see [`signals`]), time on every x axis.
@@ -84,11 +90,17 @@ pub fn plot_signals(
     if wanted.is_empty() {
         return Err(PlotError::NoData { file, problem: "the trace has no signal columns".into() });
     }
+    let held = held_spans(trace);
     let mut cells = Vec::with_capacity(wanted.len());
     for s in &wanted {
-        let values = data.get(&s.column)?;
-        let colour = palette(if s.command { 1 } else { 0 });
-        let mut series = vec![Series::solid(&s.caption, zip(&t, &values), colour)];
+        let mut series = Vec::with_capacity(s.lines.len() + 1);
+        for l in &s.lines {
+            let points = zip(&t, &data.get(&l.column)?);
+            series.push(match l.command {
+                true => Series::command(&l.label, points, palette(1)),
+                false => Series::solid(&l.label, points, palette(0)),
+            });
+        }
         if let Some(sp) = s.setpoint {
             let span = [t.first().copied().unwrap_or(0.0), t.last().copied().unwrap_or(0.0)];
             series.push(Series::command("set point", span.iter().map(|ti| (*ti, sp)).collect(), palette(3)));
@@ -99,13 +111,15 @@ pub fn plot_signals(
         };
         let mut panel = Panel::new(&caption, &s.unit, series);
         panel.legend = false;
+        panel.shaded = held.clone();
+        panel.x_span = time_span(&t);
         cells.push(Some(panel));
     }
     let cols = columns_for(cells.len());
     let rows = cells.len().div_ceil(cols);
     cells.resize_with(rows * cols, || None);
     let size = (1500, 90 + ROW_HEIGHT_PX * rows as u32);
-    let mut fig = Figure::grid(title, size, rows, cols, cells, FigureLegend::None);
+    let mut fig = Figure::grid(&format!("{title}{}", shading_note(&held)), size, rows, cols, cells, FigureLegend::None);
     // Every panel keeps its own time labels: a grid this dense is read panel by panel.
     fig.shared_x = false;
     write_figure(&fig, out_dir, stem)
@@ -114,59 +128,59 @@ pub fn plot_signals(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use silrig_flight::signals::{InputSignal, OutputSignal};
-
-    fn plant() -> PlantSignals {
-        let output = |name: &str, in_trace| OutputSignal { name: name.into(), unit: "ft".into(), in_trace };
-        PlantSignals {
-            plant: "toy".into(),
-            outputs: vec![output("alt_ft", true), output("hidden", false), output("x", true)],
-            inputs: vec![InputSignal {
-                name: "elevator".into(),
-                unit: "1".into(),
-                min: -1.0,
-                max: 1.0,
-                hold: 0.0,
-                held_output: None,
-                command_in_trace: true,
-            }],
-        }
-    }
+    use crate::plant_series::tests::cart;
 
     #[test]
-    fn one_panel_per_traced_output_and_command_with_set_points_and_units() {
-        let p = plant();
-        let setpoint = |name: &str| (name == "alt_ft").then_some(4000.0);
-        let trace = Trace::new(["t_s", "alt_ft", "x", "elevator_cmd", "flight_segment"].map(String::from).to_vec());
+    fn a_panel_per_measured_output_and_per_input_with_its_position_set_points_and_blank_dimensionless_units() {
+        let p = cart();
+        let setpoint = |name: &str| (name == "x_m").then_some(4.0);
+        let trace = Trace::new(vec![]);
         let s = signals(&trace, Some(&p), &setpoint);
-        let columns: Vec<&str> = s.iter().map(|s| s.column.as_str()).collect();
-        assert_eq!(columns, ["alt_ft", "x", p.command_column(0).as_str()]);
-        assert_eq!((s[0].setpoint, s[0].unit.as_str(), s[1].setpoint), (Some(4000.0), "ft", None));
-        assert!(s[2].command && s[2].caption == "elevator command");
-        // Without the announcement: every column but time and the segment.
-        let bare: Vec<String> = signals(&trace, None, &setpoint).into_iter().map(|s| s.column).collect();
-        assert_eq!(bare, ["alt_ft", "x", "elevator_cmd"]);
+        let columns: Vec<Vec<&str>> = s.iter().map(|s| s.lines.iter().map(|l| l.column.as_str()).collect()).collect();
+        assert_eq!(columns, [vec!["x_m"], vec!["v_mps"], vec!["steer_deg", "steer_cmd_deg"], vec!["throttle_cmd"]]);
+        assert_eq!((s[0].setpoint, s[0].unit.as_str(), s[1].setpoint), (Some(4.0), "m", None));
+        assert_eq!((s[2].unit.as_str(), s[3].unit.as_str()), ("deg", ""), "a dimensionless unit is left blank");
+        assert!(!s[2].lines[0].command && s[2].lines[1].command && s[3].lines[0].command);
+        assert_eq!(s[2].caption, "steer: position, command dashed");
+        // Without the announcement: every column but time, the segment and the held flag.
+        let bare = Trace::new(
+            ["t_s", "x_m", "steer_cmd_deg", "flight_segment", OUTPUTS_HELD_COLUMN].map(String::from).to_vec(),
+        );
+        let columns: Vec<String> = signals(&bare, None, &setpoint).into_iter().map(|s| s.caption).collect();
+        assert_eq!(columns, ["x_m", "steer_cmd_deg"]);
     }
 
     #[test]
-    fn the_figure_is_drawn_with_nan_rows_as_breaks() {
-        let p = plant();
-        let mut trace = Trace::new(
-            ["t_s", "alt_ft", "x", p.command_column(0).as_str(), "flight_segment"].map(String::from).to_vec(),
-        );
+    fn the_figure_is_drawn_with_nan_rows_as_breaks_and_held_rows_shaded() {
+        let p = cart();
+        let names = [
+            "t_s",
+            "x_m",
+            "v_mps",
+            "steer_cmd_deg",
+            "throttle_cmd",
+            "steer_deg",
+            "flight_segment",
+            OUTPUTS_HELD_COLUMN,
+        ];
+        let mut trace = Trace::new(names.map(String::from).to_vec());
         trace.rows = (0..200)
             .map(|k| {
                 let t = k as f64 * 0.01;
                 let cmd = if (50..60).contains(&k) { f64::NAN } else { (t * 3.0).sin() };
-                vec![t, 4000.0 + 10.0 * t, t.cos(), cmd, 0.0]
+                let held = if (120..150).contains(&k) { 1.0 } else { 0.0 };
+                vec![t, 4.0 * t, 4.0, cmd, 0.5, 0.9 * cmd, 0.0, held]
             })
             .collect();
         let dir = std::env::temp_dir().join(format!("silrig-plot-signals-{}", std::process::id()));
         let files =
-            plot_signals(&trace, Some(&p), &|n: &str| (n == "alt_ft").then_some(4010.0), &dir, "signals", "t").unwrap();
+            plot_signals(&trace, Some(&p), &|n: &str| (n == "x_m").then_some(4.0), &dir, "signals", "t").unwrap();
         assert_eq!(files.len(), 2);
         let png = std::fs::read(&files[0]).unwrap();
         assert!(png.starts_with(b"\x89PNG") && png.len() > 10_000, "{} bytes", png.len());
+        let svg = std::fs::read_to_string(&files[1]).unwrap();
+        assert!(svg.contains("shaded: outputs held"), "the title does not say what the shading is");
+        assert!(svg.contains("rgb(236,226,214)") || svg.contains("#ECE2D6"), "no shaded span in the SVG");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -193,6 +193,9 @@ pub struct PlantLoop {
     step_exec_ns: u64,
     /// Where the launcher reads the newest tick (see [`super::tick_beacon`]).
     beacon: Option<TickBeacon>,
+    /// The model's outputs now are the last valid ones, its own refused: every sample carrying them is flagged
+    /// ([`wire::FLAG_OUTPUTS_HELD`]) until they are the model's own again. Set by a plant session.
+    pub(crate) outputs_held: bool,
 }
 
 impl PlantLoop {
@@ -279,6 +282,7 @@ impl PlantLoop {
             events,
             loop_faults,
             beacon,
+            outputs_held: false,
         })
     }
 
@@ -355,6 +359,7 @@ impl PlantLoop {
 
     /// The wire sample of the model's outputs now.
     fn sample(&self, flags: u32) -> PlantSample {
+        let flags = flags | if self.outputs_held { wire::FLAG_OUTPUTS_HELD } else { 0 };
         PlantSample { t_sim_s: self.model.t_s(), flags, ..PlantSample::with_outputs(&self.model.outputs()) }
     }
 

@@ -6,7 +6,8 @@
 //! in-loop faults, the flags and the timing report. `libsilrig_client.so` exports it to C and Python.
 //!
 //! The model's step time is what passes between handing out the inputs and the next `tick`; outputs with NaN or
-//! infinity are refused (counted, the first said in an event) and the last valid ones are published instead.
+//! infinity are refused (counted, the first said in an event) and the last valid ones are published instead, each
+//! such sample flagged ([`silrig_wire::wire::FLAG_OUTPUTS_HELD`]).
 //! Between the loop and the model sits the rig's [`SignalChain`]: the scenario's `[actuators.<input>]` and actuator
 //! faults move the inputs the model is stepped with, sensor faults change the outputs the controller reads (the
 //! trace and the recording show those, as for the F-16).
@@ -351,6 +352,7 @@ impl PlantSession {
                     let detail = format!("valid outputs again after {} refused", self.refused_outputs);
                     self.lp.event("outputs-accepted", detail);
                     self.refused_outputs = 0;
+                    self.lp.outputs_held = false;
                 }
             }
             Some(k) => {
@@ -362,6 +364,7 @@ impl PlantSession {
                 }
                 self.refused_outputs += 1;
                 self.lp.count("outputs_refused", 1);
+                self.lp.outputs_held = true;
             }
         }
     }

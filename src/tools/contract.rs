@@ -67,6 +67,7 @@ fn constants() -> Vec<(&'static str, u64, &'static str)> {
         ("FLAG_RATE_LIMITED", u64::from(wire::FLAG_RATE_LIMITED), "an actuator moved at its rate limit this tick"),
         ("FLAG_COMMAND_REFUSED", u64::from(wire::FLAG_COMMAND_REFUSED), "command refused (NaN/out of range): hold"),
         ("FLAG_END_OF_RUN", u64::from(wire::FLAG_END_OF_RUN), "the plant's last sample: last tick, its positions"),
+        ("FLAG_OUTPUTS_HELD", u64::from(wire::FLAG_OUTPUTS_HELD), "outputs refused (NaN/inf): the last valid held"),
         ("MAX_OUTPUTS", wire::MAX_OUTPUTS as u64, "outputs a plant sample carries at most"),
         ("MAX_INPUTS", wire::MAX_INPUTS as u64, "inputs a command sample carries at most"),
         ("MAX_DIAGNOSTICS", wire::MAX_DIAGNOSTICS as u64, "diagnostics a command sample carries at most"),

@@ -146,6 +146,9 @@ pub const FLAG_RATE_LIMITED: u32 = 1 << 3;
 /// state that left the model's envelope). It repeats that tick's outputs with the actuator positions that tick's
 /// command set, which no later sample would carry; a controller does not answer it.
 pub const FLAG_END_OF_RUN: u32 = 1 << 5;
+/// `PlantSample::flags`: the model's outputs for this tick were refused (NaN or infinity) and the sample carries
+/// the last valid ones, held: the row is not the model's flight data (`trace.csv`'s `outputs_held`).
+pub const FLAG_OUTPUTS_HELD: u32 = 1 << 6;
 
 /// `CommandSample::flags`: the controller's command for this tick was refused (NaN, infinity or out of range) and
 /// not sent; the plant holds its last valid command, as for a missing one.

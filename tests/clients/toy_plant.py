@@ -3,6 +3,7 @@ double integrator driven by its surface, with the F-16's sign convention (a posi
 moment) and the F-16's signal names, so the example PID flies it unchanged.
 
     python3 toy_plant.py [MODE]     MODE: ok (default), nan (output phi_deg is NaN at ticks 300..=309),
+                                    degraded (phi_deg is NaN from tick 334 on: two thirds of a 10 s run),
                                     twice (announces phi_deg twice), none (announces no outputs)
 
 It keeps checkpoints (`save`, `restore`), so a restarted toy goes on with the flight. The scenario's
@@ -49,7 +50,7 @@ class Toy(PlantModel):
 
     def outputs_now(self):
         out = self.angle + self.rate + self.surface
-        if self.mode == "nan" and 300 <= self.tick <= 309:
+        if (self.mode == "nan" and 300 <= self.tick <= 309) or (self.mode == "degraded" and self.tick >= 334):
             out[0] = math.nan
         return out
 

@@ -1,6 +1,7 @@
 //! The FMUs this repository builds from C, for the tests that fly or break them: `airframe` (the example vehicle,
 //! `examples/fmu/airframe`), `misbehave` (the importer's error fixture, `tests/fmu/misbehave`), `lag3` (a
-//! first-order lag in FMI 3.0, `tests/fmu/lag3`) and `pid` (the example PID as a controller FMU,
+//! first-order lag in FMI 3.0, `tests/fmu/lag3`), `attitude` (a foreign three-axis attitude vehicle, inputs named
+//! with their unit and no surface positions, `tests/fmu/attitude`) and `pid` (the example PID as a controller FMU,
 //! `examples/fmu/pid`), each built by `examples/fmu/build.sh` with the system `cc` against
 //! the FMI headers of the test venv's `fmpy`.
 
@@ -38,8 +39,9 @@ pub fn fmu_source(name: &str) -> PathBuf {
         "airframe" => Path::new(ROOT).join("examples/fmu/airframe"),
         "misbehave" => Path::new(ROOT).join("tests/fmu/misbehave"),
         "lag3" => Path::new(ROOT).join("tests/fmu/lag3"),
+        "attitude" => Path::new(ROOT).join("tests/fmu/attitude"),
         "pid" => Path::new(ROOT).join("examples/fmu/pid"),
-        other => panic!("no FMU named {other}: airframe, misbehave, lag3 or pid"),
+        other => panic!("no FMU named {other}: airframe, misbehave, lag3, attitude or pid"),
     }
 }
 
@@ -55,7 +57,7 @@ pub fn run_build_sh(src: &Path, out: &Path) -> std::process::Output {
         .expect("sh runs")
 }
 
-/// Build FMU `name` ("airframe", "misbehave", "lag3", the FMI 3.0 one, or "pid", the controller) into `out_dir/<name>.fmu` and return that path.
+/// Build FMU `name` ("airframe", "misbehave", "lag3", the FMI 3.0 one, "attitude" or "pid", the controller) into `out_dir/<name>.fmu` and return that path.
 pub fn build_fmu(name: &str, out_dir: &Path) -> PathBuf {
     build(&fmu_source(name), &out_dir.join(format!("{name}.fmu")))
 }

@@ -57,10 +57,23 @@ pub fn page(report: &RigReport, command: &str) -> Page {
     } else {
         others
     };
+    let others = left_out(report) + &others;
     page.section("figures", "Figures", command, others);
     page.section("events", "Events", command, super::events(out));
     page.section_with("files", "Files", Vec::new(), super::files(out, out));
     page
+}
+
+/// The figures the run did not draw, each with why: said here once, not in every run's printed report.
+fn left_out(r: &RigReport) -> String {
+    if r.figures_left_out.is_empty() {
+        return String::new();
+    }
+    let mut out = "<ul class=\"notes\">".to_string();
+    for f in &r.figures_left_out {
+        let _ = write!(out, "<li>{} not drawn: {}</li>", esc(&f.figure), esc(&f.reason));
+    }
+    out + "</ul>\n"
 }
 
 /// The run, the machine, the processes, counters, what went wrong and the control quality.
