@@ -5,8 +5,10 @@
 
 pub mod criteria;
 pub mod one_process;
+mod recovery;
 pub mod repeat;
 pub mod suite;
+mod timing;
 pub mod verdict;
 
 use anyhow::Context;
@@ -231,7 +233,8 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
             }
             let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
             run_dirs.push(dir.display().to_string());
-            evidence.push(RunEvidence { report, trace });
+            let held_ns = silrig_launch::run_report::held_command_times_ns(&dir);
+            evidence.push(RunEvidence { report, trace, held_ns });
             if signals::termination_requested() {
                 break;
             }
