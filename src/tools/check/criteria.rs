@@ -26,6 +26,15 @@ pub struct RunEvidence {
     pub held_ns: Vec<u64>,
 }
 
+impl RunEvidence {
+    /// Why the flight never started (the logger recorded no tick and the plant flew none): the run's first
+    /// failure, which names the controller or plant that never joined or exited at once. None once it flew.
+    pub fn never_started(&self) -> Option<String> {
+        let flew = self.trace.is_some() || counter(&self.report, Role::Plant, "ticks").is_some_and(|t| t > 0);
+        (!flew).then(|| self.report.failures.first().cloned().unwrap_or_else(|| "no process said why".into()))
+    }
+}
+
 /// The rig's criteria of a case, judged from its runs' reports and traces: what `silrig check` adds to the flight
 /// criteria of [`Criteria`], which live below the rig.
 pub trait RigCriteria {

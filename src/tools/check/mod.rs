@@ -199,8 +199,8 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
 }
 
 /// Fly one case (twice for determinism) and judge it; fly it again while its answer is inconclusive, up to
-/// `--retries` more times.
-fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict, CheckError> {
+/// `--retries` more times. With the verdict, why no other case can fly, if this one's flight never started.
+fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<(CaseVerdict, Option<String>), CheckError> {
     let setup = |problem: anyhow::Error| CheckError::Setup { case: case.name.clone(), problem };
     let started = std::time::Instant::now();
     let case_dir = out.join(&case.name);
@@ -210,59 +210,70 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
         .with_context(|| format!("writing {}", scenario_path.display()))
         .map_err(setup)?;
     if let Some(sweep) = &case.sweep {
-        return sweep_case(opts, case, sweep, &scenario_path, &case_dir, started).map_err(setup);
+        return Ok((sweep_case(opts, case, sweep, &scenario_path, &case_dir, started).map_err(setup)?, None));
     }
     if opts.in_process && one_process::flies_in_one_process(case) {
-        return in_process_case(opts, case, &case_dir, started).map_err(setup);
+        return Ok((in_process_case(opts, case, &case_dir, started).map_err(setup)?, None));
     }
-    let runs = case.criteria.runs();
     let mut run_dirs = Vec::new();
     let mut attempts = 0;
-    let judgements = loop {
+    let (judgements, never_started) = loop {
         attempts += 1;
         // The first flight goes where it always has; a retry into a folder of its own beside it.
         let attempt_dir =
             if attempts == 1 { case_dir.clone() } else { case_dir.join(format!("retry-{}", attempts - 1)) };
-        let mut evidence = Vec::new();
-        for i in 1..=runs {
-            let dir = if runs == 1 { attempt_dir.clone() } else { attempt_dir.join(format!("run-{i}")) };
-            let report = launcher::run(&launch_options(opts, case, &scenario_path, dir.clone())).map_err(setup)?;
-            // The run's page, as `silrig run` writes it: what a reader of a failed case opens first.
-            if let Err(e) = crate::html::run::write(&report, &opts.reproduce(&case.name)) {
-                eprintln!("silrig check: case {}: no report.html in {}: {e:#}", case.name, dir.display());
-            }
-            let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
-            run_dirs.push(dir.display().to_string());
-            let held_ns = silrig_launch::run_report::held_command_times_ns(&dir);
-            evidence.push(RunEvidence { report, trace, held_ns });
-            if signals::termination_requested() {
-                break;
-            }
-        }
+        let evidence = fly_runs(opts, case, &scenario_path, &attempt_dir, &mut run_dirs)?;
         let judgements = case.criteria.judge(&case.scenario, &evidence);
+        let never_started = evidence.last().and_then(RunEvidence::never_started);
         let outcome = verdict::case_outcome(&judgements);
         if outcome != Outcome::Inconclusive || attempts > opts.retries || signals::termination_requested() {
-            break judgements;
+            break (judgements, never_started);
         }
         eprintln!(
             "silrig check: case {} inconclusive (the machine disturbed a timing figure): flying it again ({} of {})",
             case.name, attempts, opts.retries
         );
     };
-    let outcome = verdict::case_outcome(&judgements);
-    Ok(CaseVerdict {
-        name: case.name.clone(),
-        why: case.why.clone(),
-        mode: case.mode.label().into(),
-        faults: case.fault_flags.clone(),
-        passed: outcome == Outcome::Pass,
-        inconclusive: outcome == Outcome::Inconclusive,
+    let verdict = CaseVerdict::judged(
+        case,
+        case.mode.label().into(),
         attempts,
-        wall_s: started.elapsed().as_secs_f64(),
+        started.elapsed().as_secs_f64(),
         run_dirs,
-        reproduce: opts.reproduce(&case.name),
+        opts.reproduce(&case.name),
         judgements,
-    })
+    );
+    Ok((verdict, never_started.map(|why| format!("the flight never started in case `{}`: {why}", case.name))))
+}
+
+/// One flight of a case into `dir`: its run (or two, for determinism), each run's folder added to `run_dirs`. A
+/// run whose flight never started ends it: a second one would wait as long for the same thing.
+fn fly_runs(
+    opts: &CheckOptions,
+    case: &Case,
+    scenario_path: &Path,
+    dir: &Path,
+    run_dirs: &mut Vec<String>,
+) -> Result<Vec<RunEvidence>, CheckError> {
+    let runs = case.criteria.runs();
+    let mut evidence: Vec<RunEvidence> = Vec::new();
+    for i in 1..=runs {
+        let dir = if runs == 1 { dir.to_path_buf() } else { dir.join(format!("run-{i}")) };
+        let report = launcher::run(&launch_options(opts, case, scenario_path, dir.clone()))
+            .map_err(|problem| CheckError::Setup { case: case.name.clone(), problem })?;
+        // The run's page, as `silrig run` writes it: what a reader of a failed case opens first.
+        if let Err(e) = crate::html::run::write(&report, &opts.reproduce(&case.name)) {
+            eprintln!("silrig check: case {}: no report.html in {}: {e:#}", case.name, dir.display());
+        }
+        let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
+        run_dirs.push(dir.display().to_string());
+        let held_ns = silrig_launch::run_report::held_command_times_ns(&dir);
+        evidence.push(RunEvidence { report, trace, held_ns });
+        if signals::termination_requested() || evidence.last().and_then(RunEvidence::never_started).is_some() {
+            break;
+        }
+    }
+    Ok(evidence)
 }
 
 /// Fly a lockstep case in one process (`--in-process`) and judge it: no inconclusive answer is possible (no
@@ -277,20 +288,9 @@ fn in_process_case(
     silrig_rig::in_process::FmuFlags { plant_fmu: opts.plant_fmu.clone(), controller_fmu: opts.controller_fmu.clone() }
         .apply(&mut case.scenario)?;
     let (judgements, run_dirs) = one_process::fly_and_judge(&case, case_dir)?;
-    let outcome = verdict::case_outcome(&judgements);
-    Ok(CaseVerdict {
-        name: case.name.clone(),
-        why: case.why.clone(),
-        mode: "lockstep, one process".into(),
-        faults: case.fault_flags.clone(),
-        passed: outcome == Outcome::Pass,
-        inconclusive: false,
-        attempts: 1,
-        wall_s: started.elapsed().as_secs_f64(),
-        run_dirs,
-        reproduce: opts.reproduce(&case.name),
-        judgements,
-    })
+    let wall_s = started.elapsed().as_secs_f64();
+    let mode = "lockstep, one process".into();
+    Ok(CaseVerdict::judged(&case, mode, 1, wall_s, run_dirs, opts.reproduce(&case.name), judgements))
 }
 
 /// Fly a sweep case: its dispersed cases as `silrig sweep` flies them (in one process; through the lockstep rig
@@ -365,20 +365,8 @@ fn sweep_case(
         )
     });
     let judgements = vec![silrig_flight::judge::judgement("pass_rate", measured, limit, failure)];
-    let outcome = verdict::case_outcome(&judgements);
-    Ok(CaseVerdict {
-        name: case.name.clone(),
-        why: case.why.clone(),
-        mode: "sweep".into(),
-        faults: case.fault_flags.clone(),
-        passed: outcome == Outcome::Pass,
-        inconclusive: false,
-        attempts: 1,
-        wall_s: started.elapsed().as_secs_f64(),
-        run_dirs: vec![case_dir.display().to_string()],
-        reproduce: opts.reproduce(&case.name),
-        judgements,
-    })
+    let (wall_s, dirs) = (started.elapsed().as_secs_f64(), vec![case_dir.display().to_string()]);
+    Ok(CaseVerdict::judged(case, "sweep".into(), 1, wall_s, dirs, opts.reproduce(&case.name), judgements))
 }
 
 /// Run the suite and write the verdict's files. An `Err` means nothing could be judged (exit status 2); a verdict
@@ -425,7 +413,7 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
             },
             if case.sweep.is_none() && case.criteria.runs() > 1 { ", flown twice" } else { "" }
         );
-        let verdict = run_case(opts, case, &out)?;
+        let (verdict, never_started) = run_case(opts, case, &out)?;
         eprintln!(
             "silrig check: case {} {} in {:.1} s",
             case.name,
@@ -438,6 +426,14 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
         );
         cases.push(verdict);
         if signals::termination_requested() {
+            break;
+        }
+        // A controller or plant that never joins, or exits at once, would only make every other case wait as long
+        // to say the same: the rest are reported, not flown.
+        if let Some(why) = never_started {
+            eprintln!("silrig check: {why}; the other cases are not flown");
+            let rest = &suite.cases[i + 1..];
+            cases.extend(rest.iter().map(|c| CaseVerdict::not_flown(c, opts.reproduce(&c.name), why.clone())));
             break;
         }
     }
