@@ -26,7 +26,9 @@ use verdict::{CaseVerdict, Verdict};
 /// What `silrig check` is asked to do.
 #[derive(Debug, Clone, clap::Args)]
 pub struct CheckOptions {
-    /// Suite file (TOML); without it, the embedded default suite (configs/check-default.toml).
+    /// Suite file (TOML); without it, the embedded default suite (configs/check-default.toml), or with
+    /// --plant-cmd or --plant-fmu the one for a plant of your own (configs/check-any-plant.toml: nothing of the
+    /// F-16).
     pub suite: Option<PathBuf>,
     /// Run only this case of the suite.
     #[arg(long, value_name = "NAME")]
@@ -102,6 +104,8 @@ impl CheckOptions {
     fn load_suite(&self) -> Result<Suite, CheckError> {
         let mut suite = match &self.suite {
             Some(path) => Suite::load(path)?,
+            // A plant of your own has none of the F-16's signals, sections or criteria.
+            None if self.plant_cmd.is_some() || self.plant_fmu.is_some() => Suite::embedded_any_plant(),
             None => Suite::embedded_default(),
         };
         if let Some(name) = &self.case {
