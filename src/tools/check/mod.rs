@@ -373,6 +373,26 @@ fn sweep_case(
     Ok(CaseVerdict::judged(case, "sweep".into(), 1, wall_s, dirs, opts.reproduce(&case.name), judgements))
 }
 
+/// Say which case flies now, and how (a CI log's progress).
+fn announce(opts: &CheckOptions, i: usize, of: usize, case: &Case) {
+    eprintln!(
+        "silrig check: case {}/{} {} ({}{}) ...",
+        i + 1,
+        of,
+        case.name,
+        match case.sweep {
+            Some(sweep) => format!(
+                "a sweep of {} dispersed cases {}",
+                sweep.runs,
+                if opts.controller_cmd.is_some() { "through the lockstep rig" } else { "in one process" }
+            ),
+            None if opts.in_process && one_process::flies_in_one_process(case) => "lockstep, in one process".into(),
+            None => case.mode.label().to_string(),
+        },
+        if case.sweep.is_none() && case.criteria.runs() > 1 { ", flown twice" } else { "" }
+    );
+}
+
 /// Run the suite and write the verdict's files. An `Err` means nothing could be judged (exit status 2); a verdict
 /// with failed cases is `Ok` (exit status 1).
 pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
@@ -401,22 +421,7 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
     let started_unix_s = verdict::unix_now_s();
     let mut cases = Vec::new();
     for (i, case) in suite.cases.iter().enumerate() {
-        eprintln!(
-            "silrig check: case {}/{} {} ({}{}) ...",
-            i + 1,
-            suite.cases.len(),
-            case.name,
-            match case.sweep {
-                Some(sweep) => format!(
-                    "a sweep of {} dispersed cases {}",
-                    sweep.runs,
-                    if opts.controller_cmd.is_some() { "through the lockstep rig" } else { "in one process" }
-                ),
-                None if opts.in_process && one_process::flies_in_one_process(case) => "lockstep, in one process".into(),
-                None => case.mode.label().to_string(),
-            },
-            if case.sweep.is_none() && case.criteria.runs() > 1 { ", flown twice" } else { "" }
-        );
+        announce(opts, i, suite.cases.len(), case);
         let (verdict, never_started) = run_case(opts, case, &out)?;
         eprintln!(
             "silrig check: case {} {} in {:.1} s",
