@@ -5,7 +5,7 @@
 use super::recovery::{
     comebacks, failsafe_engaged_and_released, recovered_within, restart_join_within, restarts, resume_jump,
 };
-use super::timing::{budget, deadline_misses, every_tick_answered};
+use super::timing::{budget, counter, deadline_misses, every_tick_answered};
 use silrig_flight::criteria::positive;
 pub use silrig_flight::criteria::{Criteria, Judgement, Outcome};
 use silrig_flight::judge::{judge_flight, judgement, no_evidence};
@@ -158,11 +158,6 @@ impl RigCriteria for Criteria {
         }
         out
     }
-}
-
-/// A counter of one process's report (None: it wrote none, or not this counter).
-pub(super) fn counter(report: &RigReport, role: Role, name: &str) -> Option<u64> {
-    report.processes.iter().find(|p| p.process == role.label()).and_then(|p| p.counters.get(name).copied())
 }
 
 fn run_completed(scenario: &Scenario, runs: &[RunEvidence]) -> Judgement {

@@ -3,7 +3,6 @@
 //! unanswered tick that the machine's own disturbance during the run explains (the plant's late wake-ups, the OS
 //! floor's p99 and stalls beside the run, the load) is inconclusive and flown again, not failed.
 
-use super::criteria::counter;
 use silrig_flight::criteria::{Budget, Judgement, Outcome};
 use silrig_flight::judge::{inconclusive, judgement, no_evidence};
 use silrig_flight::role::Role;
@@ -182,6 +181,11 @@ pub(super) fn budget(
             Some(format!("{over}; latency.png in the run folder shows the whole distribution")),
         ),
     }
+}
+
+/// A counter of one process's report (None: it wrote none, or not this counter).
+pub(super) fn counter(report: &RigReport, role: Role, name: &str) -> Option<u64> {
+    report.processes.iter().find(|p| p.process == role.label()).and_then(|p| p.counters.get(name).copied())
 }
 
 /// The plant's unanswered ticks of one run, set beside the OS floor's stalls.
