@@ -98,8 +98,8 @@ fn rejoin(f: &Fault, window: &[&Event], t0_ns: u64) -> Option<Rejoin> {
     });
     Some(Rejoin {
         restarted_at_wall_s: wall(restarted),
-        joined_at_wall_s: joined.map(|e| wall(e)),
-        closed_at_wall_s: closed.map(|e| wall(e)),
+        joined_at_wall_s: joined.map(&wall),
+        closed_at_wall_s: closed.map(wall),
     })
 }
 
