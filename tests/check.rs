@@ -1,7 +1,9 @@
 //! `silrig check`: the default suite passes with our controller; the Python PID example passes a test suite and,
 //! with one fault injected (tests/clients/faulty_pid.py), fails exactly the criteria that fault breaks; the paper's
 //! gains fail on their limit cycle, and `--case` reproduces a failed case's numbers; a controller that never joins
-//! is a failed verdict (exit 1), a malformed suite or an unrunnable command is no verdict (exit 2). The JUnit file is
+//! is a failed verdict (exit 1), and one that never joins or exits at once fails the default suite at its first case
+//! with the rest not flown; a restarted controller is judged from its join; a plant of our own passes the any-plant
+//! default suite; a malformed suite or an unrunnable command is no verdict (exit 2). The JUnit file is
 //! parsed by Python's xml.etree and its counts compared with check.json. Timing criteria are never required to pass
 //! (this machine is shared): they must only be measured, or, for a controller 15 ms slow, fail.
 
@@ -137,17 +139,22 @@ impl Check {
         (n[0], n[1], n[2], n[3])
     }
 
-    /// The JUnit file's counts are check.json's.
+    /// The JUnit file's counts are check.json's: a test per criterion, and one (skipped) per case not flown.
     fn junit_agrees(&self) {
-        let all: Vec<&Value> = self.verdict["cases"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .flat_map(|c| c["judgements"].as_array().unwrap())
-            .collect();
+        let cases = self.verdict["cases"].as_array().unwrap();
+        let all: Vec<&Value> = cases.iter().flat_map(|c| c["judgements"].as_array().unwrap()).collect();
         let failed = all.iter().filter(|j| j["passed"] == false && !j["inconclusive"].is_string()).count() as u64;
-        let n = all.len() as u64;
+        let n = (all.len() + cases.iter().filter(|c| c["not_flown"].is_string()).count()) as u64;
         assert_eq!(self.junit_counts(), (n, failed, n, failed));
+    }
+
+    /// The names of the cases flown (judged), and of those not flown with the reason given.
+    fn flown_and_not(&self) -> (Vec<String>, Vec<(String, String)>) {
+        let cases = self.verdict["cases"].as_array().unwrap();
+        let name = |c: &Value| c["name"].as_str().unwrap().to_string();
+        let flown = cases.iter().filter(|c| c["not_flown"].is_null()).map(name).collect();
+        let not = cases.iter().filter_map(|c| Some((name(c), c["not_flown"].as_str()?.to_string()))).collect();
+        (flown, not)
     }
 }
 
@@ -294,6 +301,98 @@ fn a_controller_that_never_joins_is_a_failed_verdict() {
     assert!(c.stdout.contains("the run did not finish cleanly"), "{}", c.stdout);
     c.finish();
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A controller that never joins, or exits at once, fails the default suite at its first case; the other six are
+/// reported, not flown, with that reason, in the table and as skipped JUnit tests. (How long it takes is not
+/// asserted: the first case waits for the plant's start-up timeout, 10 s, whatever the machine.)
+fn fails_fast(test: &str, controller: &str, reason: &str) {
+    let c = check(test, &["--controller-cmd", controller]);
+    assert_eq!(c.code, Some(1), "{}{}", c.stdout, c.stderr);
+    let (flown, not_flown) = c.flown_and_not();
+    assert_eq!(flown, ["lockstep-determinism"], "{}", c.stdout);
+    assert_eq!(not_flown.len(), 6, "{}", c.stdout);
+    assert_eq!(c.verdict["cases_in_suite"], 7);
+    for (case, why) in &not_flown {
+        assert!(why.starts_with("the flight never started in case `lockstep-determinism`: "), "{case}: {why}");
+        assert!(why.contains(reason), "{case}: {why}");
+    }
+    assert!(c.failed("lockstep-determinism").contains("run_completed"), "{}", c.stdout);
+    assert_eq!(
+        c.case("lockstep-determinism")["run_dirs"].as_array().unwrap().len(),
+        1,
+        "the second determinism run is not flown either"
+    );
+    assert!(
+        c.stdout.contains("NOT FLOWN realtime-deadline, sensor-noise-bias, controller-kill-restart"),
+        "{}",
+        c.stdout
+    );
+    assert!(c.stdout.contains("6 cases not flown"), "{}", c.stdout);
+    let junit = std::fs::read_to_string(c.out.join("check.junit.xml")).unwrap();
+    assert_eq!(junit.matches("name=\"not_flown\"").count(), 6);
+    assert!(junit.contains("<skipped message=\"not flown: the flight never started in case"), "{junit}");
+    c.junit_agrees();
+    c.finish();
+}
+
+#[test]
+fn a_silent_controller_fails_the_default_suite_at_its_first_case_and_the_rest_are_not_flown() {
+    fails_fast("silent", "sleep 600", "no controller and logger connected within 10 s");
+}
+
+#[test]
+fn a_controller_that_exits_at_once_fails_the_default_suite_at_its_first_case() {
+    fails_fast("exits", "true", "controller: exit status 0 before the plant's first tick");
+}
+
+#[test]
+fn a_restarted_controller_is_judged_from_its_join_with_its_start_up_beside() {
+    client_lib();
+    // The Python PID starting a second late, every life: the restart's join takes that second and more.
+    let slow = "sh -c 'sleep 1; exec python3 examples/python/pid_attitude.py'";
+    let c = check("join", &["--case", "controller-kill-restart", "--controller-cmd", slow]);
+    let join = c.measured("controller-kill-restart", "restart_join_within_s");
+    let join_s: f64 = join.strip_suffix(" s").unwrap().parse().unwrap();
+    assert!(join_s >= 1.0, "{join}: the start-up is the join");
+    let recovered = c.measured("controller-kill-restart", "recovered_within_s");
+    assert!(recovered.ends_with(&format!(", joined {join_s:.3} s after its restart")), "{recovered}");
+    // The figure judged is the report's closed loop less its join, not the start-up.
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(c.out.join("controller-kill-restart/report.json")).unwrap())
+            .unwrap();
+    let rejoin = &report["faults"][0]["rejoin"];
+    let from_join = rejoin["closed_at_wall_s"].as_f64().unwrap() - rejoin["joined_at_wall_s"].as_f64().unwrap();
+    assert!(recovered.starts_with(&format!("{from_join:.3} s, joined")), "{recovered} against {rejoin}");
+    c.finish();
+}
+
+#[test]
+fn a_plant_of_your_own_flies_the_any_plant_default_suite_and_passes() {
+    client_lib();
+    let plant = "python3 tests/clients/toy_plant.py";
+    let c = check("any-plant", &["--plant-cmd", plant, "--controller-cmd", "python3 examples/python/pid_attitude.py"]);
+    assert_eq!(c.verdict["suite"], "any-plant", "{}{}", c.stdout, c.stderr);
+    let (flown, not_flown) = c.flown_and_not();
+    assert_eq!(flown, ["lockstep-determinism", "realtime-deadline", "controller-kill-restart", "plant-restart"]);
+    assert!(not_flown.is_empty());
+    for case in &flown {
+        for (criterion, passed) in c.judgements(case) {
+            assert!(
+                passed || TIMING_CRITERIA.contains(&criterion.as_str()),
+                "{case}: {criterion} failed:\n{}",
+                c.stdout
+            );
+            for f16 in ["settled", "alpha_max_deg", "body_rate_max_dps", "resume_jump_max_deg"] {
+                assert_ne!(criterion, f16, "{case}: an F-16 criterion in the any-plant suite");
+            }
+        }
+    }
+    assert_eq!(c.measured("lockstep-determinism", "deterministic"), "identical over 1001 ticks");
+    assert!(c.measured("plant-restart", "recovered_within_s").contains(", joined "), "{}", c.stdout);
+    assert_eq!(c.code, Some(c.expected_code()), "{}{}", c.stdout, c.stderr);
+    c.junit_agrees();
+    c.finish();
 }
 
 #[test]

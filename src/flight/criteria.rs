@@ -25,6 +25,9 @@ pub struct Criteria {
     pub deadline_misses_max: Option<u64>,
     /// phi, theta and psi each stay within `band_deg` of the set point from `within_s` on.
     pub settled: Option<Settled>,
+    /// Every set point of the scenario that names an output of the plant flown stays within `band` of it (in that
+    /// output's unit) from `within_s` on: `settled` for any plant.
+    pub setpoints_held: Option<SettledBand>,
     /// Largest overshoot of phi, theta or psi past its set point (in the direction of its step), deg.
     pub overshoot_max_deg: Option<f64>,
     /// Largest |angle - set point| of phi, theta, psi at the end of the run, deg.
@@ -42,8 +45,13 @@ pub struct Criteria {
     #[serde(default)]
     pub no_sustained_oscillation: bool,
     /// After each restarted or resumed process (kill/term with `restart_after`, stop), the loop flies again within
-    /// this many seconds of the process coming back.
+    /// this many seconds of the process coming back: of a restarted one joining the flight, of a stopped one being
+    /// continued.
     pub recovered_within_s: Option<f64>,
+    /// After each restart (kill/term with `restart_after`), the process joined the flight again (the controller's
+    /// first sample, the plant's first tick) within this many seconds of being started: its start-up, judged apart
+    /// from the loop's recovery.
+    pub restart_join_within_s: Option<f64>,
     /// The plant's failsafe engaged during a fault and released when the controller came back.
     #[serde(default)]
     pub failsafe_engaged_and_released: bool,
@@ -266,13 +274,14 @@ pub fn positive(key: &str, v: f64) -> Result<(), String> {
 }
 
 /// Criteria only the three-process rig can measure (timing, the contract, process faults, two runs).
-const RIG_CRITERIA: [&str; 9] = [
+const RIG_CRITERIA: [&str; 10] = [
     "every_tick_answered",
     "no_invalid_command",
     "compute_p99",
     "sense_to_actuate_p99",
     "deadline_misses_max",
     "recovered_within_s",
+    "restart_join_within_s",
     "failsafe_engaged_and_released",
     "resume_jump_max_deg",
     "deterministic",
@@ -288,6 +297,7 @@ impl Criteria {
             self.sense_to_actuate_p99.is_some(),
             self.deadline_misses_max.is_some(),
             self.recovered_within_s.is_some(),
+            self.restart_join_within_s.is_some(),
             self.failsafe_engaged_and_released,
             self.resume_jump_max_deg.is_some(),
             self.deterministic,
@@ -308,6 +318,15 @@ impl Criteria {
                 return Err(format!(
                     "`criteria.{at}` judges against a set point, and the scenario gives none: add `{name} = ...` to \
                      [setpoint]"
+                ));
+            }
+        }
+        if let Some(s) = self.setpoints_held {
+            positive("setpoints_held.band", s.band)?;
+            if !(s.within_s >= 0.0 && s.within_s < duration_s) {
+                return Err(format!(
+                    "`criteria.setpoints_held.within_s` must be within 0..{duration_s} s, got {}",
+                    s.within_s
                 ));
             }
         }
@@ -355,6 +374,7 @@ impl Criteria {
     pub fn has_flight_criteria(&self) -> bool {
         !self.outputs.is_empty()
             || self.settled.is_some()
+            || self.setpoints_held.is_some()
             || self.alpha_max_deg.is_some()
             || self.overshoot_max_deg.is_some()
             || self.final_error_max_deg.is_some()

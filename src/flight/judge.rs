@@ -2,7 +2,7 @@
 //! limit it is held to, and the sentence that explains a failure to someone who has not read the code. Pure: the
 //! same code judges `silrig check` runs and sweep cases.
 
-use crate::criteria::{BodyRateLimit, Criteria, Judgement, OutputCriteria, Settled};
+use crate::criteria::{BodyRateLimit, Criteria, Judgement, OutputCriteria, Settled, SettledBand};
 use crate::scenario::Scenario;
 use crate::summary::{Summary, settle_time};
 use crate::trace::Trace;
@@ -46,6 +46,9 @@ pub fn judge_flight(
     let mut out = Vec::new();
     if let Some(s) = criteria.settled {
         out.push(settled(scenario, trace, s));
+    }
+    if let Some(s) = criteria.setpoints_held {
+        out.push(setpoints_held(scenario, trace, s));
     }
     if let Some(o) = criteria.overshoot_max_deg {
         out.push(overshoot_max(scenario, trace, o));
@@ -254,6 +257,51 @@ fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement 
         )),
     };
     judgement("settled", measured, limit, failure).with_value(at.unwrap_or(f64::INFINITY))
+}
+
+/// `setpoints_held`: every set point of the scenario that names a column of the trace (an output of whatever plant
+/// flew) stays within the band of it, in that output's unit, from `within_s` on; judged on the one that settled
+/// last. A scenario none of whose set points the plant has fails: there is nothing to hold.
+fn setpoints_held(scenario: &Scenario, trace: Option<&Trace>, s: SettledBand) -> Judgement {
+    let limit = format!("each within {} of its set point from {} s", s.band, s.within_s);
+    let Some(trace) = trace else { return no_evidence("setpoints_held", limit, "no trace was logged") };
+    let t = trace.column("t_s").unwrap_or_default();
+    let all = scenario.setpoint.all();
+    let held: Vec<(&str, f64, Option<f64>)> = all
+        .iter()
+        .filter_map(|&(name, setpoint)| Some((name, setpoint, settle_time(&t, &trace.column(name)?, setpoint, s.band))))
+        .collect();
+    let Some(&(name, setpoint, at)) =
+        held.iter().max_by(|a, b| a.2.unwrap_or(f64::INFINITY).total_cmp(&b.2.unwrap_or(f64::INFINITY)))
+    else {
+        let names: Vec<&str> = all.iter().map(|(n, _)| *n).collect();
+        let why = format!(
+            "the scenario's set points ({}) name no output of this plant (the trace's columns: {}); fly a suite whose \
+             scenario gives your outputs set points in its [setpoint]",
+            names.join(", "),
+            trace.columns.join(", ")
+        );
+        return judgement("setpoints_held", "no set point".into(), limit, Some(why));
+    };
+    let of = format!("{} set point{}", held.len(), if held.len() == 1 { "" } else { "s" });
+    let measured = match at {
+        Some(a) => format!("{name} settled at {a:.2} s (last of {of})"),
+        None => format!("{name} never settled (of {of})"),
+    };
+    let failure = match at {
+        Some(a) if a <= s.within_s => None,
+        Some(a) => Some(format!(
+            "{name} only stayed within {} of its set point {setpoint} from {a:.2} s on, later than the {} s allowed; \
+             signals.png in the run folder shows the response",
+            s.band, s.within_s
+        )),
+        None => Some(format!(
+            "{name} was still more than {} from its set point {setpoint} at the end of the run; signals.png in the run \
+             folder shows the response",
+            s.band
+        )),
+    };
+    judgement("setpoints_held", measured, limit, failure).with_value(at.unwrap_or(f64::INFINITY))
 }
 
 /// Largest |column| over rows with t >= from_s (NaN-free), with the time it happened.
@@ -528,5 +576,31 @@ mod tests {
         // A flight that is no longer a number fails both.
         let lost = trace(&[[5.0, 5.0, 5.0], [f64::NAN, f64::NAN, f64::NAN]]);
         assert!(!overshoot_max(&s, Some(&lost), 100.0).passed && !final_error_max(&s, Some(&lost), 100.0).passed);
+    }
+
+    #[test]
+    fn every_set_point_the_plant_has_is_held_and_one_it_lacks_is_not_asked_for() {
+        // A plant with pitch and altitude only: the default scenario's phi and psi set points are not its outputs.
+        let mut s = Scenario::embedded_default();
+        s.setpoint.outputs.insert("alt_ft".into(), 4000.0);
+        let mut t = Trace::new(["t_s", "theta_deg", "alt_ft"].map(String::from).to_vec());
+        t.rows = (0..100)
+            .map(|k| vec![k as f64 * 0.1, if k < 30 { 0.0 } else { 10.2 }, 4000.0 + (50 - k).max(0) as f64])
+            .collect();
+        let held = |within_s: f64, band: f64| setpoints_held(&s, Some(&t), SettledBand { within_s, band });
+        let j = held(6.0, 5.0);
+        assert_eq!((j.passed, j.measured.as_str()), (true, "alt_ft settled at 4.50 s (last of 2 set points)"), "{j:?}");
+        let j = held(4.0, 5.0);
+        assert!(!j.passed && j.why_failed.unwrap().contains("alt_ft only stayed within 5 of its set point 4000"));
+        let j = held(8.0, 0.1);
+        assert_eq!(j.measured, "theta_deg never settled (of 2 set points)");
+        // A plant none of whose outputs has a set point fails, saying what to do.
+        let mut other = Trace::new(["t_s", "speed_mps"].map(String::from).to_vec());
+        other.rows = vec![vec![0.0, 1.0]];
+        let j = setpoints_held(&s, Some(&other), SettledBand { within_s: 1.0, band: 1.0 });
+        assert!(
+            !j.passed
+                && j.why_failed.unwrap().contains("name no output of this plant (the trace's columns: t_s, speed_mps)")
+        );
     }
 }

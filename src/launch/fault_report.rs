@@ -37,6 +37,70 @@ pub struct FaultRecord {
     /// Where the logged flight joins a re-flown one after this fault (a restarted plant), and by how much.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub discontinuity: Option<Discontinuity>,
+    /// How the process came back, for a kill or term with `restart_after`: its start-up apart from the loop's
+    /// recovery, so that a slow start is not judged as slow control.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rejoin: Option<Rejoin>,
+}
+
+/// How a restarted process came back, in wall-clock s from the plant's first tick 0 (simulated time stands still
+/// while a plant is down, so it cannot time a plant's restart).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Rejoin {
+    /// When the launcher started it again.
+    pub restarted_at_wall_s: f64,
+    /// When it joined the flight again: the controller's first sample, the plant's first tick, the logger's first
+    /// row (None: never).
+    pub joined_at_wall_s: Option<f64>,
+    /// When the loop closed again after that: the plant's first fresh command after a controller came back, the
+    /// controller's first sample after a plant came back, the join itself for the logger (None: never).
+    pub closed_at_wall_s: Option<f64>,
+}
+
+/// The event by which a restarted process of `role` says it joined the flight again.
+fn join_kind(role: Role) -> &'static str {
+    match role {
+        Role::Controller => "controller-joined",
+        Role::Plant => "ticking",
+        Role::Logger => "logger-resumed",
+    }
+}
+
+/// The peer's event that says the loop closed again after `role` joined (None: the join closes it).
+fn closed_kind(role: Role) -> Option<(Role, &'static str)> {
+    match role {
+        Role::Controller => Some((Role::Plant, "controller-recovered")),
+        Role::Plant => Some((Role::Controller, "plant-recovered")),
+        Role::Logger => None,
+    }
+}
+
+/// How the target of a kill or term with `restart_after` came back, from the events of its window.
+fn rejoin(f: &Fault, window: &[&Event], t0_ns: u64) -> Option<Rejoin> {
+    if !matches!(f.action(), FaultAction::Kill | FaultAction::Term) || f.restart_after_s.is_none() {
+        return None;
+    }
+    // The bridge has no rig process to join: how it came back is the bridge's own report.
+    let role = f.target().role()?;
+    let wall = |e: &Event| (e.t_ns as f64 - t0_ns as f64) / 1e9;
+    let restarted = window.iter().copied().find(|e| {
+        e.process == "launcher" && e.kind == "process-restarted" && e.detail.starts_with(&format!("{} ", role.label()))
+    })?;
+    let joined = window
+        .iter()
+        .copied()
+        .find(|e| e.t_ns >= restarted.t_ns && e.process == role.label() && e.kind == join_kind(role));
+    let closed = joined.and_then(|j| match closed_kind(role) {
+        None => Some(j),
+        Some((peer, kind)) => {
+            window.iter().copied().find(|e| e.t_ns >= j.t_ns && e.process == peer.label() && e.kind == kind)
+        }
+    });
+    Some(Rejoin {
+        restarted_at_wall_s: wall(restarted),
+        joined_at_wall_s: joined.map(&wall),
+        closed_at_wall_s: closed.map(wall),
+    })
 }
 
 /// A place where the logged flight joins a re-flown one: a restarted plant flew again from a tick older than the
@@ -159,6 +223,7 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
                 plant_samples_lost: plant_lost,
                 command_samples_lost: command_lost,
                 discontinuity: window.iter().find(|e| e.kind == "flight-discontinuity").map(|e| discontinuity(e, dt_s)),
+                rejoin: rejoin(f, &window, t0),
             }
         })
         .collect()
@@ -176,6 +241,7 @@ fn empty(f: &Fault) -> FaultRecord {
         plant_samples_lost: 0,
         command_samples_lost: 0,
         discontinuity: None,
+        rejoin: None,
     }
 }
 
@@ -406,5 +472,43 @@ mod detection_tests {
         let r = &fault_records(&[fault], &dir, 0.01)[0];
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(r.detected_by.as_deref(), Some("controller (plant-stale)"));
+    }
+
+    #[test]
+    fn a_restarted_process_is_timed_from_its_restart_to_its_join_and_from_its_join_to_the_closed_loop() {
+        // A Python controller taking 0.82 s to start: its start-up is the join, not the loop's recovery.
+        let fault = parse_fault_flag("controller:kill@1s,restart_after=0.5s").unwrap();
+        let dir = run_with(
+            "rejoin",
+            &[
+                (1000, "launcher", "fault-injected", "controller kill at 1 s, restart after 0.5 s (SIGKILL)"),
+                (1060, "plant", "controller-stale", "no command for 59 ms"),
+                (1510, "launcher", "process-restarted", "plant as pid 9 (restart 1)"),
+                (1520, "launcher", "process-restarted", "controller as pid 8 (restart 1)"),
+                (2340, "controller", "controller-joined", "plant already at tick 234"),
+                (2355, "plant", "controller-recovered", "failsafe released, commands resumed"),
+            ],
+        );
+        let r = &fault_records(&[fault], &dir, 0.01)[0];
+        let never = parse_fault_flag("controller:term@1s,restart_after=0.5s").unwrap();
+        let never_dir = run_with(
+            "rejoin-never",
+            &[
+                (1000, "launcher", "fault-injected", "controller term at 1 s, restart after 0.5 s"),
+                (1500, "launcher", "process-restarted", "controller as pid 8 (restart 1)"),
+            ],
+        );
+        let silent = &fault_records(&[never], &never_dir, 0.01)[0];
+        std::fs::remove_dir_all(&never_dir).unwrap();
+        let stop = parse_fault_flag("controller:stop@1s,for=0.5s").unwrap();
+        let stopped = &fault_records(&[stop], &dir, 0.01)[0];
+        std::fs::remove_dir_all(&dir).unwrap();
+        let j = r.rejoin.expect("a restart");
+        assert!((j.restarted_at_wall_s - 1.52).abs() < 1e-9, "the controller's restart, not the plant's: {j:?}");
+        assert!((j.joined_at_wall_s.unwrap() - 2.34).abs() < 1e-9, "{j:?}");
+        assert!((j.closed_at_wall_s.unwrap() - 2.355).abs() < 1e-9, "{j:?}");
+        let j = silent.rejoin.expect("a restart");
+        assert_eq!((j.joined_at_wall_s, j.closed_at_wall_s), (None, None));
+        assert_eq!(stopped.rejoin, None, "a stopped process is continued, not restarted");
     }
 }

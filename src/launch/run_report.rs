@@ -104,6 +104,24 @@ pub(crate) fn per_tick_values_us(out: &Path, realtime: bool) -> Vec<(String, Vec
         .collect()
 }
 
+/// When the plant held its last command because the controller's answer was not there (or was refused): the send
+/// time (CLOCK_MONOTONIC ns) of each logged sample whose flags say the tick before it held one. That is the moment
+/// the plant needed the command, which a check sets beside the stalls of the OS floor.
+pub fn held_command_times_ns(out: &Path) -> Vec<u64> {
+    let Ok(text) = std::fs::read_to_string(out.join("timing.csv")) else { return Vec::new() };
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let column = |name: &str| header.iter().position(|c| *c == name);
+    let (Some(sent), Some(flags)) = (column("t_plant_send_ns"), column("plant_flags")) else { return Vec::new() };
+    lines
+        .filter_map(|l| {
+            let row: Vec<&str> = l.split(',').collect();
+            let flags: u32 = row.get(flags)?.parse().ok()?;
+            (flags & silrig_wire::wire::FLAG_COMMAND_STALE != 0).then(|| row.get(sent)?.parse().ok()).flatten()
+        })
+        .collect()
+}
+
 /// The plant's wake-up lateness (realtime), its step execution time and the controller's compute time split at the
 /// end of the warm-up, from the per-tick columns of the logger's `timing.csv` (ticks by simulated time: tick * dt <
 /// 1 s is warm-up).
@@ -523,5 +541,20 @@ mod tests {
                 "257-512: 250"
             ]
         );
+    }
+
+    #[test]
+    fn the_ticks_that_held_a_command_are_the_samples_flagged_after_them() {
+        let dir = std::env::temp_dir().join(format!("silrig-run-report-held-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut timing = silrig_wire::recording::TIMING_COLUMNS.join(",") + "\n";
+        // Flags 1 (held) after ticks 1 and 3; 2 (saturated) alone is not a held command.
+        for (tick, flags) in [(0, 0), (1, 2), (2, 1), (3, 0), (4, 3)] {
+            timing += &format!("{tick},{tick},7,{},0,{flags},0,0,0,0,0,0,0,0\n", 1000 + tick * 10);
+        }
+        std::fs::write(dir.join("timing.csv"), timing).unwrap();
+        let held = held_command_times_ns(&dir);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(held, [1020, 1040]);
     }
 }

@@ -695,11 +695,14 @@ impl Supervisor {
             }
             let (role, restarts) = (p.role, p.restarts + 1);
             self.keep_report_of_life(role, restarts);
+            // Stamped when it is started, not once started: a quick process joins (and says so) before that.
+            let spawned_ns = silrig_wire::clock::monotonic_ns();
             let process = self.spawn(role, role.resumes())?;
             let pid = process.pid();
             self.begin_life(role, restarts + 1, pid);
             self.processes[i] = RoleProcess::started(role, process, restarts);
-            self.events.emit(None, "process-restarted", format!("{role} as pid {pid} (restart {restarts})"));
+            let detail = format!("{role} as pid {pid} (restart {restarts})");
+            self.events.emit_at(spawned_ns, None, "process-restarted", detail);
         }
         Ok(())
     }

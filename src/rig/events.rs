@@ -38,13 +38,13 @@ impl EventLog {
 
     /// Append an event now. Failing to log is reported on stderr, never fatal: the loop matters more.
     pub fn emit(&self, tick: Option<u64>, kind: &str, detail: impl Into<String>) {
-        let event = Event {
-            t_ns: silrig_wire::clock::monotonic_ns(),
-            tick,
-            process: self.process.into(),
-            kind: kind.into(),
-            detail: detail.into(),
-        };
+        self.emit_at(silrig_wire::clock::monotonic_ns(), tick, kind, detail);
+    }
+
+    /// Append an event that happened at `t_ns` (CLOCK_MONOTONIC), before it could be told: a child started, whose
+    /// own first events may reach the log before its parent has its pid to say so.
+    pub fn emit_at(&self, t_ns: u64, tick: Option<u64>, kind: &str, detail: impl Into<String>) {
+        let event = Event { t_ns, tick, process: self.process.into(), kind: kind.into(), detail: detail.into() };
         let line = serde_json::to_string(&event).expect("an event serialises") + "\n";
         let written = std::fs::OpenOptions::new().create(true).append(true).open(&self.path).and_then(|mut f| {
             let before = f.metadata()?.len();

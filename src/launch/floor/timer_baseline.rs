@@ -89,6 +89,18 @@ pub struct Outlier {
     pub lateness_us: f64,
 }
 
+/// A wake-up of the baseline loop late by a tenth of its period or more: the machine stalled, and when.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Stall {
+    /// The deadline it woke late for, CLOCK_MONOTONIC ns (the clock of the rig's stamps and events).
+    pub at_ns: u64,
+    /// How late it woke, µs.
+    pub lateness_us: f64,
+}
+
+/// Most stalls a report keeps (the first ones): a machine stalling more often than this is disturbed throughout.
+pub const MAX_STALLS: usize = 1000;
+
 /// Result of [`timer_baseline`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct BaselineReport {
@@ -113,6 +125,10 @@ pub struct BaselineReport {
     pub lateness_steady: Option<LatencySummary>,
     /// The five latest wake-ups, latest first, with their tick numbers.
     pub worst: Vec<Outlier>,
+    /// Every wake-up late by a tenth of the period or more, in order (up to [`MAX_STALLS`]): when the machine
+    /// stalled, so that a rig tick missed at the same time can be told apart from one the controller missed alone.
+    #[serde(default)]
+    pub stalls: Vec<Stall>,
     /// `(percentile, µs)` points of the lateness distribution, for plots.
     #[serde(default)]
     pub percentile_points: Vec<(f64, f64)>,
@@ -172,6 +188,7 @@ struct BaselineRecorder {
     /// Wake-ups after the first second.
     steady: LatencyHistogram,
     worst: Vec<Outlier>,
+    stalls: Vec<Stall>,
     overruns: u64,
     skipped_ticks: u64,
 }
@@ -183,6 +200,7 @@ impl BaselineRecorder {
             hist: LatencyHistogram::new(),
             steady: LatencyHistogram::new(),
             worst: Vec::with_capacity(6),
+            stalls: Vec::new(),
             overruns: 0,
             skipped_ticks: 0,
         }
@@ -200,6 +218,10 @@ impl BaselineRecorder {
             self.skipped_ticks += outcome.skipped;
         }
         let lateness_us = outcome.wake_lateness_ns as f64 / 1e3;
+        // A tenth of the period: the default suite's round-trip budget, and far above a quiet machine's wake-ups.
+        if outcome.wake_lateness_ns >= (self.schedule.period_ns / 10) as i64 && self.stalls.len() < MAX_STALLS {
+            self.stalls.push(Stall { at_ns: self.schedule.deadline_ns(tick), lateness_us });
+        }
         if self.worst.len() < 5 || self.worst.last().is_some_and(|w| lateness_us > w.lateness_us) {
             self.worst.push(Outlier { tick, lateness_us });
             self.worst.sort_by(|a, b| b.lateness_us.total_cmp(&a.lateness_us));
@@ -220,6 +242,7 @@ impl BaselineRecorder {
             lateness: self.hist.summary(),
             lateness_steady: (self.steady.count() > 0).then(|| self.steady.summary()),
             worst: self.worst,
+            stalls: self.stalls,
             percentile_points: self.hist.percentile_points(),
             hgrm: self.hist.hgrm(),
         }
@@ -331,5 +354,18 @@ mod tests {
         assert!(r.wakeups >= 1);
         assert!(r.wakeups + r.skipped_ticks <= 11, "{r:?}");
         assert!(r.lateness.min_us >= 0.0 && r.lateness.p50_us <= r.lateness.max_us);
+    }
+
+    #[test]
+    fn a_wake_up_late_by_a_tenth_of_the_period_is_a_stall_with_its_time() {
+        let (mut rec, _) = baseline_grid(1_000_000_000, 1.0, 10_000_000);
+        let due = |tick| rec.schedule.deadline_ns(tick);
+        let (d0, d1, d2) = (due(0), due(1), due(2));
+        let next = rec.record(0, d0 + 50_000);
+        assert_eq!(next, 1);
+        rec.record(1, d1 + 999_000);
+        rec.record(2, d2 + 2_500_000);
+        let r = rec.report(TickSource::Nanosleep, 1_000_000_000);
+        assert_eq!(r.stalls, [Stall { at_ns: d2, lateness_us: 2500.0 }], "only the wake-up 1 ms late or more");
     }
 }

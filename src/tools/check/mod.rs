@@ -5,8 +5,10 @@
 
 pub mod criteria;
 pub mod one_process;
+mod recovery;
 pub mod repeat;
 pub mod suite;
+mod timing;
 pub mod verdict;
 
 use anyhow::Context;
@@ -24,7 +26,9 @@ use verdict::{CaseVerdict, Verdict};
 /// What `silrig check` is asked to do.
 #[derive(Debug, Clone, clap::Args)]
 pub struct CheckOptions {
-    /// Suite file (TOML); without it, the embedded default suite (configs/check-default.toml).
+    /// Suite file (TOML); without it, the embedded default suite (configs/check-default.toml), or with
+    /// --plant-cmd or --plant-fmu the one for a plant of your own (configs/check-any-plant.toml: nothing of the
+    /// F-16).
     pub suite: Option<PathBuf>,
     /// Run only this case of the suite.
     #[arg(long, value_name = "NAME")]
@@ -100,6 +104,8 @@ impl CheckOptions {
     fn load_suite(&self) -> Result<Suite, CheckError> {
         let mut suite = match &self.suite {
             Some(path) => Suite::load(path)?,
+            // A plant of your own has none of the F-16's signals, sections or criteria.
+            None if self.plant_cmd.is_some() || self.plant_fmu.is_some() => Suite::embedded_any_plant(),
             None => Suite::embedded_default(),
         };
         if let Some(name) = &self.case {
@@ -197,8 +203,8 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
 }
 
 /// Fly one case (twice for determinism) and judge it; fly it again while its answer is inconclusive, up to
-/// `--retries` more times.
-fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict, CheckError> {
+/// `--retries` more times. With the verdict, why no other case can fly, if this one's flight never started.
+fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<(CaseVerdict, Option<String>), CheckError> {
     let setup = |problem: anyhow::Error| CheckError::Setup { case: case.name.clone(), problem };
     let started = std::time::Instant::now();
     let case_dir = out.join(&case.name);
@@ -208,58 +214,70 @@ fn run_case(opts: &CheckOptions, case: &Case, out: &Path) -> Result<CaseVerdict,
         .with_context(|| format!("writing {}", scenario_path.display()))
         .map_err(setup)?;
     if let Some(sweep) = &case.sweep {
-        return sweep_case(opts, case, sweep, &scenario_path, &case_dir, started).map_err(setup);
+        return Ok((sweep_case(opts, case, sweep, &scenario_path, &case_dir, started).map_err(setup)?, None));
     }
     if opts.in_process && one_process::flies_in_one_process(case) {
-        return in_process_case(opts, case, &case_dir, started).map_err(setup);
+        return Ok((in_process_case(opts, case, &case_dir, started).map_err(setup)?, None));
     }
-    let runs = case.criteria.runs();
     let mut run_dirs = Vec::new();
     let mut attempts = 0;
-    let judgements = loop {
+    let (judgements, never_started) = loop {
         attempts += 1;
         // The first flight goes where it always has; a retry into a folder of its own beside it.
         let attempt_dir =
             if attempts == 1 { case_dir.clone() } else { case_dir.join(format!("retry-{}", attempts - 1)) };
-        let mut evidence = Vec::new();
-        for i in 1..=runs {
-            let dir = if runs == 1 { attempt_dir.clone() } else { attempt_dir.join(format!("run-{i}")) };
-            let report = launcher::run(&launch_options(opts, case, &scenario_path, dir.clone())).map_err(setup)?;
-            // The run's page, as `silrig run` writes it: what a reader of a failed case opens first.
-            if let Err(e) = crate::html::run::write(&report, &opts.reproduce(&case.name)) {
-                eprintln!("silrig check: case {}: no report.html in {}: {e:#}", case.name, dir.display());
-            }
-            let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
-            run_dirs.push(dir.display().to_string());
-            evidence.push(RunEvidence { report, trace });
-            if signals::termination_requested() {
-                break;
-            }
-        }
+        let evidence = fly_runs(opts, case, &scenario_path, &attempt_dir, &mut run_dirs)?;
         let judgements = case.criteria.judge(&case.scenario, &evidence);
+        let never_started = evidence.last().and_then(RunEvidence::never_started);
         let outcome = verdict::case_outcome(&judgements);
         if outcome != Outcome::Inconclusive || attempts > opts.retries || signals::termination_requested() {
-            break judgements;
+            break (judgements, never_started);
         }
         eprintln!(
             "silrig check: case {} inconclusive (the machine disturbed a timing figure): flying it again ({} of {})",
             case.name, attempts, opts.retries
         );
     };
-    let outcome = verdict::case_outcome(&judgements);
-    Ok(CaseVerdict {
-        name: case.name.clone(),
-        why: case.why.clone(),
-        mode: case.mode.label().into(),
-        faults: case.fault_flags.clone(),
-        passed: outcome == Outcome::Pass,
-        inconclusive: outcome == Outcome::Inconclusive,
+    let verdict = CaseVerdict::judged(
+        case,
+        case.mode.label().into(),
         attempts,
-        wall_s: started.elapsed().as_secs_f64(),
+        started.elapsed().as_secs_f64(),
         run_dirs,
-        reproduce: opts.reproduce(&case.name),
+        opts.reproduce(&case.name),
         judgements,
-    })
+    );
+    Ok((verdict, never_started.map(|why| format!("the flight never started in case `{}`: {why}", case.name))))
+}
+
+/// One flight of a case into `dir`: its run (or two, for determinism), each run's folder added to `run_dirs`. A
+/// run whose flight never started ends it: a second one would wait as long for the same thing.
+fn fly_runs(
+    opts: &CheckOptions,
+    case: &Case,
+    scenario_path: &Path,
+    dir: &Path,
+    run_dirs: &mut Vec<String>,
+) -> Result<Vec<RunEvidence>, CheckError> {
+    let runs = case.criteria.runs();
+    let mut evidence: Vec<RunEvidence> = Vec::new();
+    for i in 1..=runs {
+        let dir = if runs == 1 { dir.to_path_buf() } else { dir.join(format!("run-{i}")) };
+        let report = launcher::run(&launch_options(opts, case, scenario_path, dir.clone()))
+            .map_err(|problem| CheckError::Setup { case: case.name.clone(), problem })?;
+        // The run's page, as `silrig run` writes it: what a reader of a failed case opens first.
+        if let Err(e) = crate::html::run::write(&report, &opts.reproduce(&case.name)) {
+            eprintln!("silrig check: case {}: no report.html in {}: {e:#}", case.name, dir.display());
+        }
+        let trace = Trace::load(&dir.join("trace.csv")).ok().filter(|t| !t.rows.is_empty());
+        run_dirs.push(dir.display().to_string());
+        let held_ns = silrig_launch::run_report::held_command_times_ns(&dir);
+        evidence.push(RunEvidence { report, trace, held_ns });
+        if signals::termination_requested() || evidence.last().and_then(RunEvidence::never_started).is_some() {
+            break;
+        }
+    }
+    Ok(evidence)
 }
 
 /// Fly a lockstep case in one process (`--in-process`) and judge it: no inconclusive answer is possible (no
@@ -274,20 +292,9 @@ fn in_process_case(
     silrig_rig::in_process::FmuFlags { plant_fmu: opts.plant_fmu.clone(), controller_fmu: opts.controller_fmu.clone() }
         .apply(&mut case.scenario)?;
     let (judgements, run_dirs) = one_process::fly_and_judge(&case, case_dir)?;
-    let outcome = verdict::case_outcome(&judgements);
-    Ok(CaseVerdict {
-        name: case.name.clone(),
-        why: case.why.clone(),
-        mode: "lockstep, one process".into(),
-        faults: case.fault_flags.clone(),
-        passed: outcome == Outcome::Pass,
-        inconclusive: false,
-        attempts: 1,
-        wall_s: started.elapsed().as_secs_f64(),
-        run_dirs,
-        reproduce: opts.reproduce(&case.name),
-        judgements,
-    })
+    let wall_s = started.elapsed().as_secs_f64();
+    let mode = "lockstep, one process".into();
+    Ok(CaseVerdict::judged(&case, mode, 1, wall_s, run_dirs, opts.reproduce(&case.name), judgements))
 }
 
 /// Fly a sweep case: its dispersed cases as `silrig sweep` flies them (in one process; through the lockstep rig
@@ -362,20 +369,28 @@ fn sweep_case(
         )
     });
     let judgements = vec![silrig_flight::judge::judgement("pass_rate", measured, limit, failure)];
-    let outcome = verdict::case_outcome(&judgements);
-    Ok(CaseVerdict {
-        name: case.name.clone(),
-        why: case.why.clone(),
-        mode: "sweep".into(),
-        faults: case.fault_flags.clone(),
-        passed: outcome == Outcome::Pass,
-        inconclusive: false,
-        attempts: 1,
-        wall_s: started.elapsed().as_secs_f64(),
-        run_dirs: vec![case_dir.display().to_string()],
-        reproduce: opts.reproduce(&case.name),
-        judgements,
-    })
+    let (wall_s, dirs) = (started.elapsed().as_secs_f64(), vec![case_dir.display().to_string()]);
+    Ok(CaseVerdict::judged(case, "sweep".into(), 1, wall_s, dirs, opts.reproduce(&case.name), judgements))
+}
+
+/// Say which case flies now, and how (a CI log's progress).
+fn announce(opts: &CheckOptions, i: usize, of: usize, case: &Case) {
+    eprintln!(
+        "silrig check: case {}/{} {} ({}{}) ...",
+        i + 1,
+        of,
+        case.name,
+        match case.sweep {
+            Some(sweep) => format!(
+                "a sweep of {} dispersed cases {}",
+                sweep.runs,
+                if opts.controller_cmd.is_some() { "through the lockstep rig" } else { "in one process" }
+            ),
+            None if opts.in_process && one_process::flies_in_one_process(case) => "lockstep, in one process".into(),
+            None => case.mode.label().to_string(),
+        },
+        if case.sweep.is_none() && case.criteria.runs() > 1 { ", flown twice" } else { "" }
+    );
 }
 
 /// Run the suite and write the verdict's files. An `Err` means nothing could be judged (exit status 2); a verdict
@@ -406,23 +421,8 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
     let started_unix_s = verdict::unix_now_s();
     let mut cases = Vec::new();
     for (i, case) in suite.cases.iter().enumerate() {
-        eprintln!(
-            "silrig check: case {}/{} {} ({}{}) ...",
-            i + 1,
-            suite.cases.len(),
-            case.name,
-            match case.sweep {
-                Some(sweep) => format!(
-                    "a sweep of {} dispersed cases {}",
-                    sweep.runs,
-                    if opts.controller_cmd.is_some() { "through the lockstep rig" } else { "in one process" }
-                ),
-                None if opts.in_process && one_process::flies_in_one_process(case) => "lockstep, in one process".into(),
-                None => case.mode.label().to_string(),
-            },
-            if case.sweep.is_none() && case.criteria.runs() > 1 { ", flown twice" } else { "" }
-        );
-        let verdict = run_case(opts, case, &out)?;
+        announce(opts, i, suite.cases.len(), case);
+        let (verdict, never_started) = run_case(opts, case, &out)?;
         eprintln!(
             "silrig check: case {} {} in {:.1} s",
             case.name,
@@ -435,6 +435,14 @@ pub fn run(opts: &CheckOptions) -> Result<Verdict, CheckError> {
         );
         cases.push(verdict);
         if signals::termination_requested() {
+            break;
+        }
+        // A controller or plant that never joins, or exits at once, would only make every other case wait as long
+        // to say the same: the rest are reported, not flown.
+        if let Some(why) = never_started {
+            eprintln!("silrig check: {why}; the other cases are not flown");
+            let rest = &suite.cases[i + 1..];
+            cases.extend(rest.iter().map(|c| CaseVerdict::not_flown(c, opts.reproduce(&c.name), why.clone())));
             break;
         }
     }

@@ -12,6 +12,21 @@ use std::path::{Path, PathBuf};
 
 /// The embedded default suite (what `silrig check` runs without a suite file).
 pub const DEFAULT_SUITE_TOML: &str = include_str!("../../../configs/check-default.toml");
+/// The embedded default suite for a plant of your own (`--plant-cmd`, `--plant-fmu` without a suite file).
+pub const ANY_PLANT_SUITE_TOML: &str = include_str!("../../../configs/check-any-plant.toml");
+/// The scenario its cases fly: set points and timing, nothing of the F-16.
+pub const ANY_PLANT_SCENARIO_TOML: &str = include_str!("../../../configs/any-plant.toml");
+
+/// The scenario a case starts from when neither it nor its suite names one: its text and how errors name it.
+#[derive(Debug, Clone, Copy)]
+struct BaseScenario {
+    text: &'static str,
+    origin: &'static str,
+}
+
+/// The embedded default scenario (the F-16's), for a suite file and the default suite.
+const DEFAULT_BASE: BaseScenario =
+    BaseScenario { text: silrig_flight::scenario::DEFAULT_SCENARIO_TOML, origin: "embedded default scenario" };
 
 /// A suite file as written.
 #[derive(Debug, Clone, Deserialize)]
@@ -168,6 +183,12 @@ impl Suite {
         Self::from_toml(DEFAULT_SUITE_TOML, None).expect("the embedded default suite is valid")
     }
 
+    /// The embedded default suite for a plant of your own: no F-16 scenario or criterion.
+    pub fn embedded_any_plant() -> Self {
+        let base = BaseScenario { text: ANY_PLANT_SCENARIO_TOML, origin: "embedded any-plant scenario" };
+        Self::parse(ANY_PLANT_SUITE_TOML, None, base).expect("the embedded any-plant suite is valid")
+    }
+
     /// Read a suite file; scenario paths in it are relative to its folder.
     pub fn load(path: &Path) -> Result<Self, SuiteError> {
         let text = std::fs::read_to_string(path)
@@ -177,6 +198,11 @@ impl Suite {
 
     /// Parse and validate suite text; `path` (None: embedded) names it in errors and anchors relative paths.
     pub fn from_toml(text: &str, path: Option<&Path>) -> Result<Self, SuiteError> {
+        Self::parse(text, path, DEFAULT_BASE)
+    }
+
+    /// [`Suite::from_toml`], its cases starting from `base` when they name no scenario.
+    fn parse(text: &str, path: Option<&Path>, base: BaseScenario) -> Result<Self, SuiteError> {
         let origin = path.map_or("embedded default suite".to_string(), |p| p.display().to_string());
         let file: SuiteFile = toml::from_str(text)
             .map_err(|e| SuiteError::Parse { origin: origin.clone(), message: e.to_string().trim_end().into() })?;
@@ -198,7 +224,7 @@ impl Suite {
                 return Err(case_err("a second case of this name".into()));
             }
             let scenario_path = c.scenario.as_ref().or(file.scenario.as_ref()).map(|p| dir.join(p));
-            let mut scenario = case_scenario(c, scenario_path.as_deref()).map_err(case_err)?;
+            let mut scenario = case_scenario(c, scenario_path.as_deref(), base).map_err(case_err)?;
             match &c.sweep {
                 Some(sweep) => sweep_scenario(c, sweep, &mut scenario).map_err(case_err)?,
                 None if !c.dispersions.is_empty() => {
@@ -268,13 +294,13 @@ fn sweep_scenario(c: &CaseFile, sweep: &SweepCase, scenario: &mut Scenario) -> R
 
 /// The case's scenario: the file (or the embedded default), the `set` overrides, the duration, the faults; validated
 /// as `silrig run` would validate it. Errors name the key.
-fn case_scenario(c: &CaseFile, path: Option<&Path>) -> Result<Scenario, String> {
+fn case_scenario(c: &CaseFile, path: Option<&Path>, base: BaseScenario) -> Result<Scenario, String> {
     let (text, origin) = match path {
         Some(p) => (
             std::fs::read_to_string(p).map_err(|e| format!("`scenario`: {}: {e}", p.display()))?,
             p.display().to_string(),
         ),
-        None => (silrig_flight::scenario::DEFAULT_SCENARIO_TOML.to_string(), "embedded default scenario".to_string()),
+        None => (base.text.to_string(), base.origin.to_string()),
     };
     let mut table: toml::Table =
         toml::from_str(&text).map_err(|e| format!("`scenario`: {origin}: {}", e.to_string().trim_end()))?;
@@ -314,6 +340,19 @@ mod tests {
         let default = Suite::embedded_default();
         assert_eq!(default.cases.len(), 7);
         assert!(default.cases.iter().all(|c| !c.why.is_empty()), "every default case says why it is there");
+        // A plant of your own: no F-16 section in the scenario, no F-16 criterion in the cases.
+        let any = Suite::embedded_any_plant();
+        assert_eq!(any.cases.len(), 4);
+        for case in &any.cases {
+            assert!(!case.why.is_empty());
+            assert_eq!(case.scenario.name, "any-plant");
+            let c = &case.criteria;
+            assert!(c.setpoints_held.is_some() && c.settled.is_none(), "{}", case.name);
+            assert!(c.alpha_max_deg.is_none() && c.body_rate_max_dps.is_none() && c.resume_jump_max_deg.is_none());
+            assert!(c.rate_limit_fraction_max.is_none() && !c.no_sustained_oscillation && case.sweep.is_none());
+        }
+        let names: Vec<&str> = any.cases.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["lockstep-determinism", "realtime-deadline", "controller-kill-restart", "plant-restart"]);
         let paper =
             Suite::load(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/check-paper-gains.toml")))
                 .expect("the paper-gains suite loads");

@@ -2,6 +2,7 @@
 //! `<testsuite>` per case, one `<testcase>` per criterion) for GitLab, Jenkins and GitHub test reporters.
 
 use super::criteria::Judgement;
+use super::suite::Case;
 use serde::{Deserialize, Serialize};
 use silrig_flight::criteria::Outcome;
 use std::fmt::Write as _;
@@ -37,8 +38,12 @@ pub struct CaseVerdict {
     pub run_dirs: Vec<String>,
     /// The command that runs just this case again.
     pub reproduce: String,
-    /// Each criterion, `run_completed` first.
+    /// Each criterion, `run_completed` first (none for a case not flown).
     pub judgements: Vec<Judgement>,
+    /// Why the case was not flown: an earlier case's flight never started (its controller or plant never joined
+    /// or exited at once), so no case could fly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub not_flown: Option<String>,
 }
 
 /// The whole check (`check.json`).
@@ -76,6 +81,50 @@ fn one() -> u32 {
 }
 
 impl CaseVerdict {
+    /// A case judged by its criteria, in its folders.
+    pub fn judged(
+        case: &Case,
+        mode: String,
+        attempts: u32,
+        wall_s: f64,
+        run_dirs: Vec<String>,
+        reproduce: String,
+        judgements: Vec<Judgement>,
+    ) -> Self {
+        let outcome = case_outcome(&judgements);
+        CaseVerdict {
+            name: case.name.clone(),
+            why: case.why.clone(),
+            mode,
+            faults: case.fault_flags.clone(),
+            passed: outcome == Outcome::Pass,
+            inconclusive: outcome == Outcome::Inconclusive,
+            attempts,
+            wall_s,
+            run_dirs,
+            reproduce,
+            judgements,
+            not_flown: None,
+        }
+    }
+
+    /// A case not flown, and why: a failure of the check, with no criterion judged.
+    pub fn not_flown(case: &Case, reproduce: String, why: String) -> Self {
+        let mode = if case.sweep.is_some() { "sweep".into() } else { case.mode.label().into() };
+        CaseVerdict {
+            attempts: 0,
+            not_flown: Some(why),
+            ..Self::judged(case, mode, 0, 0.0, Vec::new(), reproduce, Vec::new())
+        }
+        .failed()
+    }
+
+    /// Not passed: a case with no judgement would otherwise count as passed.
+    fn failed(mut self) -> Self {
+        self.passed = false;
+        self
+    }
+
     /// The case's answer: fail if a criterion failed, else inconclusive if one was, else pass.
     pub fn outcome(&self) -> Outcome {
         match (self.passed, self.inconclusive) {
@@ -159,6 +208,11 @@ impl Verdict {
         }
     }
 
+    /// The cases not flown.
+    pub fn not_flown(&self) -> usize {
+        self.cases.iter().filter(|c| c.not_flown.is_some()).count()
+    }
+
     /// Criteria judged, how many failed and how many were inconclusive.
     pub fn counts(&self) -> (usize, usize, usize) {
         let all = self.cases.iter().flat_map(|c| &c.judgements);
@@ -187,6 +241,13 @@ impl Verdict {
             "case", "criterion", "measured", "limit"
         );
         for case in &self.cases {
+            if case.not_flown.is_some() {
+                let _ = writeln!(
+                    out,
+                    "{:<w_case$}  {:<w_crit$}  {:<w_meas$}  {:<w_lim$}  not flown",
+                    case.name, "-", "-", "-"
+                );
+            }
             for (i, j) in case.judgements.iter().enumerate() {
                 let name = if i == 0 { case.name.as_str() } else { "" };
                 let result = j.outcome().label();
@@ -197,7 +258,7 @@ impl Verdict {
                 );
             }
         }
-        for case in self.cases.iter().filter(|c| !c.passed) {
+        for case in self.cases.iter().filter(|c| !c.passed && c.not_flown.is_none()) {
             let why = if case.why.is_empty() { String::new() } else { format!(": {}", case.why) };
             let (heading, flown) = match case.outcome() {
                 Outcome::Inconclusive => ("INCONCLUSIVE", format!(" (flown {} times)", case.attempts)),
@@ -211,16 +272,26 @@ impl Verdict {
             let _ = writeln!(out, "  run folder: {}", case.run_dirs.join(", "));
             let _ = writeln!(out, "  reproduce:  {}", case.reproduce);
         }
+        let not_flown: Vec<&CaseVerdict> = self.cases.iter().filter(|c| c.not_flown.is_some()).collect();
+        if let Some(first) = not_flown.first() {
+            let names: Vec<&str> = not_flown.iter().map(|c| c.name.as_str()).collect();
+            let _ =
+                writeln!(out, "\nNOT FLOWN {}: {}", names.join(", "), first.not_flown.as_deref().unwrap_or_default());
+        }
         let (criteria, failed, inconclusive) = self.counts();
         let passed_cases = self.cases.iter().filter(|c| c.passed).count();
         let _ = writeln!(out);
         if self.interrupted {
             let _ = writeln!(out, "interrupted after {} of {} cases", self.cases.len(), self.cases_in_suite);
         }
+        let not_flown = match self.not_flown() {
+            0 => String::new(),
+            n => format!(", {n} case{} not flown", if n == 1 { "" } else { "s" }),
+        };
         let _ = writeln!(
             out,
             "verdict: {}: {passed_cases} of {} cases passed, {failed} of {criteria} criteria failed, {inconclusive} \
-             inconclusive, {:.1} s",
+             inconclusive{not_flown}, {:.1} s",
             self.outcome().label().to_uppercase(),
             self.cases_in_suite,
             self.wall_s
@@ -232,7 +303,9 @@ impl Verdict {
     /// JUnit XML: one `<testsuite>` per case, one `<testcase>` per criterion, a `<failure>` with the explanation
     /// and the reproducing command.
     pub fn to_junit(&self) -> String {
-        let (tests, failures, skipped) = self.counts();
+        let (judged, failures, inconclusive) = self.counts();
+        // A case not flown is one skipped test of its own, with the reason.
+        let (tests, skipped) = (judged + self.not_flown(), inconclusive + self.not_flown());
         let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
         let _ = writeln!(
             out,
@@ -242,13 +315,14 @@ impl Verdict {
         );
         for case in &self.cases {
             let of = |o: Outcome| case.judgements.iter().filter(|j| j.outcome() == o).count();
-            let (failed, skipped) = (of(Outcome::Fail), of(Outcome::Inconclusive));
+            let not_flown = usize::from(case.not_flown.is_some());
+            let (failed, skipped) = (of(Outcome::Fail), of(Outcome::Inconclusive) + not_flown);
             let _ = writeln!(
                 out,
                 "  <testsuite name=\"{}.{}\" tests=\"{}\" failures=\"{failed}\" errors=\"0\" skipped=\"{skipped}\" time=\"{:.3}\" timestamp=\"{}\">",
                 xml_escape(&self.suite),
                 xml_escape(&case.name),
-                case.judgements.len(),
+                case.judgements.len() + not_flown,
                 case.wall_s,
                 xml_escape(&utc_iso(self.started_unix_s)),
             );
@@ -263,6 +337,15 @@ impl Verdict {
                 let _ = writeln!(out, "      <property name=\"{name}\" value=\"{}\"/>", xml_escape(value));
             }
             let _ = writeln!(out, "    </properties>");
+            if let Some(why) = &case.not_flown {
+                let _ = writeln!(
+                    out,
+                    "    <testcase classname=\"{}.{}\" name=\"not_flown\" time=\"0\">\n      <skipped message=\"{}\"/>\n    </testcase>",
+                    xml_escape(&self.suite),
+                    xml_escape(&case.name),
+                    xml_escape(&format!("not flown: {why}"))
+                );
+            }
             for j in &case.judgements {
                 let _ = write!(
                     out,
@@ -341,6 +424,7 @@ mod tests {
             run_dirs: vec!["out/x".into()],
             reproduce: "silrig check --case x".into(),
             judgements,
+            not_flown: None,
         }
     }
 
@@ -392,5 +476,33 @@ mod tests {
     #[test]
     fn xml_escape_handles_markup_and_control_characters() {
         assert_eq!(xml_escape("a<b & \"c\" 'd'\u{1}"), "a&lt;b &amp; &quot;c&quot; &apos;d&apos; ");
+    }
+
+    #[test]
+    fn a_case_not_flown_fails_the_check_and_says_why_in_the_table_and_as_a_skipped_junit_test() {
+        use silrig_flight::judge::judgement;
+        let failed = judgement("run_completed", "0.00 s flown".into(), "10 s".into(), Some("never joined".into()));
+        let suite = super::super::suite::Suite::embedded_default();
+        let why = "the flight never started in case `a`: controller: exit status 0 before the plant's first tick";
+        let rest = CaseVerdict::not_flown(&suite.cases[1], "silrig check --case b".into(), why.into());
+        assert_eq!((rest.outcome(), rest.attempts, rest.judgements.len()), (Outcome::Fail, 0, 0));
+        let v = verdict(vec![case("a", vec![failed]), rest]);
+        assert_eq!((v.outcome(), v.not_flown()), (Outcome::Fail, 1));
+        let text = v.to_text();
+        assert!(text.contains(&format!("NOT FLOWN realtime-deadline: {why}")), "{text}");
+        assert!(
+            text.contains(
+                "verdict: FAIL: 0 of 2 cases passed, 1 of 1 criteria failed, 0 inconclusive, 1 case not flown"
+            ),
+            "{text}"
+        );
+        let junit = v.to_junit();
+        assert!(junit.contains("tests=\"2\" failures=\"1\" errors=\"0\" skipped=\"1\""), "{junit}");
+        assert!(
+            junit.contains(
+                "name=\"not_flown\" time=\"0\">\n      <skipped message=\"not flown: the flight never started"
+            ),
+            "{junit}"
+        );
     }
 }

@@ -82,6 +82,9 @@ fn case_body(out: &Path, case: &CaseVerdict) -> String {
         html += &esc(&case.why);
     }
     html += "</p>\n";
+    if let Some(why) = &case.not_flown {
+        let _ = writeln!(html, "<ul class=\"problems\"><li><b>not flown</b>: {}</li></ul>", esc(why));
+    }
     let mut rows = vec![("mode", case.mode.clone())];
     if !case.faults.is_empty() {
         rows.push(("faults", case.faults.join("; ")));
