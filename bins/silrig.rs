@@ -11,7 +11,13 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "silrig", version, about = "Software-in-the-loop rig for the Stevens & Lewis F-16")]
+#[command(
+    name = "silrig",
+    version,
+    about = "Software-in-the-loop rig for flight control: your plant and your controller (Python, C, Rust, FMUs, \
+             JSBSim) as real-time processes over shared memory, with faults, recordings and verdicts; the Stevens & \
+             Lewis F-16 and an adaptive sliding-mode controller are its reference pair"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -115,6 +121,21 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Start a controller or a plant of your own: write the example as a working starting point into DIR, with a
+    /// scenario, a check suite and a README saying how to build, fly and check it.
+    New {
+        /// What to start: a controller (flown against the built-in F-16) or a plant (flown by the example PID).
+        kind: silrig::new_project::Kind,
+        /// Its language.
+        #[arg(long)]
+        lang: silrig::new_project::Lang,
+        /// The folder to write (created; it must be empty or absent).
+        dir: PathBuf,
+        /// With --lang rust: the checkout whose crates the project depends on by path (default: the one this binary
+        /// was built from).
+        #[arg(long)]
+        silrig_path: Option<PathBuf>,
+    },
     /// Micro-benchmarks of the model (median of batches; run on an idle machine); `bench ipc`: the transport's
     /// ping-pong ceiling and the lockstep rig against it.
     Bench {
@@ -178,6 +199,11 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Replay(opts) => replay(&opts),
         Command::Contract { c_header, python } => contract(c_header, python),
         Command::ExportFmu { config, out } => export_fmu(config.as_deref(), &out),
+        Command::New { kind, lang, dir, silrig_path } => {
+            let written = silrig::new_project::write(kind, lang, &dir, silrig_path.as_deref())?;
+            print!("{}", silrig::new_project::summary(kind, lang, &dir, &written));
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Bench { what: None } => bench(),
         Command::Bench { what: Some(BenchCommand::Ipc(args)) } => bench_ipc(&args),
         Command::Bench { what: Some(BenchCommand::Fmu(args)) } => {

@@ -24,7 +24,7 @@ out=docs/src/reference/cli.md
     echo
   }
   section '`silrig`' silrig
-  for c in trim plant sim sweep compare run top check replay soak contract export-fmu bench timer-baseline; do
+  for c in trim plant sim sweep compare run top check replay soak contract export-fmu new bench timer-baseline; do
     section "\`silrig $c\`" silrig "$c"
     case $c in
       plant) section '`silrig plant derivative`' silrig plant derivative ;;

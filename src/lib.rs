@@ -27,5 +27,7 @@ pub use silrig_launch as launch;
 pub use silrig_model::{actuator, control, f16_outputs, integrator, plant, rng, units, vehicle};
 pub use silrig_plot as plot;
 pub use silrig_rig as rig;
-pub use silrig_tools::{bench, campaign, check, contract, derivative_csv, export_fmu, html, outputs, replay, soak};
+pub use silrig_tools::{
+    bench, campaign, check, contract, derivative_csv, export_fmu, html, new_project, outputs, replay, soak,
+};
 pub use silrig_wire::{clock, ipc, recording, timing, topology, wire};

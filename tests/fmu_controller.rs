@@ -330,11 +330,11 @@ fn mapping_mistakes_are_refused_before_the_run_naming_the_file() {
     let cases: [(&str, &[&str]); 6] = [
         (
             "[controller.map]\nnope = \"phi_deg\"",
-            &["`controller.map.nope` = \"phi_deg\": the FMU has no variable \"nope\"", "its Real inputs: phi_deg"],
+            &["`controller.map.nope` = \"phi_deg\": the FMU has no variable \"nope\"", "its inputs: phi_deg"],
         ),
         (
             "[controller.map]\nkp_phi = \"phi_deg\"",
-            &["`controller.map.kp_phi`: variable \"kp_phi\" has causality parameter", "its Real outputs: aileron"],
+            &["`controller.map.kp_phi`: variable \"kp_phi\" has causality parameter", "its outputs: aileron"],
         ),
         (
             "[controller.map]\naileron = \"phi_deg\"",
@@ -361,14 +361,15 @@ fn mapping_mistakes_are_refused_before_the_run_naming_the_file() {
             assert!(stderr.contains(e), "case {k}: no {e:?} in: {stderr}");
         }
     }
-    // A plant that lacks what the FMU reads, known before the run (an FMU plant): named with the plant's outputs.
+    // A plant that has nothing the FMU reads or commands, known before the run (an FMU plant): its inputs would
+    // stay at their start values, but none of its outputs commands the plant, named with the plant's inputs.
     let lag = scenario_with(&dir, "lag", &format!("{ROOT}/tests/scenarios/toy.toml"), "");
     let stderr =
         refused("mapping-lag3", &["--mode", "lockstep", "--plant-fmu", &fmu("lag3"), "--controller-fmu", &pid, &lag]);
     assert!(
         stderr.contains(&format!("FMU {pid}"))
-            && stderr.contains("input \"phi_deg\" is neither an output of plant")
-            && stderr.contains("its outputs: y"),
+            && stderr.contains("none of its outputs (aileron, elevator, rudder, err_phi_deg")
+            && stderr.contains("named like an input of plant lag3 (u)"),
         "{stderr}"
     );
     // A `[controller] fmu` beside --controller-cmd is a contradiction, said as such.

@@ -4,7 +4,7 @@
 #   examples/fmu/build.sh SRC_DIR OUT.fmu
 #
 # compiles SRC_DIR/*.c with the system C compiler (`cc`, or $CC) into binaries/linux64/<modelIdentifier>.so (FMI 3.0:
-# binaries/x86_64-linux/), adds SRC_DIR/modelDescription.xml and packs both into OUT.fmu with Python's zipfile module
+# binaries/x86_64-linux/), adds SRC_DIR/modelDescription.xml (and SRC_DIR/resources/, if there is one) and packs them into OUT.fmu with Python's zipfile module
 # (no `zip` needed). The FMI headers come from $FMI_HEADERS (a folder holding fmi2Functions.h and fmi3Functions.h), else from the fmpy package that
 # `python3` ($PYTHON) imports (pip install fmpy). Everything happens in a temporary folder: OUT.fmu appears whole or
 # not at all.
@@ -67,7 +67,12 @@ mkdir -p "$tmp/fmu/binaries/$platform"
 "$compiler" -shared -fPIC -O2 -Wall -I "$FMI_HEADERS" -o "$tmp/fmu/binaries/$platform/$id.so" "$@" -lm ||
     die "compiling $* failed"
 cp "$src/modelDescription.xml" "$tmp/fmu/modelDescription.xml"
-(cd "$tmp/fmu" && "$python" -m zipfile -c "$tmp/packed.fmu" modelDescription.xml binaries) ||
+set -- modelDescription.xml binaries
+if [ -d "$src/resources" ]; then
+    cp -R "$src/resources" "$tmp/fmu/resources"
+    set -- "$@" resources
+fi
+(cd "$tmp/fmu" && "$python" -m zipfile -c "$tmp/packed.fmu" "$@") ||
     die "packing $out failed"
 # Copied beside OUT first and renamed into place: a reader never sees half an FMU, even across file systems.
 partial="$out.partial.$$"

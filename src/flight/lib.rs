@@ -3,7 +3,8 @@
 //!
 //! - [`scenario`]: TOML scenarios (initial condition, set points, disturbance, plant and controller options,
 //!   actuator limits, [`timing`]) with `validate`; [`fault`]: the fault plan as data, targeting a [`role`] (a rig
-//!   process); [`dispersion`]: seeded per-key distributions for sweeps.
+//!   process); [`dispersion`]: seeded per-key distributions for sweeps; [`controller_map`]: `[controller.map]`'s
+//!   values (a plant signal or a constant).
 //! - [`sim`]: the single-process loop (plant, actuators, controller in lockstep), whose pieces the rig's processes
 //!   reuse so both give the same trace; [`trace`]: the trace rows and `trace.csv`.
 //! - [`signals`]: a plant's named signals as data (what it announces, the checks, lookups by name, the trace's
@@ -15,6 +16,7 @@
 //!
 //! Layers: uses `silrig-model` only.
 
+pub mod controller_map;
 pub mod criteria;
 pub mod dispersion;
 pub mod f16_signals;

@@ -224,10 +224,10 @@ pub struct ControllerOptions {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fmu: Option<std::path::PathBuf>,
     /// FMU variable name = plant signal name, for the variables whose names differ from the plant's signals (an
-    /// FMU input takes the plant output, or the set point `<output>_sp`, it is mapped to; an FMU output commands
-    /// the plant input it is mapped to).
+    /// FMU input takes the plant output, or the set point `<output>_sp`, it is mapped to, or a constant; an FMU
+    /// output commands the plant input it is mapped to).
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
-    pub map: BTreeMap<String, String>,
+    pub map: BTreeMap<String, crate::controller_map::MapTarget>,
     /// The controller FMU's parameters by variable name, set before its initialization.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub parameters: BTreeMap<String, f64>,
@@ -258,7 +258,7 @@ impl<'de> Deserialize<'de> for ControllerOptions {
             .transpose()
             .map_err(|e| D::Error::custom(format!("controller.fmu: {e}")))?;
         let map = take("map")
-            .map(|v| v.try_into::<BTreeMap<String, String>>())
+            .map(crate::controller_map::from_toml)
             .transpose()
             .map_err(|e| D::Error::custom(format!("controller.map: {e}")))?
             .unwrap_or_default();
@@ -592,13 +592,8 @@ impl Scenario {
         for (name, v) in &self.controller.parameters {
             finite(&format!("controller.parameters.{name}"), *v)?;
         }
-        for (variable, signal) in &self.controller.map {
-            if !crate::signals::valid_name(signal) {
-                return err(
-                    &format!("controller.map.{variable}"),
-                    format!("{signal:?} is not a signal name (1 to 31 ASCII letters, digits and '_')"),
-                );
-            }
+        for (variable, target) in &self.controller.map {
+            target.check().map_err(|e| (format!("controller.map.{variable}"), e))?;
         }
         let t = &self.timing;
         t.validate()?;
@@ -648,7 +643,7 @@ mod tests {
         );
         let s = Scenario::from_toml(&text, "test").unwrap();
         assert_eq!(s.controller.fmu.as_deref(), Some(Path::new("pid.fmu")));
-        assert_eq!(s.controller.map["pitch"], "theta_deg");
+        assert_eq!(s.controller.map["pitch"], crate::controller_map::MapTarget::Signal("theta_deg".into()));
         assert_eq!(s.controller.parameters["kp_phi"], 1.5);
         assert_eq!(Scenario::from_toml(&s.to_toml(), "again").unwrap(), s);
         let typo = text.replace("fmu = \"pid.fmu\"", "fmu = \"pid.fmu\"\nswitching_gain = 3");

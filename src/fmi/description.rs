@@ -80,14 +80,54 @@ impl Causality {
     }
 }
 
-/// A variable's type, as far as the rig reads values: real numbers (FMI 2 `Real`, FMI 3 `Float64`) are read and
-/// set; the rest are listed so an error can say what a name is.
+/// A variable's type, as far as the rig reads values: numbers (FMI 2 `Real`, `Integer` and `Boolean`, FMI 3
+/// `Float64`, `Int32` and `Boolean`) are read and set as doubles; the rest are listed so an error can say what a
+/// name is and why it is not a signal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ValueKind {
     /// FMI 2 `Real`, FMI 3 `Float64`.
     Real,
-    /// Any other type (its element name: `Integer`, `Boolean`, `Float32`, `String`, ...).
+    /// FMI 2 `Integer`, FMI 3 `Int32`: a double holds every value exactly.
+    Integer,
+    /// FMI 2 and 3 `Boolean`: 0 or 1.
+    Boolean,
+    /// Any other type (its element name: `Float32`, `Int64`, `String`, `Enumeration`, `array`, ...).
     Other(&'static str),
+}
+
+impl ValueKind {
+    /// Whether the rig reads and sets it as a number (a signal, a parameter, a controller FMU's input or output).
+    pub fn is_number(self) -> bool {
+        !matches!(self, ValueKind::Other(_))
+    }
+
+    /// As `modelDescription.xml` names it, for messages.
+    pub fn label(self) -> &'static str {
+        match self {
+            ValueKind::Real => "Real",
+            ValueKind::Integer => "Integer",
+            ValueKind::Boolean => "Boolean",
+            ValueKind::Other(name) => name,
+        }
+    }
+
+    /// Why a variable of this type is not a signal, or None when it is one.
+    pub fn refusal(self) -> Option<String> {
+        let why = match self {
+            ValueKind::Real | ValueKind::Integer | ValueKind::Boolean => return None,
+            ValueKind::Other("Float32") => "a Float32 is not read (silrig reads Float64, Int32 and Boolean)",
+            ValueKind::Other("Int8" | "UInt8" | "Int16" | "UInt16" | "UInt32" | "Int64" | "UInt64") => {
+                "of the FMI 3 integers silrig reads Int32 alone (64-bit ones do not fit a double exactly)"
+            }
+            ValueKind::Other("String") => "a String is text, not a number",
+            ValueKind::Other("Binary") => "a Binary is bytes, not a number",
+            ValueKind::Other("Enumeration") => "an Enumeration is not read (declare it an Integer)",
+            ValueKind::Other("Clock") => "a Clock ticks events, which silrig does not use",
+            ValueKind::Other("array") => "an array holds several values behind one value reference",
+            ValueKind::Other(_) => "its type is not read",
+        };
+        Some(format!("{} is not a signal: {why}", self.label()))
+    }
 }
 
 /// One variable of `ModelVariables`.
@@ -285,6 +325,16 @@ fn attribute_number(node: roxmltree::Node, name: &str, variable: &str) -> Result
     }
 }
 
+/// A Boolean's start value as a number: `true` and `1` are 1, `false` and `0` are 0 (xs:boolean).
+fn boolean_start(node: roxmltree::Node, variable: &str) -> Result<Option<f64>, String> {
+    match node.attribute("start").map(str::trim) {
+        None => Ok(None),
+        Some("true" | "1") => Ok(Some(1.0)),
+        Some("false" | "0") => Ok(Some(0.0)),
+        Some(text) => Err(format!("variable {variable:?}: start={text:?} is not a Boolean (true or false)")),
+    }
+}
+
 /// The attributes of a variable's `<Annotations><Tool name="silrig"><Signal .../>`.
 fn silrig_annotation(node: roxmltree::Node) -> BTreeMap<String, String> {
     node.children()
@@ -317,19 +367,20 @@ fn variable_v2(node: roxmltree::Node, types: &DeclaredTypes) -> Result<Variable,
         .ok_or_else(|| format!("variable {name:?} has no type element (<Real>, <Integer>, ...)"))?;
     let kind = match typed.tag_name().name() {
         "Real" => ValueKind::Real,
-        "Integer" => ValueKind::Other("Integer"),
-        "Boolean" => ValueKind::Other("Boolean"),
+        "Integer" => ValueKind::Integer,
+        "Boolean" => ValueKind::Boolean,
         "String" => ValueKind::Other("String"),
         "Enumeration" => ValueKind::Other("Enumeration"),
         other => return Err(format!("variable {name:?}: unknown type <{other}>")),
     };
     let declared = typed.attribute("declaredType").and_then(|t| types.iter().find(|(n, ..)| n == t));
     let (min, max, start) = match kind {
-        ValueKind::Real => (
+        ValueKind::Real | ValueKind::Integer => (
             attribute_number(typed, "min", &name)?.or(declared.and_then(|d| d.2)),
             attribute_number(typed, "max", &name)?.or(declared.and_then(|d| d.3)),
             attribute_number(typed, "start", &name)?,
         ),
+        ValueKind::Boolean => (Some(0.0), Some(1.0), boolean_start(typed, &name)?),
         ValueKind::Other(_) => (None, None, None),
     };
     Ok(Variable {
@@ -352,24 +403,32 @@ fn variable_v3(node: roxmltree::Node) -> Result<Variable, String> {
     let kind = match node.tag_name().name() {
         "Float64" => ValueKind::Real,
         "Float32" => ValueKind::Other("Float32"),
-        "Int8" | "UInt8" | "Int16" | "UInt16" | "Int32" | "UInt32" | "Int64" | "UInt64" => ValueKind::Other("Integer"),
-        "Boolean" => ValueKind::Other("Boolean"),
+        "Int32" => ValueKind::Integer,
+        "Int8" => ValueKind::Other("Int8"),
+        "UInt8" => ValueKind::Other("UInt8"),
+        "Int16" => ValueKind::Other("Int16"),
+        "UInt16" => ValueKind::Other("UInt16"),
+        "UInt32" => ValueKind::Other("UInt32"),
+        "Int64" => ValueKind::Other("Int64"),
+        "UInt64" => ValueKind::Other("UInt64"),
+        "Boolean" => ValueKind::Boolean,
         "String" => ValueKind::Other("String"),
         "Binary" => ValueKind::Other("Binary"),
         "Enumeration" => ValueKind::Other("Enumeration"),
         "Clock" => ValueKind::Other("Clock"),
         other => return Err(format!("variable {name:?}: unknown type <{other}>")),
     };
-    let real = kind == ValueKind::Real;
     // An array variable (with <Dimension>) holds several values behind one reference: not a scalar signal.
     let array = node.children().any(|n| n.has_tag_name("Dimension"));
-    let (min, max, start) = match real && !array {
-        true => (
+    let (min, max, start) = match kind {
+        _ if array => (None, None, None),
+        ValueKind::Real | ValueKind::Integer => (
             attribute_number(node, "min", &name)?,
             attribute_number(node, "max", &name)?,
             attribute_number(node, "start", &name)?,
         ),
-        false => (None, None, None),
+        ValueKind::Boolean => (Some(0.0), Some(1.0), boolean_start(node, &name)?),
+        ValueKind::Other(_) => (None, None, None),
     };
     Ok(Variable {
         silrig: silrig_annotation(node),
@@ -423,7 +482,7 @@ mod tests {
         assert_eq!(d.variable("k").unwrap().start, Some(2.0));
         let y = &d.variable("y").unwrap().silrig;
         assert_eq!((y["name"].as_str(), y["trace"].as_str(), y.len()), ("y_m", "false", 2));
-        assert_eq!(d.variable("n").unwrap().kind, ValueKind::Other("Integer"));
+        assert_eq!(d.variable("n").unwrap().kind, ValueKind::Integer);
     }
 
     #[test]

@@ -68,6 +68,10 @@ fmi_functions! {
     terminate: "fmi2Terminate": fn(Component) -> Status;
     get_real: "fmi2GetReal": fn(Component, *const u32, usize, *mut f64) -> Status;
     set_real: "fmi2SetReal": fn(Component, *const u32, usize, *const f64) -> Status;
+    get_integer: "fmi2GetInteger": fn(Component, *const u32, usize, *mut c_int) -> Status;
+    set_integer: "fmi2SetInteger": fn(Component, *const u32, usize, *const c_int) -> Status;
+    get_boolean: "fmi2GetBoolean": fn(Component, *const u32, usize, *mut Boolean) -> Status;
+    set_boolean: "fmi2SetBoolean": fn(Component, *const u32, usize, *const Boolean) -> Status;
     do_step: "fmi2DoStep": fn(Component, f64, f64, Boolean) -> Status;
     get_fmu_state: "fmi2GetFMUstate": fn(Component, *mut FmuState) -> Status;
     set_fmu_state: "fmi2SetFMUstate": fn(Component, FmuState) -> Status;
@@ -157,6 +161,39 @@ impl Instance {
         // SAFETY: both slices hold refs.len() elements.
         let status = unsafe { (self.f.get_real)(self.component, refs.as_ptr(), refs.len(), values.as_mut_ptr()) };
         self.calls.check(status, || format!("fmi2GetReal of value references {refs:?}"))
+    }
+
+    pub(crate) fn set_integers(&mut self, refs: &[u32], values: &[c_int]) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), values.len(), "one value per reference");
+        self.calls.usable("fmi2SetInteger")?;
+        // SAFETY: both slices hold refs.len() elements.
+        let status = unsafe { (self.f.set_integer)(self.component, refs.as_ptr(), refs.len(), values.as_ptr()) };
+        self.calls.check(status, || format!("fmi2SetInteger of value references {refs:?}"))
+    }
+
+    pub(crate) fn get_integers(&mut self, refs: &[u32], values: &mut [c_int]) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), values.len(), "one value per reference");
+        self.calls.usable("fmi2GetInteger")?;
+        // SAFETY: both slices hold refs.len() elements.
+        let status = unsafe { (self.f.get_integer)(self.component, refs.as_ptr(), refs.len(), values.as_mut_ptr()) };
+        self.calls.check(status, || format!("fmi2GetInteger of value references {refs:?}"))
+    }
+
+    /// fmi2Boolean is a C int (0 or 1).
+    pub(crate) fn set_booleans(&mut self, refs: &[u32], values: &[c_int]) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), values.len(), "one value per reference");
+        self.calls.usable("fmi2SetBoolean")?;
+        // SAFETY: both slices hold refs.len() elements.
+        let status = unsafe { (self.f.set_boolean)(self.component, refs.as_ptr(), refs.len(), values.as_ptr()) };
+        self.calls.check(status, || format!("fmi2SetBoolean of value references {refs:?}"))
+    }
+
+    pub(crate) fn get_booleans(&mut self, refs: &[u32], values: &mut [c_int]) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), values.len(), "one value per reference");
+        self.calls.usable("fmi2GetBoolean")?;
+        // SAFETY: both slices hold refs.len() elements.
+        let status = unsafe { (self.f.get_boolean)(self.component, refs.as_ptr(), refs.len(), values.as_mut_ptr()) };
+        self.calls.check(status, || format!("fmi2GetBoolean of value references {refs:?}"))
     }
 
     pub(crate) fn do_step(&mut self, t_s: f64, step_s: f64) -> Result<(), FmiError> {

@@ -37,6 +37,10 @@ fmi_functions! {
     terminate: "fmi3Terminate": fn(InstanceHandle) -> Status;
     get_float64: "fmi3GetFloat64": fn(InstanceHandle, *const u32, usize, *mut f64, usize) -> Status;
     set_float64: "fmi3SetFloat64": fn(InstanceHandle, *const u32, usize, *const f64, usize) -> Status;
+    get_int32: "fmi3GetInt32": fn(InstanceHandle, *const u32, usize, *mut i32, usize) -> Status;
+    set_int32: "fmi3SetInt32": fn(InstanceHandle, *const u32, usize, *const i32, usize) -> Status;
+    get_boolean: "fmi3GetBoolean": fn(InstanceHandle, *const u32, usize, *mut u8, usize) -> Status;
+    set_boolean: "fmi3SetBoolean": fn(InstanceHandle, *const u32, usize, *const u8, usize) -> Status;
     do_step: "fmi3DoStep": fn(InstanceHandle, f64, f64, bool, *mut bool, *mut bool, *mut bool, *mut f64) -> Status;
     get_fmu_state: "fmi3GetFMUState": fn(InstanceHandle, *mut FmuState) -> Status;
     set_fmu_state: "fmi3SetFMUState": fn(InstanceHandle, FmuState) -> Status;
@@ -127,6 +131,44 @@ impl Instance {
         let status =
             unsafe { (self.f.get_float64)(self.handle, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len()) };
         self.calls.check(status, || format!("fmi3GetFloat64 of value references {refs:?}"))
+    }
+
+    pub(crate) fn set_integers(&mut self, refs: &[u32], values: &[i32]) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), values.len(), "one value per reference");
+        self.calls.usable("fmi3SetInt32")?;
+        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
+        let status =
+            unsafe { (self.f.set_int32)(self.handle, refs.as_ptr(), refs.len(), values.as_ptr(), values.len()) };
+        self.calls.check(status, || format!("fmi3SetInt32 of value references {refs:?}"))
+    }
+
+    pub(crate) fn get_integers(&mut self, refs: &[u32], values: &mut [i32]) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), values.len(), "one value per reference");
+        self.calls.usable("fmi3GetInt32")?;
+        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
+        let status =
+            unsafe { (self.f.get_int32)(self.handle, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len()) };
+        self.calls.check(status, || format!("fmi3GetInt32 of value references {refs:?}"))
+    }
+
+    /// fmi3Boolean is a C bool, read and written as its byte (0 or 1) so that no other byte an FMU writes is ever
+    /// a Rust bool.
+    pub(crate) fn set_booleans(&mut self, refs: &[u32], values: &[u8]) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), values.len(), "one value per reference");
+        self.calls.usable("fmi3SetBoolean")?;
+        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
+        let status =
+            unsafe { (self.f.set_boolean)(self.handle, refs.as_ptr(), refs.len(), values.as_ptr(), values.len()) };
+        self.calls.check(status, || format!("fmi3SetBoolean of value references {refs:?}"))
+    }
+
+    pub(crate) fn get_booleans(&mut self, refs: &[u32], values: &mut [u8]) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), values.len(), "one value per reference");
+        self.calls.usable("fmi3GetBoolean")?;
+        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
+        let status =
+            unsafe { (self.f.get_boolean)(self.handle, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len()) };
+        self.calls.check(status, || format!("fmi3GetBoolean of value references {refs:?}"))
     }
 
     pub(crate) fn do_step(&mut self, t_s: f64, step_s: f64) -> Result<(), FmiError> {

@@ -5,8 +5,10 @@
 //!   open when its process was killed), read
 //!   [`description::ModelDescription`], and load the Linux x86-64 binary; each step that fails names the file and
 //!   what is wrong (not a zip, no `modelDescription.xml`, FMI 1.0, model exchange only, no binary for this
-//!   platform, a missing function).
-//! - [`Fmu::instantiate`] gives an [`Instance`]: real values set and read by value reference, `doStep`, and the
+//!   platform, a binary cut short or built for another class or machine, a missing function: [`elf`] checks the
+//!   binary's bytes before it is mapped, so a broken one is an error, not a SIGBUS).
+//! - [`Fmu::instantiate`] gives an [`Instance`]: real values set and read by value reference (and numbers of every
+//!   kind a signal can be, [`numbers::Numbers`]), `doStep`, and the
 //!   FMU's own state taken, serialized and put back where the FMU offers it. Whatever the FMU logs is kept and
 //!   joined to the error of the call that failed.
 //! - [`fmi2`], [`fmi3`]: the two C APIs, declared by hand from the standard's headers (the functions a
@@ -25,7 +27,11 @@ macro_rules! fmi_functions {
         }
 
         impl Functions {
-            /// Load the binary and resolve every function; a missing one is named.
+            /// Every function's name, as the binary must export it.
+            pub const SYMBOLS: &'static [&'static str] = &[$($symbol),*];
+
+            /// Load the binary (its bytes checked by [`crate::elf`] first) and resolve every function; a missing one
+            /// is named.
             pub fn load(binary: &std::path::Path) -> Result<Self, String> {
                 // SAFETY: loading runs the binary's initializers: an FMU's binary is code the user chose to run.
                 let library = unsafe { libloading::Library::new(binary) }
@@ -50,8 +56,10 @@ macro_rules! fmi_functions {
 
 mod calls;
 pub mod description;
+mod elf;
 pub mod fmi2;
 pub mod fmi3;
+pub mod numbers;
 
 use description::{FmiVersion, ModelDescription};
 use std::path::{Path, PathBuf};
@@ -166,6 +174,14 @@ impl Fmu {
             });
         }
         let binary_error = |problem: String| FmiError::Binary { file: file.into(), problem };
+        // Checked from its bytes before it is mapped: a binary cut short would kill this process with SIGBUS.
+        let symbols = match description.version {
+            FmiVersion::V2 => fmi2::Functions::SYMBOLS,
+            FmiVersion::V3 => fmi3::Functions::SYMBOLS,
+        };
+        let inside =
+            format!("{}/{}.so", description.version.binary_folder(), description.co_simulation.model_identifier);
+        elf::check(&binary, &inside, description.version.label(), symbols).map_err(binary_error)?;
         let api = match description.version {
             FmiVersion::V2 => Api::V2(Arc::new(fmi2::Functions::load(&binary).map_err(binary_error)?)),
             FmiVersion::V3 => Api::V3(Arc::new(fmi3::Functions::load(&binary).map_err(binary_error)?)),

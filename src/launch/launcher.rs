@@ -82,14 +82,16 @@ pub struct LaunchOptions {
     #[arg(long, value_name = "CMD")]
     pub plant_cmd: Option<String>,
     /// Fly a co-simulation FMU (FMI 2.0 or 3.0, with a Linux x86-64 binary) as the plant: silrig-plant loads it,
-    /// announces its Real outputs and inputs as the plant's signals and steps it once per tick; the scenario's
-    /// `[plant.parameters]` set its parameters by variable name. Same as the scenario key `[plant] fmu`.
+    /// announces its Real, Integer and Boolean outputs and inputs as the plant's signals and steps it once per tick;
+    /// the scenario's `[plant.parameters]` set its parameters by variable name. Same as the scenario key
+    /// `[plant] fmu`.
     #[arg(long, value_name = "FILE.fmu", conflicts_with_all = ["plant_cmd", "plant"])]
     pub plant_fmu: Option<PathBuf>,
     /// Fly a co-simulation FMU (FMI 2.0 or 3.0, with a Linux x86-64 binary) as the controller: silrig-controller
-    /// loads it, feeds its Real inputs the plant's outputs of the same name (an input `<output>_sp` the scenario's
-    /// set point of that output), commands the plant's inputs with its Real outputs of the same name and logs all
-    /// its Real outputs as diagnostics; `[controller.map]` renames, `[controller.parameters]` sets its parameters.
+    /// loads it, feeds its inputs (Real, Integer, Boolean) the plant's outputs of the same name (an input `<output>_sp`
+    /// the scenario's set point of that output; an input that names nothing of the plant its start value), commands
+    /// the plant's inputs with its outputs of the same name and logs all its outputs as diagnostics;
+    /// `[controller.map]` renames or holds an input at a constant, `[controller.parameters]` sets its parameters.
     /// Same as the scenario key `[controller] fmu`.
     #[arg(long, value_name = "FILE.fmu", conflicts_with_all = ["controller_cmd", "controller", "bridge_listen"])]
     pub controller_fmu: Option<PathBuf>,

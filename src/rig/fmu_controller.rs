@@ -4,14 +4,18 @@
 //! and the report as any controller does. What it owns is the mapping between the FMU's variables and the plant's
 //! signals, by name:
 //!
-//! - each Real input of the FMU takes, every tick, the plant output of its name; an input named `<output>_sp`
-//!   takes instead the scenario's set point of that output (`[setpoint]`, in the output's unit);
-//! - each Real output of the FMU named like a plant input is that input's command; inputs no output names stay where
+//! - its inputs and outputs are its numeric variables (Real/Float64, Integer/Int32, Boolean, as doubles); the others
+//!   are left out, and refused by name when `[controller.map]` names one;
+//! - each input of the FMU takes, every tick, the plant output of its name; an input named `<output>_sp` takes
+//!   instead the scenario's set point of that output (`[setpoint]`, in the output's unit); an input that is neither
+//!   stays unconnected at its start value;
+//! - each output of the FMU named like a plant input is that input's command; inputs no output names stay where
 //!   their actuators are (the throttle under an attitude controller);
-//! - every Real output is also one of the controller's diagnostics, under the variable's signal name (so the trace
+//! - every output is also one of the controller's diagnostics, under the variable's signal name (so the trace
 //!   shows what the FMU itself asked for, before the rig's blend and checks): diagnostics are announced before the
 //!   plant is known, when which outputs are commands is not;
-//! - `[controller.map]` renames (`FMU variable = "plant signal"`) where the names differ;
+//! - `[controller.map]` renames (`FMU variable = "plant signal"`) where the names differ, and holds an input at a
+//!   constant (`FMU input = 0.0`);
 //! - `[controller.parameters]` sets the FMU's parameters by variable name before its initialization.
 //!
 //! What can be judged from the file alone ([`ControllerMap::describe`]: the map's variables exist and are inputs or
@@ -25,11 +29,15 @@
 use super::ProcessArgs;
 use super::controller::{Controller, serve};
 use super::events::EventLog;
-use super::fmu_variables::{can_checkpoint, from_hex, parameters, signal_name, to_hex};
+use super::fmu_variables::{
+    can_checkpoint, from_hex, parameters, set_parameters, signal_name, signal_variables, to_hex,
+};
 use super::report::ProcessReport;
+use silrig_flight::controller_map::MapTarget;
 use silrig_flight::scenario::{ControllerOptions, Scenario, Setpoint};
 use silrig_flight::signals::{PlantSignals, valid_name};
 use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
+use silrig_fmi::numbers::Numbers;
 use silrig_fmi::{Fmu, Instance};
 use silrig_wire::wire::{ControllerInfo, MAX_DIAGNOSTICS, PlantSample};
 use std::cell::RefCell;
@@ -39,17 +47,21 @@ use std::sync::Arc;
 /// The suffix of an FMU input that takes a set point: `theta_deg_sp` takes `[setpoint] theta_deg`.
 pub const SETPOINT_SUFFIX: &str = "_sp";
 
-/// One Real input or output of the controller FMU.
+/// One input or output of the controller FMU.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MappedVariable {
     /// The variable's name in the FMU.
     pub variable: String,
     /// The plant signal it is matched with: `[controller.map]`'s, or the variable's signal name.
     pub signal: String,
+    /// The constant `[controller.map]` holds an input at, if it does.
+    pub constant: Option<f64>,
     /// Whether `[controller.map]` named it (its errors then say so).
     pub mapped: bool,
-    /// Its value reference.
-    pub value_reference: u32,
+    /// Its kind (Real, Integer, Boolean) and value reference.
+    pub value_reference: (ValueKind, u32),
+    /// Its start value, if it declares one (what an unconnected input stays at).
+    pub start: Option<f64>,
 }
 
 /// What the FMU file and `[controller]` say, before the plant is known.
@@ -57,14 +69,16 @@ pub struct MappedVariable {
 pub struct ControllerMap {
     /// The FMU as given, for messages.
     pub file: String,
-    /// Its Real inputs, in the description's order.
+    /// Its inputs, in the description's order.
     pub inputs: Vec<MappedVariable>,
-    /// Its Real outputs, in the description's order.
+    /// Its outputs, in the description's order.
     pub outputs: Vec<MappedVariable>,
+    /// Its inputs and outputs that are not numbers, each `"name" (why)`.
+    pub left_out: Vec<String>,
     /// The diagnostics' names: the signal names of the first [`MAX_DIAGNOSTICS`] outputs.
     pub diagnostics: Vec<String>,
-    /// `[controller.parameters]`: value references and the values set before initialization.
-    pub parameters: Vec<(u32, f64)>,
+    /// `[controller.parameters]`: kinds, value references and the values set before initialization.
+    pub parameters: Vec<super::fmu_variables::Parameter>,
 }
 
 /// Where an FMU input's value comes from each tick.
@@ -74,6 +88,10 @@ pub enum Source {
     Output(usize),
     /// A set point (constant over the run).
     Setpoint(f64),
+    /// The constant `[controller.map]` gives.
+    Constant(f64),
+    /// Unconnected: the input's start value.
+    Start(f64),
 }
 
 /// The FMU bound to the plant: where each input comes from and which outputs command which inputs.
@@ -90,45 +108,61 @@ fn list(names: impl IntoIterator<Item = impl AsRef<str>>) -> String {
     if names.is_empty() { "none".into() } else { names.join(", ") }
 }
 
+/// Each key of `[controller.map]` names an input or output of the FMU that is a number; a constant is given to an
+/// input only. Errors name the key and what the FMU has.
+fn check_map_keys(
+    d: &ModelDescription,
+    options: &ControllerOptions,
+    inputs: &[&Variable],
+    outputs: &[&Variable],
+) -> Result<(), String> {
+    let names = |vs: &[&Variable]| list(vs.iter().map(|v| v.name.as_str()));
+    let has = || format!("its inputs: {}; its outputs: {}", names(inputs), names(outputs));
+    for (key, target) in &options.map {
+        let found = d.variable(key).or_else(|| d.variables.iter().find(|v| signal_name(&v.name) == *key));
+        let Some(v) = found else {
+            return Err(format!("`controller.map.{key}` = {target}: the FMU has no variable {key:?}; {}", has()));
+        };
+        if let Some(why) = v.kind.refusal() {
+            return Err(format!("`controller.map.{key}`: variable {:?} cannot be mapped: {why}", v.name));
+        }
+        if !matches!(v.causality, Causality::Input | Causality::Output) {
+            return Err(format!(
+                "`controller.map.{key}`: variable {:?} has causality {}: only an input (fed from a plant output, a \
+                 set point or a constant) or an output (a plant input's command) can be mapped; {}",
+                v.name,
+                v.causality.label(),
+                has()
+            ));
+        }
+        if let (Causality::Output, MapTarget::Constant(value)) = (v.causality, target) {
+            return Err(format!(
+                "`controller.map.{key}` = {value}: variable {:?} is an output, which the FMU computes: only an input \
+                 can be held at a constant (map an output to the plant input it commands)",
+                v.name
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl ControllerMap {
     /// Check the FMU's variables against `[controller]` (its map and parameters) and name its diagnostics. Errors
     /// name the file, the key and what the FMU has.
     pub fn describe(file: &str, d: &ModelDescription, options: &ControllerOptions) -> Result<Self, String> {
         let bad = |problem: String| format!("FMU {file}: {problem}");
-        let real = |c: Causality| -> Vec<&Variable> {
-            d.variables.iter().filter(|v| v.kind == ValueKind::Real && v.causality == c).collect()
-        };
-        let (inputs, outputs) = (real(Causality::Input), real(Causality::Output));
-        let names = |vs: &[&Variable]| list(vs.iter().map(|v| v.name.as_str()));
-        for (key, signal) in &options.map {
-            let found = d.variable(key).or_else(|| d.variables.iter().find(|v| signal_name(&v.name) == *key));
-            let Some(v) = found else {
-                return Err(bad(format!(
-                    "`controller.map.{key}` = {signal:?}: the FMU has no variable {key:?}; its Real inputs: {}; its \
-                     Real outputs: {}",
-                    names(&inputs),
-                    names(&outputs)
-                )));
-            };
-            if v.kind != ValueKind::Real {
-                return Err(bad(format!("`controller.map.{key}`: variable {:?} is not a Real (Float64)", v.name)));
-            }
-            if !matches!(v.causality, Causality::Input | Causality::Output) {
-                return Err(bad(format!(
-                    "`controller.map.{key}`: variable {:?} has causality {}: only an input (fed from a plant output \
-                     or a set point) or an output (a plant input's command) can be mapped; its Real inputs: {}; its \
-                     Real outputs: {}",
-                    v.name,
-                    v.causality.label(),
-                    names(&inputs),
-                    names(&outputs)
-                )));
-            }
-        }
+        let (inputs, mut left_out) = signal_variables(d, Causality::Input);
+        let (outputs, outputs_left_out) = signal_variables(d, Causality::Output);
+        left_out.extend(outputs_left_out);
+        check_map_keys(d, options, &inputs, &outputs).map_err(&bad)?;
         let mapped = |v: &Variable| -> Result<MappedVariable, String> {
             let given = options.map.get(&v.name).or_else(|| options.map.get(&signal_name(&v.name)));
-            let signal = given.cloned().unwrap_or_else(|| signal_name(&v.name));
-            if !valid_name(&signal) {
+            let (signal, constant) = match given {
+                Some(MapTarget::Signal(name)) => (name.clone(), None),
+                Some(MapTarget::Constant(value)) => (signal_name(&v.name), Some(*value)),
+                None => (signal_name(&v.name), None),
+            };
+            if constant.is_none() && !valid_name(&signal) {
                 return Err(bad(format!(
                     "variable {:?} makes the signal name {signal:?}, longer than 31 characters: map it to the plant's \
                      signal in `[controller.map]`",
@@ -138,14 +172,20 @@ impl ControllerMap {
             Ok(MappedVariable {
                 variable: v.name.clone(),
                 signal,
+                constant,
                 mapped: given.is_some(),
-                value_reference: v.value_reference,
+                value_reference: (v.kind, v.value_reference),
+                start: v.start,
             })
         };
         let inputs = inputs.into_iter().map(mapped).collect::<Result<Vec<_>, _>>()?;
         let outputs = outputs.into_iter().map(mapped).collect::<Result<Vec<_>, _>>()?;
         if outputs.is_empty() {
-            return Err(bad("it has no Real outputs, so nothing to command the plant with".into()));
+            let why = match left_out.is_empty() {
+                true => String::new(),
+                false => format!(" (left out, not being numbers: {})", left_out.join(", ")),
+            };
+            return Err(bad(format!("it has no outputs, so nothing to command the plant with{why}")));
         }
         for (i, o) in outputs.iter().enumerate() {
             if let Some(other) = outputs[..i].iter().find(|p| p.signal == o.signal) {
@@ -162,55 +202,18 @@ impl ControllerMap {
             return Err(bad(format!("its outputs as the controller's diagnostics: {e}")));
         }
         let parameters = parameters(file, d, "controller.parameters", &options.parameters)?;
-        Ok(Self { file: file.to_string(), inputs, outputs, diagnostics, parameters })
+        Ok(Self { file: file.to_string(), inputs, outputs, left_out, diagnostics, parameters })
     }
 
-    /// Bind the FMU to the plant's signals: each input to a plant output or a set point, the outputs named like the
-    /// plant's inputs to their commands. Errors name the file, the variable and the plant's signals.
+    /// Bind the FMU to the plant's signals: each input to a plant output, a set point, a constant or its start
+    /// value, the outputs named like the plant's inputs to their commands. Errors name the file, the variable and
+    /// the plant's signals.
     pub fn bind(&self, plant: &PlantSignals, setpoint: &Setpoint) -> Result<Binding, String> {
         let bad = |problem: String| format!("FMU {}: {problem}", self.file);
-        let outputs = || list(plant.outputs.iter().map(|o| o.name.as_str()));
         let inputs = || list(plant.inputs.iter().map(|i| i.name.as_str()));
-        let as_given = |v: &MappedVariable| match v.mapped {
-            true => format!("{:?} (mapped to `{}` by `controller.map`)", v.variable, v.signal),
-            false => format!("{:?}", v.variable),
-        };
         let output_index = |name: &str| plant.outputs.iter().position(|o| o.name == name);
         let input_index = |name: &str| plant.inputs.iter().position(|i| i.name == name);
-        let mut sources = Vec::new();
-        for v in &self.inputs {
-            if let Some(k) = output_index(&v.signal) {
-                sources.push(Source::Output(k));
-                continue;
-            }
-            if let Some(of) = v.signal.strip_suffix(SETPOINT_SUFFIX).filter(|of| output_index(of).is_some()) {
-                let Some(value) = setpoint.get(of) else {
-                    return Err(bad(format!(
-                        "input {} takes the set point of `{of}`, and the scenario gives none: add `{of} = ...` to its \
-                         [setpoint]",
-                        as_given(v)
-                    )));
-                };
-                sources.push(Source::Setpoint(value));
-                continue;
-            }
-            let problem = match input_index(&v.signal) {
-                Some(_) => format!(
-                    "input {} is `{}`, an input of plant {}: an FMU input reads a plant output (or the set point \
-                     `<output>{SETPOINT_SUFFIX}`)",
-                    as_given(v),
-                    v.signal,
-                    plant.plant
-                ),
-                None => format!(
-                    "input {} is neither an output of plant {} nor the set point `<output>{SETPOINT_SUFFIX}` of one \
-                     (map it in `[controller.map]`)",
-                    as_given(v),
-                    plant.plant
-                ),
-            };
-            return Err(bad(format!("{problem}; its outputs: {}", outputs())));
-        }
+        let sources = self.inputs.iter().map(|v| source(v, plant, setpoint).map_err(&bad)).collect::<Result<_, _>>()?;
         let mut commands = Vec::new();
         for (j, v) in self.outputs.iter().enumerate() {
             if let Some(k) = input_index(&v.signal) {
@@ -224,10 +227,10 @@ impl ControllerMap {
                 return Err(bad(format!("output {} is `{}`, {what}; its inputs: {}", as_given(v), v.signal, inputs())));
             }
         }
-        if commands.is_empty() {
+        // A plant without inputs (a model that only reports, as the Reference FMU `Stair`) is watched, not commanded.
+        if commands.is_empty() && !plant.inputs.is_empty() {
             return Err(bad(format!(
-                "none of its Real outputs ({}) is named like an input of plant {} ({}): map them in \
-                 `[controller.map]`",
+                "none of its outputs ({}) is named like an input of plant {} ({}): map them in `[controller.map]`",
                 list(self.outputs.iter().map(|o| o.variable.as_str())),
                 plant.plant,
                 inputs()
@@ -235,6 +238,70 @@ impl ControllerMap {
         }
         Ok(Binding { sources, commands })
     }
+
+    /// The inputs that stay unconnected at their start value on `plant` (for the `controller-fmu` event and the
+    /// launcher's note).
+    pub fn unconnected(&self, binding: &Binding) -> Vec<String> {
+        let at_start = binding.sources.iter().zip(&self.inputs).filter(|(s, _)| matches!(s, Source::Start(_)));
+        at_start.map(|(_, v)| v.variable.clone()).collect()
+    }
+}
+
+/// How a variable is named in errors: with its mapping when `[controller.map]` gave one.
+fn as_given(v: &MappedVariable) -> String {
+    match v.mapped {
+        true => format!("{:?} (mapped to `{}` by `controller.map`)", v.variable, v.signal),
+        false => format!("{:?}", v.variable),
+    }
+}
+
+/// Where input `v` takes its value each tick: a constant of the map, the plant output of its name, the set point
+/// `<output>_sp`, or, when it names nothing of the plant and the map does not name it, its start value.
+fn source(v: &MappedVariable, plant: &PlantSignals, setpoint: &Setpoint) -> Result<Source, String> {
+    let output_index = |name: &str| plant.outputs.iter().position(|o| o.name == name);
+    if let Some(value) = v.constant {
+        return Ok(Source::Constant(value));
+    }
+    if let Some(k) = output_index(&v.signal) {
+        return Ok(Source::Output(k));
+    }
+    if let Some(of) = v.signal.strip_suffix(SETPOINT_SUFFIX).filter(|of| output_index(of).is_some()) {
+        return match setpoint.get(of) {
+            Some(value) => Ok(Source::Setpoint(value)),
+            None => Err(format!(
+                "input {} takes the set point of `{of}`, and the scenario gives none: add `{of} = ...` to its \
+                 [setpoint]",
+                as_given(v)
+            )),
+        };
+    }
+    let is_plant_input = plant.inputs.iter().any(|i| i.name == v.signal);
+    if let (false, false, Some(start)) = (v.mapped, is_plant_input, v.start) {
+        return Ok(Source::Start(start));
+    }
+    let problem = match (is_plant_input, v.mapped) {
+        (true, _) => format!(
+            "input {} is `{}`, an input of plant {}: an FMU input reads a plant output (or the set point \
+             `<output>{SETPOINT_SUFFIX}`, or a constant)",
+            as_given(v),
+            v.signal,
+            plant.plant
+        ),
+        (false, true) => format!(
+            "input {} is `{}`, neither an output of plant {} nor the set point `<output>{SETPOINT_SUFFIX}` of one",
+            as_given(v),
+            v.signal,
+            plant.plant
+        ),
+        (false, false) => format!(
+            "input {} is neither an output of plant {} nor the set point `<output>{SETPOINT_SUFFIX}` of one, and \
+             it declares no start value to stay at: map it in `[controller.map]`, to a signal or a constant",
+            as_given(v),
+            plant.plant
+        ),
+    };
+    let outputs = list(plant.outputs.iter().map(|o| o.name.as_str()));
+    Err(format!("{problem}; its outputs: {outputs}"))
 }
 
 /// A checkpoint of a controller FMU: the tick of the sample it last answered and the FMU's serialized state.
@@ -254,8 +321,8 @@ pub struct FmuController {
     pub map: ControllerMap,
     setpoint: Setpoint,
     binding: Option<Binding>,
-    input_refs: Vec<u32>,
-    output_refs: Vec<u32>,
+    inputs: Numbers,
+    outputs: Numbers,
     input_values: Vec<f64>,
     output_values: Vec<f64>,
     last_tick: u64,
@@ -263,6 +330,8 @@ pub struct FmuController {
     /// says).
     fmu_time_s: Option<f64>,
     failure: Option<String>,
+    /// Where connecting says which inputs stay unconnected (the run's events; none in one process).
+    events: Option<EventLog>,
 }
 
 impl FmuController {
@@ -277,15 +346,12 @@ impl FmuController {
         let map =
             ControllerMap::describe(fmu.file(), &fmu.description, &scenario.controller).map_err(anyhow::Error::msg)?;
         let mut instance = fmu.instantiate("controller")?;
-        if !map.parameters.is_empty() {
-            let (refs, values): (Vec<u32>, Vec<f64>) = map.parameters.iter().copied().unzip();
-            instance.set_reals(&refs, &values)?;
-        }
+        set_parameters(&mut instance, &map.parameters)?;
         instance.enter_initialization(0.0)?;
         instance.exit_initialization()?;
         Ok(Self {
-            input_refs: map.inputs.iter().map(|v| v.value_reference).collect(),
-            output_refs: map.outputs.iter().map(|v| v.value_reference).collect(),
+            inputs: Numbers::new(map.inputs.iter().map(|v| v.value_reference)),
+            outputs: Numbers::new(map.outputs.iter().map(|v| v.value_reference)),
             input_values: vec![0.0; map.inputs.len()],
             output_values: vec![0.0; map.outputs.len()],
             instance: RefCell::new(instance),
@@ -296,6 +362,7 @@ impl FmuController {
             last_tick: 0,
             fmu_time_s: None,
             failure: None,
+            events: None,
         })
     }
 
@@ -319,6 +386,9 @@ impl FmuController {
             Err(why) => format!("{why}, so a restarted controller starts it fresh"),
         };
         let mut text = format!("flying {}: {resumes}", self.fmu.label());
+        if !self.map.left_out.is_empty() {
+            text += &format!("; left out: {}", self.map.left_out.join(", "));
+        }
         if self.map.outputs.len() > self.map.diagnostics.len() {
             let left: Vec<&str> =
                 self.map.outputs[self.map.diagnostics.len()..].iter().map(|o| o.variable.as_str()).collect();
@@ -333,12 +403,12 @@ impl FmuController {
         for (value, source) in self.input_values.iter_mut().zip(&binding.sources) {
             *value = match *source {
                 Source::Output(k) => outputs[k],
-                Source::Setpoint(v) => v,
+                Source::Setpoint(v) | Source::Constant(v) | Source::Start(v) => v,
             };
         }
         let instance = self.instance.get_mut();
-        if !self.input_refs.is_empty() {
-            instance.set_reals(&self.input_refs, &self.input_values).map_err(|e| e.to_string())?;
+        if !self.inputs.is_empty() {
+            instance.set_numbers(&mut self.inputs, &self.input_values).map_err(|e| e.to_string())?;
         }
         // A plant resumed from its checkpoint sends ticks the controller has flown already; an FMU refuses a
         // communication point before its own time, so the controller's time goes on, as a controller's clock on a
@@ -346,7 +416,7 @@ impl FmuController {
         let t_s = (sample.header.tick as f64 * dt_s).max(self.fmu_time_s.unwrap_or(f64::NEG_INFINITY));
         instance.do_step(t_s, dt_s).map_err(|e| e.to_string())?;
         self.fmu_time_s = Some(t_s + dt_s);
-        instance.get_reals(&self.output_refs, &mut self.output_values).map_err(|e| e.to_string())?;
+        instance.get_numbers(&mut self.outputs, &mut self.output_values).map_err(|e| e.to_string())?;
         for &(j, k) in &binding.commands {
             command[k] = self.output_values[j];
         }
@@ -361,7 +431,17 @@ impl Controller for FmuController {
     }
 
     fn connect(&mut self, plant: &PlantSignals) -> Result<(), String> {
-        self.binding = Some(self.map.bind(plant, &self.setpoint)?);
+        let binding = self.map.bind(plant, &self.setpoint)?;
+        let unconnected = self.map.unconnected(&binding);
+        if let (Some(events), false) = (&self.events, unconnected.is_empty()) {
+            let detail = format!(
+                "inputs plant {} has no signal for, at their start values: {}",
+                plant.plant,
+                unconnected.join(", ")
+            );
+            events.emit(None, "controller-fmu-unconnected", detail);
+        }
+        self.binding = Some(binding);
         Ok(())
     }
 
@@ -400,11 +480,107 @@ impl Controller for FmuController {
 /// Fly the scenario's controller FMU at `path` as the run's controller, to the end of the run (or SIGTERM), and
 /// write the report.
 pub fn run_fmu_controller(args: &ProcessArgs, scenario: Scenario, path: &Path) -> anyhow::Result<ProcessReport> {
-    let controller = FmuController::open(path, &scenario)?;
-    EventLog::new(&args.out, silrig_flight::role::Role::Controller.label()).emit(
-        None,
-        "controller-fmu",
-        controller.describe_fmu(),
-    );
+    let mut controller = FmuController::open(path, &scenario)?;
+    let events = EventLog::new(&args.out, silrig_flight::role::Role::Controller.label());
+    events.emit(None, "controller-fmu", controller.describe_fmu());
+    controller.events = Some(events);
     serve(args, scenario, Box::new(controller))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use silrig_flight::signals::{InputSignal, OutputSignal};
+
+    /// A controller FMU with a Real input `a`, an Integer input `n` (start 4), a Boolean input `b` without start, a
+    /// String input `label`, a Real output `u` and a Boolean output `on`.
+    const FMU: &str = r#"<fmiModelDescription fmiVersion="2.0" modelName="c" guid="{g}">
+  <CoSimulation modelIdentifier="c"/>
+  <ModelVariables>
+    <ScalarVariable name="a" valueReference="0" causality="input"><Real start="0"/></ScalarVariable>
+    <ScalarVariable name="n" valueReference="1" causality="input"><Integer start="4"/></ScalarVariable>
+    <ScalarVariable name="b" valueReference="2" causality="input"><Boolean/></ScalarVariable>
+    <ScalarVariable name="label" valueReference="3" causality="input"><String start="x"/></ScalarVariable>
+    <ScalarVariable name="u" valueReference="4" causality="output"><Real/></ScalarVariable>
+    <ScalarVariable name="on" valueReference="5" causality="output"><Boolean/></ScalarVariable>
+  </ModelVariables>
+</fmiModelDescription>"#;
+
+    fn plant(outputs: &[&str], inputs: &[&str]) -> PlantSignals {
+        let output = |n: &&str| OutputSignal { name: n.to_string(), unit: String::new(), in_trace: true };
+        let input = |n: &&str| InputSignal {
+            name: n.to_string(),
+            unit: String::new(),
+            min: -1.0,
+            max: 1.0,
+            hold: 0.0,
+            held_output: None,
+            command_in_trace: true,
+        };
+        PlantSignals {
+            plant: "p".into(),
+            outputs: outputs.iter().map(output).collect(),
+            inputs: inputs.iter().map(input).collect(),
+        }
+    }
+
+    fn map_of(entries: &str) -> Result<ControllerMap, String> {
+        let d = ModelDescription::parse(FMU, "c.fmu").unwrap();
+        let table: toml::Value = toml::from_str(entries).unwrap();
+        let options =
+            ControllerOptions { map: silrig_flight::controller_map::from_toml(table).unwrap(), ..Default::default() };
+        ControllerMap::describe("c.fmu", &d, &options)
+    }
+
+    #[test]
+    fn number_variables_are_mapped_and_the_others_left_out_with_the_reason() {
+        let map = map_of("").unwrap();
+        let kinds: Vec<_> = map.inputs.iter().map(|v| (v.variable.as_str(), v.value_reference.0)).collect();
+        assert_eq!(kinds, [("a", ValueKind::Real), ("n", ValueKind::Integer), ("b", ValueKind::Boolean)]);
+        assert_eq!(
+            map.outputs.iter().map(|v| v.value_reference.0).collect::<Vec<_>>(),
+            [ValueKind::Real, ValueKind::Boolean]
+        );
+        assert_eq!(map.left_out, ["\"label\" (String is not a signal: a String is text, not a number)"]);
+        let e = map_of("label = \"x\"").unwrap_err();
+        assert!(
+            e.contains("`controller.map.label`: variable \"label\" cannot be mapped: String is not a signal"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn inputs_take_a_constant_or_stay_unconnected_at_their_start_value() {
+        let map = map_of("a = 0.25\nb = 1").unwrap();
+        let binding = map.bind(&plant(&["y"], &["u"]), &Setpoint::default()).unwrap();
+        assert_eq!(binding.sources, [Source::Constant(0.25), Source::Start(4.0), Source::Constant(1.0)]);
+        assert_eq!(binding.commands, [(0, 0)]);
+        assert_eq!(map.unconnected(&binding), ["n"]);
+        // Named like a plant output, an input reads it; a Boolean without a start value must be connected.
+        let map = map_of("a = 0.25").unwrap();
+        let binding = map.bind(&plant(&["b", "n"], &["u"]), &Setpoint::default()).unwrap();
+        assert_eq!(binding.sources, [Source::Constant(0.25), Source::Output(1), Source::Output(0)]);
+        let e = map.bind(&plant(&["y"], &["u"]), &Setpoint::default()).unwrap_err();
+        assert!(
+            e.contains("input \"b\" is neither an output of plant p") && e.contains("declares no start value"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_constant_for_an_output_and_an_input_mapped_to_a_missing_signal_are_refused() {
+        let e = map_of("u = 0.0").unwrap_err();
+        assert!(e.contains("`controller.map.u` = 0: variable \"u\" is an output"), "{e}");
+        let map = map_of("a = \"alpha\"").unwrap();
+        let e = map.bind(&plant(&["y", "n", "b"], &["u"]), &Setpoint::default()).unwrap_err();
+        assert!(e.contains("input \"a\" (mapped to `alpha` by `controller.map`) is `alpha`, neither"), "{e}");
+    }
+
+    #[test]
+    fn a_plant_without_inputs_is_watched_and_one_with_inputs_must_be_commanded() {
+        let map = map_of("").unwrap();
+        assert!(map.bind(&plant(&["b"], &[]), &Setpoint::default()).unwrap().commands.is_empty());
+        let e = map.bind(&plant(&["b"], &["elevator"]), &Setpoint::default()).unwrap_err();
+        assert!(e.contains("none of its outputs (u, on) is named like an input of plant p (elevator)"), "{e}");
+    }
 }

@@ -1,5 +1,6 @@
-//! A co-simulation FMU as the run's plant (`silrig run --plant-fmu`, a scenario's `[plant] fmu`): its Real
-//! (Float64) variables of causality output and input become the plant's named signals ([`fmu_signals`]), its
+//! A co-simulation FMU as the run's plant (`silrig run --plant-fmu`, a scenario's `[plant] fmu`): its numeric
+//! variables (Real/Float64, Integer/Int32 and Boolean, as doubles) of causality output and input become the plant's
+//! named signals ([`fmu_signals`]; the others are left out, each named with the reason), its
 //! parameters and start values come from `[plant.parameters]` by variable name, and [`run_fmu_plant`] flies it
 //! through the same [`PlantSession`] as any plant of the user's own, so it gets the rig's clock, actuators, sensor
 //! and actuator faults, watchdog and failsafe, logger, recording and timing report. The step time the report gives
@@ -16,7 +17,7 @@
 //! of `trace.csv` (an input's command out of it), `position_of` names the input whose actuator an output reports.
 
 use super::ProcessArgs;
-use super::fmu_variables::{can_checkpoint, from_hex, to_hex};
+use super::fmu_variables::{can_checkpoint, from_hex, set_parameters, signal_variables, to_hex};
 use super::plant_model::{ActuatorFlags, PlantModel};
 use super::plant_session::{PlantSession, PlantTick};
 use super::report::ProcessReport;
@@ -24,6 +25,7 @@ use silrig_flight::scenario::Scenario;
 use silrig_flight::signal_chain::SignalChain;
 use silrig_flight::signals::{InputSignal, OutputSignal, PlantSignals, valid_name, valid_unit};
 use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
+use silrig_fmi::numbers::Numbers;
 use silrig_fmi::{Fmu, Instance};
 use std::path::Path;
 use std::sync::Arc;
@@ -35,19 +37,30 @@ pub use super::fmu_variables::signal_name;
 pub struct FmuSignals {
     /// What the plant announces.
     pub signals: PlantSignals,
-    /// The value reference of each output, in the announced order.
-    pub output_refs: Vec<u32>,
-    /// The value reference of each input, in the announced order.
-    pub input_refs: Vec<u32>,
-    /// `[plant.parameters]`: value references and the values set before initialization.
-    pub parameters: Vec<(u32, f64)>,
+    /// The kind and value reference of each output, in the announced order.
+    pub output_refs: Vec<(ValueKind, u32)>,
+    /// The kind and value reference of each input, in the announced order.
+    pub input_refs: Vec<(ValueKind, u32)>,
+    /// `[plant.parameters]`: kinds, value references and the values set before initialization.
+    pub parameters: Vec<super::fmu_variables::Parameter>,
+    /// The inputs and outputs that are not signals, each `"name" (why)`.
+    pub left_out: Vec<String>,
+}
+
+impl FmuSignals {
+    /// What the `plant-fmu` event adds about the variables left out (empty when none is).
+    pub fn left_out_note(&self) -> String {
+        match self.left_out.is_empty() {
+            true => String::new(),
+            false => format!("; left out: {}", self.left_out.join(", ")),
+        }
+    }
 }
 
 /// Map an FMU's variables to the plant's signals, and `[plant.parameters]` to its parameters. Errors name the
 /// FMU, the variable and the rule.
 pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Result<FmuSignals, String> {
     let bad = |problem: String| format!("FMU {file}: {problem}");
-    let real = |v: &&Variable| v.kind == ValueKind::Real;
     let traced = |v: &Variable| v.silrig.get("trace").is_none_or(|t| t != "false");
     let named = |v: &Variable| -> Result<String, String> {
         let name = v.silrig.get("name").cloned().unwrap_or_else(|| signal_name(&v.name));
@@ -71,9 +84,9 @@ pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Res
             ))),
         }
     };
-    let outputs: Vec<&Variable> =
-        d.variables.iter().filter(|v| v.causality == Causality::Output).filter(real).collect();
-    let inputs: Vec<&Variable> = d.variables.iter().filter(|v| v.causality == Causality::Input).filter(real).collect();
+    let (outputs, mut left_out) = signal_variables(d, Causality::Output);
+    let (inputs, inputs_left_out) = signal_variables(d, Causality::Input);
+    left_out.extend(inputs_left_out);
     let plant = d.silrig_plant_name.clone().unwrap_or_else(|| signal_name(&d.model_name));
     let mut signals = PlantSignals { plant, outputs: Vec::new(), inputs: Vec::new() };
     if !valid_name(&signals.plant) {
@@ -95,15 +108,20 @@ pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Res
         let held_output = by_annotation.or_else(|| signals.outputs.iter().position(|o| o.name == by_name));
         signals.inputs.push(InputSignal { name, unit, min, max, hold, held_output, command_in_trace: traced(v) });
     }
-    signals
-        .check(silrig_wire::wire::MAX_OUTPUTS, silrig_wire::wire::MAX_INPUTS)
-        .map_err(|e| bad(format!("its variables as the plant's signals: {e}")))?;
+    signals.check(silrig_wire::wire::MAX_OUTPUTS, silrig_wire::wire::MAX_INPUTS).map_err(|e| {
+        let why = match left_out.is_empty() {
+            true => String::new(),
+            false => format!(" (left out, not being signals: {})", left_out.join(", ")),
+        };
+        bad(format!("its variables as the plant's signals: {e}{why}"))
+    })?;
     let parameters = super::fmu_variables::parameters(file, d, "plant.parameters", &scenario.plant.parameters)?;
     Ok(FmuSignals {
-        output_refs: outputs.iter().map(|v| v.value_reference).collect(),
-        input_refs: inputs.iter().map(|v| v.value_reference).collect(),
+        output_refs: outputs.iter().map(|v| (v.kind, v.value_reference)).collect(),
+        input_refs: inputs.iter().map(|v| (v.kind, v.value_reference)).collect(),
         signals,
         parameters,
+        left_out,
     })
 }
 
@@ -114,6 +132,8 @@ pub struct FmuPlant {
     fmu: Arc<Fmu>,
     /// Its signals and references.
     pub map: FmuSignals,
+    outputs: Numbers,
+    inputs: Numbers,
     tick: u64,
     dt_s: f64,
 }
@@ -136,13 +156,11 @@ impl FmuPlant {
     pub fn new(fmu: Arc<Fmu>, scenario: &Scenario) -> anyhow::Result<Self> {
         let map = Self::describe(&fmu, scenario).map_err(anyhow::Error::msg)?;
         let mut instance = fmu.instantiate("plant")?;
-        if !map.parameters.is_empty() {
-            let (refs, values): (Vec<u32>, Vec<f64>) = map.parameters.iter().copied().unzip();
-            instance.set_reals(&refs, &values)?;
-        }
+        set_parameters(&mut instance, &map.parameters)?;
         instance.enter_initialization(0.0)?;
         instance.exit_initialization()?;
-        Ok(Self { instance, fmu, map, tick: 0, dt_s: scenario.timing.dt_s })
+        let (outputs, inputs) = (Numbers::new(map.output_refs.clone()), Numbers::new(map.input_refs.clone()));
+        Ok(Self { instance, fmu, map, outputs, inputs, tick: 0, dt_s: scenario.timing.dt_s })
     }
 
     /// The signals of the FMU at `path` under `scenario`, without instantiating it: what the launcher checks
@@ -163,12 +181,12 @@ impl FmuPlant {
 
     /// Its outputs now, in the announced order.
     pub fn outputs(&mut self, values: &mut [f64]) -> Result<(), String> {
-        self.instance.get_reals(&self.map.output_refs, values).map_err(|e| e.to_string())
+        self.instance.get_numbers(&mut self.outputs, values).map_err(|e| e.to_string())
     }
 
     /// Set the inputs and step one period.
     pub fn step(&mut self, inputs: &[f64]) -> Result<(), String> {
-        self.instance.set_reals(&self.map.input_refs, inputs).map_err(|e| e.to_string())?;
+        self.instance.set_numbers(&mut self.inputs, inputs).map_err(|e| e.to_string())?;
         let t_s = self.tick as f64 * self.dt_s;
         self.instance.do_step(t_s, self.dt_s).map_err(|e| e.to_string())?;
         self.tick += 1;
@@ -202,11 +220,14 @@ pub fn run_fmu_plant(args: &ProcessArgs, scenario: Scenario, path: &Path) -> any
     let initial = signals.inputs.iter().map(|i| i.held_output.map_or(i.hold, |k| outputs[k])).collect();
     let mut session = PlantSession::open_at(args.clone(), scenario, &signals, initial)?;
     let checkpoints = plant.can_checkpoint();
+    let left_out = plant.map.left_out_note();
     session.event(
         "plant-fmu",
         match &checkpoints {
-            Ok(()) => format!("flying {}: checkpoints through its own state", plant.fmu.label()),
-            Err(why) => format!("flying {}: {why}, so a restarted plant flies again from tick 0", plant.fmu.label()),
+            Ok(()) => format!("flying {}: checkpoints through its own state{left_out}", plant.fmu.label()),
+            Err(why) => {
+                format!("flying {}: {why}, so a restarted plant flies again from tick 0{left_out}", plant.fmu.label())
+            }
         },
     );
     if let Some(text) = session.restored_checkpoint() {

@@ -9,6 +9,7 @@
 //!   `silrig plant derivative`.
 //! - [`export_fmu`]: `silrig export-fmu`, the built-in F-16 as an FMI 2.0 co-simulation FMU.
 //! - [`html`]: `report.html`, one self-contained page per run, check and sweep.
+//! - [`new_project`]: `silrig new`, a controller or plant of the user's own started from the examples.
 //! - [`soak`]: `silrig soak`, a long realtime run under faults drawn from a seed, and its figures.
 //!
 //! Layers: the top; uses every crate below.
@@ -20,6 +21,7 @@ pub mod contract;
 pub mod derivative_csv;
 pub mod export_fmu;
 pub mod html;
+pub mod new_project;
 pub mod outputs;
 pub mod replay;
 pub mod soak;

@@ -1,6 +1,6 @@
 """A plant that speaks iceoryx2 itself, written from `silrig contract` alone (PyPI `iceoryx2` 0.10 and the generated
 `examples/python/silrig_contract.py`; no libsilrig_client): the plant's side of a raw peer. It is the toy of
-toy_plant.py (three damped rotational axes with the F-16's names) and keeps the clock itself: one tick every
+examples/python/toy_plant.py (three damped rotational axes with the F-16's names) and keeps the clock itself: one tick every
 SILRIG_* period on the wall clock (realtime), the command answering each tick applied when it is in, the last one
 held when not. It announces PlantInfo, waits for a command publisher, flies the run's ticks, sends the last tick
 again with FLAG_END_OF_RUN and notifies EVENT_FINISHED. It writes no report.
@@ -53,7 +53,7 @@ def main():
     config.global_cfg.prefix = iox2.FileName.new(f"sr_{run}_")
     node = iox2.NodeBuilder.new().config(config).name(iox2.NodeName.new("raw-plant")).create(iox2.ServiceType.Ipc)
 
-    model = Toy("ok")
+    model = Toy()
     info = announcement(model)
     announcer = Sender(*open_stream(node, "plant-info", c.PlantInfo))
     announcer.send(info, 0)

@@ -1,8 +1,9 @@
 //! The FMUs this repository builds from C, for the tests that fly or break them: `airframe` (the example vehicle,
 //! `examples/fmu/airframe`), `misbehave` (the importer's error fixture, `tests/fmu/misbehave`), `lag3` (a
 //! first-order lag in FMI 3.0, `tests/fmu/lag3`), `attitude` (a foreign three-axis attitude vehicle, inputs named
-//! with their unit and no surface positions, `tests/fmu/attitude`) and `pid` (the example PID as a controller FMU,
-//! `examples/fmu/pid`), each built by `examples/fmu/build.sh` with the system `cc` against
+//! with their unit and no surface positions, `tests/fmu/attitude`), `pid` (the example PID as a controller FMU,
+//! `examples/fmu/pid`), and `stair` and `resource` (FMI 3.0, the Reference FMUs' interfaces with Int32 outputs,
+//! `tests/fmu/stair` and `tests/fmu/resource`), each built by `examples/fmu/build.sh` with the system `cc` against
 //! the FMI headers of the test venv's `fmpy`.
 
 use std::path::{Path, PathBuf};
@@ -41,7 +42,9 @@ pub fn fmu_source(name: &str) -> PathBuf {
         "lag3" => Path::new(ROOT).join("tests/fmu/lag3"),
         "attitude" => Path::new(ROOT).join("tests/fmu/attitude"),
         "pid" => Path::new(ROOT).join("examples/fmu/pid"),
-        other => panic!("no FMU named {other}: airframe, misbehave, lag3, attitude or pid"),
+        "stair" => Path::new(ROOT).join("tests/fmu/stair"),
+        "resource" => Path::new(ROOT).join("tests/fmu/resource"),
+        other => panic!("no FMU named {other}: airframe, misbehave, lag3, attitude, pid, stair or resource"),
     }
 }
 
