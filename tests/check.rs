@@ -573,3 +573,41 @@ fn in_process_flies_a_lockstep_case_in_one_process_with_the_rigs_trace_and_judge
     one.finish();
     rig.finish();
 }
+
+/// Plants of other kinds than the Python toy pass a suite with process faults, judged by their own outputs: the C
+/// toy plant (killed controller and killed plant) and the foreign attitude FMU (killed controller; it keeps no
+/// state to restart from).
+#[test]
+fn the_c_toy_plant_and_a_foreign_fmu_plant_pass_a_suite_with_process_faults() {
+    let suite = format!("{ROOT}/tests/check/process-faults.toml");
+    let pid = "python3 examples/python/pid_attitude.py";
+    let c_plant = common::c_example(SILRIG, "check", "toy_plant");
+    let fmu_dir = temp_dir("process-faults-fmu-build");
+    let fmu = common::fmu::build_fmu("attitude", &fmu_dir);
+    let fmu = fmu.to_str().unwrap();
+    for (name, args, cases) in [
+        ("c-toy", vec!["--plant-cmd", c_plant.as_str()], vec!["controller-kill-restart", "plant-restart"]),
+        ("fmu", vec!["--plant-fmu", fmu, "--case", "controller-kill-restart"], vec!["controller-kill-restart"]),
+    ] {
+        let mut all = vec![suite.as_str(), "--controller-cmd", pid];
+        all.extend(args);
+        let c = check(&format!("process-faults-{name}"), &all);
+        assert!(!c.verdict.is_null(), "{name}: no check.json:\n{}{}", c.stdout, c.stderr);
+        let (flown, not_flown) = c.flown_and_not();
+        assert_eq!(flown, cases, "{name}:\n{}{}", c.stdout, c.stderr);
+        assert!(not_flown.is_empty());
+        for case in &flown {
+            for (criterion, passed) in c.judgements(case) {
+                assert!(
+                    passed || TIMING_CRITERIA.contains(&criterion.as_str()),
+                    "{name} {case}: {criterion}:\n{}",
+                    c.stdout
+                );
+            }
+        }
+        assert!(c.measured("controller-kill-restart", "recovered_within_s").contains(", joined "), "{}", c.stdout);
+        assert_eq!(c.code, Some(c.expected_code()), "{name}:\n{}{}", c.stdout, c.stderr);
+        c.finish();
+    }
+    std::fs::remove_dir_all(fmu_dir).ok();
+}

@@ -62,6 +62,11 @@ fn every_shipped_scenario_has_a_golden_trace() {
         let path = entry.unwrap().path();
         let Ok(scenario) = Scenario::load(&path) else { continue };
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        // The any-plant scenario is for plants of the user's own (set points and timing, nothing of the F-16): no
+        // F-16 trace to hold; tests/check.rs and tests/plants.rs fly it with the toy plants.
+        if name == "any-plant" {
+            continue;
+        }
         assert!(GOLDEN.iter().any(|g| g.0 == name), "{} has no golden trace ({})", path.display(), scenario.name);
     }
 }

@@ -26,24 +26,7 @@ fn toy(mode: &str) -> String {
 
 /// The C example plant, compiled with the system compiler against the header and the library.
 fn c_plant() -> String {
-    let lib_dir = common::client_lib(SILRIG).parent().unwrap().to_path_buf();
-    let out = std::env::temp_dir().join(format!("silrig-plants-{}-toy_plant", std::process::id()));
-    if !out.exists() {
-        let o = Command::new("cc")
-            .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
-            .arg(format!("{ROOT}/examples/c"))
-            .arg(format!("{ROOT}/examples/c/toy_plant.c"))
-            .arg("-L")
-            .arg(&lib_dir)
-            .arg("-lsilrig_client")
-            .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
-            .arg("-o")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "cc: {}", String::from_utf8_lossy(&o.stderr));
-    }
-    out.display().to_string()
+    common::c_example(SILRIG, "plants", "toy_plant")
 }
 
 fn python_pid() -> String {
@@ -162,6 +145,23 @@ fn a_c_plant_flies_lockstep_with_the_example_controller() {
     assert!(rows.iter().any(|row| row[8] != 0.0), "the controller did command the elevator");
     r.finish();
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Without a scenario file a plant of your own flies the embedded any-plant scenario (set points and timing only),
+/// not the F-16's, whose initial condition and actuators it does not have.
+#[test]
+fn without_a_scenario_a_plant_of_your_own_flies_the_any_plant_scenario() {
+    let r = run(
+        "no-scenario",
+        &["--mode", "lockstep", "--duration-s", "3", "--plant-cmd", &c_plant(), "--controller-cmd", &python_pid()],
+    );
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("scenario any-plant, lockstep mode"), "{}", r.stdout);
+    assert_eq!(r.counter("plant", "ticks"), 301);
+    let (_, rows) = r.trace();
+    let theta = rows.last().unwrap()[2];
+    assert!(theta > 5.0, "the any-plant scenario's pitch set point (10 deg) is flown: theta ends at {theta}");
+    r.finish();
 }
 
 #[test]

@@ -381,7 +381,8 @@ fn a_plant_killed_for_good_ends_the_flight_early_and_the_run_fails_saying_when()
     assert!(text.contains("killed by signal 9 (the fault plan), no report"), "{text}");
     assert!(report["cycles_per_s"].as_f64().unwrap() > 0.0, "{}", report["cycles_per_s"]);
     assert!(!text.contains("NaN"), "{text}");
-    assert!(text.contains("n/a"), "{text}");
+    // The late window (0.3 of the planned 3 s) is judged on what was flown, not left out.
+    assert!(text.contains("max |p|, |q|, |r| in the last 0.9 s"), "{text}");
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }

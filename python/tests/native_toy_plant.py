@@ -10,7 +10,7 @@ import sys
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "tests" / "clients"))
 
 import silrig  # noqa: E402
-from toy_plant import Toy  # noqa: E402
+from toy_plant import TestToy  # noqa: E402
 
 if __name__ == "__main__":
-    sys.exit(silrig.serve_plant(Toy(sys.argv[1] if len(sys.argv) > 1 else "ok")))
+    sys.exit(silrig.serve_plant(TestToy(sys.argv[1] if len(sys.argv) > 1 else "ok")))

@@ -12,6 +12,9 @@ use std::path::Path;
 
 /// The embedded default scenario (what `silrig sim` and `silrig run` use without a file).
 pub const DEFAULT_SCENARIO_TOML: &str = include_str!("../../configs/robust.toml");
+/// The embedded scenario for a plant of the user's own (what `silrig run` and `silrig check` fly it with without a
+/// file): set points and timing, nothing of the F-16.
+pub const ANY_PLANT_SCENARIO_TOML: &str = include_str!("../../configs/any-plant.toml");
 
 /// A whole scenario.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -473,6 +476,12 @@ impl Scenario {
     /// The embedded default scenario.
     pub fn embedded_default() -> Self {
         Self::from_toml(DEFAULT_SCENARIO_TOML, "embedded default").expect("the embedded default scenario is valid")
+    }
+
+    /// The embedded scenario for a plant of the user's own ([`ANY_PLANT_SCENARIO_TOML`]).
+    pub fn embedded_any_plant() -> Self {
+        Self::from_toml(ANY_PLANT_SCENARIO_TOML, "embedded any-plant")
+            .expect("the embedded any-plant scenario is valid")
     }
 
     /// The scenario as TOML (what a run records next to its outputs).

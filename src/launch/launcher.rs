@@ -29,7 +29,8 @@ use std::time::Duration;
 /// What `silrig run` is asked to do.
 #[derive(Debug, Clone, clap::Args)]
 pub struct LaunchOptions {
-    /// Scenario file (TOML); without it, the embedded default scenario.
+    /// Scenario file (TOML); without it, the embedded default scenario (for a plant of your own, --plant-cmd,
+    /// --plant-fmu or --plant external: the embedded any-plant scenario, set points and timing only).
     pub config: Option<PathBuf>,
     /// realtime (the scenario's rate on the wall clock) or lockstep (as fast as possible, deterministic).
     #[arg(long, value_enum, default_value = "realtime")]
@@ -345,6 +346,15 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     silrig_rig::flag_in_range("external-timeout-s", opts.external_timeout_s, 0.1, 86_400.0, "s")
         .map_err(|e| anyhow::anyhow!(e))?;
     let mut scenario = load_scenario(opts.config.as_deref(), opts.duration_s)?;
+    // Without a file, a plant of the user's own flies the any-plant scenario: the F-16's would refuse it.
+    let own_plant = opts.plant_cmd.is_some() || opts.plant_fmu.is_some() || opts.plant != PlantKind::Builtin;
+    if opts.config.is_none() && own_plant {
+        scenario = silrig_flight::scenario::Scenario::embedded_any_plant();
+        if let Some(d) = opts.duration_s {
+            scenario.timing.duration_s = d;
+            scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("--duration-s: `{key}`: {problem}"))?;
+        }
+    }
     // Across hosts a network leg sits in every answer: next-tick unless the user asks for same-tick.
     let across_hosts = opts.bridge_listen.is_some().then_some(silrig_flight::scenario::CommandTiming::NextTick);
     if let Some(timing) = opts.command_timing.or(across_hosts) {

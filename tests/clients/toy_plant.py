@@ -5,14 +5,22 @@
                                     twice (announces phi_deg twice), none (announces no outputs)
 """
 
+import importlib.util
 import math
 import pathlib
 import sys
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "python"))
+EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples" / "python"
+sys.path.insert(0, str(EXAMPLES))
 
 from silrig_client import serve_plant  # noqa: E402
-from toy_plant import Toy  # noqa: E402
+
+# The example is loaded by its path under a name of its own: this file is `toy_plant` too, for whoever imports it
+# (python/tests/native_toy_plant.py), so `import toy_plant` here would find this file again.
+_spec = importlib.util.spec_from_file_location("example_toy_plant", EXAMPLES / "toy_plant.py")
+_example = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_example)
+Toy = _example.Toy
 
 
 class TestToy(Toy):

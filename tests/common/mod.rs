@@ -38,18 +38,26 @@ pub fn client_lib(silrig: &str) -> &'static Path {
 }
 
 /// `examples/c/pid_attitude.c` compiled once per test process (of suite `suite`) against `libsilrig_client.so`
-/// beside `silrig`, built beside and renamed into place for tests running in parallel.
+/// beside `silrig` (see [`c_example`]).
 #[allow(dead_code)]
 pub fn c_pid(silrig: &str, suite: &str) -> String {
+    c_example(silrig, suite, "pid_attitude")
+}
+
+/// `examples/c/<name>.c` compiled once per test process (of suite `suite`) with the system compiler, warnings as
+/// errors, against `libsilrig_client.so` beside `silrig`, built beside and renamed into place for tests running in
+/// parallel.
+#[allow(dead_code)]
+pub fn c_example(silrig: &str, suite: &str, name: &str) -> String {
     let root = env!("CARGO_MANIFEST_DIR");
-    let exe = std::env::temp_dir().join(format!("silrig-{suite}-{}-pid_attitude", std::process::id()));
+    let exe = std::env::temp_dir().join(format!("silrig-{suite}-{}-{name}", std::process::id()));
     if !exe.exists() {
         let lib_dir = client_lib(silrig).parent().unwrap().to_path_buf();
         let partial = exe.with_extension(format!("{:?}", std::thread::current().id()).replace(['(', ')'], ""));
         let o = Command::new("cc")
-            .args(["-std=c11", "-O2", "-I"])
+            .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
             .arg(format!("{root}/examples/c"))
-            .arg(format!("{root}/examples/c/pid_attitude.c"))
+            .arg(format!("{root}/examples/c/{name}.c"))
             .arg("-L")
             .arg(&lib_dir)
             .args(["-lsilrig_client", "-lm"])

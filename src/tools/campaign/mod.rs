@@ -138,11 +138,6 @@ impl Campaign {
         Ok(())
     }
 
-    /// Fly every case through the lockstep rig with the controller `cmd` (as [`Self::fly_commands`]).
-    pub fn fly_controller_cmd(&mut self, cmd: &str) -> anyhow::Result<()> {
-        self.fly_commands(RigCommands { controller_cmd: Some(cmd.to_string()), plant_cmd: None })
-    }
-
     /// A campaign from a scenario's text; `config` names it in errors and printed commands.
     pub fn from_text(text: &str, config: &str) -> anyhow::Result<Self> {
         Self::from_scenario(Scenario::from_toml(text, config)?, config)

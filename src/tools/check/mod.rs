@@ -298,7 +298,7 @@ fn in_process_case(
 }
 
 /// Fly a sweep case: its dispersed cases as `silrig sweep` flies them (in one process; through the lockstep rig
-/// with `--controller-cmd`), with `cases.csv`, `sweep.json` and the figures in the case's folder, judged on the
+/// with `--controller-cmd` or `--plant-cmd`), with `cases.csv`, `sweep.json` and the figures in the case's folder, judged on the
 /// 95 % Wilson lower bound of the pass rate.
 fn sweep_case(
     opts: &CheckOptions,
@@ -308,11 +308,6 @@ fn sweep_case(
     case_dir: &Path,
     started: std::time::Instant,
 ) -> anyhow::Result<CaseVerdict> {
-    anyhow::ensure!(
-        opts.plant_cmd.is_none(),
-        "a sweep case flies the built-in F-16 or a plant FMU (--plant-fmu); a plant process of your own \
-         (--plant-cmd) is not swept yet"
-    );
     let mut scenario = case.scenario.clone();
     let fmus = silrig_rig::in_process::FmuFlags {
         plant_fmu: opts.plant_fmu.clone(),
@@ -320,11 +315,13 @@ fn sweep_case(
     };
     fmus.apply(&mut scenario)?;
     let mut campaign = crate::campaign::Campaign::from_scenario(scenario, &scenario_path.display().to_string())?;
-    // A controller of the user's own flies each dispersed case through the lockstep rig, as `silrig sweep
-    // --controller-cmd` does; the worst cases' commands name it.
-    if let Some(cmd) = &opts.controller_cmd {
-        campaign.fly_controller_cmd(cmd)?;
-        campaign.flags = format!(" --controller-cmd {}", shell_quote(cmd));
+    // A controller or plant of the user's own flies each dispersed case through the lockstep rig, as `silrig sweep
+    // --controller-cmd` and `--plant-cmd` do; the worst cases' commands name them.
+    let commands =
+        crate::campaign::RigCommands { controller_cmd: opts.controller_cmd.clone(), plant_cmd: opts.plant_cmd.clone() };
+    if commands.any() {
+        campaign.flags = commands.to_args();
+        campaign.fly_commands(commands)?;
     }
     let seed = sweep.seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(crate::campaign::jobs(None)?);

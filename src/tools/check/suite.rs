@@ -15,7 +15,7 @@ pub const DEFAULT_SUITE_TOML: &str = include_str!("../../../configs/check-defaul
 /// The embedded default suite for a plant of your own (`--plant-cmd`, `--plant-fmu` without a suite file).
 pub const ANY_PLANT_SUITE_TOML: &str = include_str!("../../../configs/check-any-plant.toml");
 /// The scenario its cases fly: set points and timing, nothing of the F-16.
-pub const ANY_PLANT_SCENARIO_TOML: &str = include_str!("../../../configs/any-plant.toml");
+pub use silrig_flight::scenario::ANY_PLANT_SCENARIO_TOML;
 
 /// The scenario a case starts from when neither it nor its suite names one: its text and how errors name it.
 #[derive(Debug, Clone, Copy)]
