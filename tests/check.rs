@@ -611,3 +611,46 @@ fn the_c_toy_plant_and_a_foreign_fmu_plant_pass_a_suite_with_process_faults() {
     }
     std::fs::remove_dir_all(fmu_dir).ok();
 }
+
+/// A suite's sweep case flies a plant of your own (`--plant-cmd`) through the lockstep rig, its parameters and set
+/// points dispersed by name, and the sweep's commands name the plant.
+#[test]
+fn a_sweep_case_flies_a_plant_of_your_own_through_the_lockstep_rig() {
+    client_lib();
+    let dir = temp_dir("dispersed-toy-files");
+    // The dispersed parameter must be a key of the scenario: the toy's, with the gain it reads stated.
+    let scenario = std::fs::read_to_string(format!("{ROOT}/tests/scenarios/toy.toml")).unwrap();
+    std::fs::write(dir.join("toy-scenario.toml"), scenario + "\n[plant.parameters]\ngain_dps2_per_deg = 4.0\n")
+        .unwrap();
+    let suite = format!(
+        r#"name = "toy-dispersed"
+scenario = "toy-scenario.toml"
+[[cases]]
+name = "dispersed-toy"
+mode = "lockstep"
+[cases.sweep]
+runs = 4
+seed = 1
+pass_rate_min = 0.3
+[cases.dispersions]
+"plant.parameters.gain_dps2_per_deg" = {{ dist = "uniform", min = 3.0, max = 5.0 }}
+"setpoint.theta_deg" = {{ dist = "uniform", min = 5.0, max = 15.0 }}
+[cases.criteria]
+setpoints_held = {{ within_s = 8.0, band = 1.0 }}
+"#
+    );
+    std::fs::write(dir.join("toy.toml"), suite).unwrap();
+    let plant = "python3 tests/clients/toy_plant.py";
+    let pid = "python3 examples/python/pid_attitude.py";
+    let c = check(
+        "dispersed-toy",
+        &[dir.join("toy.toml").to_str().unwrap(), "--plant-cmd", plant, "--controller-cmd", pid],
+    );
+    assert_eq!(c.code, Some(0), "{}{}", c.stdout, c.stderr);
+    assert!(c.measured("dispersed-toy", "pass_rate").contains("(4 of 4 passed"), "{}", c.stdout);
+    let sweep: Value =
+        serde_json::from_str(&std::fs::read_to_string(c.out.join("dispersed-toy/sweep.json")).unwrap()).unwrap();
+    assert!(sweep["config"].as_str().unwrap().ends_with(&format!("--plant-cmd '{plant}'")), "{sweep}");
+    std::fs::remove_dir_all(&c.dir).unwrap();
+    std::fs::remove_dir_all(dir).unwrap();
+}
