@@ -8,7 +8,7 @@
 //! The logger writes every index and summary group; [`McapOptions`] can leave each out, as the MCAP project's
 //! conformance suite does in its writer variants: `tests/mcap_conformance.rs` holds this writer, so configured, to
 //! the bytes of the `mcap` crate's writer (one of the suite's reference writers), and
-//! `examples/mcap_conformance_writer.rs` runs it against the suite itself.
+//! `examples/mcap_conformance_writer/` runs it against the suite itself.
 
 use std::io::Write;
 
