@@ -1,8 +1,10 @@
 //! The aircraft in 3-D for Foxglove's 3D panel: a plant's position and attitude as a `foxglove.FrameTransform`
 //! (parent `world`, child `body`) and a simple aircraft of primitives with its control surfaces deflected as a
 //! `foxglove.SceneUpdate` in `body`, both protobuf-encoded, with the `FileDescriptorSet` Foxglove decodes them by
-//! ([`descriptor_set`]). Hand-encoded: two messages and their schemas are a few hundred lines, where a protobuf
-//! library (or the Foxglove SDK) would add proc-macro crates to every clean build.
+//! ([`descriptor_set`]). The messages, their encoding and their schemas are the `foxglove` crate's (the Foxglove
+//! SDK's, without its features): they cost the logger 0.04 MB and a clean build about 4 % more CPU
+//! (docs/src/explanations/architecture.md, "Written by hand, held to others' tests"), where our own encoding was 400
+//! lines more.
 //!
 //! Frames: `world` is east-north-up (x east, y north, z up, m; REP 103), from the plant's north/east position and
 //! altitude; `body` is forward-left-up (x out of the nose, y out of the left wing, z up), at the plant's reference
@@ -16,6 +18,11 @@
 //! otherwise. Sign conventions are Stevens & Lewis': positive elevator and positive aileron on the right wing are
 //! trailing edge down (the left aileron moves the other way), positive rudder is trailing edge left.
 
+use foxglove::Encode;
+use foxglove::schemas::{
+    Color, CubePrimitive, CylinderPrimitive, FrameTransform, Pose, Quaternion, SceneEntity, SceneUpdate, Timestamp,
+    Vector3,
+};
 use silrig_flight::signals::PlantSignals;
 
 /// MCAP schema encoding of the 3-D channels.
@@ -94,125 +101,65 @@ pub fn enu_flu_quaternion(phi_rad: f64, theta_rad: f64, psi_rad: f64) -> [f64; 4
     zyx_quaternion(std::f64::consts::FRAC_PI_2 - psi_rad, -theta_rad, phi_rad)
 }
 
-/// A protobuf message being built; reused from message to message, so encoding one allocates nothing once the
-/// buffers have grown.
-#[derive(Debug, Default)]
+/// The 3-D messages, built once and changed in place, and the bytes of the last one encoded: encoding one allocates
+/// nothing once the buffer has grown (the logger writes a transform every row).
+#[derive(Debug)]
 pub struct ProtoBuffer {
     bytes: Vec<u8>,
-    /// Where each open nested message's body starts.
-    open: Vec<usize>,
+    transform: FrameTransform,
+    scene: SceneUpdate,
 }
 
-const VARINT: u8 = 0;
-const FIXED64: u8 = 1;
-const LEN: u8 = 2;
+impl Default for ProtoBuffer {
+    fn default() -> Self {
+        let transform = FrameTransform {
+            parent_frame_id: WORLD_FRAME.into(),
+            child_frame_id: BODY_FRAME.into(),
+            ..Default::default()
+        };
+        Self { bytes: Vec::new(), transform, scene: SceneUpdate { deletions: Vec::new(), entities: vec![aircraft()] } }
+    }
+}
 
 impl ProtoBuffer {
-    /// Start a new message.
-    pub fn start(&mut self) {
-        self.bytes.clear();
-        self.open.clear();
-    }
-
-    /// The message so far.
+    /// The message last encoded.
     pub fn bytes(&self) -> &[u8] {
         &self.bytes
     }
+}
 
-    fn varint(&mut self, mut v: u64) {
-        while v >= 0x80 {
-            self.bytes.push(v as u8 | 0x80);
-            v >>= 7;
-        }
-        self.bytes.push(v as u8);
-    }
+/// `message` encoded into `bytes`, replacing what was there.
+fn encode(bytes: &mut Vec<u8>, message: &impl Encode) {
+    bytes.clear();
+    message.encode(bytes).expect("a Vec<u8> grows as the message needs");
+}
 
-    fn key(&mut self, field: u32, wire_type: u8) {
-        self.varint(u64::from(field) << 3 | u64::from(wire_type));
-    }
+/// Foxglove's timestamp: unsigned 32-bit seconds (to 2106) and nanoseconds.
+fn timestamp(wall_ns: u64) -> Option<Timestamp> {
+    Some(Timestamp::new((wall_ns / 1_000_000_000) as u32, (wall_ns % 1_000_000_000) as u32))
+}
 
-    fn double(&mut self, field: u32, v: f64) {
-        self.key(field, FIXED64);
-        self.bytes.extend_from_slice(&v.to_le_bytes());
-    }
+fn v3([x, y, z]: [f64; 3]) -> Option<Vector3> {
+    Some(Vector3 { x, y, z })
+}
 
-    fn int(&mut self, field: u32, v: i64) {
-        self.key(field, VARINT);
-        self.varint(v as u64);
-    }
+fn quat([x, y, z, w]: [f64; 4]) -> Option<Quaternion> {
+    Some(Quaternion { x, y, z, w })
+}
 
-    fn string(&mut self, field: u32, s: &str) {
-        self.key(field, LEN);
-        self.varint(s.len() as u64);
-        self.bytes.extend_from_slice(s.as_bytes());
-    }
+fn color([r, g, b, a]: [f64; 4]) -> Option<Color> {
+    Some(Color { r, g, b, a })
+}
 
-    /// Open nested message `field`; [`Self::end`] closes it.
-    fn begin(&mut self, field: u32) {
-        self.key(field, LEN);
-        self.open.push(self.bytes.len());
-    }
-
-    /// Close the innermost open message: its length goes in front of its body.
-    fn end(&mut self) {
-        let start = self.open.pop().expect("a nested message is open");
-        let len = self.bytes.len() - start;
-        let mut prefix = [0u8; 10];
-        let mut n = 0;
-        let mut v = len as u64;
-        loop {
-            prefix[n] = v as u8 | if v >= 0x80 { 0x80 } else { 0 };
-            n += 1;
-            v >>= 7;
-            if v == 0 {
-                break;
-            }
-        }
-        self.bytes.resize(self.bytes.len() + n, 0);
-        self.bytes.copy_within(start..start + len, start + n);
-        self.bytes[start..start + n].copy_from_slice(&prefix[..n]);
-    }
-
-    fn timestamp(&mut self, field: u32, wall_ns: u64) {
-        self.begin(field);
-        self.int(1, (wall_ns / 1_000_000_000) as i64);
-        self.int(2, (wall_ns % 1_000_000_000) as i64);
-        self.end();
-    }
-
-    fn xyz(&mut self, field: u32, v: [f64; 3]) {
-        self.begin(field);
-        for (k, x) in v.into_iter().enumerate() {
-            self.double(k as u32 + 1, x);
-        }
-        self.end();
-    }
-
-    fn xyzw(&mut self, field: u32, q: [f64; 4]) {
-        self.begin(field);
-        for (k, x) in q.into_iter().enumerate() {
-            self.double(k as u32 + 1, x);
-        }
-        self.end();
-    }
-
-    /// A `foxglove.Pose` in field 1 and what follows it of a primitive.
-    fn pose(&mut self, position_m: [f64; 3], orientation: [f64; 4]) {
-        self.begin(1);
-        self.xyz(1, position_m);
-        self.xyzw(2, orientation);
-        self.end();
-    }
+fn pose(position_m: [f64; 3], orientation: [f64; 4]) -> Option<Pose> {
+    Some(Pose { position: v3(position_m), orientation: quat(orientation) })
 }
 
 /// A `foxglove.FrameTransform` world -> body at `wall_ns` into `buffer`.
 pub fn frame_transform(buffer: &mut ProtoBuffer, wall_ns: u64, translation_m: [f64; 3], rotation: [f64; 4]) {
-    buffer.start();
-    buffer.timestamp(1, wall_ns);
-    buffer.string(2, WORLD_FRAME);
-    buffer.string(3, BODY_FRAME);
-    buffer.xyz(4, translation_m);
-    buffer.xyzw(5, rotation);
+    let t = &mut buffer.transform;
+    (t.timestamp, t.translation, t.rotation) = (timestamp(wall_ns), v3(translation_m), quat(rotation));
+    encode(&mut buffer.bytes, &buffer.transform);
 }
 
 /// Colours (r, g, b, a) of the model.
@@ -319,417 +266,61 @@ impl Surface {
 /// Rotation about y by 90 degrees: a cylinder's axis (z) along the body's x.
 const CYLINDER_ALONG_X: [f64; 4] = [0.0, std::f64::consts::FRAC_1_SQRT_2, 0.0, std::f64::consts::FRAC_1_SQRT_2];
 
-/// A `foxglove.SceneUpdate` at `wall_ns` into `buffer`: the aircraft in `body` (frame-locked, so it moves with
-/// the transform), its surfaces at `surfaces_rad` (aileron, elevator, rudder).
-pub fn aircraft_scene(buffer: &mut ProtoBuffer, wall_ns: u64, surfaces_rad: [f64; 3]) {
-    buffer.start();
-    buffer.begin(2); // entities
-    buffer.timestamp(1, wall_ns);
-    buffer.string(2, BODY_FRAME);
-    buffer.string(3, ENTITY_ID);
-    buffer.int(5, 1); // frame_locked
-    // Fuselage, then the nose: a cone (top_scale 0) pointing forward.
-    for (center_x_m, length_m, top_scale) in [(-1.25, 11.5, 1.0), (6.0, 3.0, 0.0)] {
-        buffer.begin(10); // cylinders
-        buffer.pose([center_x_m, 0.0, 0.0], CYLINDER_ALONG_X);
-        buffer.xyz(2, [1.3, 1.3, length_m]);
-        buffer.double(3, 1.0);
-        buffer.double(4, top_scale);
-        buffer.xyzw(5, AIRFRAME);
-        buffer.end();
+/// The aircraft in `body` (frame-locked, so it moves with the transform), its surfaces neutral: the fuselage and the
+/// nose (a cone: top scale 0) pointing forward, the fixed blocks, then the moving surfaces.
+fn aircraft() -> SceneEntity {
+    let cylinders = [(-1.25, 11.5, 1.0), (6.0, 3.0, 0.0)].map(|(center_x_m, length_m, top_scale)| CylinderPrimitive {
+        pose: pose([center_x_m, 0.0, 0.0], CYLINDER_ALONG_X),
+        size: v3([1.3, 1.3, length_m]),
+        bottom_scale: 1.0,
+        top_scale,
+        color: color(AIRFRAME),
+    });
+    let blocks = BLOCKS.iter().map(|b| CubePrimitive {
+        pose: pose(b.center_m, [0.0, 0.0, 0.0, 1.0]),
+        size: v3(b.size_m),
+        color: color(b.color),
+    });
+    let surfaces = SURFACES.iter().map(|s| {
+        let (center, orientation) = s.pose([0.0; 3]);
+        CubePrimitive { pose: pose(center, orientation), size: v3(s.size_m), color: color(SURFACE) }
+    });
+    SceneEntity {
+        frame_id: BODY_FRAME.into(),
+        id: ENTITY_ID.into(),
+        frame_locked: true,
+        cubes: blocks.chain(surfaces).collect(),
+        cylinders: cylinders.to_vec(),
+        ..Default::default()
     }
-    for block in &BLOCKS {
-        buffer.begin(8); // cubes
-        buffer.pose(block.center_m, [0.0, 0.0, 0.0, 1.0]);
-        buffer.xyz(2, block.size_m);
-        buffer.xyzw(3, block.color);
-        buffer.end();
-    }
-    for s in &SURFACES {
-        let (center, orientation) = s.pose(surfaces_rad);
-        buffer.begin(8);
-        buffer.pose(center, orientation);
-        buffer.xyz(2, s.size_m);
-        buffer.xyzw(3, SURFACE);
-        buffer.end();
-    }
-    buffer.end();
 }
 
-/// Protobuf field types and labels used by the schemas (`google.protobuf.FieldDescriptorProto`).
-const DOUBLE: u8 = 1;
-const INT64: u8 = 3;
-const INT32: u8 = 5;
-const FIXED32: u8 = 7;
-const BOOL: u8 = 8;
-const STRING: u8 = 9;
-const MESSAGE: u8 = 11;
-const BYTES: u8 = 12;
-const ENUM: u8 = 14;
-const OPTIONAL: u8 = 1;
-const REPEATED: u8 = 3;
+/// A `foxglove.SceneUpdate` at `wall_ns` into `buffer`: the aircraft, its surfaces at `surfaces_rad` (aileron,
+/// elevator, rudder).
+pub fn aircraft_scene(buffer: &mut ProtoBuffer, wall_ns: u64, surfaces_rad: [f64; 3]) {
+    let entity = &mut buffer.scene.entities[0];
+    entity.timestamp = timestamp(wall_ns);
+    for (cube, s) in entity.cubes[BLOCKS.len()..].iter_mut().zip(&SURFACES) {
+        let (center, orientation) = s.pose(surfaces_rad);
+        cube.pose = pose(center, orientation);
+    }
+    encode(&mut buffer.bytes, &buffer.scene);
+}
 
-/// A field: name, number, label, type, type name (`.package.Message` for messages and enums, else empty).
-type Field = (&'static str, u32, u8, u8, &'static str);
-/// A message: name, fields, nested enums (name, values).
-type Message = (&'static str, &'static [Field], &'static [(&'static str, &'static [(&'static str, i64)])]);
-/// A `.proto` file: name, package, dependencies, its one message.
-type ProtoFile = (&'static str, &'static str, &'static [&'static str], Message);
-
-/// Foxglove's schemas for the two messages and every type they use, as `foxglove-schemas-protobuf` has them.
-const FILES: [ProtoFile; 20] = [
-    (
-        "google/protobuf/timestamp.proto",
-        "google.protobuf",
-        &[],
-        ("Timestamp", &[("seconds", 1, OPTIONAL, INT64, ""), ("nanos", 2, OPTIONAL, INT32, "")], &[]),
-    ),
-    (
-        "google/protobuf/duration.proto",
-        "google.protobuf",
-        &[],
-        ("Duration", &[("seconds", 1, OPTIONAL, INT64, ""), ("nanos", 2, OPTIONAL, INT32, "")], &[]),
-    ),
-    (
-        "foxglove/Vector3.proto",
-        "foxglove",
-        &[],
-        (
-            "Vector3",
-            &[("x", 1, OPTIONAL, DOUBLE, ""), ("y", 2, OPTIONAL, DOUBLE, ""), ("z", 3, OPTIONAL, DOUBLE, "")],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/Point3.proto",
-        "foxglove",
-        &[],
-        (
-            "Point3",
-            &[("x", 1, OPTIONAL, DOUBLE, ""), ("y", 2, OPTIONAL, DOUBLE, ""), ("z", 3, OPTIONAL, DOUBLE, "")],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/Quaternion.proto",
-        "foxglove",
-        &[],
-        (
-            "Quaternion",
-            &[
-                ("x", 1, OPTIONAL, DOUBLE, ""),
-                ("y", 2, OPTIONAL, DOUBLE, ""),
-                ("z", 3, OPTIONAL, DOUBLE, ""),
-                ("w", 4, OPTIONAL, DOUBLE, ""),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/Color.proto",
-        "foxglove",
-        &[],
-        (
-            "Color",
-            &[
-                ("r", 1, OPTIONAL, DOUBLE, ""),
-                ("g", 2, OPTIONAL, DOUBLE, ""),
-                ("b", 3, OPTIONAL, DOUBLE, ""),
-                ("a", 4, OPTIONAL, DOUBLE, ""),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/KeyValuePair.proto",
-        "foxglove",
-        &[],
-        ("KeyValuePair", &[("key", 1, OPTIONAL, STRING, ""), ("value", 2, OPTIONAL, STRING, "")], &[]),
-    ),
-    (
-        "foxglove/Pose.proto",
-        "foxglove",
-        &["foxglove/Quaternion.proto", "foxglove/Vector3.proto"],
-        (
-            "Pose",
-            &[
-                ("position", 1, OPTIONAL, MESSAGE, ".foxglove.Vector3"),
-                ("orientation", 2, OPTIONAL, MESSAGE, ".foxglove.Quaternion"),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/FrameTransform.proto",
-        "foxglove",
-        &["foxglove/Quaternion.proto", "foxglove/Vector3.proto", "google/protobuf/timestamp.proto"],
-        (
-            "FrameTransform",
-            &[
-                ("timestamp", 1, OPTIONAL, MESSAGE, ".google.protobuf.Timestamp"),
-                ("parent_frame_id", 2, OPTIONAL, STRING, ""),
-                ("child_frame_id", 3, OPTIONAL, STRING, ""),
-                ("translation", 4, OPTIONAL, MESSAGE, ".foxglove.Vector3"),
-                ("rotation", 5, OPTIONAL, MESSAGE, ".foxglove.Quaternion"),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/ArrowPrimitive.proto",
-        "foxglove",
-        &["foxglove/Color.proto", "foxglove/Pose.proto"],
-        (
-            "ArrowPrimitive",
-            &[
-                ("pose", 1, OPTIONAL, MESSAGE, ".foxglove.Pose"),
-                ("shaft_length", 2, OPTIONAL, DOUBLE, ""),
-                ("shaft_diameter", 3, OPTIONAL, DOUBLE, ""),
-                ("head_length", 4, OPTIONAL, DOUBLE, ""),
-                ("head_diameter", 5, OPTIONAL, DOUBLE, ""),
-                ("color", 6, OPTIONAL, MESSAGE, ".foxglove.Color"),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/CubePrimitive.proto",
-        "foxglove",
-        &["foxglove/Color.proto", "foxglove/Pose.proto", "foxglove/Vector3.proto"],
-        (
-            "CubePrimitive",
-            &[
-                ("pose", 1, OPTIONAL, MESSAGE, ".foxglove.Pose"),
-                ("size", 2, OPTIONAL, MESSAGE, ".foxglove.Vector3"),
-                ("color", 3, OPTIONAL, MESSAGE, ".foxglove.Color"),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/SpherePrimitive.proto",
-        "foxglove",
-        &["foxglove/Color.proto", "foxglove/Pose.proto", "foxglove/Vector3.proto"],
-        (
-            "SpherePrimitive",
-            &[
-                ("pose", 1, OPTIONAL, MESSAGE, ".foxglove.Pose"),
-                ("size", 2, OPTIONAL, MESSAGE, ".foxglove.Vector3"),
-                ("color", 3, OPTIONAL, MESSAGE, ".foxglove.Color"),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/CylinderPrimitive.proto",
-        "foxglove",
-        &["foxglove/Color.proto", "foxglove/Pose.proto", "foxglove/Vector3.proto"],
-        (
-            "CylinderPrimitive",
-            &[
-                ("pose", 1, OPTIONAL, MESSAGE, ".foxglove.Pose"),
-                ("size", 2, OPTIONAL, MESSAGE, ".foxglove.Vector3"),
-                ("bottom_scale", 3, OPTIONAL, DOUBLE, ""),
-                ("top_scale", 4, OPTIONAL, DOUBLE, ""),
-                ("color", 5, OPTIONAL, MESSAGE, ".foxglove.Color"),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/LinePrimitive.proto",
-        "foxglove",
-        &["foxglove/Color.proto", "foxglove/Point3.proto", "foxglove/Pose.proto"],
-        (
-            "LinePrimitive",
-            &[
-                ("type", 1, OPTIONAL, ENUM, ".foxglove.LinePrimitive.Type"),
-                ("pose", 2, OPTIONAL, MESSAGE, ".foxglove.Pose"),
-                ("thickness", 3, OPTIONAL, DOUBLE, ""),
-                ("scale_invariant", 4, OPTIONAL, BOOL, ""),
-                ("points", 5, REPEATED, MESSAGE, ".foxglove.Point3"),
-                ("color", 6, OPTIONAL, MESSAGE, ".foxglove.Color"),
-                ("colors", 7, REPEATED, MESSAGE, ".foxglove.Color"),
-                ("indices", 8, REPEATED, FIXED32, ""),
-            ],
-            &[("Type", &[("LINE_STRIP", 0), ("LINE_LOOP", 1), ("LINE_LIST", 2)])],
-        ),
-    ),
-    (
-        "foxglove/TriangleListPrimitive.proto",
-        "foxglove",
-        &["foxglove/Color.proto", "foxglove/Point3.proto", "foxglove/Pose.proto"],
-        (
-            "TriangleListPrimitive",
-            &[
-                ("pose", 1, OPTIONAL, MESSAGE, ".foxglove.Pose"),
-                ("points", 2, REPEATED, MESSAGE, ".foxglove.Point3"),
-                ("color", 3, OPTIONAL, MESSAGE, ".foxglove.Color"),
-                ("colors", 4, REPEATED, MESSAGE, ".foxglove.Color"),
-                ("indices", 5, REPEATED, FIXED32, ""),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/TextPrimitive.proto",
-        "foxglove",
-        &["foxglove/Color.proto", "foxglove/Pose.proto"],
-        (
-            "TextPrimitive",
-            &[
-                ("pose", 1, OPTIONAL, MESSAGE, ".foxglove.Pose"),
-                ("billboard", 2, OPTIONAL, BOOL, ""),
-                ("font_size", 3, OPTIONAL, DOUBLE, ""),
-                ("scale_invariant", 4, OPTIONAL, BOOL, ""),
-                ("color", 5, OPTIONAL, MESSAGE, ".foxglove.Color"),
-                ("text", 6, OPTIONAL, STRING, ""),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/ModelPrimitive.proto",
-        "foxglove",
-        &["foxglove/Color.proto", "foxglove/Pose.proto", "foxglove/Vector3.proto"],
-        (
-            "ModelPrimitive",
-            &[
-                ("pose", 1, OPTIONAL, MESSAGE, ".foxglove.Pose"),
-                ("scale", 2, OPTIONAL, MESSAGE, ".foxglove.Vector3"),
-                ("color", 3, OPTIONAL, MESSAGE, ".foxglove.Color"),
-                ("override_color", 4, OPTIONAL, BOOL, ""),
-                ("url", 5, OPTIONAL, STRING, ""),
-                ("media_type", 6, OPTIONAL, STRING, ""),
-                ("data", 7, OPTIONAL, BYTES, ""),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/SceneEntity.proto",
-        "foxglove",
-        &[
-            "foxglove/ArrowPrimitive.proto",
-            "foxglove/CubePrimitive.proto",
-            "foxglove/CylinderPrimitive.proto",
-            "foxglove/KeyValuePair.proto",
-            "foxglove/LinePrimitive.proto",
-            "foxglove/ModelPrimitive.proto",
-            "foxglove/SpherePrimitive.proto",
-            "foxglove/TextPrimitive.proto",
-            "foxglove/TriangleListPrimitive.proto",
-            "google/protobuf/duration.proto",
-            "google/protobuf/timestamp.proto",
-        ],
-        (
-            "SceneEntity",
-            &[
-                ("timestamp", 1, OPTIONAL, MESSAGE, ".google.protobuf.Timestamp"),
-                ("frame_id", 2, OPTIONAL, STRING, ""),
-                ("id", 3, OPTIONAL, STRING, ""),
-                ("lifetime", 4, OPTIONAL, MESSAGE, ".google.protobuf.Duration"),
-                ("frame_locked", 5, OPTIONAL, BOOL, ""),
-                ("metadata", 6, REPEATED, MESSAGE, ".foxglove.KeyValuePair"),
-                ("arrows", 7, REPEATED, MESSAGE, ".foxglove.ArrowPrimitive"),
-                ("cubes", 8, REPEATED, MESSAGE, ".foxglove.CubePrimitive"),
-                ("spheres", 9, REPEATED, MESSAGE, ".foxglove.SpherePrimitive"),
-                ("cylinders", 10, REPEATED, MESSAGE, ".foxglove.CylinderPrimitive"),
-                ("lines", 11, REPEATED, MESSAGE, ".foxglove.LinePrimitive"),
-                ("triangles", 12, REPEATED, MESSAGE, ".foxglove.TriangleListPrimitive"),
-                ("texts", 13, REPEATED, MESSAGE, ".foxglove.TextPrimitive"),
-                ("models", 14, REPEATED, MESSAGE, ".foxglove.ModelPrimitive"),
-            ],
-            &[],
-        ),
-    ),
-    (
-        "foxglove/SceneEntityDeletion.proto",
-        "foxglove",
-        &["google/protobuf/timestamp.proto"],
-        (
-            "SceneEntityDeletion",
-            &[
-                ("timestamp", 1, OPTIONAL, MESSAGE, ".google.protobuf.Timestamp"),
-                ("type", 2, OPTIONAL, ENUM, ".foxglove.SceneEntityDeletion.Type"),
-                ("id", 3, OPTIONAL, STRING, ""),
-            ],
-            &[("Type", &[("MATCHING_ID", 0), ("ALL", 1)])],
-        ),
-    ),
-    (
-        "foxglove/SceneUpdate.proto",
-        "foxglove",
-        &["foxglove/SceneEntity.proto", "foxglove/SceneEntityDeletion.proto"],
-        (
-            "SceneUpdate",
-            &[
-                ("deletions", 1, REPEATED, MESSAGE, ".foxglove.SceneEntityDeletion"),
-                ("entities", 2, REPEATED, MESSAGE, ".foxglove.SceneEntity"),
-            ],
-            &[],
-        ),
-    ),
-];
-
-/// The `google.protobuf.FileDescriptorSet` of schema `name` (`foxglove.FrameTransform`, `foxglove.SceneUpdate`):
-/// its file and every file it imports, each after its imports, as Foxglove reads an MCAP schema's data.
+/// The `FileDescriptorSet` of schema `name` (`foxglove.FrameTransform` or `foxglove.SceneUpdate`).
 pub fn descriptor_set(name: &str) -> Vec<u8> {
-    fn add(file: &str, order: &mut Vec<&'static ProtoFile>) {
-        let f = FILES.iter().find(|f| f.0 == file).expect("a schema file of the table");
-        if order.iter().any(|o| o.0 == file) {
-            return;
-        }
-        for dep in f.2 {
-            add(dep, order);
-        }
-        order.push(f);
-    }
-    let short = name.strip_prefix("foxglove.").expect("a foxglove schema");
-    let mut order = Vec::new();
-    add(&format!("foxglove/{short}.proto"), &mut order);
-    let mut b = ProtoBuffer::default();
-    for (file, package, deps, (message, fields, enums)) in order {
-        b.begin(1); // FileDescriptorSet.file
-        b.string(1, file);
-        b.string(2, package);
-        for dep in *deps {
-            b.string(3, dep);
-        }
-        b.begin(4); // message_type
-        b.string(1, message);
-        for (field, number, label, ty, type_name) in *fields {
-            b.begin(2);
-            b.string(1, field);
-            b.int(3, i64::from(*number));
-            b.int(4, i64::from(*label));
-            b.int(5, i64::from(*ty));
-            if !type_name.is_empty() {
-                b.string(6, type_name);
-            }
-            b.end();
-        }
-        for (enum_name, values) in *enums {
-            b.begin(4); // enum_type
-            b.string(1, enum_name);
-            for (value, number) in *values {
-                b.begin(2);
-                b.string(1, value);
-                b.int(2, *number);
-                b.end();
-            }
-            b.end();
-        }
-        b.end();
-        b.string(12, "proto3");
-        b.end();
-    }
-    b.bytes
+    let schema = match name {
+        FRAME_TRANSFORM => FrameTransform::get_schema(),
+        SCENE_UPDATE => SceneUpdate::get_schema(),
+        other => panic!("no schema {other}"),
+    };
+    schema.expect("a foxglove schema").data.into_owned()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use foxglove::Decode;
     use std::f64::consts::FRAC_PI_2;
 
     /// A rotation's matrix, to compare frames by the axes they map.
@@ -764,28 +355,19 @@ mod tests {
     }
 
     #[test]
-    fn nested_lengths_take_as_many_bytes_as_they_need() {
-        let mut b = ProtoBuffer::default();
-        b.start();
-        b.begin(2);
-        b.string(1, &"x".repeat(200));
-        b.end();
-        // key, 2-byte length 203, key, 2-byte length 200, the text.
-        assert_eq!(&b.bytes()[..6], &[0x12, 0xcb, 0x01, 0x0a, 0xc8, 0x01]);
-        assert_eq!(b.bytes().len(), 206);
-    }
-
-    #[test]
     fn a_deflected_trailing_edge_goes_down_and_left() {
+        // The same buffer deflected, then neutral again: the surfaces move, nothing else does.
         let mut b = ProtoBuffer::default();
-        aircraft_scene(&mut b, 0, [0.1, 0.1, 0.1]);
-        let neutral = {
-            let mut n = ProtoBuffer::default();
-            aircraft_scene(&mut n, 0, [0.0; 3]);
-            n.bytes
+        let mut poses = |surfaces_rad: [f64; 3]| {
+            aircraft_scene(&mut b, 0, surfaces_rad);
+            let scene = SceneUpdate::decode(b.bytes()).unwrap();
+            let cubes = scene.entities[0].cubes.iter().map(|c| c.pose).collect::<Vec<_>>();
+            (cubes, scene.entities[0].cylinders.clone())
         };
-        assert_eq!(b.bytes().len(), neutral.len(), "a deflection changes values, not the message's shape");
-        assert_ne!(b.bytes(), &neutral[..]);
+        let (deflected, neutral) = (poses([0.1; 3]), poses([0.0; 3]));
+        assert_eq!((&deflected.0[..BLOCKS.len()], &deflected.1), (&neutral.0[..BLOCKS.len()], &neutral.1));
+        assert!(deflected.0[BLOCKS.len()..].iter().zip(&neutral.0[BLOCKS.len()..]).all(|(d, n)| d != n));
+        assert_eq!(neutral.0, aircraft().cubes.iter().map(|c| c.pose).collect::<Vec<_>>());
         // Each surface's centre lies behind its hinge, so it follows the trailing edge: a positive deflection moves
         // the right aileron's and the tail's down, the left aileron's up, the rudder's left (+y).
         let moved = |k: usize| {
@@ -801,13 +383,26 @@ mod tests {
     }
 
     #[test]
-    fn every_schema_file_is_in_the_table_once() {
-        for (k, f) in FILES.iter().enumerate() {
-            assert!(FILES[k + 1..].iter().all(|g| g.0 != f.0), "{} twice", f.0);
-            for dep in f.2 {
-                assert!(FILES.iter().any(|g| g.0 == *dep), "{} imports {dep}, not in the table", f.0);
-            }
+    fn a_message_decodes_to_what_was_set_and_each_schema_is_its_descriptor_set() {
+        let mut b = ProtoBuffer::default();
+        frame_transform(&mut b, 3_000_000_007, [1.0, 2.0, 3.0], [0.0, 0.0, 0.6, 0.8]);
+        let t = FrameTransform::decode(b.bytes()).unwrap();
+        assert_eq!((t.parent_frame_id.as_str(), t.child_frame_id.as_str()), (WORLD_FRAME, BODY_FRAME));
+        assert_eq!(t.timestamp, timestamp(3_000_000_007));
+        assert_eq!((t.translation, t.rotation), (v3([1.0, 2.0, 3.0]), quat([0.0, 0.0, 0.6, 0.8])));
+        aircraft_scene(&mut b, 5, [0.0, 0.2, 0.0]);
+        let scene = SceneUpdate::decode(b.bytes()).unwrap();
+        let entity = &scene.entities[0];
+        assert_eq!((entity.id.as_str(), entity.frame_id.as_str(), entity.frame_locked), (ENTITY_ID, BODY_FRAME, true));
+        assert_eq!((entity.cubes.len(), entity.cylinders.len()), (BLOCKS.len() + SURFACES.len(), 2));
+        // The elevator's halves (surfaces 2 and 3) turned, the ailerons did not.
+        let turned = |k: usize| entity.cubes[BLOCKS.len() + k].pose.unwrap().orientation.unwrap().y != 0.0;
+        assert!(turned(2) && turned(3) && !turned(0) && !turned(4));
+        for name in [FRAME_TRANSFORM, SCENE_UPDATE] {
+            let data = descriptor_set(name);
+            let set = <prost_types::FileDescriptorSet as prost::Message>::decode(&data[..]).unwrap();
+            let short = name.trim_start_matches("foxglove.");
+            assert!(set.file.iter().any(|f| f.message_type.iter().any(|m| m.name() == short)), "{name}");
         }
-        assert!(!descriptor_set(FRAME_TRANSFORM).is_empty() && !descriptor_set(SCENE_UPDATE).is_empty());
     }
 }

@@ -4,6 +4,11 @@
 //! each record field by field as it is written and checksums the LZ4 frame again, which was half the logger's work a
 //! lockstep tick. Reading stays with the `mcap` crate ([`super::reader`]), and Foxglove's readers check what this
 //! writes in the recording tests.
+//!
+//! The logger writes every index and summary group; [`McapOptions`] can leave each out, as the MCAP project's
+//! conformance suite does in its writer variants: `tests/mcap_conformance.rs` holds this writer, so configured, to
+//! the bytes of the `mcap` crate's writer (one of the suite's reference writers), and
+//! `examples/mcap_conformance_writer/` runs it against the suite itself.
 
 use std::io::Write;
 
@@ -27,16 +32,59 @@ mod op {
     pub const DATA_END: u8 = 0x0F;
 }
 
-/// A chunk is closed once its records reach this many bytes (the `mcap` crate's default), or at a flush.
+/// A chunk is closed before a message once its records are over this many bytes (the `mcap` crate's default and
+/// rule), or at a flush.
 pub const CHUNK_SIZE: usize = 1024 * 1024;
 
 /// How chunks are compressed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ChunkCompression {
+    /// Stored as they are.
+    None,
     /// LZ4 frames: the cheapest per byte.
     Lz4,
     /// Zstandard frames at this level: the smaller file.
     Zstd(i32),
+}
+
+/// What a file holds besides its records: [`McapOptions::indexed`] is everything, what the logger writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct McapOptions {
+    /// How chunks are compressed.
+    pub compression: ChunkCompression,
+    /// Schemas, channels and messages in chunks; `false`: straight in the data section, with no index.
+    pub chunks: bool,
+    /// A message index per channel after each chunk.
+    pub message_indexes: bool,
+    /// The chunk indexes in the summary.
+    pub chunk_indexes: bool,
+    /// The statistics record in the summary.
+    pub statistics: bool,
+    /// Every schema again in the summary.
+    pub summary_schemas: bool,
+    /// Every channel again in the summary.
+    pub summary_channels: bool,
+    /// The metadata indexes in the summary.
+    pub metadata_indexes: bool,
+    /// Where each summary group starts, after the summary.
+    pub summary_offsets: bool,
+}
+
+impl McapOptions {
+    /// Chunks compressed by `compression`, and every index and summary group.
+    pub fn indexed(compression: ChunkCompression) -> Self {
+        Self {
+            compression,
+            chunks: true,
+            message_indexes: true,
+            chunk_indexes: true,
+            statistics: true,
+            summary_schemas: true,
+            summary_channels: true,
+            metadata_indexes: true,
+            summary_offsets: true,
+        }
+    }
 }
 
 /// Little-endian MCAP fields appended to a byte buffer.
@@ -129,13 +177,14 @@ fn widen(bounds: &mut Option<(u64, u64)>, t: u64) {
 /// An MCAP file being written to `out`.
 pub struct McapWriter<W: Write> {
     out: W,
+    options: McapOptions,
     /// Bytes handed to `out`.
     written: u64,
     /// CRC-32 of the data section so far (from the magic on, as the `mcap` crate counts it).
     data_crc: crc32fast::Hasher,
-    /// Zstandard's context, kept from chunk to chunk; `None`: LZ4.
+    /// Zstandard's context, kept from chunk to chunk; `None`: another compression.
     zstd: Option<zstd::bulk::Compressor<'static>>,
-    /// The open chunk's records, uncompressed.
+    /// The open chunk's records, uncompressed (without chunks: the records not yet handed to `out`).
     chunk: Vec<u8>,
     /// First and last log time of the open chunk's messages.
     chunk_bounds: Option<(u64, u64)>,
@@ -163,14 +212,20 @@ pub struct McapWriter<W: Write> {
 }
 
 impl<W: Write> McapWriter<W> {
-    /// Start a file: the magic and the header record.
+    /// Start a file the logger's way (chunks, every index and summary group): the magic and the header record.
     pub fn new(out: W, profile: &str, library: &str, compression: ChunkCompression) -> std::io::Result<Self> {
-        let zstd = match compression {
+        Self::with_options(out, profile, library, McapOptions::indexed(compression))
+    }
+
+    /// Start a file holding what `options` say: the magic and the header record.
+    pub fn with_options(out: W, profile: &str, library: &str, options: McapOptions) -> std::io::Result<Self> {
+        let zstd = match options.compression {
             ChunkCompression::Zstd(level) => Some(zstd::bulk::Compressor::new(level)?),
-            ChunkCompression::Lz4 => None,
+            ChunkCompression::Lz4 | ChunkCompression::None => None,
         };
         let mut writer = Self {
             out,
+            options,
             written: 0,
             data_crc: crc32fast::Hasher::new(),
             zstd,
@@ -276,7 +331,7 @@ impl<W: Write> McapWriter<W> {
     }
 
     /// A message on `channel` (an id [`Self::add_channel`] gave), numbered 1, 2, ... on its channel (MCAP's
-    /// `sequence`) and copied into the open chunk; the chunk is closed and written once it is [`CHUNK_SIZE`] long.
+    /// `sequence`); see [`Self::write_message_numbered`].
     pub fn write_message(
         &mut self,
         channel: u16,
@@ -286,80 +341,79 @@ impl<W: Write> McapWriter<W> {
     ) -> std::io::Result<()> {
         let id = usize::from(channel);
         assert!(id >= 1 && id < self.message_counts.len(), "message on channel {channel}, which was never added");
+        let sequence = (self.message_counts[id] + 1) as u32;
+        self.write_message_numbered(channel, sequence, log_time_ns, publish_time_ns, data)
+    }
+
+    /// A message on `channel` with the `sequence` number its source gave it, copied into the open chunk; the chunk
+    /// is closed and written first if it is already over [`CHUNK_SIZE`].
+    pub fn write_message_numbered(
+        &mut self,
+        channel: u16,
+        sequence: u32,
+        log_time_ns: u64,
+        publish_time_ns: u64,
+        data: &[u8],
+    ) -> std::io::Result<()> {
+        let id = usize::from(channel);
+        assert!(id >= 1 && id < self.message_counts.len(), "message on channel {channel}, which was never added");
+        if self.chunk.len() > CHUNK_SIZE {
+            self.close_chunk()?;
+        }
         let offset = self.chunk.len() as u64;
         let c = &mut self.chunk;
         c.push(op::MESSAGE);
         c.u64((2 + 4 + 8 + 8 + data.len()) as u64);
         c.u16(channel);
-        c.u32((self.message_counts[id] + 1) as u32);
+        c.u32(sequence);
         c.u64(log_time_ns);
         c.u64(publish_time_ns);
         c.extend_from_slice(data);
-        self.chunk_entries[id].push((log_time_ns, offset));
+        if self.options.chunks && self.options.message_indexes {
+            self.chunk_entries[id].push((log_time_ns, offset));
+        }
         self.message_counts[id] += 1;
         widen(&mut self.chunk_bounds, log_time_ns);
-        if self.chunk.len() >= CHUNK_SIZE {
-            self.close_chunk()?;
-        }
+        widen(&mut self.bounds, log_time_ns);
         Ok(())
     }
 
-    /// Compress and write the open chunk, with its message indexes after it, if it has any records.
+    /// Write the open chunk's records: compressed into a chunk with its message indexes after it, or, without
+    /// chunks, as they are.
     fn close_chunk(&mut self) -> std::io::Result<()> {
         if self.chunk.is_empty() {
             return Ok(());
         }
+        if !self.options.chunks {
+            let records = std::mem::take(&mut self.chunk);
+            let written = self.emit(&records);
+            self.chunk = records;
+            self.chunk.clear();
+            self.chunk_bounds = None;
+            return written;
+        }
         let uncompressed_crc = crc32fast::hash(&self.chunk);
-        let mut compressed = std::mem::take(&mut self.compressed);
-        compressed.clear();
-        let name = match &mut self.zstd {
-            Some(z) => {
-                compressed.reserve(zstd::zstd_safe::compress_bound(self.chunk.len()));
-                z.compress_to_buffer(&self.chunk[..], &mut compressed)?;
-                "zstd"
-            }
-            None => {
-                lz4_frame(&self.chunk, &mut compressed)?;
-                "lz4"
-            }
-        };
-        let (start, end) = self.chunk_bounds.unwrap_or((0, 0));
+        let name = self.compress()?;
+        let (start, end) = self.chunk_bounds.take().unwrap_or((0, 0));
         let chunk_start = self.written;
         let mut header = std::mem::take(&mut self.scratch);
         header.clear();
         header.push(op::CHUNK);
-        let content = 8 + 8 + 8 + 4 + 4 + name.len() + 8 + compressed.len();
+        let content = 8 + 8 + 8 + 4 + 4 + name.len() + 8 + self.compressed.len();
         header.u64(content as u64);
         header.u64(start);
         header.u64(end);
         header.u64(self.chunk.len() as u64);
         header.u32(uncompressed_crc);
         header.str(name);
-        header.u64(compressed.len() as u64);
+        header.u64(self.compressed.len() as u64);
+        let compressed = std::mem::take(&mut self.compressed);
         let written = self.emit(&header).and_then(|()| self.emit(&compressed));
         self.compressed = compressed;
+        self.scratch = header;
         written?;
         let chunk_length = self.written - chunk_start;
-        // The message indexes, and where each is.
-        header.clear();
-        let mut offsets = Vec::new();
-        for (id, entries) in self.chunk_entries.iter_mut().enumerate().filter(|(_, e)| !e.is_empty()) {
-            offsets.push((id as u16, self.written + header.len() as u64));
-            header.record(op::MESSAGE_INDEX, |b| {
-                b.u16(id as u16);
-                b.prefixed(|b| {
-                    for &(t, offset) in entries.iter() {
-                        b.u64(t);
-                        b.u64(offset);
-                    }
-                });
-            });
-            entries.clear();
-        }
-        let indexes_written = self.emit(&header);
-        let index_length = header.len() as u64;
-        self.scratch = header;
-        indexes_written?;
+        let (offsets, index_length) = self.write_message_indexes()?;
         self.chunk_indexes.record(op::CHUNK_INDEX, |b| {
             b.u64(start);
             b.u64(end);
@@ -377,12 +431,53 @@ impl<W: Write> McapWriter<W> {
             b.u64(self.chunk.len() as u64);
         });
         self.chunk_count += 1;
-        if let Some((a, b)) = self.chunk_bounds.take() {
-            widen(&mut self.bounds, a);
-            widen(&mut self.bounds, b);
-        }
         self.chunk.clear();
         Ok(())
+    }
+
+    /// The open chunk's records compressed into `self.compressed`; the compression's name in MCAP.
+    fn compress(&mut self) -> std::io::Result<&'static str> {
+        self.compressed.clear();
+        match self.options.compression {
+            ChunkCompression::Zstd(_) => {
+                let z = self.zstd.as_mut().expect("a zstd context, made with the options");
+                self.compressed.reserve(zstd::zstd_safe::compress_bound(self.chunk.len()));
+                z.compress_to_buffer(&self.chunk[..], &mut self.compressed)?;
+                Ok("zstd")
+            }
+            ChunkCompression::Lz4 => {
+                lz4_frame(&self.chunk, &mut self.compressed)?;
+                Ok("lz4")
+            }
+            ChunkCompression::None => {
+                self.compressed.extend_from_slice(&self.chunk);
+                Ok("")
+            }
+        }
+    }
+
+    /// The closed chunk's message indexes, by channel id: where each is, and their length in all.
+    fn write_message_indexes(&mut self) -> std::io::Result<(Vec<(u16, u64)>, u64)> {
+        let mut indexes = std::mem::take(&mut self.scratch);
+        indexes.clear();
+        let mut offsets = Vec::new();
+        for (id, entries) in self.chunk_entries.iter_mut().enumerate().filter(|(_, e)| !e.is_empty()) {
+            offsets.push((id as u16, self.written + indexes.len() as u64));
+            indexes.record(op::MESSAGE_INDEX, |b| {
+                b.u16(id as u16);
+                b.prefixed(|b| {
+                    for &(t, offset) in entries.iter() {
+                        b.u64(t);
+                        b.u64(offset);
+                    }
+                });
+            });
+            entries.clear();
+        }
+        let written = self.emit(&indexes);
+        let length = indexes.len() as u64;
+        self.scratch = indexes;
+        written.map(|()| (offsets, length))
     }
 
     /// Close the open chunk and hand everything to the file: a reader reads up to here if the writer dies next.
@@ -391,8 +486,8 @@ impl<W: Write> McapWriter<W> {
         self.out.flush()
     }
 
-    /// Close the data section and write the summary (schemas, channels, statistics, chunk and metadata indexes), its
-    /// offsets, the footer and the closing magic. Once only; later calls do nothing.
+    /// Close the data section and write the summary (the groups the options keep: schemas, channels, statistics,
+    /// chunk and metadata indexes), its offsets, the footer and the closing magic. Once only; later calls do nothing.
     pub fn finish(&mut self) -> std::io::Result<()> {
         if self.finished {
             return Ok(());
@@ -406,14 +501,45 @@ impl<W: Write> McapWriter<W> {
         let summary_start = self.written;
         let mut summary = Vec::new();
         let mut offsets = Vec::new();
-        let mut group = |summary: &mut Vec<u8>, opcode: u8, records: &[u8]| {
-            if !records.is_empty() {
+        let mut group = |summary: &mut Vec<u8>, keep: bool, opcode: u8, records: &[u8]| {
+            if keep && !records.is_empty() {
                 offsets.push((opcode, summary_start + summary.len() as u64, records.len() as u64));
                 summary.extend_from_slice(records);
             }
         };
-        group(&mut summary, op::SCHEMA, &self.schemas.concat());
-        group(&mut summary, op::CHANNEL, &self.channels.concat());
+        let o = self.options;
+        group(&mut summary, o.summary_schemas, op::SCHEMA, &self.schemas.concat());
+        group(&mut summary, o.summary_channels, op::CHANNEL, &self.channels.concat());
+        group(&mut summary, o.statistics, op::STATISTICS, &self.statistics());
+        group(&mut summary, o.chunk_indexes, op::CHUNK_INDEX, &self.chunk_indexes);
+        group(&mut summary, o.metadata_indexes, op::METADATA_INDEX, &self.metadata_indexes);
+        // As the `mcap` crate writes them: no summary, a summary start of 0; no offsets, an offset start of 0.
+        let groups_end = summary_start + summary.len() as u64;
+        let summary_offset_start = if o.summary_offsets { groups_end } else { 0 };
+        if o.summary_offsets {
+            for (opcode, start, length) in offsets {
+                summary.record(op::SUMMARY_OFFSET, |b| {
+                    b.push(opcode);
+                    b.u64(start);
+                    b.u64(length);
+                });
+            }
+        }
+        // The footer's CRC covers the summary and the footer up to the CRC itself.
+        summary.push(op::FOOTER);
+        summary.u64(8 + 8 + 4);
+        summary.u64(if groups_end > summary_start { summary_start } else { 0 });
+        summary.u64(summary_offset_start);
+        let summary_crc = crc32fast::hash(&summary);
+        summary.u32(summary_crc);
+        summary.extend_from_slice(MAGIC);
+        self.out.write_all(&summary)?;
+        self.written += summary.len() as u64;
+        self.out.flush()
+    }
+
+    /// The statistics record of everything written.
+    fn statistics(&self) -> Vec<u8> {
         let mut statistics = Vec::new();
         let (first, last) = self.bounds.unwrap_or((0, 0));
         statistics.record(op::STATISTICS, |b| {
@@ -432,28 +558,7 @@ impl<W: Write> McapWriter<W> {
                 }
             });
         });
-        group(&mut summary, op::STATISTICS, &statistics);
-        group(&mut summary, op::CHUNK_INDEX, &self.chunk_indexes);
-        group(&mut summary, op::METADATA_INDEX, &self.metadata_indexes);
-        let summary_offset_start = summary_start + summary.len() as u64;
-        for (opcode, start, length) in offsets {
-            summary.record(op::SUMMARY_OFFSET, |b| {
-                b.push(opcode);
-                b.u64(start);
-                b.u64(length);
-            });
-        }
-        // The footer's CRC covers the summary and the footer up to the CRC itself.
-        summary.push(op::FOOTER);
-        summary.u64(8 + 8 + 4);
-        summary.u64(summary_start);
-        summary.u64(summary_offset_start);
-        let summary_crc = crc32fast::hash(&summary);
-        summary.u32(summary_crc);
-        summary.extend_from_slice(MAGIC);
-        self.out.write_all(&summary)?;
-        self.written += summary.len() as u64;
-        self.out.flush()
+        statistics
     }
 }
 
