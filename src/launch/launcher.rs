@@ -5,8 +5,11 @@
 //! beside the rig, so the plant's wake-up lateness can be read against the OS floor measured under the same
 //! conditions.
 
+pub use super::claim::fresh_run_id;
+use super::claim::{Claim, remove_stale_claims};
 use super::fault_schedule::FaultSchedule;
-use super::run_figures::write_plots;
+use super::process_env::{wait_for_external_report, write_controller_env, write_plant_env};
+use super::run_figures::{remove_empty_figures, write_plots};
 use super::run_report::{ProcessLife, RigReport};
 use crate::floor::{timer_baseline, timer_baseline::BaselineArgs, timer_baseline::BaselineReport};
 use crate::program::check_command;
@@ -19,7 +22,7 @@ use silrig_flight::trace::Trace;
 use silrig_rig::events::EventLog;
 use silrig_rig::report::{MachineConditions, ProcessReport, read_report};
 use silrig_rig::status::LiveLine;
-use silrig_rig::{ProcessArgs, ProcessOptions, RigMode, load_scenario, signals};
+use silrig_rig::{ProcessArgs, ProcessOptions, RigMode, load_scenario_for, signals};
 use silrig_wire::ipc::{self, RunId};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -189,61 +192,6 @@ impl LaunchOptions {
     }
 }
 
-/// `<out>/<name>`: the run's variables as `export NAME='value'` lines, written whole or not at all (someone waiting for
-/// the file to appear sources it at once).
-fn write_env_file(args: &ProcessArgs, name: &str) -> anyhow::Result<PathBuf> {
-    let lines: String =
-        args.to_env().iter().map(|(k, v)| format!("export {k}='{}'\n", v.replace('\'', "'\\''"))).collect();
-    let path = args.out.join(name);
-    silrig_flight::files::write_atomically(&path, &lines).with_context(|| format!("writing {}", path.display()))?;
-    Ok(path)
-}
-
-/// `<out>/controller.env`: the variables a controller of this run reads (`export NAME='value'` lines, for `.` in a
-/// shell); for `--controller external` also printed with how to start it.
-fn write_controller_env(args: &ProcessArgs, controller: &ControllerLaunch, remote: bool) -> anyhow::Result<()> {
-    let path = write_env_file(args, "controller.env")?;
-    if *controller == ControllerLaunch::External && !remote {
-        eprintln!(
-            "silrig run: waiting up to {} s for a controller on run {}; start yours with the run's variables, e.g.\n  \
-             . {} && python3 examples/python/pid_attitude.py",
-            args.options.startup_timeout_s,
-            args.run_id,
-            path.display()
-        );
-    }
-    Ok(())
-}
-
-/// `<out>/plant.env` for `--plant external`: the same variables, printed with how to start a plant.
-fn write_plant_env(args: &ProcessArgs) -> anyhow::Result<()> {
-    let path = write_env_file(args, "plant.env")?;
-    eprintln!(
-        "silrig run: waiting up to {} s for a plant on run {}; start yours with the run's variables, e.g.\n  \
-         . {} && python3 tests/clients/toy_plant.py",
-        args.options.startup_timeout_s,
-        args.run_id,
-        path.display()
-    );
-    Ok(())
-}
-
-/// A process the launcher did not start writes its report when it sees the run end; give it a moment.
-fn wait_for_external_report(out: &Path, role: Role) {
-    let path = silrig_rig::report::report_path(out, role.label());
-    let deadline = std::time::Instant::now() + Duration::from_secs(5);
-    while !path.exists() && std::time::Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-/// A fresh run id: short, lowercase, unique per launcher process and start time.
-pub fn fresh_run_id() -> RunId {
-    let t = silrig_wire::clock::monotonic_ns();
-    let id = format!("r{:x}-{:x}", std::process::id(), (t / 1_000) & 0xff_ffff);
-    RunId::new(&id).expect("generated run ids are valid")
-}
-
 /// A run ready to start: its scenario with the plan's faults, its id and its folder.
 struct Prepared {
     scenario: Scenario,
@@ -253,80 +201,6 @@ struct Prepared {
     scenario_path: PathBuf,
     /// The folder and the run id, held for the run.
     _claims: [Claim; 2],
-}
-
-/// A lock file created exclusively (check and create in one step), holding the launcher's pid, removed when the
-/// run ends: two launchers never share a folder or a run id. A claim whose launcher died is taken over.
-struct Claim(PathBuf);
-
-impl Claim {
-    fn take(path: PathBuf, what: &str) -> anyhow::Result<Self> {
-        // The claim appears with its pid in it (written beside it, then linked into place: a link never replaces),
-        // so a run that finds it taken can always say by whom.
-        let staged = PathBuf::from(format!("{}.{}", path.display(), std::process::id()));
-        std::fs::write(&staged, std::process::id().to_string())
-            .with_context(|| format!("writing {}", staged.display()))?;
-        let claimed = (|| {
-            for _ in 0..2 {
-                match std::fs::hard_link(&staged, &path) {
-                    Ok(()) => return Ok(Self(path.clone())),
-                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                        if let Some(holder) = live_holder(&path) {
-                            let who = holder.map_or(
-                                "another user's, or one just starting: its pid cannot be read".to_string(),
-                                |pid| format!("pid {pid}"),
-                            );
-                            anyhow::bail!(
-                                "{what} is taken by another silrig run ({who}): wait for it, or choose another"
-                            );
-                        }
-                        // Its launcher died without removing it.
-                        let _ = std::fs::remove_file(&path);
-                    }
-                    Err(e) => return Err(e).with_context(|| format!("creating {}", path.display())),
-                }
-            }
-            anyhow::bail!("{what}: cannot claim {} (another run keeps taking it)", path.display())
-        })();
-        let _ = std::fs::remove_file(&staged);
-        claimed
-    }
-}
-
-/// The holder of a claim file if it is alive: `Some(Some(pid))`; `Some(None)` for one whose pid cannot be read:
-/// another user's (owner-only), or without a pid (written by an older silrig) and too fresh to call abandoned.
-fn live_holder(path: &Path) -> Option<Option<i32>> {
-    let text = match std::fs::read_to_string(path) {
-        Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => return Some(None),
-        read => read.ok(),
-    };
-    let holder: Option<i32> = text.and_then(|t| t.trim().parse().ok());
-    match holder {
-        // SAFETY: kill with signal 0 only asks whether the process exists.
-        Some(pid) => (pid > 0 && unsafe { libc::kill(pid, 0) } == 0).then_some(Some(pid)),
-        None => {
-            let age = std::fs::metadata(path).and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
-            age.is_none_or(|a| a < Duration::from_secs(5)).then_some(None)
-        }
-    }
-}
-
-/// Remove run-id claims (`/tmp/silrig_<run>.lock`) whose launcher died (a `kill -9`); returns how many.
-fn remove_stale_claims() -> usize {
-    let mut removed = 0;
-    for entry in std::fs::read_dir("/tmp").into_iter().flatten().flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if name.starts_with("silrig_") && name.ends_with(".lock") && live_holder(&entry.path()).is_none() {
-            removed += usize::from(std::fs::remove_file(entry.path()).is_ok());
-        }
-    }
-    removed
-}
-
-impl Drop for Claim {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
 }
 
 /// Phase 1: the scenario with `--fault` flags added and validated, a folder that holds no run yet, the effective
@@ -345,16 +219,9 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     opts.supervision.validate().map_err(|e| anyhow::anyhow!(e))?;
     silrig_rig::flag_in_range("external-timeout-s", opts.external_timeout_s, 0.1, 86_400.0, "s")
         .map_err(|e| anyhow::anyhow!(e))?;
-    let mut scenario = load_scenario(opts.config.as_deref(), opts.duration_s)?;
     // Without a file, a plant of the user's own flies the any-plant scenario: the F-16's would refuse it.
     let own_plant = opts.plant_cmd.is_some() || opts.plant_fmu.is_some() || opts.plant != PlantKind::Builtin;
-    if opts.config.is_none() && own_plant {
-        scenario = silrig_flight::scenario::Scenario::embedded_any_plant();
-        if let Some(d) = opts.duration_s {
-            scenario.timing.duration_s = d;
-            scenario.validate().map_err(|(key, problem)| anyhow::anyhow!("--duration-s: `{key}`: {problem}"))?;
-        }
-    }
+    let mut scenario = load_scenario_for(opts.config.as_deref(), opts.duration_s, own_plant)?;
     // Across hosts a network leg sits in every answer: next-tick unless the user asks for same-tick.
     let across_hosts = opts.bridge_listen.is_some().then_some(silrig_flight::scenario::CommandTiming::NextTick);
     if let Some(timing) = opts.command_timing.or(across_hosts) {
@@ -604,18 +471,6 @@ fn finish_baseline(
         let _ = std::fs::remove_file(&path);
     }
     Ok(report)
-}
-
-/// A figure the disk could not take is left empty by the plotting library: remove it rather than leave a file
-/// that is not a figure.
-fn remove_empty_figures(out: &Path) {
-    for entry in std::fs::read_dir(out).into_iter().flatten().flatten() {
-        let path = entry.path();
-        let figure = path.extension().is_some_and(|e| e == "png" || e == "svg");
-        if figure && entry.metadata().is_ok_and(|m| m.len() == 0) {
-            let _ = std::fs::remove_file(path);
-        }
-    }
 }
 
 /// What a process the launcher stopped at the normal end of a run reports as "terminated by signal" (its SIGTERM)

@@ -156,6 +156,18 @@ pub(crate) fn write_plots(report: &RigReport, out: &Path, scenario: &Scenario) -
     Ok(left)
 }
 
+/// A figure the disk could not take is left empty by the plotting library: remove it rather than leave a file
+/// that is not a figure.
+pub(crate) fn remove_empty_figures(out: &Path) {
+    for entry in std::fs::read_dir(out).into_iter().flatten().flatten() {
+        let path = entry.path();
+        let figure = path.extension().is_some_and(|e| e == "png" || e == "svg");
+        if figure && entry.metadata().is_ok_and(|m| m.len() == 0) {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -264,8 +264,15 @@ impl ProcessArgs {
 
 /// Load a scenario (or the embedded default) and apply a duration override.
 pub fn load_scenario(path: Option<&Path>, duration_s: Option<f64>) -> anyhow::Result<Scenario> {
+    load_scenario_for(path, duration_s, false)
+}
+
+/// [`load_scenario`], where without a file a plant of the user's own (`own_plant`) flies the embedded any-plant
+/// scenario (set points and timing only) instead of the F-16's.
+pub fn load_scenario_for(path: Option<&Path>, duration_s: Option<f64>, own_plant: bool) -> anyhow::Result<Scenario> {
     let mut scenario = match path {
         Some(p) => Scenario::load(p)?,
+        None if own_plant => Scenario::embedded_any_plant(),
         None => Scenario::embedded_default(),
     };
     if let Some(d) = duration_s {

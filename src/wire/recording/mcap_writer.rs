@@ -330,6 +330,13 @@ impl<W: Write> McapWriter<W> {
         Ok(())
     }
 
+    /// The index of a channel [`Self::add_channel`] gave, in the per-channel tables.
+    fn channel_index(&self, channel: u16) -> usize {
+        let id = usize::from(channel);
+        assert!(id >= 1 && id < self.message_counts.len(), "message on channel {channel}, which was never added");
+        id
+    }
+
     /// A message on `channel` (an id [`Self::add_channel`] gave), numbered 1, 2, ... on its channel (MCAP's
     /// `sequence`); see [`Self::write_message_numbered`].
     pub fn write_message(
@@ -339,9 +346,7 @@ impl<W: Write> McapWriter<W> {
         publish_time_ns: u64,
         data: &[u8],
     ) -> std::io::Result<()> {
-        let id = usize::from(channel);
-        assert!(id >= 1 && id < self.message_counts.len(), "message on channel {channel}, which was never added");
-        let sequence = (self.message_counts[id] + 1) as u32;
+        let sequence = (self.message_counts[self.channel_index(channel)] + 1) as u32;
         self.write_message_numbered(channel, sequence, log_time_ns, publish_time_ns, data)
     }
 
@@ -355,8 +360,7 @@ impl<W: Write> McapWriter<W> {
         publish_time_ns: u64,
         data: &[u8],
     ) -> std::io::Result<()> {
-        let id = usize::from(channel);
-        assert!(id >= 1 && id < self.message_counts.len(), "message on channel {channel}, which was never added");
+        let id = self.channel_index(channel);
         if self.chunk.len() > CHUNK_SIZE {
             self.close_chunk()?;
         }
