@@ -386,6 +386,50 @@ fn an_output_folder_holding_a_run_is_never_overwritten() {
 }
 
 #[test]
+fn a_failed_runs_folder_is_refused_too_and_a_file_is_not_a_folder() {
+    let dir = temp_dir("reuse-failed");
+    let out = dir.join("run");
+    let run = |out: &std::path::Path, controller: &str| {
+        let mut cmd = Command::new(SILRIG);
+        cmd.args(["run", "--mode", "lockstep", "--duration-s", "0.5", "--startup-timeout-s", "5"]);
+        cmd.args(["--controller-cmd", controller, "--out", out.to_str().unwrap()]).output().unwrap()
+    };
+    // A controller that exits at once: the run fails and writes no trace.csv, but its events, report and recording.
+    let failed = run(&out, "false");
+    assert_ne!(failed.status.code(), Some(0), "{}", String::from_utf8_lossy(&failed.stdout));
+    assert!(!out.join("trace.csv").exists());
+    let events = std::fs::read(out.join("events.jsonl")).unwrap();
+    let again = Command::new(SILRIG)
+        .args(["run", "--mode", "lockstep", "--duration-s", "0.5", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(again.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(err.contains("already holds a run (report.json)") && err.contains("choose another --out"), "{err}");
+    assert_eq!(std::fs::read(out.join("events.jsonl")).unwrap(), events, "the failed run's events are kept");
+    let file = dir.join("afile");
+    std::fs::write(&file, "mine").unwrap();
+    let o = Command::new(SILRIG).args(["run", "--mode", "lockstep", "--out", file.to_str().unwrap()]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("it is a file, not a folder"), "{err}");
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_misspelled_flag_gets_the_flag_it_resembles_and_an_unknown_fault_action_the_actions() {
+    let o = Command::new(SILRIG).args(["run", "--duration", "5"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("a similar argument exists: '--duration-s'"), "{err}");
+    let o = Command::new(SILRIG).args(["run", "--fault", "controller:kil@3s"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("unknown action \"kil\"; the actions: kill, term, stop"), "{err}");
+}
+
+#[test]
 fn a_controller_with_more_diagnostics_than_a_command_carries_is_refused_before_it_connects() {
     let dir = temp_dir("too-many");
     let centres: Vec<String> = (0..20).map(|k| format!("[{}.0, 0.0]", k)).collect();

@@ -398,7 +398,10 @@ pub fn parse_fault_flag(text: &str) -> Result<Fault, String> {
         .iter()
         .copied()
         .find(|a| a.label() == action.trim())
-        .ok_or_else(|| bad(format!("unknown action {:?}", action.trim())))?;
+        .ok_or_else(|| {
+            let actions: Vec<&str> = FaultAction::ALL.iter().map(|a| a.label()).collect();
+            bad(format!("unknown action {:?}; the actions: {}", action.trim(), actions.join(", ")))
+        })?;
     let mut parts = rest.split(',');
     let at = parts.next().unwrap_or("");
     let mut fault = Fault {
@@ -500,7 +503,8 @@ mod tests {
     #[test]
     fn bad_flags_and_plans_name_the_problem() {
         assert!(parse_fault_flag("pilot:kill@1s").unwrap_err().contains("unknown target \"pilot\""));
-        assert!(parse_fault_flag("plant:explode@1s").unwrap_err().contains("unknown action \"explode\""));
+        let unknown = parse_fault_flag("plant:explode@1s").unwrap_err();
+        assert!(unknown.contains("unknown action \"explode\"; the actions: kill, term, stop,"), "{unknown}");
         assert!(parse_fault_flag("plant:kill").unwrap_err().contains("TARGET:ACTION@TIME"));
         assert!(parse_fault_flag("plant:kill@soon").unwrap_err().contains("not a duration"));
         assert!(parse_fault_flag("plant:kill@1s,colour=red").unwrap_err().contains("unknown key \"colour\""));

@@ -1,5 +1,6 @@
 //! What makes a run its own: its run id ([`fresh_run_id`]) and the lock files that claim its folder and its run id
-//! for one launcher ([`Claim`]), taken over when their launcher died ([`remove_stale_claims`]).
+//! for one launcher ([`Claim`]), taken over when their launcher died ([`remove_stale_claims`]), and the check that
+//! refuses an output folder already holding a run's files ([`refuse_used_folder`]).
 
 use anyhow::Context;
 use silrig_wire::ipc::RunId;
@@ -11,6 +12,25 @@ pub fn fresh_run_id() -> RunId {
     let t = silrig_wire::clock::monotonic_ns();
     let id = format!("r{:x}-{:x}", std::process::id(), (t / 1_000) & 0xff_ffff);
     RunId::new(&id).expect("generated run ids are valid")
+}
+
+/// Files only a run writes into its folder, a failed run's included (it writes no `trace.csv`, but its events,
+/// report and recording): a folder holding any of them belongs to an earlier run.
+const RUN_FILES: [&str; 4] = ["trace.csv", "report.json", "events.jsonl", "recording.mcap"];
+
+/// Refuse `out` as a run's folder: a file where the folder should be, or a folder that holds an earlier run's files
+/// (reusing it would mix two runs' events and recordings, and nothing already recorded may be lost).
+pub fn refuse_used_folder(out: &Path) -> anyhow::Result<()> {
+    if out.exists() && !out.is_dir() {
+        anyhow::bail!("--out {}: it is a file, not a folder: choose a folder for the run's files", out.display());
+    }
+    if let Some(found) = RUN_FILES.iter().find(|name| out.join(name).exists()) {
+        anyhow::bail!(
+            "{} already holds a run ({found}); choose another --out or move it away: nothing is overwritten",
+            out.display()
+        );
+    }
+    Ok(())
 }
 
 /// A lock file created exclusively (check and create in one step), holding the launcher's pid, removed when the

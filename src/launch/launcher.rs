@@ -5,7 +5,7 @@
 //! beside the rig, so the plant's wake-up lateness can be read against the OS floor measured under the same
 //! conditions.
 
-pub use super::claim::fresh_run_id;
+pub use super::claim::{fresh_run_id, refuse_used_folder};
 use super::claim::{Claim, remove_stale_claims};
 use super::fault_schedule::FaultSchedule;
 use super::process_env::{wait_for_external_report, write_controller_env, write_plant_env};
@@ -301,11 +301,7 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     }
     let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
     let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));
-    anyhow::ensure!(
-        !out.join("trace.csv").exists(),
-        "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
-        out.display()
-    );
+    refuse_used_folder(&out)?;
     let created = !out.exists();
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     claim(scenario, run_id, out.clone()).inspect_err(|_| {
@@ -325,11 +321,7 @@ fn claim(scenario: Scenario, run_id: RunId, out: PathBuf) -> anyhow::Result<Prep
         Claim::take(PathBuf::from(format!("/tmp/silrig_{run_id}.lock")), &format!("run id {run_id}"))?,
     ];
     // Checked again now that the folder is ours: a run that finished between the first check and the claim.
-    anyhow::ensure!(
-        !out.join("trace.csv").exists(),
-        "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
-        out.display()
-    );
+    refuse_used_folder(&out)?;
     let root = run_id.root_dir();
     anyhow::ensure!(
         // Without its trailing slash, so that a file there is seen as one.

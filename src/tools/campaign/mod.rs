@@ -522,11 +522,7 @@ pub fn fly_one(campaign: &Campaign, seed: u64, index: u64, out: &Path) -> anyhow
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let (result, flight) = if campaign.commands.any() {
         // The rig writes its run (trace, report, figures) into `out` itself.
-        anyhow::ensure!(
-            !out.join("trace.csv").exists(),
-            "{} already holds a run (trace.csv); choose another --out or move it away: nothing is overwritten",
-            out.display()
-        );
+        silrig_launch::claim::refuse_used_folder(out)?;
         rig_case::fly(campaign, seed, index, out, None, true)?
     } else {
         case::fly_with_trace(&campaign.models, &campaign.scenario, &campaign.criteria, seed, index)
