@@ -17,15 +17,15 @@
 //! messages. Each message is encoded into one reused buffer: writing a row allocates nothing. A [`RecordingTap`]
 //! given at creation sees every channel and message after the file has it.
 
-use super::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
-use super::foxglove::{self as fox, BodySignals, ProtoBuffer};
-use super::mcap_writer::{ChunkCompression, McapWriter};
-use super::{
+use crate::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
+use crate::foxglove::{self as fox, BodySignals, ProtoBuffer};
+use crate::mcap_writer::{ChunkCompression, McapWriter};
+use crate::{
     LoggedRow, RecordingMeta, RecordingTap, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, TapChannel, meta_keys,
     recording_file_name, timing_values, topics,
 };
-use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use serde_json::{Value, json};
+use silrig_wire::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Read, Seek, SeekFrom};
@@ -205,7 +205,7 @@ impl McapSink {
             proto: ProtoBuffer::default(),
             last_scene: None,
             events_read: 0,
-            wall_minus_monotonic_ns: wall_ns as i128 - i128::from(crate::clock::monotonic_ns()),
+            wall_minus_monotonic_ns: wall_ns as i128 - i128::from(silrig_wire::clock::monotonic_ns()),
             finished: false,
             tap,
         })

@@ -5,11 +5,11 @@
 //! recording, a file that is not MCAP, one cut short (its logger was killed), one of another wire layout, or a
 //! message that does not fit its type is an error naming the file.
 
-use super::cdr::{self, CdrCodec, CdrReader};
-use super::json::sample_from_json;
-use super::{TRACE_COLUMNS_KEY, meta_keys, recording_files, topics};
-use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION, WireType};
+use crate::cdr::{self, CdrCodec, CdrReader};
+use crate::json::sample_from_json;
+use crate::{TRACE_COLUMNS_KEY, meta_keys, recording_files, topics};
 use silrig_flight::signals::PlantSignals;
+use silrig_wire::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION, WireType};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -351,8 +351,8 @@ impl RecordedRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::json::sample_json;
-    use crate::wire::SampleHeader;
+    use crate::json::sample_json;
+    use silrig_wire::wire::SampleHeader;
 
     /// A recording as the first loggers wrote it (JSON messages with JSON Schemas), with `plant` and `command`.
     fn write_json_recording(path: &Path, info: &PlantInfo, plant: &PlantSample, command: &CommandSample) {
@@ -393,7 +393,7 @@ mod tests {
         let mut command = CommandSample::zeroed();
         command.answers_tick = 3;
         command.diagnostics[2] = std::f64::consts::PI;
-        write_json_recording(&dir.join(super::super::RECORDING_FILE), &info, &plant, &command);
+        write_json_recording(&dir.join(crate::RECORDING_FILE), &info, &plant, &command);
         let run = RecordedRun::read(&dir).unwrap();
         assert_eq!(run.plant_info, Some(info));
         assert_eq!(run.plant.len(), 1);
@@ -409,7 +409,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("silrig-reader-damaged-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let info = PlantInfo::new(&silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2])).unwrap();
-        let path = dir.join(super::super::RECORDING_FILE);
+        let path = dir.join(crate::RECORDING_FILE);
         write_json_recording(&path, &info, &PlantSample::zeroed(), &CommandSample::zeroed());
         let whole = std::fs::read(&path).unwrap();
         // The first chunk among the top-level records.
