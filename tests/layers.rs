@@ -71,6 +71,10 @@ fn every_crate_depends_only_on_the_layers_below_it() {
     for dep in ["clap", "toml", "plotters", "anyhow"] {
         assert!(!model.contains(dep), "silrig-model depends on {dep}: the model is plain math");
     }
+    let wire = dependencies("wire");
+    for dep in ["mcap", "foxglove", "lz4", "zstd"] {
+        assert!(!wire.contains(dep), "silrig-wire depends on {dep}: files and their formats are silrig-recording's");
+    }
     let client = dependencies("client");
     assert!(client.iter().all(|d| ["silrig-rig", "silrig-wire"].contains(&d.as_str())), "the client links {client:?}");
     let fmu = dependencies("fmu_f16");
