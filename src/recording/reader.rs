@@ -260,7 +260,7 @@ impl RecordedRun {
             let record = record.map_err(|e| cut_short(path, &bytes, messages, e.to_string()))?;
             match record {
                 mcap::records::Record::Metadata(m) if m.name == meta_keys::RUN => {
-                    self.run_metadata(path, m.metadata)?;
+                    self.add_run_metadata(path, m.metadata)?;
                     layout_checked = true;
                 }
                 mcap::records::Record::Metadata(m)
@@ -280,7 +280,7 @@ impl RecordedRun {
                     let Some(channel) = topics_by_id.get(&header.channel_id) else {
                         return Err(unreadable(format!("a message on unknown channel {}", header.channel_id)));
                     };
-                    self.message(path, channel, &codecs, &data)?;
+                    self.add_message(path, channel, &codecs, &data)?;
                 }
                 _ => {}
             }
@@ -297,7 +297,7 @@ impl RecordedRun {
 
     /// A file's run metadata: its wire layout must be this build's (replay sends the samples as they were); the
     /// first file's is the run's.
-    fn run_metadata(&mut self, path: &Path, metadata: BTreeMap<String, String>) -> Result<(), RecordingError> {
+    fn add_run_metadata(&mut self, path: &Path, metadata: BTreeMap<String, String>) -> Result<(), RecordingError> {
         let found = metadata.get(meta_keys::LAYOUT_VERSION).cloned().unwrap_or_else(|| "none".into());
         if found != WIRE_LAYOUT_VERSION.to_string() {
             return Err(RecordingError::OtherLayout { path: path.to_path_buf(), found });
@@ -310,7 +310,7 @@ impl RecordedRun {
 
     /// One message on `channel` (its topic, encoding and metadata): counted on its topic, and the wire samples and
     /// the trace's columns kept; an error names the topic and the message's number on it.
-    fn message(
+    fn add_message(
         &mut self,
         path: &Path,
         (topic, encoding, channel_meta): &(String, String, BTreeMap<String, String>),
