@@ -6,8 +6,8 @@
 //!   [`f16_outputs`]): the math, no I/O.
 //! - `silrig-flight` ([`scenario`], [`fault`], [`role`], [`dispersion`], [`sim`], [`trace`], [`summary`],
 //!   [`f_true`], [`criteria`], [`judge`], [`files`]): a flight as data and as one deterministic process.
-//! - `silrig-wire` ([`wire`], [`topology`], [`ipc`], [`clock`], [`timing`], [`recording`]): the contract and the
-//!   transport.
+//! - `silrig-wire` ([`wire`], [`topology`], [`ipc`], [`clock`], [`timing`]): the contract and the transport.
+//! - `silrig-recording` ([`recording`]): what the logger writes (CSV, MCAP) and replay reads.
 //! - `silrig-plot` ([`plot`]): every figure.
 //! - `silrig-rig` ([`rig`]): the plant, controller and logger processes and the controller session.
 //! - `silrig-launch` ([`launch`]): `silrig run`, supervision, faults, the run's report.
@@ -26,8 +26,9 @@ pub use silrig_flight::{
 pub use silrig_launch as launch;
 pub use silrig_model::{actuator, control, f16_outputs, integrator, plant, rng, units, vehicle};
 pub use silrig_plot as plot;
+pub use silrig_recording as recording;
 pub use silrig_rig as rig;
 pub use silrig_tools::{
     bench, campaign, check, contract, derivative_csv, export_fmu, html, new_project, outputs, replay, soak,
 };
-pub use silrig_wire::{clock, ipc, recording, timing, topology, wire};
+pub use silrig_wire::{clock, ipc, timing, topology, wire};

@@ -7,19 +7,21 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The library crates from the bottom up, each with the crates it may depend on.
-const LAYERS: [(&str, &[&str]); 9] = [
+const LAYERS: [(&str, &[&str]); 10] = [
     ("model", &[]),
     // The FMU importer knows no silrig crate: it opens, instantiates and steps any co-simulation FMU.
     ("fmi", &[]),
     ("flight", &["model"]),
     ("wire", &["model", "flight"]),
+    // What the logger writes (CSV, MCAP) and replay reads: the wire's samples in files.
+    ("recording", &["flight", "wire"]),
     ("plot", &["flight"]),
-    ("rig", &["model", "flight", "wire", "fmi"]),
+    ("rig", &["model", "flight", "wire", "recording", "fmi"]),
     // What turns a foreign thing (a device over UDP, and next an FMU or a process) into a plant or a controller.
     ("adapters", &["model", "flight", "wire", "rig", "fmi"]),
-    ("launch", &["flight", "wire", "plot", "rig"]),
+    ("launch", &["flight", "wire", "recording", "plot", "rig"]),
     // `silrig export-fmu` writes the description the FMU's binary checks its GUID with.
-    ("tools", &["model", "flight", "wire", "plot", "rig", "launch", "fmu-f16-description"]),
+    ("tools", &["model", "flight", "wire", "recording", "plot", "rig", "launch", "fmu-f16-description"]),
 ];
 
 /// The crates beside the layers, each linking only what its users need: the C ABI a user's controller loads, the
@@ -68,6 +70,10 @@ fn every_crate_depends_only_on_the_layers_below_it() {
     let model = dependencies("model");
     for dep in ["clap", "toml", "plotters", "anyhow"] {
         assert!(!model.contains(dep), "silrig-model depends on {dep}: the model is plain math");
+    }
+    let wire = dependencies("wire");
+    for dep in ["mcap", "foxglove", "lz4", "zstd"] {
+        assert!(!wire.contains(dep), "silrig-wire depends on {dep}: files and their formats are silrig-recording's");
     }
     let client = dependencies("client");
     assert!(client.iter().all(|d| ["silrig-rig", "silrig-wire"].contains(&d.as_str())), "the client links {client:?}");

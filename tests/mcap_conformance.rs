@@ -1,4 +1,4 @@
-//! Our MCAP writer (`src/wire/recording/mcap_writer.rs`) held to the MCAP project's conformance suite for writers,
+//! Our MCAP writer (`src/recording/mcap_writer.rs`) held to the MCAP project's conformance suite for writers,
 //! without the suite's files (which stay out of this repository): the suite's inputs (no data, one message, one
 //! schemaless message, one metadata record, ten messages) are built here in its JSON form, in every combination of
 //! the features our writer has (chunks, message and chunk indexes, statistics, schemas and channels repeated in

@@ -9,7 +9,8 @@
 //!   beside a run (ours and cyclictest's); [`held_outputs`]: the ticks a degraded plant held, flagged and judged.
 //! - [`remote`]: the plant-side bridge for a controller on another host.
 //!
-//! Layers: uses `silrig-rig` (the processes it starts), `silrig-plot`, `silrig-wire` and `silrig-flight`.
+//! Layers: uses `silrig-rig` (the processes it starts), `silrig-plot`, `silrig-recording`, `silrig-wire` and
+//! `silrig-flight`.
 
 pub mod claim;
 pub mod fault_report;

@@ -139,7 +139,7 @@ pub(crate) fn write_plots(report: &RigReport, out: &Path, scenario: &Scenario) -
     };
     // The units and which output is which input's position are in the plant's announcement, which the recording
     // keeps (a run without one draws bare names, and no fault timeline).
-    let plant = silrig_wire::recording::reader::RecordedRun::read(out).ok().and_then(|r| r.plant_signals().ok());
+    let plant = silrig_recording::reader::RecordedRun::read(out).ok().and_then(|r| r.plant_signals().ok());
     let mut figures = match &trace {
         Some(trace) => trace_figures(report, out, scenario, trace, plant.as_ref()),
         None => Vec::new(),

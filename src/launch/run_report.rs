@@ -171,7 +171,7 @@ pub(crate) fn control_summary(
     if builtin_f16 {
         return (Some(summarize(trace, scenario, None)), None);
     }
-    let announced = silrig_wire::recording::reader::RecordedRun::read(out).and_then(|r| r.plant_signals());
+    let announced = silrig_recording::reader::RecordedRun::read(out).and_then(|r| r.plant_signals());
     match announced {
         Ok(plant) => (Some(summarize(trace, scenario, Some(&plant))), None),
         Err(e) => (
@@ -547,7 +547,7 @@ mod tests {
     fn the_ticks_that_held_a_command_are_the_samples_flagged_after_them() {
         let dir = std::env::temp_dir().join(format!("silrig-run-report-held-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let mut timing = silrig_wire::recording::TIMING_COLUMNS.join(",") + "\n";
+        let mut timing = silrig_recording::TIMING_COLUMNS.join(",") + "\n";
         // Flags 1 (held) after ticks 1 and 3; 2 (saturated) alone is not a held command.
         for (tick, flags) in [(0, 0), (1, 2), (2, 1), (3, 0), (4, 3)] {
             timing += &format!("{tick},{tick},7,{},0,{flags},0,0,0,0,0,0,0,0\n", 1000 + tick * 10);

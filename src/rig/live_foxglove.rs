@@ -8,7 +8,7 @@
 //! Without the feature the module still builds: [`AVAILABLE`] is false and [`serve`] refuses with the build
 //! command, so `silrig run --live` can say what to do before anything starts.
 
-use silrig_wire::recording::RecordingTap;
+use silrig_recording::RecordingTap;
 use std::net::SocketAddr;
 
 /// Whether this build can serve (`cargo build --release --features live`).
@@ -47,7 +47,7 @@ pub fn serve(addr: SocketAddr, _run_id: &str) -> anyhow::Result<Box<dyn Recordin
 
 #[cfg(feature = "live")]
 mod server {
-    use silrig_wire::recording::{RecordingTap, TapChannel};
+    use silrig_recording::{RecordingTap, TapChannel};
     use std::sync::Arc;
     use std::time::Duration;
 

@@ -1,6 +1,6 @@
 //! `silrig-logger`: subscribes to the plant and command streams with queues deep enough to absorb a 1 s stall,
 //! pairs each plant sample with the command answering it, and writes each row, as it goes, to its sinks
-//! ([`silrig_wire::recording`]): `trace.csv` (its columns from the plant's announcement,
+//! ([`silrig_recording`]): `trace.csv` (its columns from the plant's announcement,
 //! [`PlantSignals::trace_columns`]: for the F-16 the same columns and values as `silrig sim`), `timing.csv` (per-tick
 //! stamps, flags and gaps) and the MCAP recording (the samples as received, for viewers and replay). Sinks are flushed
 //! every few rows, so a kill loses at most the last unflushed batch and never corrupts earlier rows.
@@ -24,11 +24,11 @@ use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::{self, Trace};
+use silrig_recording::csv::CsvSink;
+use silrig_recording::mcap_file::McapSink;
+use silrig_recording::{LoggedRow, RecordingMeta, RowSink};
 use silrig_wire::clock::{TickSchedule, monotonic_ns};
 use silrig_wire::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
-use silrig_wire::recording::csv::CsvSink;
-use silrig_wire::recording::mcap_file::McapSink;
-use silrig_wire::recording::{LoggedRow, RecordingMeta, RowSink};
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
 use std::collections::BTreeMap;

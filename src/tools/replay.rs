@@ -14,9 +14,9 @@ use silrig_flight::signals::PlantSignals;
 use silrig_launch::launcher::fresh_run_id;
 use silrig_launch::program::binary_dir;
 use silrig_launch::supervision::start_process;
+use silrig_recording::reader::RecordedRun;
 use silrig_rig::{ProcessArgs, ProcessOptions, RigMode};
 use silrig_wire::ipc::{self, RunId};
-use silrig_wire::recording::reader::RecordedRun;
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{self, CommandSample, PlantInfo, PlantSample};
 use std::path::{Path, PathBuf};
@@ -425,7 +425,7 @@ fn check_same_run(run_dir: &Path, recorded: &RecordedRun) -> anyhow::Result<()> 
 }
 
 /// Replay the recording in `opts.run_dir` against the controller, and compare. A recording that cannot be read is
-/// an error ([`silrig_wire::recording::reader::RecordingError`]); a controller that dies or stops answering is an error
+/// an error ([`silrig_recording::reader::RecordingError`]); a controller that dies or stops answering is an error
 /// naming the tick.
 pub fn replay(opts: &ReplayOptions) -> anyhow::Result<ReplayOutcome> {
     silrig_rig::flag_in_range("tolerance", opts.tolerance, 0.0, f64::MAX, "").map_err(anyhow::Error::msg)?;

@@ -1,12 +1,20 @@
-//! What the logger writes, and reading it back: the sinks a logged row goes to ([`RowSink`]: `trace.csv` and
-//! `timing.csv` in [`csv`], the MCAP recording in [`mcap_file`]), the binary form of wire samples and rows with their
-//! ROS 2 message definitions ([`cdr`], what the recording holds), the aircraft in 3-D for Foxglove ([`foxglove`]: a
-//! frame transform and a scene, protobuf), their JSON form ([`json`], what the first
-//! recordings held: replay still reads them), and the reader replay uses ([`reader`]). What the MCAP sink writes
-//! can also go, as it is written, to a [`RecordingTap`] (the logger's live Foxglove server).
+//! silrig-recording: what the logger writes, and reading it back.
+//!
+//! - Here: the sinks a logged row goes to ([`RowSink`], [`LoggedRow`]), the recording's topics, metadata keys and
+//!   files, `timing.csv`'s columns, and the [`RecordingTap`], a second reader handed what the MCAP sink writes as it
+//!   writes it (the logger's live Foxglove server).
+//! - [`csv`]: `trace.csv` and `timing.csv`; [`mcap_file`]: the MCAP recording (channels, messages, the run's
+//!   metadata), written by [`mcap_writer`], our MCAP file format chunk by chunk.
+//! - [`cdr`]: the binary form of wire samples and rows with their ROS 2 message definitions (what the recording
+//!   holds); [`foxglove`]: the aircraft in 3-D for Foxglove (a frame transform and a scene, protobuf); [`json`]: the
+//!   samples' JSON form, what the first recordings held (replay still reads them).
+//! - [`reader`]: a recording read back, what replay and the run's report use.
 //!
 //! The logger decides what a row is (pairing, gaps, restarts); a sink only writes it, so a new format is a new sink,
 //! not a second copy of that logic.
+//!
+//! Layers: uses `silrig-wire` (the samples it records) and `silrig-flight` (a plant's signals, the trace's columns);
+//! used by `silrig-rig` (the logger), `silrig-launch` (the run's report) and `silrig-tools` (replay).
 
 pub mod cdr;
 pub mod csv;
@@ -16,8 +24,8 @@ pub mod mcap_file;
 pub mod mcap_writer;
 pub mod reader;
 
-use crate::ipc::Received;
-use crate::wire::{CommandSample, PlantInfo, PlantSample};
+use silrig_wire::ipc::Received;
+use silrig_wire::wire::{CommandSample, PlantInfo, PlantSample};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -202,7 +210,7 @@ pub mod topics {
     /// The run's events (`events.jsonl`).
     pub const EVENTS: &str = "/events";
     /// The aircraft's position and attitude, `foxglove.FrameTransform` world -> body, a message a row (plants that
-    /// announce both, [`super::foxglove`]).
+    /// announce both, [`foxglove`]).
     pub const BODY_TRANSFORM: &str = "/body_transform";
     /// The aircraft's model with its surfaces deflected, `foxglove.SceneUpdate` in `body`, a message a row.
     pub const AIRCRAFT: &str = "/aircraft";

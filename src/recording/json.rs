@@ -1,12 +1,12 @@
 //! Wire samples as JSON, what the first recordings held (the logger now writes CDR, [`super::cdr`]); replay still
-//! reads them. Built from each type's field table ([`crate::wire::WireField`]), like the CDR codec, whose field
+//! reads them. Built from each type's field table ([`silrig_wire::wire::WireField`]), like the CDR codec, whose field
 //! shapes ([`shape`]) are these. Every field is written as received:
 //! numbers with the shortest text that reads back to the same bits (non-finite values as `null`), integers exactly,
 //! `SampleHeader` as a nested object, byte arrays (names and units) as strings. `_pad` fields are left out.
 //! [`sample_from_json`] is the inverse, which replay uses to send the recorded samples again bit for bit.
 
-use crate::wire::{SampleHeader, WireField, WireType};
 use serde_json::Value;
+use silrig_wire::wire::{SampleHeader, WireField, WireType};
 use std::fmt::Write as _;
 
 /// The element type of a field, from its Rust type as written in the wire definition (shared with [`super::cdr`]).
@@ -68,8 +68,8 @@ pub(super) fn shape(field: &WireField) -> Shape {
             let per = inner.trim_start_matches('[').rsplit_once(';').map(|(_, n)| n.trim().trim_end_matches(']'));
             // `[[u8; NAME_BYTES]; MAX_DIAGNOSTICS]`: the string length is the constant's value.
             let text_len = match per {
-                Some("NAME_BYTES") => crate::wire::NAME_BYTES,
-                Some("UNIT_BYTES") => crate::wire::UNIT_BYTES,
+                Some("NAME_BYTES") => silrig_wire::wire::NAME_BYTES,
+                Some("UNIT_BYTES") => silrig_wire::wire::UNIT_BYTES,
                 Some(n) => n.parse().unwrap_or_else(|_| panic!("wire field {}: unknown length {n}", field.name)),
                 None => panic!("wire field {}: cannot read type {t}", field.name),
             };
@@ -264,7 +264,7 @@ pub fn sample_from_json<T: WireType + Copy>(value: &Value) -> Result<T, JsonFiel
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wire::{CommandSample, ControllerInfo, PlantSample};
+    use silrig_wire::wire::{CommandSample, ControllerInfo, PlantSample};
 
     fn plant() -> PlantSample {
         let mut s = PlantSample::zeroed();
@@ -305,7 +305,7 @@ mod tests {
             value["inputs"].as_array().unwrap()[..3],
             serde_json::json!([null, null, 1.5]).as_array().unwrap()[..]
         );
-        assert_eq!(value["diagnostics"].as_array().map(Vec::len), Some(crate::wire::MAX_DIAGNOSTICS));
+        assert_eq!(value["diagnostics"].as_array().map(Vec::len), Some(silrig_wire::wire::MAX_DIAGNOSTICS));
         let back: CommandSample = sample_from_json(&value).expect("fits");
         assert!(back.inputs[0].is_nan() && back.inputs[1].is_nan() && back.inputs[2] == 1.5);
         assert_eq!(back.diagnostics[1], -2.25);

@@ -17,15 +17,15 @@
 //! messages. Each message is encoded into one reused buffer: writing a row allocates nothing. A [`RecordingTap`]
 //! given at creation sees every channel and message after the file has it.
 
-use super::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
-use super::foxglove::{self as fox, BodySignals, ProtoBuffer};
-use super::mcap_writer::{ChunkCompression, McapWriter};
-use super::{
+use crate::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
+use crate::foxglove::{self as fox, BodySignals, ProtoBuffer};
+use crate::mcap_writer::{ChunkCompression, McapWriter};
+use crate::{
     LoggedRow, RecordingMeta, RecordingTap, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, TapChannel, meta_keys,
     recording_file_name, timing_values, topics,
 };
-use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use serde_json::{Value, json};
+use silrig_wire::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Read, Seek, SeekFrom};
@@ -125,6 +125,74 @@ const TIMING_MSG: &str = "silrig/msg/Timing";
 /// The schema name of the `/trace` messages.
 const TRACE_MSG: &str = "silrig/msg/Trace";
 
+/// The run's next recording file in `out_dir`, created so that no other life's file is overwritten: the first free
+/// name of `recording.mcap`, `recording-2.mcap`, ... (a restarted logger starts a file of its own).
+fn create_next_file(out_dir: &Path) -> std::io::Result<(PathBuf, File)> {
+    let (path, file) = (1..)
+        .map(|life| out_dir.join(recording_file_name(life)))
+        .find_map(|path| match OpenOptions::new().write(true).create_new(true).open(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => None,
+            opened => Some((path.clone(), opened)),
+        })
+        .expect("some recording file name is free");
+    let file = file.map_err(|e| std::io::Error::new(e.kind(), format!("creating {}: {e}", path.display())))?;
+    Ok((path, file))
+}
+
+/// The channels every recording has from its start, whatever the controller: the wire's samples (CDR), `/timing`
+/// and `/events`. `/trace` waits for the trace's columns, the 3-D channels for the plant's announcement.
+fn add_first_channels(writer: &mut McapWriter<BufWriter<File>>, tap: &mut Option<Box<dyn RecordingTap>>) -> Channels {
+    let no_metadata = BTreeMap::new();
+    let mut add = |topic: &str, name: &str, msg: String| -> u16 {
+        let channel = NewChannel {
+            topic,
+            message_encoding: MESSAGE_ENCODING,
+            schema_name: name,
+            schema_encoding: SCHEMA_ENCODING,
+            schema_data: msg.as_bytes(),
+            metadata: &no_metadata,
+        };
+        add_channel(writer, tap, channel)
+    };
+    let plant = add(topics::PLANT, &cdr::msg_name::<PlantSample>(), cdr::sample_msg::<PlantSample>(&[RECEIVE_STAMP]));
+    let plant_info = add(topics::PLANT_INFO, &cdr::msg_name::<PlantInfo>(), cdr::sample_msg::<PlantInfo>(&[]));
+    let command =
+        add(topics::COMMAND, &cdr::msg_name::<CommandSample>(), cdr::sample_msg::<CommandSample>(&[RECEIVE_STAMP]));
+    let timing = add(topics::TIMING, TIMING_MSG, timing_msg());
+    let event_schema = serde_json::to_vec(&event_schema()).expect("JSON");
+    let events = NewChannel {
+        topic: topics::EVENTS,
+        message_encoding: "json",
+        schema_name: "silrig.Event",
+        schema_encoding: "jsonschema",
+        schema_data: &event_schema,
+        metadata: &no_metadata,
+    };
+    let events = add_channel(writer, tap, events);
+    Channels { plant, plant_info, command, timing, events, trace: None, body: None }
+}
+
+/// The run's metadata records: who wrote the file for which run and mode (with the wire layout replay checks), and
+/// the scenario as it was loaded.
+fn write_run_metadata(
+    writer: &mut McapWriter<BufWriter<File>>,
+    meta: &RecordingMeta,
+    path: &Path,
+) -> std::io::Result<()> {
+    let run = BTreeMap::from([
+        ("run_id".to_string(), meta.run_id.clone()),
+        ("scenario".to_string(), meta.scenario_name.clone()),
+        ("mode".to_string(), meta.mode.clone()),
+        ("ticks".to_string(), meta.ticks.to_string()),
+        ("silrig_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+        (meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string()),
+        ("file".to_string(), path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
+    ]);
+    writer.write_metadata(meta_keys::RUN, &run)?;
+    let scenario = BTreeMap::from([(meta_keys::TOML.to_string(), meta.scenario_toml.clone())]);
+    writer.write_metadata(meta_keys::SCENARIO, &scenario)
+}
+
 impl McapSink {
     /// Create the run's next recording file in `out_dir` (`recording.mcap`, or `recording-<n>.mcap` after a
     /// logger restart), with the run's metadata and the channels that do not depend on the controller; `tap`, if
@@ -134,14 +202,7 @@ impl McapSink {
         meta: &RecordingMeta,
         mut tap: Option<Box<dyn RecordingTap>>,
     ) -> std::io::Result<Self> {
-        let (path, file) = (1..)
-            .map(|life| out_dir.join(recording_file_name(life)))
-            .find_map(|path| match OpenOptions::new().write(true).create_new(true).open(&path) {
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => None,
-                opened => Some((path.clone(), opened)),
-            })
-            .expect("some recording file name is free");
-        let file = file.map_err(|e| std::io::Error::new(e.kind(), format!("creating {}: {e}", path.display())))?;
+        let (path, file) = create_next_file(out_dir)?;
         let named = |e: std::io::Error| named_error(&path, e);
         // Realtime: the smaller file, zstd at level 1 (Foxglove's own recorder writes zstd): the default run's
         // recording 0.75 MB against 0.86 MB with lz4, for about the same CPU. Lockstep: lz4, the cheaper per byte,
@@ -150,47 +211,8 @@ impl McapSink {
         let compression = if meta.mode == "lockstep" { ChunkCompression::Lz4 } else { ChunkCompression::Zstd(1) };
         let library = format!("silrig {}", env!("CARGO_PKG_VERSION"));
         let mut writer = McapWriter::new(BufWriter::new(file), "", &library, compression).map_err(named)?;
-        let no_metadata = BTreeMap::new();
-        let mut add = |topic: &str, name: &str, msg: String| -> u16 {
-            let channel = NewChannel {
-                topic,
-                message_encoding: MESSAGE_ENCODING,
-                schema_name: name,
-                schema_encoding: SCHEMA_ENCODING,
-                schema_data: msg.as_bytes(),
-                metadata: &no_metadata,
-            };
-            add_channel(&mut writer, &mut tap, channel)
-        };
-        let plant =
-            add(topics::PLANT, &cdr::msg_name::<PlantSample>(), cdr::sample_msg::<PlantSample>(&[RECEIVE_STAMP]));
-        let plant_info = add(topics::PLANT_INFO, &cdr::msg_name::<PlantInfo>(), cdr::sample_msg::<PlantInfo>(&[]));
-        let command =
-            add(topics::COMMAND, &cdr::msg_name::<CommandSample>(), cdr::sample_msg::<CommandSample>(&[RECEIVE_STAMP]));
-        let timing = add(topics::TIMING, TIMING_MSG, timing_msg());
-        let event_schema = serde_json::to_vec(&event_schema()).expect("JSON");
-        let events = NewChannel {
-            topic: topics::EVENTS,
-            message_encoding: "json",
-            schema_name: "silrig.Event",
-            schema_encoding: "jsonschema",
-            schema_data: &event_schema,
-            metadata: &no_metadata,
-        };
-        let events = add_channel(&mut writer, &mut tap, events);
-        let channels = Channels { plant, plant_info, command, timing, events, trace: None, body: None };
-        let run = BTreeMap::from([
-            ("run_id".to_string(), meta.run_id.clone()),
-            ("scenario".to_string(), meta.scenario_name.clone()),
-            ("mode".to_string(), meta.mode.clone()),
-            ("ticks".to_string(), meta.ticks.to_string()),
-            ("silrig_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
-            (meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string()),
-            ("file".to_string(), path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
-        ]);
-        writer.write_metadata(meta_keys::RUN, &run).map_err(named)?;
-        let scenario = BTreeMap::from([(meta_keys::TOML.to_string(), meta.scenario_toml.clone())]);
-        writer.write_metadata(meta_keys::SCENARIO, &scenario).map_err(named)?;
+        let channels = add_first_channels(&mut writer, &mut tap);
+        write_run_metadata(&mut writer, meta, &path).map_err(named)?;
         let wall_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
         Ok(Self {
             events_path: out_dir.join("events.jsonl"),
@@ -205,7 +227,7 @@ impl McapSink {
             proto: ProtoBuffer::default(),
             last_scene: None,
             events_read: 0,
-            wall_minus_monotonic_ns: wall_ns as i128 - i128::from(crate::clock::monotonic_ns()),
+            wall_minus_monotonic_ns: wall_ns as i128 - i128::from(silrig_wire::clock::monotonic_ns()),
             finished: false,
             tap,
         })

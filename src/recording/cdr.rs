@@ -2,15 +2,15 @@
 //! `00 01 00 00` for little-endian, then every field in order, each aligned to its own size counted from the end of
 //! that header) with their ROS 2 message definitions (`ros2msg`), which Foxglove, PlotJuggler and `ros2 bag` decode
 //! without a plug-in. Definitions and codecs are built from each type's field table
-//! ([`crate::wire::WireField`]), so a field added to the wire appears in the recording without an edit here.
+//! ([`silrig_wire::wire::WireField`]), so a field added to the wire appears in the recording without an edit here.
 //!
 //! Every field is written as received: numbers in their own binary form (so every f64, NaN and -0.0 included,
 //! reads back bit for bit), `SampleHeader` as a nested message, fixed arrays as ROS fixed arrays, byte arrays (names
 //! and units) as strings. `_pad` fields are left out. [`CdrCodec::decode`] is the inverse, which replay uses to send
 //! the recorded samples again bit for bit.
 
-use super::json::{Element, bytes_of, fields_shown, shape};
-use crate::wire::{SampleHeader, WireField, WireType};
+use crate::json::{Element, bytes_of, fields_shown, shape};
+use silrig_wire::wire::{SampleHeader, WireField, WireType};
 
 /// MCAP schema encoding of the definitions.
 pub const SCHEMA_ENCODING: &str = "ros2msg";
@@ -370,7 +370,7 @@ pub fn float_row_msg(header: &str, names: &[String], columns: &[String]) -> Stri
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wire::{CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
+    use silrig_wire::wire::{CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
 
     fn plant() -> PlantSample {
         let mut s = PlantSample::zeroed();

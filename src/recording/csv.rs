@@ -2,7 +2,7 @@
 //! flags and gaps), appended in whole rows, so a kill loses at most the last unflushed batch and a restarted logger
 //! continues the same files.
 
-use super::{LoggedRow, RowSink, TIMING_COLUMNS, timing_values};
+use crate::{LoggedRow, RowSink, TIMING_COLUMNS, timing_values};
 use silrig_flight::trace::Trace;
 use std::fs::{File, OpenOptions};
 use std::io::Write;

@@ -5,11 +5,11 @@
 //! recording, a file that is not MCAP, one cut short (its logger was killed), one of another wire layout, or a
 //! message that does not fit its type is an error naming the file.
 
-use super::cdr::{self, CdrCodec, CdrReader};
-use super::json::sample_from_json;
-use super::{TRACE_COLUMNS_KEY, meta_keys, recording_files, topics};
-use crate::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION, WireType};
+use crate::cdr::{self, CdrCodec, CdrReader};
+use crate::json::sample_from_json;
+use crate::{TRACE_COLUMNS_KEY, meta_keys, recording_files, topics};
 use silrig_flight::signals::PlantSignals;
+use silrig_wire::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION, WireType};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -198,6 +198,17 @@ fn checked_records(mut bytes: &[u8]) -> impl Iterator<Item = mcap::McapResult<mc
     })
 }
 
+/// A file that stops making sense after `messages` messages: damaged if it still ends with MCAP's magic (a record
+/// broken inside it), truncated if not (a logger killed mid-write).
+fn cut_short(path: &Path, bytes: &[u8], messages: u64, why: String) -> RecordingError {
+    let path = path.to_path_buf();
+    if bytes.ends_with(mcap::MAGIC) {
+        RecordingError::Damaged { path, messages, why }
+    } else {
+        RecordingError::Truncated { path, messages, why }
+    }
+}
+
 fn decode<T: WireType + Copy>(encoding: &str, codec: &CdrCodec, data: &[u8], stamped: bool) -> Result<T, String> {
     match encoding {
         cdr::MESSAGE_ENCODING => {
@@ -246,27 +257,11 @@ impl RecordedRun {
         let bad_record = first_impossible_record(&bytes);
         let readable = bad_record.as_ref().map_or(&bytes[..], |(offset, _)| &bytes[..*offset]);
         for record in checked_records(readable) {
-            let record = match record {
-                Ok(r) => r,
-                Err(e) => {
-                    let (path, why) = (path.to_path_buf(), e.to_string());
-                    return Err(if bytes.ends_with(mcap::MAGIC) {
-                        RecordingError::Damaged { path, messages, why }
-                    } else {
-                        RecordingError::Truncated { path, messages, why }
-                    });
-                }
-            };
+            let record = record.map_err(|e| cut_short(path, &bytes, messages, e.to_string()))?;
             match record {
                 mcap::records::Record::Metadata(m) if m.name == meta_keys::RUN => {
-                    let found = m.metadata.get(meta_keys::LAYOUT_VERSION).cloned().unwrap_or_else(|| "none".into());
-                    if found != WIRE_LAYOUT_VERSION.to_string() {
-                        return Err(RecordingError::OtherLayout { path: path.to_path_buf(), found });
-                    }
+                    self.add_run_metadata(path, m.metadata)?;
                     layout_checked = true;
-                    if self.run.is_empty() {
-                        self.run = m.metadata;
-                    }
                 }
                 mcap::records::Record::Metadata(m)
                     if m.name == meta_keys::SCENARIO && self.scenario_toml.is_empty() =>
@@ -282,50 +277,67 @@ impl RecordedRun {
                         let found = "no silrig metadata before the first message".to_string();
                         return Err(RecordingError::OtherLayout { path: path.to_path_buf(), found });
                     }
-                    let Some((topic, encoding, channel_meta)) = topics_by_id.get(&header.channel_id) else {
+                    let Some(channel) = topics_by_id.get(&header.channel_id) else {
                         return Err(unreadable(format!("a message on unknown channel {}", header.channel_id)));
                     };
-                    let index = {
-                        let n = self.counts.entry(topic.clone()).or_insert(0);
-                        *n += 1;
-                        *n
-                    };
-                    let bad = |why: String| RecordingError::BadMessage {
-                        path: path.to_path_buf(),
-                        topic: topic.clone(),
-                        index,
-                        why,
-                    };
-                    match topic.as_str() {
-                        topics::PLANT => self.plant.push(decode(encoding, &codecs.plant, &data, true).map_err(bad)?),
-                        topics::COMMAND => {
-                            let command: CommandSample = decode(encoding, &codecs.command, &data, true).map_err(bad)?;
-                            self.commands.insert(command.answers_tick, command);
-                        }
-                        topics::PLANT_INFO if self.plant_info.is_none() => {
-                            self.plant_info = Some(decode(encoding, &codecs.plant_info, &data, false).map_err(bad)?);
-                        }
-                        topics::TRACE if self.trace_columns.is_empty() => {
-                            let columns = channel_meta.get(TRACE_COLUMNS_KEY).map(String::as_str).unwrap_or("");
-                            self.trace_columns = columns.split(',').map(str::to_string).collect();
-                        }
-                        _ => {}
-                    }
+                    self.add_message(path, channel, &codecs, &data)?;
                 }
                 _ => {}
             }
         }
         if let Some((_, why)) = bad_record {
-            let path = path.to_path_buf();
-            return Err(if bytes.ends_with(mcap::MAGIC) {
-                RecordingError::Damaged { path, messages, why }
-            } else {
-                RecordingError::Truncated { path, messages, why }
-            });
+            return Err(cut_short(path, &bytes, messages, why));
         }
         if !bytes.ends_with(mcap::MAGIC) {
             let why = "no MCAP footer at its end".to_string();
             return Err(RecordingError::Truncated { path: path.to_path_buf(), messages, why });
+        }
+        Ok(())
+    }
+
+    /// A file's run metadata: its wire layout must be this build's (replay sends the samples as they were); the
+    /// first file's is the run's.
+    fn add_run_metadata(&mut self, path: &Path, metadata: BTreeMap<String, String>) -> Result<(), RecordingError> {
+        let found = metadata.get(meta_keys::LAYOUT_VERSION).cloned().unwrap_or_else(|| "none".into());
+        if found != WIRE_LAYOUT_VERSION.to_string() {
+            return Err(RecordingError::OtherLayout { path: path.to_path_buf(), found });
+        }
+        if self.run.is_empty() {
+            self.run = metadata;
+        }
+        Ok(())
+    }
+
+    /// One message on `channel` (its topic, encoding and metadata): counted on its topic, and the wire samples and
+    /// the trace's columns kept; an error names the topic and the message's number on it.
+    fn add_message(
+        &mut self,
+        path: &Path,
+        (topic, encoding, channel_meta): &(String, String, BTreeMap<String, String>),
+        codecs: &Codecs,
+        data: &[u8],
+    ) -> Result<(), RecordingError> {
+        let index = {
+            let n = self.counts.entry(topic.clone()).or_insert(0);
+            *n += 1;
+            *n
+        };
+        let bad =
+            |why: String| RecordingError::BadMessage { path: path.to_path_buf(), topic: topic.clone(), index, why };
+        match topic.as_str() {
+            topics::PLANT => self.plant.push(decode(encoding, &codecs.plant, data, true).map_err(bad)?),
+            topics::COMMAND => {
+                let command: CommandSample = decode(encoding, &codecs.command, data, true).map_err(bad)?;
+                self.commands.insert(command.answers_tick, command);
+            }
+            topics::PLANT_INFO if self.plant_info.is_none() => {
+                self.plant_info = Some(decode(encoding, &codecs.plant_info, data, false).map_err(bad)?);
+            }
+            topics::TRACE if self.trace_columns.is_empty() => {
+                let columns = channel_meta.get(TRACE_COLUMNS_KEY).map(String::as_str).unwrap_or("");
+                self.trace_columns = columns.split(',').map(str::to_string).collect();
+            }
+            _ => {}
         }
         Ok(())
     }
@@ -351,8 +363,8 @@ impl RecordedRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::json::sample_json;
-    use crate::wire::SampleHeader;
+    use crate::json::sample_json;
+    use silrig_wire::wire::SampleHeader;
 
     /// A recording as the first loggers wrote it (JSON messages with JSON Schemas), with `plant` and `command`.
     fn write_json_recording(path: &Path, info: &PlantInfo, plant: &PlantSample, command: &CommandSample) {
@@ -393,7 +405,7 @@ mod tests {
         let mut command = CommandSample::zeroed();
         command.answers_tick = 3;
         command.diagnostics[2] = std::f64::consts::PI;
-        write_json_recording(&dir.join(super::super::RECORDING_FILE), &info, &plant, &command);
+        write_json_recording(&dir.join(crate::RECORDING_FILE), &info, &plant, &command);
         let run = RecordedRun::read(&dir).unwrap();
         assert_eq!(run.plant_info, Some(info));
         assert_eq!(run.plant.len(), 1);
@@ -409,7 +421,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("silrig-reader-damaged-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let info = PlantInfo::new(&silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2])).unwrap();
-        let path = dir.join(super::super::RECORDING_FILE);
+        let path = dir.join(crate::RECORDING_FILE);
         write_json_recording(&path, &info, &PlantSample::zeroed(), &CommandSample::zeroed());
         let whole = std::fs::read(&path).unwrap();
         // The first chunk among the top-level records.
