@@ -92,7 +92,18 @@ fn the_worst_cases_fly_alone_with_the_numbers_the_sweep_gave() {
 #[test]
 fn infeasible_cases_are_counted_with_their_reason_never_dropped() {
     let dir = temp_dir("infeasible");
-    let (csv, json) = sweep(&dir.join("sweep"), &["--runs", "30"]);
+    // The shipped sweep draws no descent (none infeasible); descents at idle up high have no trim.
+    let shipped = std::fs::read_to_string(CONFIG).unwrap();
+    let theta = shipped.lines().find(|l| l.starts_with("\"initial.theta_deg\"")).unwrap();
+    let descents = "\"initial.theta_deg\" = { dist = \"normal\", mean = 5.0, std = 2.0, min = -5.0, max = 15.0 }";
+    let config = dir.join("descents.toml");
+    std::fs::write(&config, shipped.replace(theta, descents)).unwrap();
+    let out = dir.join("sweep");
+    let (code, stdout, stderr) =
+        silrig(&["sweep", config.to_str().unwrap(), "--runs", "30", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{stdout}{stderr}");
+    let csv = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    let json = std::fs::read_to_string(out.join("sweep.json")).unwrap();
     let summary: Value = serde_json::from_str(&json).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
     assert_eq!(rows.len(), 30);
@@ -305,5 +316,44 @@ fn sigint_stops_a_sweep_keeping_every_case_it_flew_and_sweep_json_says_so() {
     let (whole, _) = sweep(&dir.join("whole"), &["--runs", "300"]);
     assert_eq!(csv.lines().take(301).collect::<Vec<_>>(), whole.lines().collect::<Vec<_>>());
     assert!(out.join("envelope.png").exists(), "the figures of the cases flown are drawn");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_shipped_sweep_draws_no_infeasible_case_and_its_failure_counts_agree_with_its_tables() {
+    let dir = temp_dir("agree");
+    let out = dir.join("sweep");
+    let (code, text, stderr) = silrig(&["sweep", CONFIG, "--runs", "1000", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{text}{stderr}");
+    let summary: Value = serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(summary["infeasible"], 0, "{text}");
+    let csv = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|r| r.split(',').collect()).collect();
+    let cell = |row: &Vec<&str>, name: &str| -> String {
+        row[row.len() - header.len() + header.iter().position(|h| *h == name).unwrap()].to_string()
+    };
+    for (k, entry) in summary["failures_by_criterion"].as_array().unwrap().iter().enumerate() {
+        let name = entry[0].as_str().unwrap();
+        let failing: Vec<&Vec<&str>> = rows.iter().filter(|r| cell(r, &format!("{name}_passed")) == "0").collect();
+        let departed = failing.iter().filter(|r| !cell(r, "departed_at_s").is_empty()).count();
+        assert_eq!(entry[1].as_u64().unwrap() as usize, failing.len(), "{name}");
+        assert_eq!(summary["departed_failures_by_criterion"][k].as_u64().unwrap() as usize, departed, "{name}");
+        // A criterion some case within the data failed lists that failure first among its worst cases.
+        let worst = &summary["worst"][k][1];
+        assert_eq!(worst[0]["passed"].as_bool().unwrap(), failing.len() == departed, "{name}: {worst}");
+        if departed > 0 {
+            assert!(
+                text.contains(&format!("  {name}: failed in {} of 1000, {departed} of them departed", failing.len()))
+            );
+        }
+    }
+    // Every row of a table starts its verdict in the same column.
+    let columns: Vec<usize> = text
+        .lines()
+        .filter(|l| l.starts_with("    case "))
+        .filter_map(|l| l.find(" FAIL ").or(l.find(" pass ")))
+        .collect();
+    assert!(columns.len() >= 10 && columns.iter().all(|c| *c == columns[0]), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

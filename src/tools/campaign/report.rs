@@ -88,6 +88,10 @@ pub struct SweepSummary {
     pub pass_rate_95: (f64, f64),
     /// Per criterion: how many flown cases failed it.
     pub failures_by_criterion: Vec<(String, u64)>,
+    /// Per criterion: how many of those failures were departed cases (listed in `departed_cases`, not among the
+    /// worst), so the worst cases and the failure counts agree.
+    #[serde(default)]
+    pub departed_failures_by_criterion: Vec<u64>,
     /// Per criterion: the worst `WORST_LISTED` flown cases that stayed within the aerodynamic data (largest figure
     /// first; never settled counts as worst). Departed cases are listed apart: past their departure no figure
     /// means anything.
@@ -150,6 +154,7 @@ impl Tally {
                 pass_rate: 0.0,
                 pass_rate_95: (0.0, 1.0),
                 failures_by_criterion: criterion_names.iter().map(|n| (n.clone(), 0)).collect(),
+                departed_failures_by_criterion: vec![0; criterion_names.len()],
                 worst: Vec::new(),
                 departed_cases: Vec::new(),
                 infeasible_cases: Vec::new(),
@@ -184,6 +189,9 @@ impl Tally {
         }
         if let Some(at_s) = c.figures.as_ref().and_then(|f| f.departed_at_s) {
             s.departed += 1;
+            for (failures, j) in s.departed_failures_by_criterion.iter_mut().zip(&c.judgements) {
+                *failures += u64::from(!j.passed);
+            }
             if s.departed_cases.len() < CASES_LISTED_MAX {
                 s.departed_cases.push(DepartedCase {
                     index: c.index,
@@ -303,17 +311,20 @@ impl SweepSummary {
             self.departed,
             self.infeasible
         );
-        for ((name, failures), (_, worst)) in self.failures_by_criterion.iter().zip(&self.worst) {
-            let _ = writeln!(out, "  {name}: failed in {failures} of {flown}");
-            for w in worst.iter().take(3) {
-                let _ = writeln!(
-                    out,
-                    "    case {:<6} {:<34} {}   {}",
-                    w.index,
-                    w.measured,
-                    if w.passed { "pass" } else { "FAIL" },
-                    w.reproduce
-                );
+        let listed = |worst: &[WorstCase]| worst.iter().take(3).cloned().collect::<Vec<_>>();
+        // One column for every table, as wide as its widest figure.
+        let width = self.worst.iter().flat_map(|(_, w)| listed(w)).map(|w| w.measured.chars().count()).max();
+        let width = width.unwrap_or(0).max(34);
+        for (k, ((name, failures), (_, worst))) in self.failures_by_criterion.iter().zip(&self.worst).enumerate() {
+            let departed = self.departed_failures_by_criterion.get(k).copied().unwrap_or(0);
+            let _ = match departed {
+                0 => writeln!(out, "  {name}: failed in {failures} of {flown}"),
+                d if d == *failures => writeln!(out, "  {name}: failed in {failures} of {flown}, all departed (below)"),
+                d => writeln!(out, "  {name}: failed in {failures} of {flown}, {d} of them departed (below)"),
+            };
+            for w in listed(worst) {
+                let verdict = if w.passed { "pass" } else { "FAIL" };
+                let _ = writeln!(out, "    case {:<6} {:<width$} {verdict}   {}", w.index, w.measured, w.reproduce);
             }
         }
         if !self.departed_cases.is_empty() {
