@@ -12,8 +12,8 @@
 //! Lockstep: no sleeping; the plant waits for every command, and never runs further ahead of the logger than its queue
 //! holds.
 //!
-//! The loop flies any [`PlantModel`] (the vehicle behind named signals; the F-16 is
-//! [`super::f16_plant::F16Plant`]) and keeps everything around it: the clock, the commands, the watchdog and the
+//! The loop flies any [`PlantModel`] (the vehicle behind named signals; which one is the adapters' choice, in
+//! `silrig-adapters`) and keeps everything around it: the clock, the commands, the watchdog and the
 //! failsafe (the model's announced hold values), the checkpoints and the report.
 //!
 //! The process runs in four phases: [`PlantLoop::setup`] (scenario, model, recorder, watchdog settings),
@@ -141,7 +141,7 @@ impl PlantPorts {
 struct Watchdog {
     stale_after_ns: u64,
     hold_ns: u64,
-    /// The model's announced hold values (the F-16's: the trim surfaces of the scenario's flight condition).
+    /// The model's announced hold values (a trimmed aircraft's: its trim surfaces).
     failsafe: Vec<f64>,
     last_fresh_ns: u64,
     last_fresh_tick: u64,
@@ -658,7 +658,7 @@ impl PlantLoop {
     }
 
     /// A held command: the controller is stale after a few periods without a fresh command, and after the hold
-    /// the plant flies the failsafe (its announced hold values: the F-16's trim surfaces) until commands return.
+    /// the plant flies the failsafe (its announced hold values) until commands return.
     fn watch_controller(&mut self) {
         let tick = self.sim_tick;
         let w = &mut self.watchdog;
@@ -698,9 +698,14 @@ impl PlantLoop {
     }
 }
 
-/// Fly the built-in F-16 as the plant process to the end of the scenario (or SIGTERM) and write its report.
-pub fn run_f16_plant(args: &ProcessArgs, scenario: Scenario) -> anyhow::Result<ProcessReport> {
-    let model = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
+/// Fly `model` as the plant process to the end of the scenario (or SIGTERM) and write its report: the process body
+/// for a model stepped in this process (a model of the user's own in another process goes through
+/// [`super::plant_session`] instead). Which model flies is the caller's choice (`silrig-adapters`).
+pub fn run_plant_model(
+    args: &ProcessArgs,
+    scenario: Scenario,
+    model: Box<dyn PlantModel>,
+) -> anyhow::Result<ProcessReport> {
     let mut plant = PlantLoop::setup(args, scenario, model)?;
     let mut ports = PlantPorts::connect(args, &plant.info)?;
     let ended = if ports.wait_for_peers(args.options.startup_timeout_s)? {

@@ -1,6 +1,6 @@
 //! What the plant process flies: [`PlantModel`], a vehicle behind named signals, stepped by the plant loop
-//! ([`super::plant::PlantLoop`]); the F-16 is [`super::f16_plant::F16Plant`], a model of the user's own is driven
-//! through [`super::plant_session`].
+//! ([`super::plant::PlantLoop`]); the models themselves (the built-in F-16, an FMU) are adapters, in
+//! `silrig-adapters`; a model of the user's own in another process is driven through [`super::plant_session`].
 
 use silrig_flight::signals::PlantSignals;
 

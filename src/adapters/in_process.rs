@@ -1,5 +1,5 @@
 //! The closed loop of any plant and any controller the rig flies in one process, with no clock and no transport:
-//! the built-in F-16 or an FMU ([`super::fmu_plant::FmuModel`]) against our controller or a controller FMU, tick
+//! the built-in F-16 or an FMU ([`crate::fmu::plant::FmuModel`]) against our controller or a controller FMU, tick
 //! by tick in lockstep. `silrig sim` and `silrig sweep` fly scenarios that name an FMU here, so a user's models get
 //! Monte Carlo at in-process speed.
 //!
@@ -13,15 +13,16 @@
 //! [`Models`] opens a scenario's FMUs once (unpacking is the slow part) and flies any number of flights of it, each
 //! with fresh instances, from any number of threads unless an FMU says its binary allows one instance per process.
 
-use super::controller::{AttitudeLaw, Controller};
-use super::f16_plant::F16Plant;
-use super::fmu_controller::FmuController;
-use super::fmu_plant::{FmuModel, FmuPlant};
-use super::plant_model::PlantModel;
+use crate::builtin::attitude_law::AttitudeLaw;
+use crate::builtin::f16_plant::F16Plant;
+use crate::fmu::controller::FmuController;
+use crate::fmu::plant::{FmuModel, FmuPlant};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
 use silrig_fmi::Fmu;
+use silrig_rig::controller::Controller;
+use silrig_rig::plant_model::PlantModel;
 use silrig_wire::wire::{self, CommandSample, PlantSample, WireSample};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -241,7 +242,7 @@ impl Models {
     /// (what the summary takes: `silrig_flight::summary::summarize`).
     pub fn plant_signals(&self, scenario: &Scenario) -> Result<Option<PlantSignals>, String> {
         let Some(fmu) = &self.plant_fmu else { return Ok(None) };
-        super::fmu_plant::fmu_signals(fmu.file(), &fmu.description, scenario).map(|f| Some(f.signals))
+        crate::fmu::plant::fmu_signals(fmu.file(), &fmu.description, scenario).map(|f| Some(f.signals))
     }
 
     /// The FMU whose binary allows one instance per process (`canBeInstantiatedOnlyOncePerProcess`), if any:
