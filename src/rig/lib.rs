@@ -3,12 +3,14 @@
 //! the sessions a plant or controller of the user's own links (through `libsilrig_client.so` or directly).
 //!
 //! - [`plant`]: the plant process's loop around any [`plant_model::PlantModel`] (clock, commands, watchdog,
-//!   failsafe, checkpoints, report); [`plant_model`]: the trait a plant model implements; [`plant_session`]: the
-//!   plant's side of the contract for a model stepped outside the loop (announce, then outputs in, inputs out,
-//!   tick by tick).
+//!   failsafe, checkpoints, report; its streams in `plant/ports.rs`, its commands and watchdog in
+//!   `plant/commands.rs`); [`plant_model`]: the trait a plant model implements; [`plant_session`]: the plant's
+//!   side of the contract for a model stepped outside the loop (announce, then outputs in, inputs out, tick by
+//!   tick).
 //! - [`controller`]: the [`controller::Controller`] trait and [`controller::serve`], which flies one in a
 //!   [`session::ControllerSession`]: the controller side of the contract as one reusable session (open a run, wait
-//!   for a sample, send a command, stamps, checks, in-loop faults; the C ABI's status codes too).
+//!   for a sample, send a command, stamps, checks, in-loop faults; the plant's side as it sees it in
+//!   `session/samples.rs`, its errors and the C ABI's status codes in `session/errors.rs`).
 //! - [`logger`]: the logger process; [`live_foxglove`]: its Foxglove WebSocket server (`silrig run --live
 //!   foxglove`, feature `live`).
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
