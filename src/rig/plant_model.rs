@@ -4,8 +4,9 @@
 
 use silrig_flight::signals::PlantSignals;
 
-/// What the plant process flies: a vehicle model behind named signals. The loop around it ([`super::plant::PlantLoop`]) keeps the
-/// clock, the commands, the watchdog and failsafe, the checkpoints and the report.
+/// What the plant process flies: a vehicle model behind named signals. The loop around it
+/// ([`super::plant::PlantLoop`]) keeps the clock, the commands, the watchdog and failsafe, the checkpoints and the
+/// report.
 pub trait PlantModel {
     /// Its announcement: name, outputs, inputs with their ranges and the values its failsafe holds.
     fn signals(&self) -> &PlantSignals;
