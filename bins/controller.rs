@@ -1,5 +1,5 @@
-//! `silrig-controller`: the controller process of the rig. A thin shell over [`silrig::rig::controller_process::run_controller`]
-//! (ours, or the scenario's controller FMU).
+//! `silrig-controller`: the controller process of the rig. A thin shell over
+//! [`silrig::adapters::process::run_controller`] (ours, or the scenario's controller FMU).
 
 use clap::Parser;
 
@@ -14,5 +14,5 @@ struct Cli {
 fn main() -> std::process::ExitCode {
     silrig::rig::owner_only_files();
     let cli = Cli::parse();
-    silrig::rig::finish_process("controller", &cli.args, silrig::rig::controller_process::run_controller(&cli.args))
+    silrig::rig::finish_process("controller", &cli.args, silrig::adapters::process::run_controller(&cli.args))
 }

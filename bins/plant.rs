@@ -1,4 +1,4 @@
-//! `silrig-plant`: the plant process of the rig. A thin shell over [`silrig::rig::plant_process::run_plant`].
+//! `silrig-plant`: the plant process of the rig. A thin shell over [`silrig::adapters::process::run_plant`].
 
 use clap::Parser;
 
@@ -13,5 +13,5 @@ struct Cli {
 fn main() -> std::process::ExitCode {
     silrig::rig::owner_only_files();
     let cli = Cli::parse();
-    silrig::rig::finish_process("plant", &cli.args, silrig::rig::plant_process::run_plant(&cli.args))
+    silrig::rig::finish_process("plant", &cli.args, silrig::adapters::process::run_plant(&cli.args))
 }

@@ -60,7 +60,7 @@ enum Command {
         seed: Option<u64>,
         /// The plant or controller as an FMU, in place of the scenario's.
         #[command(flatten)]
-        fmus: silrig::rig::in_process::FmuFlags,
+        fmus: silrig::adapters::in_process::FmuFlags,
         /// With --sample: fly the case through the lockstep rig with your controller, as `silrig sweep
         /// --controller-cmd CMD` did (the rig's run, with its report, in the output folder).
         #[arg(long, value_name = "CMD", requires = "sample")]
@@ -235,7 +235,7 @@ fn plant_derivative() -> anyhow::Result<ExitCode> {
 fn sim(
     config: Option<&Path>,
     out: Option<PathBuf>,
-    fmus: &silrig::rig::in_process::FmuFlags,
+    fmus: &silrig::adapters::in_process::FmuFlags,
 ) -> anyhow::Result<ExitCode> {
     let mut scenario = load_scenario(config, None)?;
     fmus.apply(&mut scenario)?;
@@ -258,7 +258,7 @@ fn sim_sample(
     out: Option<PathBuf>,
     index: u64,
     seed: Option<u64>,
-    fmus: &silrig::rig::in_process::FmuFlags,
+    fmus: &silrig::adapters::in_process::FmuFlags,
     commands: &silrig::campaign::RigCommands,
 ) -> anyhow::Result<ExitCode> {
     let path = config.ok_or_else(|| anyhow::anyhow!("--sample needs the sweep's scenario file"))?;

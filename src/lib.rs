@@ -9,7 +9,9 @@
 //! - `silrig-wire` ([`wire`], [`topology`], [`ipc`], [`clock`], [`timing`]): the contract and the transport.
 //! - `silrig-recording` ([`recording`]): what the logger writes (CSV, MCAP) and replay reads.
 //! - `silrig-plot` ([`plot`]): every figure.
-//! - `silrig-rig` ([`rig`]): the plant, controller and logger processes and the controller session.
+//! - `silrig-rig` ([`rig`]): the plant, controller and logger processes and the plant and controller sessions.
+//! - `silrig-adapters` ([`adapters`]): what turns the F-16, our law, an FMU or a device into a plant or a
+//!   controller, the one-process flight, and which adapter a process flies.
 //! - `silrig-launch` ([`launch`]): `silrig run`, supervision, faults, the run's report.
 //! - `silrig-tools` ([`check`], [`campaign`], [`replay`], [`bench`], [`contract`], [`outputs`],
 //!   [`derivative_csv`], [`export_fmu`], [`html`], [`soak`]): the tools on top.
@@ -20,6 +22,7 @@
 #[cfg(feature = "bridge")]
 pub use silrig_bridge as bridge;
 
+pub use silrig_adapters as adapters;
 pub use silrig_flight::{
     criteria, dispersion, f_true, f16_signals, fault, files, judge, role, scenario, signals, sim, summary, trace,
 };

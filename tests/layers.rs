@@ -16,12 +16,15 @@ const LAYERS: [(&str, &[&str]); 10] = [
     // What the logger writes (CSV, MCAP) and replay reads: the wire's samples in files.
     ("recording", &["flight", "wire"]),
     ("plot", &["flight"]),
-    ("rig", &["model", "flight", "wire", "recording", "fmi"]),
-    // What turns a foreign thing (a device over UDP, and next an FMU or a process) into a plant or a controller.
+    // The process bodies and sessions: they fly whatever plant model or controller they are handed.
+    ("rig", &["model", "flight", "wire", "recording"]),
+    // What turns a foreign or built-in thing (the F-16, our law, an FMU, a device over UDP) into a plant or a
+    // controller, and which of them a process flies.
     ("adapters", &["model", "flight", "wire", "rig", "fmi"]),
-    ("launch", &["flight", "wire", "recording", "plot", "rig"]),
+    // The launcher checks a run's FMUs through their adapters before it starts anything.
+    ("launch", &["flight", "wire", "recording", "plot", "rig", "adapters"]),
     // `silrig export-fmu` writes the description the FMU's binary checks its GUID with.
-    ("tools", &["model", "flight", "wire", "recording", "plot", "rig", "launch", "fmu-f16-description"]),
+    ("tools", &["model", "flight", "wire", "recording", "plot", "rig", "adapters", "launch", "fmu-f16-description"]),
 ];
 
 /// The crates beside the layers, each linking only what its users need: the C ABI a user's controller loads, the

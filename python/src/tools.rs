@@ -7,8 +7,8 @@
 use crate::silrig_error;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList, PyString};
+use silrig_adapters::in_process::{FmuFlags, Models};
 use silrig_flight::scenario::Scenario;
-use silrig_rig::in_process::{FmuFlags, Models};
 use silrig_rig::session::Status;
 use silrig_tools::campaign::{self, Campaign, report};
 use std::path::PathBuf;

@@ -241,7 +241,7 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         // The processes read the scenario from the run's folder: the FMU by its absolute path.
         let fmu = std::path::absolute(&fmu).map_err(|e| anyhow::anyhow!("--plant-fmu {}: {e}", fmu.display()))?;
         // Every problem of the file, its variables and the parameters is said here, before any process starts.
-        silrig_rig::fmu_plant::FmuPlant::check(&fmu, &scenario)?;
+        silrig_adapters::fmu::plant::FmuPlant::check(&fmu, &scenario)?;
         scenario.plant.fmu = Some(fmu);
     }
     if let Some(fmu) = &opts.controller_fmu {
@@ -258,13 +258,13 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         // The file and `[controller]` are checked here; against the plant's signals too when they are known before
         // it runs (the F-16, an FMU plant), else when the plant announces them.
         let plant = if let Some(plant_fmu) = &scenario.plant.fmu {
-            Some(silrig_rig::fmu_plant::FmuPlant::check(plant_fmu, &scenario)?.signals)
+            Some(silrig_adapters::fmu::plant::FmuPlant::check(plant_fmu, &scenario)?.signals)
         } else if opts.plant_cmd.is_none() && opts.plant == PlantKind::Builtin {
             Some(silrig_flight::f16_signals::f16_signals([0.0; 4]))
         } else {
             None
         };
-        silrig_rig::fmu_controller::FmuController::check(&fmu, &scenario, plant.as_ref())?;
+        silrig_adapters::fmu::controller::FmuController::check(&fmu, &scenario, plant.as_ref())?;
         scenario.controller.fmu = Some(fmu);
     }
     if opts.mode == RigMode::Lockstep

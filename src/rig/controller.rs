@@ -1,26 +1,19 @@
-//! `silrig-controller` and the Rust face of the controller session. A [`Controller`] is the control law alone (the
-//! plant's signals it reads and commands, found by name once; one step per plant sample; its diagnostics' names;
-//! optional checkpoint and restore, as copper's `Freezable`);
-//! [`serve`] flies it in a [`ControllerSession`] (`super::session`), which owns everything around it: the streams,
-//! the announcement, the in-loop faults, the bumpless blend after a restart, checkpoint files and the report. A
-//! controller in another language gets the same session through the C ABI of `libsilrig_client.so`. Our controller
-//! is [`AttitudeLaw`], the same [`silrig_model::control::AttitudeController`] as `silrig sim`, served by
-//! [`run_controller`].
+//! The Rust face of the controller session. A [`Controller`] is the control law alone (the plant's signals it
+//! reads and commands, found by name once; one step per plant sample; its diagnostics' names; optional checkpoint
+//! and restore, as copper's `Freezable`); [`serve`] flies it in a [`ControllerSession`] (`super::session`), which
+//! owns everything around it: the streams, the announcement, the in-loop faults, the bumpless blend after a
+//! restart, checkpoint files and the report. A controller in another language gets the same session through the C
+//! ABI of `libsilrig_client.so`. Which controller `silrig-controller` serves (ours, a controller FMU) is the
+//! adapters' choice (`silrig-adapters`), not the rig's.
 //!
-//! A controller FMU (`[controller] fmu`) is one more [`Controller`], `fmu_controller::FmuController`, served the
-//! same way; `controller_process` picks which one `silrig-controller` flies.
-//!
-//! With a fault plan the session asks for the controller's checkpoint every few ticks; restarted with `--resume`,
-//! ours restores its RBF weights, so it need not re-learn them.
+//! With a fault plan the session asks for the controller's checkpoint every few ticks and hands a restarted
+//! controller (`--resume`) what it saved.
 
 use super::ProcessArgs;
 use super::report::ProcessReport;
 use super::session::{ControllerSession, Next, SessionError};
-use silrig_flight::f16_signals::F16Outputs;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
-use silrig_flight::sim::{measurement, setpoint_rad, write_attitude_diagnostics};
-use silrig_model::control::AttitudeController;
 use silrig_wire::wire::PlantSample;
 
 /// A controller the rig can fly. The session around it ([`serve`], over [`ControllerSession`]) owns everything
@@ -55,70 +48,6 @@ pub trait Controller {
     /// as it was, and the run's events say the controller started fresh and why.
     fn restore(&mut self, _saved: &str) -> Result<(), String> {
         Err("this controller keeps no state to resume".into())
-    }
-}
-
-/// The paper's adaptive SMC/RBF controller behind the [`Controller`] trait; its checkpoint is its RBF weights. It
-/// reads the F-16's states by name ([`F16Outputs`]) and commands the inputs `aileron`, `elevator` and `rudder`,
-/// leaving any other input (the throttle) where it is.
-pub struct AttitudeLaw {
-    controller: AttitudeController,
-    setpoint: [f64; 3],
-    outputs: Option<F16Outputs>,
-    surfaces: [usize; 3],
-    /// The plant's accepted range of each of `surfaces`, deg.
-    ranges: [(f64, f64); 3],
-}
-
-impl AttitudeLaw {
-    /// The scenario's controller, with zero weights.
-    pub fn new(scenario: &Scenario) -> Self {
-        let tables = silrig_model::plant::F16Model::new(scenario.plant.xcg).tables();
-        Self {
-            controller: silrig_flight::sim::attitude_controller(scenario, tables),
-            setpoint: setpoint_rad(scenario),
-            outputs: None,
-            surfaces: [0, 1, 2],
-            ranges: [(f64::NEG_INFINITY, f64::INFINITY); 3],
-        }
-    }
-}
-
-impl Controller for AttitudeLaw {
-    fn diagnostic_names(&self) -> Vec<String> {
-        silrig_flight::trace::attitude_diagnostic_names(self.controller.gains().rbf.nodes())
-    }
-
-    fn connect(&mut self, plant: &PlantSignals) -> Result<(), String> {
-        self.outputs = Some(F16Outputs::resolve(plant)?);
-        self.surfaces = [plant.input("aileron")?, plant.input("elevator")?, plant.input("rudder")?];
-        self.ranges = self.surfaces.map(|i| (plant.inputs[i].min, plant.inputs[i].max));
-        Ok(())
-    }
-
-    fn step(&mut self, sample: &PlantSample, dt_s: f64, command: &mut [f64], diagnostics: &mut [f64]) {
-        let outputs = self.outputs.as_ref().expect("connect comes before the first step");
-        let snap = outputs.snapshot(sample.header.tick, sample.t_sim_s, sample.outputs());
-        let (surfaces, diag) = self.controller.step(&measurement(&snap), &self.setpoint, dt_s);
-        write_attitude_diagnostics(diagnostics, &diag, &self.controller);
-        // Limited to the range the plant accepts, as a flight computer limits its commands: a surface stuck
-        // hard-over drives the sliding surface, and with it the demand, past any travel (the soak's elevator
-        // hard-over: -91.8 deg against a ±90 range), and a refused command would leave the plant on its failsafe
-        // trim. The actuator saturates long before either limit; a NaN stays NaN and is refused.
-        let limited = surfaces.limited(self.ranges);
-        let [a, e, r] = self.surfaces;
-        (command[a], command[e], command[r]) = (limited.aileron_deg, limited.elevator_deg, limited.rudder_deg);
-    }
-
-    fn checkpoint(&self) -> Option<String> {
-        let weights: [&Vec<f64>; 3] = std::array::from_fn(|c| &self.controller.networks()[c].weights);
-        serde_json::to_string(&weights).ok()
-    }
-
-    fn restore(&mut self, saved: &str) -> Result<(), String> {
-        let weights =
-            serde_json::from_str::<[Vec<f64>; 3]>(saved).map_err(|e| format!("not three lists of RBF weights: {e}"))?;
-        self.controller.set_weights(&weights)
     }
 }
 
@@ -169,11 +98,4 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
         Some(e) => Err(e),
         None => Ok(report),
     }
-}
-
-/// Run our controller (the paper's, from the scenario) until SIGTERM and write its report.
-pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
-    let scenario = args.scenario()?;
-    let law = AttitudeLaw::new(&scenario);
-    serve(args, scenario, Box::new(law))
 }

@@ -1,16 +1,18 @@
 //! silrig-rig: the rig's three processes over iceoryx2, the plant (time master), the controller and the logger,
-//! each a `run_*` function the thin binaries in `bins/` call, and the controller session a user's controller links
-//! (through `libsilrig_client.so` or directly).
+//! each a process body the thin binaries in `bins/` reach through `silrig-adapters` (which picks what flies), and
+//! the sessions a plant or controller of the user's own links (through `libsilrig_client.so` or directly).
 //!
-//! - [`plant`], [`controller`], [`logger`]: the process bodies; [`session`]: the controller side of the contract as
-//!   one reusable session (open a run, wait for a sample, send a command, stamps, checks, in-loop faults).
-//! - [`plant_model`]: what the plant process flies; [`f16_plant`]: the F-16 as a [`plant_model::PlantModel`];
-//!   [`plant_session`]: the plant's side of the contract for a model of the user's own (announce, then outputs
-//!   in, inputs out, tick by tick), with the same loop around it; [`fmu_plant`]: a co-simulation FMU flown
-//!   through that session; [`plant_process`]: which of the two `silrig-plant` flies; [`fmu_controller`]: a
-//!   co-simulation FMU as the controller, one more [`controller::Controller`]; [`controller_process`]: which
-//!   controller `silrig-controller` flies; [`fmu_variables`]: what the FMU plant and controller share.
-//! - [`live_foxglove`]: the logger's Foxglove WebSocket server (`silrig run --live foxglove`, feature `live`).
+//! - [`plant`]: the plant process's loop around any [`plant_model::PlantModel`] (clock, commands, watchdog,
+//!   failsafe, checkpoints, report; its streams in `plant/ports.rs`, its commands and watchdog in
+//!   `plant/commands.rs`); [`plant_model`]: the trait a plant model implements; [`plant_session`]: the plant's
+//!   side of the contract for a model stepped outside the loop (announce, then outputs in, inputs out, tick by
+//!   tick).
+//! - [`controller`]: the [`controller::Controller`] trait and [`controller::serve`], which flies one in a
+//!   [`session::ControllerSession`]: the controller side of the contract as one reusable session (open a run, wait
+//!   for a sample, send a command, stamps, checks, in-loop faults; the plant's side as it sees it in
+//!   `session/samples.rs`, its errors and the C ABI's status codes in `session/errors.rs`).
+//! - [`logger`]: the logger process; [`live_foxglove`]: its Foxglove WebSocket server (`silrig run --live
+//!   foxglove`, feature `live`).
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
@@ -22,23 +24,17 @@
 //! All processes of one run load the same scenario and use the same run id, which selects the iceoryx2
 //! namespace (see [`silrig_wire::ipc::rig_config`]), so rigs side by side never see each other.
 //!
-//! Layers: uses `silrig-model`, `silrig-flight`, `silrig-wire` and `silrig-fmi`; the launcher that starts these processes is
-//! `silrig-launch`, above.
+//! Layers: uses `silrig-model`, `silrig-flight`, `silrig-wire` and `silrig-recording` (the logger's files); the adapters (the F-16, our law, FMUs, which of
+//! them a process flies) are `silrig-adapters`, and the launcher that starts these processes is `silrig-launch`,
+//! both above.
 
 pub mod controller;
-pub mod controller_process;
 pub mod events;
-pub mod f16_plant;
-pub mod fmu_controller;
-pub mod fmu_plant;
-pub mod fmu_variables;
-pub mod in_process;
 pub mod live_foxglove;
 pub mod logger;
 pub mod loop_faults;
 pub mod plant;
 pub mod plant_model;
-pub mod plant_process;
 pub mod plant_session;
 pub mod report;
 pub mod session;

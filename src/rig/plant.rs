@@ -1,39 +1,43 @@
 //! `silrig-plant`: the time master. Each tick it publishes the plant sample, gathers the controller's command
 //! (same-tick: waits for the answer to this tick up to a budget; next-tick: takes the answer to the previous tick),
-//! holds the last command when none is in time (a miss), moves the actuators and integrates one step with the
-//! same [`silrig_flight::sim::PlantRunner`] as `silrig sim`. It flies the scenario's N + 1 samples (t = 0 to the
-//! duration; the last one only moves the actuators) and ends with an end-of-run sample ([`wire::FLAG_END_OF_RUN`]) that
-//! carries the deflections of the last tick, which the logger's last row shows. A state that leaves the model's
-//! envelope ends the flight the same way, one tick early, and the process with an error.
+//! holds the last command when none is in time (a miss), and steps the model (actuators, then one period). It flies
+//! the scenario's N + 1 samples (t = 0 to the duration; the last one only moves the actuators) and ends with an
+//! end-of-run sample ([`wire::FLAG_END_OF_RUN`]) that carries the actuator positions of the last tick, which the
+//! logger's last row shows. A state that leaves the model's envelope ends the flight the same way, one tick early,
+//! and the process with an error.
 //!
 //! Realtime: absolute-deadline ticks with `clock_nanosleep(TIMER_ABSTIME)`; a tick that starts a whole period late
 //! is an overrun: the periods that passed without a tick are counted and never caught up in a burst. No tick number
 //! is skipped: simulated time pauses while the plant cannot run (stopped, delayed) and then falls behind wall time.
-//! Lockstep: no sleeping; the plant waits for every command, and never runs further ahead of the logger than its queue
-//! holds.
+//! Lockstep: no sleeping; the plant waits for every command, and never runs further ahead of the logger than its
+//! queue holds.
 //!
-//! The loop flies any [`PlantModel`] (the vehicle behind named signals; the F-16 is
-//! [`super::f16_plant::F16Plant`]) and keeps everything around it: the clock, the commands, the watchdog and the
-//! failsafe (the model's announced hold values), the checkpoints and the report.
+//! The loop flies any [`PlantModel`] (the vehicle behind named signals; which one is the adapters' choice, in
+//! `silrig-adapters`) and keeps everything around it: the clock, the commands, the watchdog and the failsafe (the
+//! model's announced hold values), the checkpoints and the report.
 //!
 //! The process runs in four phases: [`PlantLoop::setup`] (scenario, model, recorder, watchdog settings),
-//! [`PlantPorts::connect`] (streams, then waiting for the peers), the tick loop ([`PlantLoop::fly`], one tick at a time
-//! in named steps), and [`PlantLoop::finish`] (the report).
+//! [`PlantPorts::connect`] (streams, then waiting for the peers; `plant/ports.rs`), the tick loop
+//! ([`PlantLoop::fly`], one tick at a time in named steps; gathering, choosing and watching the commands is
+//! `plant/commands.rs`), and [`PlantLoop::finish`] (the report).
+
+mod commands;
+mod ports;
+
+pub use ports::PlantPorts;
 
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::plant_model::{ActuatorFlags, PlantModel};
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::tick_beacon::TickBeacon;
-use super::{ProcessArgs, RigMode, signals};
-use anyhow::Context;
+use super::{ProcessArgs, ProcessOptions, RigMode, signals};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_wire::clock::{self, TickSchedule, monotonic_ns};
-use silrig_wire::ipc::{self, Received, StreamPublisher, StreamService, StreamSubscriber};
-use silrig_wire::topology::Stream;
-use silrig_wire::wire::{self, CommandSample, LogAckSample, PlantInfo, PlantSample};
+use silrig_wire::ipc::{self, RunId};
+use silrig_wire::wire::{self, CommandSample, PlantInfo, PlantSample};
 use std::collections::VecDeque;
 use std::time::Duration;
 
@@ -74,79 +78,65 @@ fn step_flags(actuators: ActuatorFlags, held: bool) -> u32 {
     flags
 }
 
-/// The plant's side of the run's streams.
-pub struct PlantPorts {
-    plant_stream: StreamService<PlantSample>,
-    command_stream: StreamService<CommandSample>,
-    publisher: StreamPublisher<PlantSample>,
-    /// Held for the run, so a second plant is refused before it could announce other signals.
-    announcer: StreamPublisher<PlantInfo>,
-    commands: StreamSubscriber<CommandSample>,
-    acks: StreamSubscriber<LogAckSample>,
-    // Dropped last: the services and ports above belong to it.
-    _node: iceoryx2::prelude::Node<iceoryx2::prelude::ipc::Service>,
-}
-
-impl PlantPorts {
-    /// Open the plant's streams: announce `info`, publish plant samples, read commands and the logger's
-    /// acknowledgements. The announcement goes out now and again with the first sample (a reader that subscribed
-    /// in between gets it then), and any reader that joins later gets it from the stream's history
-    /// ([`StreamPublisher::deliver_history`], every tick).
-    pub fn connect(args: &ProcessArgs, info: &PlantInfo) -> anyhow::Result<Self> {
-        let node = ipc::create_node(&args.run_id, Role::Plant.label())?;
-        let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
-        let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
-        let ack_stream = ipc::open_stream::<LogAckSample>(&node, Stream::LogAck)?;
-        let info_stream = ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?;
-        let mut announcer = info_stream.publisher().context("the plant-info stream")?;
-        announcer.send(0, info)?;
-        let publisher = plant_stream.publisher().context("the plant stream")?;
-        let commands = command_stream.subscriber(Stream::Command.queue_depth(Role::Plant))?;
-        let acks = ack_stream.subscriber(Stream::LogAck.queue_depth(Role::Plant))?;
-        Ok(Self { plant_stream, command_stream, publisher, announcer, commands, acks, _node: node })
-    }
-
-    /// Tell readers that did not start with the run (`--controller external`) that it is over.
-    pub fn announce_finished(&self) -> anyhow::Result<()> {
-        Ok(self.publisher.announce_finished()?)
-    }
-
-    /// Wait until the controller and the logger are connected, or time out; SIGTERM ends the wait early (false).
-    pub fn wait_for_peers(&self, timeout_s: f64) -> anyhow::Result<bool> {
-        // Every port the peers read with, the logger's command subscriber too (it subscribes to commands after
-        // plant samples): otherwise the first commands of a fast lockstep run can go out before it listens.
-        let ready = || {
-            self.plant_stream.number_of_subscribers() >= 2
-                && self.command_stream.number_of_publishers() >= 1
-                && self.command_stream.number_of_subscribers() >= 2
-        };
-        let deadline = monotonic_ns() + (timeout_s * 1e9) as u64;
-        while !ready() {
-            if signals::termination_requested() {
-                return Ok(false);
-            }
-            anyhow::ensure!(
-                monotonic_ns() < deadline,
-                "no controller and logger connected within {timeout_s} s (start silrig-controller and silrig-logger \
-                 with the same --run-id)"
-            );
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        Ok(true)
-    }
-}
-
 /// The controller watchdog: stale after a few periods without a fresh command, failsafe after the hold.
 #[derive(Debug)]
 struct Watchdog {
     stale_after_ns: u64,
     hold_ns: u64,
-    /// The model's announced hold values (the F-16's: the trim surfaces of the scenario's flight condition).
+    /// The model's announced hold values (a trimmed aircraft's: its trim surfaces).
     failsafe: Vec<f64>,
     last_fresh_ns: u64,
     last_fresh_tick: u64,
     stale: bool,
     in_failsafe: bool,
+}
+
+impl Watchdog {
+    /// Stale after `--stale-after-periods` periods of `period_ns` without a fresh command, failsafe (holding
+    /// `failsafe`) after `--controller-hold-ms`.
+    fn new(period_ns: u64, options: &ProcessOptions, failsafe: Vec<f64>) -> Self {
+        Self {
+            stale_after_ns: period_ns * u64::from(options.stale_after_periods.max(1)),
+            hold_ns: (options.controller_hold_ms * 1e6) as u64,
+            failsafe,
+            last_fresh_ns: 0,
+            last_fresh_tick: 0,
+            stale: false,
+            in_failsafe: false,
+        }
+    }
+}
+
+/// The plant's report: its timing figures (in the order of the indices above) and counters, its live status
+/// published under `run_id`.
+fn plant_recorder(run_id: &RunId) -> Recorder {
+    let mut rec = Recorder::new(
+        Role::Plant.label(),
+        &[
+            ("wake_lateness", "actual minus ideal tick start (realtime only)"),
+            ("step_exec", "actuators + RK4 step execution time"),
+            ("sense_to_actuate", "plant publish of tick k to the command answering k received at the plant"),
+            ("ipc_controller_to_plant", "command publish to receive at the plant"),
+            (
+                "checkpoint_write",
+                "serialising the checkpoint a restarted plant resumes from and handing it to the writer thread (realtime)",
+            ),
+            ("sense_to_actuate_steady", "sense_to_actuate of the ticks after the first second (what check judges)"),
+        ],
+    );
+    rec.declare(&[
+        "ticks",
+        "overruns",
+        "periods_without_tick",
+        "command_misses",
+        "commands_received",
+        "commands_invalid",
+        "commands_refused_held",
+        "failsafe_ticks",
+        "samples_dropped",
+    ]);
+    rec.start_status(run_id);
+    rec
 }
 
 /// Everything the tick loop keeps from one tick to the next.
@@ -206,32 +196,7 @@ impl PlantLoop {
         let scheduling = request_scheduling(Role::Plant, realtime);
         let period = scenario.timing.period_ns();
         let o = &args.options;
-        let mut rec = Recorder::new(
-            Role::Plant.label(),
-            &[
-                ("wake_lateness", "actual minus ideal tick start (realtime only)"),
-                ("step_exec", "actuators + RK4 step execution time"),
-                ("sense_to_actuate", "plant publish of tick k to the command answering k received at the plant"),
-                ("ipc_controller_to_plant", "command publish to receive at the plant"),
-                (
-                    "checkpoint_write",
-                    "serialising the checkpoint a restarted plant resumes from and handing it to the writer thread (realtime)",
-                ),
-                ("sense_to_actuate_steady", "sense_to_actuate of the ticks after the first second (what check judges)"),
-            ],
-        );
-        rec.declare(&[
-            "ticks",
-            "overruns",
-            "periods_without_tick",
-            "command_misses",
-            "commands_received",
-            "commands_invalid",
-            "commands_refused_held",
-            "failsafe_ticks",
-            "samples_dropped",
-        ]);
-        rec.start_status(&args.run_id);
+        let rec = plant_recorder(&args.run_id);
         let events = EventLog::new(&args.out, Role::Plant.label());
         // Without it the launcher schedules process faults on the wall clock from tick 0, as it must for a plant
         // that does not use this library.
@@ -241,15 +206,7 @@ impl PlantLoop {
         let loop_faults =
             LoopFaults::new(&scenario.faults, Role::Plant, scenario.timing.dt_s, scenario.seed, events.clone());
         let info = PlantInfo::new(model.signals()).map_err(|e| anyhow::anyhow!("the plant's announcement: {e}"))?;
-        let watchdog = Watchdog {
-            stale_after_ns: period * u64::from(o.stale_after_periods.max(1)),
-            hold_ns: (o.controller_hold_ms * 1e6) as u64,
-            failsafe: model.signals().hold(),
-            last_fresh_ns: 0,
-            last_fresh_tick: 0,
-            stale: false,
-            in_failsafe: false,
-        };
+        let watchdog = Watchdog::new(period, &args.options, model.signals().hold());
         Ok(Self {
             ticks: scenario.timing.ticks(),
             budget_ns: (o.command_budget_ms * 1e6) as u64,
@@ -549,139 +506,6 @@ impl PlantLoop {
         Ok(receipt)
     }
 
-    /// Wait for the answer to this tick whichever timing applies: next-tick applies it one tick later, but
-    /// receiving it now measures the transport honestly, and lockstep never runs ahead of the controller.
-    /// Realtime: poll for `spin_ns`, then block, up to the budget; lockstep: up to the peer timeout.
-    fn gather_commands(&mut self, ports: &PlantPorts, t_send_ns: u64) -> anyhow::Result<()> {
-        let wait_until =
-            t_send_ns + if self.realtime { self.budget_ns } else { LOCKSTEP_PEER_TIMEOUT.as_nanos() as u64 };
-        // Wake-ups are consumed only after a blocking wait: consuming them while a notification lands can lose the
-        // wake-up for good (iceoryx2 0.10), and the next blocking wait would then sleep to its timeout.
-        let mut woken = false;
-        loop {
-            self.take_commands(ports, woken)?;
-            if self.received.iter().any(|c| c.answers_tick == self.sim_tick) || signals::termination_requested() {
-                return Ok(());
-            }
-            let now = monotonic_ns();
-            if now < t_send_ns + self.spin_ns.min(self.budget_ns) {
-                match self.realtime {
-                    true => std::hint::spin_loop(),
-                    // Two vCPUs for three processes: a look that yields lets the logger have its turn.
-                    false => std::thread::yield_now(),
-                }
-                continue;
-            }
-            if now >= wait_until {
-                anyhow::ensure!(
-                    self.realtime,
-                    "lockstep: no command for tick {} within {LOCKSTEP_PEER_TIMEOUT:?}",
-                    self.sim_tick
-                );
-                return Ok(());
-            }
-            // EINTR (SIGSTOP/SIGCONT, SIGTERM) just ends this wait early; the loop looks again.
-            ports.commands.wait_readable_until(wait_until);
-            woken = true;
-        }
-    }
-
-    /// Drain the command queue, and its wake-ups with `consume_wakeups`: count, time and keep the newest valid
-    /// commands.
-    fn take_commands(&mut self, ports: &PlantPorts, consume_wakeups: bool) -> anyhow::Result<()> {
-        let tick = self.sim_tick;
-        let steady_from = silrig_wire::timing::WARM_UP_NS / self.scenario.timing.period_ns();
-        let on_command = |r: &Received<CommandSample>| {
-            let invalid = match &r.invalid {
-                Some(e) => Some(e.to_string()),
-                None if r.sample.flags & wire::FLAG_COMMAND_REFUSED != 0 => None,
-                None => wire::check_command(&self.signals, &r.sample).err(),
-            };
-            if let Some(why) = invalid {
-                if self.rec.counters.get("commands_invalid").is_none_or(|n| *n == 0) {
-                    self.events.emit(Some(tick), "command-invalid", format!("{why}; the plant holds its last command"));
-                }
-                self.rec.count("commands_invalid", 1);
-                return;
-            }
-            self.rec.count("commands_received", 1);
-            let epoch = r.sample.header.epoch;
-            if self.command_epoch.is_some_and(|e| e != epoch) {
-                self.events.emit(Some(tick), "controller-restarted", "commands from a new controller epoch");
-            }
-            self.command_epoch = Some(epoch);
-            self.rec.record(IPC_CONTROLLER_TO_PLANT, r.age_ns() as i64);
-            let answers = r.sample.answers_tick;
-            if answers <= tick && tick - answers < PUBLISH_STAMPS as u64 {
-                let sent = self.publish_ns[(answers % PUBLISH_STAMPS as u64) as usize];
-                self.rec.record(SENSE_TO_ACTUATE, r.t_recv_ns as i64 - sent as i64);
-                if answers >= steady_from {
-                    self.rec.record(SENSE_TO_ACTUATE_STEADY, r.t_recv_ns as i64 - sent as i64);
-                }
-            }
-            if self.received.len() == 8 {
-                self.received.pop_front();
-            }
-            self.received.push_back(r.sample);
-        };
-        ports.commands.take(consume_wakeups, on_command)?;
-        Ok(())
-    }
-
-    /// Apply the command this tick wants (the answer to this tick, same-tick, or to the previous one, next-tick);
-    /// returns true when it is missing and the last command is held (a miss).
-    fn choose_command(&mut self) -> bool {
-        let target = self.sim_tick.checked_sub(self.scenario.timing.command_delay_ticks());
-        let Some(target) = target else { return false };
-        let Some(fresh) = self.received.iter().find(|c| c.answers_tick == target).copied() else {
-            self.rec.count("command_misses", 1);
-            return true;
-        };
-        if fresh.flags & wire::FLAG_COMMAND_REFUSED != 0 {
-            // The controller's session refused its command (its event says why): hold, as for a missing one.
-            self.rec.count("command_misses", 1);
-            self.rec.count("commands_refused_held", 1);
-            return true;
-        }
-        self.applied.copy_from_slice(fresh.inputs());
-        self.applied_answers = Some(target);
-        let w = &mut self.watchdog;
-        w.last_fresh_ns = monotonic_ns();
-        w.last_fresh_tick = self.sim_tick;
-        if w.stale || w.in_failsafe {
-            let how = if w.in_failsafe { "failsafe released, " } else { "" };
-            self.events.emit(Some(self.sim_tick), "controller-recovered", format!("{how}commands resumed"));
-            w.stale = false;
-            w.in_failsafe = false;
-        }
-        false
-    }
-
-    /// A held command: the controller is stale after a few periods without a fresh command, and after the hold
-    /// the plant flies the failsafe (its announced hold values: the F-16's trim surfaces) until commands return.
-    fn watch_controller(&mut self) {
-        let tick = self.sim_tick;
-        let w = &mut self.watchdog;
-        let silent_ns = monotonic_ns().saturating_sub(w.last_fresh_ns);
-        if !w.stale && silent_ns >= w.stale_after_ns {
-            w.stale = true;
-            self.events.emit(Some(tick), "controller-stale", format!("no command for {} ms", silent_ns / 1_000_000));
-        }
-        if !w.in_failsafe && silent_ns >= w.hold_ns {
-            w.in_failsafe = true;
-            let hold: Vec<String> = (self.signals.inputs.iter().zip(&w.failsafe))
-                .map(|(i, v)| format!("{} {v:.3} {}", i.name, i.unit))
-                .collect();
-            let detail =
-                format!("{} ticks after the last fresh command; holding {}", tick - w.last_fresh_tick, hold.join(", "));
-            self.events.emit(Some(tick), "failsafe-engaged", detail);
-        }
-        if w.in_failsafe {
-            self.applied.copy_from_slice(&w.failsafe);
-            self.rec.count("failsafe_ticks", 1);
-        }
-    }
-
     fn save_checkpoint(&self) {
         if let (Some(w), Some(text)) = (&self.checkpoints, self.model.checkpoint()) {
             w.save(text);
@@ -698,9 +522,14 @@ impl PlantLoop {
     }
 }
 
-/// Fly the built-in F-16 as the plant process to the end of the scenario (or SIGTERM) and write its report.
-pub fn run_f16_plant(args: &ProcessArgs, scenario: Scenario) -> anyhow::Result<ProcessReport> {
-    let model = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
+/// Fly `model` as the plant process to the end of the scenario (or SIGTERM) and write its report: the process body
+/// for a model stepped in this process (a model of the user's own in another process goes through
+/// [`super::plant_session`] instead). Which model flies is the caller's choice (`silrig-adapters`).
+pub fn run_plant_model(
+    args: &ProcessArgs,
+    scenario: Scenario,
+    model: Box<dyn PlantModel>,
+) -> anyhow::Result<ProcessReport> {
     let mut plant = PlantLoop::setup(args, scenario, model)?;
     let mut ports = PlantPorts::connect(args, &plant.info)?;
     let ended = if ports.wait_for_peers(args.options.startup_timeout_s)? {

@@ -1,11 +1,12 @@
 //! What the plant process flies: [`PlantModel`], a vehicle behind named signals, stepped by the plant loop
-//! ([`super::plant::PlantLoop`]); the F-16 is [`super::f16_plant::F16Plant`], a model of the user's own is driven
-//! through [`super::plant_session`].
+//! ([`super::plant::PlantLoop`]); the models themselves (the built-in F-16, an FMU) are adapters, in
+//! `silrig-adapters`; a model of the user's own in another process is driven through [`super::plant_session`].
 
 use silrig_flight::signals::PlantSignals;
 
-/// What the plant process flies: a vehicle model behind named signals. The loop around it ([`super::plant::PlantLoop`]) keeps the
-/// clock, the commands, the watchdog and failsafe, the checkpoints and the report.
+/// What the plant process flies: a vehicle model behind named signals. The loop around it
+/// ([`super::plant::PlantLoop`]) keeps the clock, the commands, the watchdog and failsafe, the checkpoints and the
+/// report.
 pub trait PlantModel {
     /// Its announcement: name, outputs, inputs with their ranges and the values its failsafe holds.
     fn signals(&self) -> &PlantSignals;

@@ -1,16 +1,16 @@
 //! The plant's side of a run for a vehicle model of the user's own (Python on JSBSim, C, an FMU's wrapper):
 //! [`PlantSession`] opens the run as its plant and announces the model's signals, then each [`PlantSession::tick`]
 //! takes the model's outputs for the tick and gives back the inputs to step it with. Everything around the model
-//! is the rig's plant loop ([`super::plant::PlantLoop`], the same as for the F-16): the clock (realtime sleeps or
-//! lockstep), the commands and their misses, the watchdog and the failsafe (the announced hold values), the
-//! in-loop faults, the flags and the timing report. `libsilrig_client.so` exports it to C and Python.
+//! is the rig's plant loop ([`super::plant::PlantLoop`], the same as for a built-in model): the clock (realtime
+//! sleeps or lockstep), the commands and their misses, the watchdog and the failsafe (the announced hold values),
+//! the in-loop faults, the flags and the timing report. `libsilrig_client.so` exports it to C and Python.
 //!
 //! The model's step time is what passes between handing out the inputs and the next `tick`; outputs with NaN or
 //! infinity are refused (counted, the first said in an event) and the last valid ones are published instead, each
 //! such sample flagged ([`silrig_wire::wire::FLAG_OUTPUTS_HELD`]).
 //! Between the loop and the model sits the rig's [`SignalChain`]: the scenario's `[actuators.<input>]` and actuator
 //! faults move the inputs the model is stepped with, sensor faults change the outputs the controller reads (the
-//! trace and the recording show those, as for the F-16).
+//! trace and the recording show those, as for a built-in model).
 //! Checkpoints (realtime): when [`PlantSession::checkpoint_due`] says so, the model hands its state as text to
 //! [`PlantSession::save_checkpoint`] after stepping; the rig writes it with the tick it belongs to and the
 //! actuators' positions. A restarted plant finds it in [`PlantSession::restored_checkpoint`] and says whether it

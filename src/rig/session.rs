@@ -1,27 +1,36 @@
 //! The controller's side of a run, for any controller: [`ControllerSession`] opens the run's streams, announces the
 //! controller's diagnostics, waits for the plant's announcement of its signals ([`ControllerSession::plant`]: what
 //! the controller finds its outputs and inputs in, by name), hands out plant samples one at a time
-//! ([`ControllerSession::next_sample`]) and takes one command in answer to each ([`ControllerSession::send`]). Everything a controller should not have to write
-//! lives here: header stamps, validation (a NaN or out-of-range command is refused, never sent), the in-loop faults
-//! of the plan (delay, jitter, drop), the bumpless blend after a restart, checkpoint files, staleness of the plant,
-//! stop requests (SIGTERM/SIGINT, the end of the run) and the timing report. `silrig-controller` is one user of it
-//! ([`super::controller::serve`]); the C ABI of `libsilrig_client.so` (`src/client/`) is another, through which
-//! controllers in C, C++, Python and anything with a C FFI fly.
+//! ([`ControllerSession::next_sample`]) and takes one command in answer to each ([`ControllerSession::send`]).
+//! Everything a controller should not have to write lives here: header stamps, validation (a NaN or out-of-range
+//! command is refused, never sent), the in-loop faults of the plan (delay, jitter, drop), the bumpless blend after
+//! a restart, checkpoint files, staleness of the plant, stop requests (SIGTERM/SIGINT, the end of the run) and the
+//! timing report. `silrig-controller` is one user of it ([`super::controller::serve`]); the C ABI of
+//! `libsilrig_client.so` (`src/client/`) is another, through which controllers in C, C++, Python and anything with
+//! a C FFI fly.
+//!
+//! This file opens the session and answers samples (blend, checks, faults, publishing) and closes it;
+//! `session/samples.rs` is the plant's side as the session sees it (its announcement, the samples, its silence),
+//! `session/errors.rs` what a call can end in ([`SessionError`], the C ABI's [`Status`] codes).
 //!
 //! A session installs a SIGTERM/SIGINT flag handler when it opens (so a stop request ends the loop with a report
 //! instead of killing the process) and waits on the plant stream's listener, not on a WaitSet, so iceoryx2 never
 //! takes the process's signals.
 
+mod errors;
+mod samples;
+
+pub use errors::{SessionError, Status, check_client_layout};
+
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
-use super::plant::LOCKSTEP_LOOK_NS;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
 use super::{ProcessArgs, RigMode, signals};
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_wire::clock::monotonic_ns;
-use silrig_wire::ipc::{self, IpcError, StreamPublisher, StreamService, StreamSubscriber, WaitOutcome};
+use silrig_wire::ipc::{self, RunId, StreamPublisher, StreamService, StreamSubscriber};
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{
     self, CommandSample, ControllerInfo, FLAG_COMMAND_REFUSED, MAX_INPUTS, PlantInfo, PlantSample, WireSample,
@@ -74,163 +83,40 @@ pub enum Next {
     Stop(StopReason),
 }
 
-/// What can go wrong in a session, each phrased for the person running the controller.
-#[derive(Debug, thiserror::Error)]
-pub enum SessionError {
-    /// The run's arguments, environment or scenario are not usable.
-    #[error("{0}")]
-    Setup(String),
-    /// The client was built against another contract than this library.
-    #[error("{0}")]
-    Layout(String),
-    /// No plant announced itself, or sent a sample, in time after opening.
-    #[error(
-        "no plant on run `{run}` within {waited_s} s: is the rig running with this run id? (start it first, \
-         e.g. `silrig run --controller external`, and give the controller the SILRIG_* variables it prints)"
-    )]
-    NoRig {
-        /// Run id.
-        run: String,
-        /// How long it waited, s.
-        waited_s: f64,
-    },
-    /// The run has a controller already.
-    #[error("refusing to start a second controller: run `{run}` has one already")]
-    SecondController {
-        /// Run id.
-        run: String,
-    },
-    /// The command was refused and not sent; the plant holds the last valid command for this tick.
-    #[error("tick {tick}: command refused, not sent ({reason}); the plant holds the last valid command")]
-    CommandRefused {
-        /// The tick it answered.
-        tick: u64,
-        /// What is wrong with it.
-        reason: String,
-    },
-    /// The API was used out of order or with wrong sizes.
-    #[error("{0}")]
-    Usage(String),
-    /// The plant's announcement does not fit: unreadable, a signal the controller asks for is missing, or a
-    /// restarted plant announced other signals.
-    #[error("{0}")]
-    Plant(String),
-    /// The transport failed.
-    #[error(transparent)]
-    Transport(#[from] IpcError),
+/// The controller's report: its timing figures (in the order of the indices above) and counters, its live status
+/// published under `run_id`.
+fn controller_recorder(run_id: &RunId) -> Recorder {
+    let mut rec = Recorder::new(
+        Role::Controller.label(),
+        &[
+            ("ipc_plant_to_controller", "plant publish to receive at the controller"),
+            ("compute", "controller step execution time: sample handed out to command given"),
+        ],
+    );
+    rec.declare(&[
+        "commands_sent",
+        "commands_refused",
+        "samples_skipped",
+        "samples_invalid",
+        "plant_stale_deadlines",
+        "errors",
+        "commands_dropped",
+        "samples_unanswered",
+        "interrupted_waits",
+        "samples_without_wakeup",
+    ]);
+    rec.start_status(run_id);
+    rec
 }
 
-/// Every outcome of a session call as the C ABI of `libsilrig_client.so` returns it: 0 and positive values are not
-/// errors, negative ones are (the reason is in `silrig_last_error()`). `silrig contract` writes them into the C
-/// header and the Python module, so a client never types them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(i32)]
-pub enum Status {
-    /// The call did what it says.
-    Ok = 0,
-    /// SIGTERM or SIGINT arrived: close the session (its report is written) and exit.
-    Stopped = 1,
-    /// The plant has flown the whole scenario: close the session and exit.
-    RunEnded = 2,
-    /// The scenario gives no value of that name (`silrig_plant_parameter`): the model keeps its own.
-    NotGiven = 3,
-    /// The API was used wrongly (a NULL pointer, a command without a sample, a count that does not match).
-    ErrUsage = -1,
-    /// The client was built against another contract (layout version or sample sizes differ).
-    ErrLayout = -2,
-    /// The run's variables or scenario are unusable, or the diagnostics do not fit a command.
-    ErrSetup = -3,
-    /// No plant sample arrived within twice the startup timeout: no rig runs with this run id.
-    ErrNoRig = -4,
-    /// The run has a controller already.
-    ErrSecondController = -5,
-    /// The command was refused (NaN, infinity, out of range) and not sent; the plant holds the last valid one.
-    ErrCommandRefused = -6,
-    /// The transport failed.
-    ErrTransport = -7,
-    /// A bug in the library (a panic was caught at the boundary).
-    ErrInternal = -8,
-    /// The plant's signals do not fit: a name the controller asks for is missing, or a restarted plant announced
-    /// other signals.
-    ErrPlant = -9,
-}
-
-impl Status {
-    /// Every status, in code order of appearance.
-    pub const ALL: [Status; 13] = [
-        Status::Ok,
-        Status::Stopped,
-        Status::RunEnded,
-        Status::NotGiven,
-        Status::ErrUsage,
-        Status::ErrLayout,
-        Status::ErrSetup,
-        Status::ErrNoRig,
-        Status::ErrSecondController,
-        Status::ErrCommandRefused,
-        Status::ErrTransport,
-        Status::ErrInternal,
-        Status::ErrPlant,
-    ];
-
-    /// The code the C ABI returns.
-    pub const fn code(self) -> i32 {
-        self as i32
+/// What a predecessor saved at `path` for a restarted controller (`--resume`); without it, the controller starts
+/// fresh and says so.
+fn read_restored(path: &std::path::Path) -> Option<String> {
+    let saved = std::fs::read_to_string(path).ok();
+    if saved.is_none() {
+        eprintln!("silrig controller: warning: --resume without a checkpoint in {}; starting fresh", path.display());
     }
-
-    /// The constant's name without the `SILRIG_` prefix (`OK`, `ERR_NO_RIG`).
-    pub const fn name(self) -> &'static str {
-        match self {
-            Status::Ok => "OK",
-            Status::Stopped => "STOPPED",
-            Status::RunEnded => "RUN_ENDED",
-            Status::NotGiven => "NOT_GIVEN",
-            Status::ErrUsage => "ERR_USAGE",
-            Status::ErrLayout => "ERR_LAYOUT",
-            Status::ErrSetup => "ERR_SETUP",
-            Status::ErrNoRig => "ERR_NO_RIG",
-            Status::ErrSecondController => "ERR_SECOND_CONTROLLER",
-            Status::ErrCommandRefused => "ERR_COMMAND_REFUSED",
-            Status::ErrTransport => "ERR_TRANSPORT",
-            Status::ErrInternal => "ERR_INTERNAL",
-            Status::ErrPlant => "ERR_PLANT",
-        }
-    }
-
-    /// What it means, for the header's comments.
-    pub const fn meaning(self) -> &'static str {
-        match self {
-            Status::Ok => "the call did what it says",
-            Status::Stopped => "SIGTERM or SIGINT arrived: close the session and exit",
-            Status::RunEnded => "the plant has flown the whole scenario: close the session and exit",
-            Status::NotGiven => "the scenario gives no value of that name: the model keeps its own",
-            Status::ErrUsage => "API misuse: NULL pointer, command without a sample, wrong count",
-            Status::ErrLayout => "built against another contract (layout version or sample sizes)",
-            Status::ErrSetup => "SILRIG_* variables, scenario or diagnostics unusable",
-            Status::ErrNoRig => "no plant announced itself within twice the startup timeout",
-            Status::ErrSecondController => "the run has a controller already",
-            Status::ErrCommandRefused => "command refused (NaN, infinity, out of range), not sent; plant holds",
-            Status::ErrTransport => "the transport failed",
-            Status::ErrInternal => "a bug in the library (a panic caught at the boundary)",
-            Status::ErrPlant => "the plant lacks a signal asked for, or a restarted plant announced other signals",
-        }
-    }
-}
-
-impl SessionError {
-    /// The status the C ABI returns for this error.
-    pub fn status(&self) -> Status {
-        match self {
-            SessionError::Setup(_) => Status::ErrSetup,
-            SessionError::Layout(_) => Status::ErrLayout,
-            SessionError::NoRig { .. } => Status::ErrNoRig,
-            SessionError::SecondController { .. } => Status::ErrSecondController,
-            SessionError::CommandRefused { .. } => Status::ErrCommandRefused,
-            SessionError::Usage(_) => Status::ErrUsage,
-            SessionError::Plant(_) => Status::ErrPlant,
-            SessionError::Transport(_) => Status::ErrTransport,
-        }
-    }
+    saved
 }
 
 /// The sample being answered.
@@ -318,41 +204,11 @@ impl ControllerSession {
         let commands = command_stream.publisher().map_err(|_| SessionError::SecondController { run })?;
 
         let realtime = args.mode == RigMode::Realtime;
-        let mut rec = Recorder::new(
-            Role::Controller.label(),
-            &[
-                ("ipc_plant_to_controller", "plant publish to receive at the controller"),
-                ("compute", "controller step execution time: sample handed out to command given"),
-            ],
-        );
-        rec.declare(&[
-            "commands_sent",
-            "commands_refused",
-            "samples_skipped",
-            "samples_invalid",
-            "plant_stale_deadlines",
-            "errors",
-            "commands_dropped",
-            "samples_unanswered",
-            "interrupted_waits",
-            "samples_without_wakeup",
-        ]);
-        rec.start_status(&args.run_id);
+        let rec = controller_recorder(&args.run_id);
         let dt = scenario.timing.dt_s;
         let events = EventLog::new(&args.out, Role::Controller.label());
         let checkpoint_path = args.out.join("controller.checkpoint.json");
-        let restored = if args.resume {
-            let saved = std::fs::read_to_string(&checkpoint_path).ok();
-            if saved.is_none() {
-                eprintln!(
-                    "silrig controller: warning: --resume without a checkpoint in {}; starting fresh",
-                    checkpoint_path.display()
-                );
-            }
-            saved
-        } else {
-            None
-        };
+        let restored = if args.resume { read_restored(&checkpoint_path) } else { None };
         let stale_after =
             Duration::from_nanos(scenario.timing.period_ns() * u64::from(args.options.stale_after_periods.max(1)));
         Ok(Self {
@@ -435,291 +291,6 @@ impl ControllerSession {
         if let Some(w) = &self.checkpoints {
             w.save(text.to_string());
         }
-    }
-
-    /// Block until the next plant sample to answer (the newest one waiting: after a stall, older ones are skipped
-    /// and counted), or until the session should stop. While the plant is silent the session idles and says so
-    /// once; with no sample at all within twice `--startup-timeout-s` of opening, it gives up
-    /// ([`SessionError::NoRig`]).
-    pub fn next_sample(&mut self) -> Result<Next, SessionError> {
-        if self.pending.take().is_some() {
-            self.rec.count("samples_unanswered", 1);
-        }
-        if !self.wait_for_plant()? {
-            return Ok(self.stop(StopReason::TerminationRequested));
-        }
-        if let Some(deadline_ns) = self.next_deadline_ns.take()
-            && let Some(sample) = self.look_near_deadline(deadline_ns)?
-        {
-            return Ok(Next::Sample(sample));
-        }
-        if let Some(sample) = self.look_lockstep()? {
-            return Ok(Next::Sample(sample));
-        }
-        // Every sample waiting is taken at each wake-up, so waiting first costs nothing: a sample that came since
-        // has left a wake-up behind.
-        loop {
-            if signals::termination_requested() {
-                return Ok(self.stop(StopReason::TerminationRequested));
-            }
-            if self.samples.stats().finished_notices > 0 || self.plant_ended {
-                return Ok(self.stop(StopReason::RunEnded));
-            }
-            match self.samples.wait(self.stale_after)? {
-                WaitOutcome::Notified => {
-                    if let Some(sample) = self.take_newest()? {
-                        return Ok(Next::Sample(sample));
-                    }
-                }
-                WaitOutcome::Interrupted => self.rec.count("interrupted_waits", 1),
-                WaitOutcome::TimedOut => {
-                    // A sample that came without its wake-up (a lost notification) is taken here, at the latest a
-                    // stale deadline after it, instead of never.
-                    if let Some(sample) = self.take_newest()? {
-                        if self.rec.counters.get("samples_without_wakeup").is_none_or(|n| *n == 0) {
-                            let detail = "a plant sample was waiting without its wake-up; taken at the deadline";
-                            self.events.emit(Some(sample.header.tick), "sample-without-wakeup", detail);
-                        }
-                        self.rec.count("samples_without_wakeup", 1);
-                        return Ok(Next::Sample(sample));
-                    }
-                    self.on_plant_silent()?
-                }
-            }
-        }
-    }
-
-    /// Realtime: block until shortly before the plant's next deadline (a sample that comes earlier, after a stall
-    /// or a restart, is taken at once), then look for it again and again until `sample_poll_ns` past the deadline.
-    /// A controller that blocks until the sample's notification pays an idle vCPU's wake-up on every tick (about
-    /// 90 µs p50, 320 µs p99 on this kind of VM); one already awake takes the sample within a few µs. Costs at most
-    /// `SAMPLE_LOOK_LEAD_NS` + `sample_poll_ns` of CPU a tick; `None` leaves the rest to the blocking wait.
-    fn look_near_deadline(&mut self, deadline_ns: u64) -> Result<Option<PlantSample>, SessionError> {
-        let look_from = deadline_ns.saturating_sub(SAMPLE_LOOK_LEAD_NS);
-        loop {
-            let now = monotonic_ns();
-            if now >= look_from || signals::termination_requested() {
-                break;
-            }
-            match self.samples.wait(Duration::from_nanos(look_from - now))? {
-                WaitOutcome::Notified => {
-                    if let Some(sample) = self.take_newest()? {
-                        return Ok(Some(sample));
-                    }
-                }
-                WaitOutcome::Interrupted => return Ok(None),
-                WaitOutcome::TimedOut => break,
-            }
-        }
-        self.look_until(deadline_ns + self.sample_poll_ns, false)
-    }
-
-    /// Look at the sample queue again and again until `until_ns`, spinning or (`yield_cpu`) yielding between looks.
-    /// The queue only: consuming wake-ups while a notification lands can lose the wake-up for good.
-    fn look_until(&mut self, until_ns: u64, yield_cpu: bool) -> Result<Option<PlantSample>, SessionError> {
-        while monotonic_ns() < until_ns {
-            if signals::termination_requested() || self.plant_ended {
-                return Ok(None);
-            }
-            if let Some(sample) = self.take_newest_from(false)? {
-                return Ok(Some(sample));
-            }
-            match yield_cpu {
-                true => std::thread::yield_now(),
-                false => std::hint::spin_loop(),
-            }
-        }
-        Ok(None)
-    }
-
-    /// Lockstep: look for the next sample again and again, yielding the CPU between looks, for up to
-    /// [`LOCKSTEP_LOOK_NS`] before blocking. The plant's step takes a few µs: a controller still on its CPU takes its
-    /// sample then, where one asleep pays an idle vCPU's wake-up (tens of µs on this kind of VM) every tick.
-    fn look_lockstep(&mut self) -> Result<Option<PlantSample>, SessionError> {
-        if !self.lockstep {
-            return Ok(None);
-        }
-        self.look_until(monotonic_ns() + LOCKSTEP_LOOK_NS, true)
-    }
-
-    /// The plant's signals as it announced them, waiting for the announcement if it has not come yet (as long as
-    /// [`Self::next_sample`] waits for a first sample). A controller looks up the outputs it reads and the inputs it
-    /// commands here, by name ([`PlantSignals::output`], [`PlantSignals::input`]).
-    pub fn plant(&mut self) -> Result<&PlantSignals, SessionError> {
-        if !self.wait_for_plant()? {
-            return Err(SessionError::Setup("terminated by signal before the plant announced its signals".into()));
-        }
-        Ok(self.plant.as_ref().expect("announced"))
-    }
-
-    /// Wait until the plant has announced itself; false when a stop request came first.
-    fn wait_for_plant(&mut self) -> Result<bool, SessionError> {
-        loop {
-            self.take_announcements()?;
-            if self.plant.is_some() {
-                return Ok(true);
-            }
-            if signals::termination_requested() {
-                return Ok(false);
-            }
-            self.give_up_without_rig()?;
-            // The announcement reaches a late subscriber from the stream's history, which wakes no listener.
-            std::thread::sleep(Duration::from_millis(2));
-        }
-    }
-
-    /// Take the plant's announcements: the first says what the plant is; a later plant epoch (a restart) must say
-    /// the same, since this controller found its signals by name in the first.
-    fn take_announcements(&mut self) -> Result<(), SessionError> {
-        let mut announced = Vec::new();
-        // Nothing waits on this listener, so its wake-ups are left unconsumed: taking them is a `recvfrom` at every
-        // look of the lockstep and realtime polls, and a listener left notified costs the plant no `sendto` either.
-        self.plant_info.receive_queued(|r| announced.push(*r))?;
-        for r in announced {
-            let signals = r
-                .sample
-                .signals()
-                .map_err(|e| SessionError::Plant(format!("the plant's announcement is refused: {e}")))?;
-            if let Some(e) = r.invalid {
-                return Err(SessionError::Plant(format!("the plant's announcement is refused: {e}")));
-            }
-            match &self.plant {
-                None => self.plant = Some(signals),
-                Some(known) if *known != signals => {
-                    return Err(SessionError::Plant(format!(
-                        "a restarted plant (epoch {}) announces plant {} with other signals than plant {} this \
-                         controller started with",
-                        r.sample.header.epoch, signals.plant, known.plant
-                    )));
-                }
-                Some(_) => {}
-            }
-        }
-        Ok(())
-    }
-
-    /// Before any sample: give up after twice the startup timeout (no rig runs with this run id).
-    fn give_up_without_rig(&mut self) -> Result<(), SessionError> {
-        let waited_s = (monotonic_ns() - self.opened_ns) as f64 / 1e9;
-        let limit_s = 2.0 * self.args.options.startup_timeout_s;
-        if waited_s > limit_s {
-            self.no_rig = true;
-            return Err(SessionError::NoRig { run: self.args.run_id.to_string(), waited_s: limit_s });
-        }
-        Ok(())
-    }
-
-    fn stop(&mut self, reason: StopReason) -> Next {
-        let ended = match reason {
-            StopReason::TerminationRequested => "terminated by signal",
-            StopReason::RunEnded => "completed",
-        };
-        self.ended.get_or_insert_with(|| ended.into());
-        Next::Stop(reason)
-    }
-
-    /// Take what waits; hand out the newest valid sample of a tick not handed out yet.
-    fn take_newest(&mut self) -> Result<Option<PlantSample>, SessionError> {
-        self.take_newest_from(true)
-    }
-
-    /// [`Self::take_newest`]; with `consume_wakeups` false the wake-ups are left to the next wait (see
-    /// [`StreamSubscriber::receive_queued`]).
-    fn take_newest_from(&mut self, consume_wakeups: bool) -> Result<Option<PlantSample>, SessionError> {
-        self.take_announcements()?;
-        let mut newest = None;
-        let mut fresh = 0u64;
-        let mut invalid = 0u64;
-        let mut ended = false;
-        let mut on_sample = |r: &ipc::Received<PlantSample>| {
-            if r.invalid.is_some() {
-                invalid += 1;
-            } else if r.sample.flags & wire::FLAG_END_OF_RUN != 0 {
-                // The plant's last word: nothing to answer (it repeats a tick already flown).
-                ended = true;
-            } else {
-                fresh += 1;
-                newest = Some(*r);
-            }
-        };
-        self.samples.take(consume_wakeups, &mut on_sample)?;
-        self.plant_ended |= ended;
-        // Counted only when there is something to count: this runs at every look, and a counter is a lookup by name.
-        if invalid > 0 {
-            self.rec.count("samples_invalid", invalid);
-        }
-        // After a stall several samples wait; acting on stale ones would only delay the newest.
-        if fresh > 1 {
-            self.rec.count("samples_skipped", fresh - 1);
-        }
-        let Some(r) = newest else { return Ok(None) };
-        let h = r.sample.header;
-        if self.last_tick.is_some_and(|(epoch, tick)| epoch == h.epoch && tick >= h.tick) {
-            return Ok(None);
-        }
-        if self.last_tick.is_none() {
-            self.announcer.send(h.tick, &self.info)?;
-        }
-        self.note_plant(h.epoch, h.tick);
-        self.rec.record(IPC_PLANT_TO_CONTROLLER, r.age_ns() as i64);
-        let mut held = [f64::NAN; MAX_INPUTS];
-        let plant = self.plant.as_ref().expect("announced before any sample is taken");
-        for (slot, input) in held.iter_mut().zip(&plant.inputs) {
-            *slot = input.held_output.and_then(|o| r.sample.outputs().get(o).copied()).unwrap_or(f64::NAN);
-        }
-        self.pending = Some(Pending { tick: h.tick, held, delivered_ns: monotonic_ns() });
-        if self.sample_poll_ns > 0 {
-            // The plant publishes right after it wakes for its tick's deadline: the next deadline is a period after
-            // this one, which is the send time less the wake-up's lateness.
-            let deadline_ns = h.t_send_ns.saturating_add_signed(-r.sample.wake_lateness_ns);
-            self.next_deadline_ns = Some(deadline_ns + self.scenario.timing.period_ns());
-        }
-        Ok(Some(r.sample))
-    }
-
-    /// What this sample says about the plant: a first sample past tick 0 (we joined a flying plant: blend), a new
-    /// plant epoch (it restarted), samples back after silence.
-    fn note_plant(&mut self, epoch: u64, tick: u64) {
-        match self.last_tick {
-            None if tick > 0 => {
-                self.blend = Some(tick);
-                let state = match &self.resumed {
-                    Resumed::Fresh => "fresh state".to_string(),
-                    Resumed::Checkpoint => "checkpointed state".to_string(),
-                    Resumed::Rejected(why) => format!("fresh state (its checkpoint was rejected: {why})"),
-                    Resumed::Unconfirmed => {
-                        "a checkpoint was offered; the controller did not say whether it used it".to_string()
-                    }
-                };
-                let detail = format!("plant already at tick {tick}: {state}, {BUMPLESS_BLEND_S} s bumpless blend");
-                self.events.emit(Some(tick), "controller-joined", detail);
-            }
-            Some((last_epoch, _)) if last_epoch != epoch => {
-                self.events.emit(Some(tick), "plant-restarted", "samples from a new plant epoch");
-            }
-            _ => {}
-        }
-        if self.plant_stale {
-            self.plant_stale = false;
-            self.events.emit(Some(tick), "plant-recovered", "samples resumed");
-        }
-        self.last_tick = Some((epoch, tick));
-    }
-
-    /// No sample within the deadline: before the first sample, give up after the startup timeout; after it, flag
-    /// the plant stale once, and clean up its node if it died so a restarted plant can take its place.
-    fn on_plant_silent(&mut self) -> Result<(), SessionError> {
-        let Some((_, tick)) = self.last_tick else {
-            return self.give_up_without_rig();
-        };
-        self.rec.count("plant_stale_deadlines", 1);
-        if !self.plant_stale {
-            self.plant_stale = true;
-            let detail = format!("no plant sample for {:?}; idling", self.stale_after);
-            self.events.emit(Some(tick), "plant-stale", detail);
-        }
-        let _ = self.plant_stream.try_cleanup_dead_nodes();
-        Ok(())
     }
 
     /// Where each input's actuator is now, in the sample being answered, or the plant's hold value where it reports
@@ -861,28 +432,4 @@ impl ControllerSession {
         }
         Ok(report)
     }
-}
-
-/// Refuse a client built against another contract than this library: another layout version (named both ways)
-/// or samples of other sizes (a header edited by hand, or packed by another compiler setting).
-pub fn check_client_layout(layout_version: u32, plant_size: usize, command_size: usize) -> Result<(), SessionError> {
-    let ours = silrig_wire::wire::WIRE_LAYOUT_VERSION;
-    if layout_version != ours {
-        return Err(SessionError::Layout(format!(
-            "the client was built against wire layout version {layout_version}, this library speaks version {ours}: \
-             rebuild the client with the header `silrig contract --c-header` writes for this build"
-        )));
-    }
-    for (what, theirs, ours) in [
-        ("plant sample", plant_size, size_of::<PlantSample>()),
-        ("command sample", command_size, size_of::<CommandSample>()),
-    ] {
-        if theirs != ours {
-            return Err(SessionError::Layout(format!(
-                "the client's {what} is {theirs} bytes, the contract's is {ours} (layout version {layout_version}): \
-                 the header was changed or compiled with other packing"
-            )));
-        }
-    }
-    Ok(())
 }

@@ -3,13 +3,13 @@
 //! side-by-side table).
 
 use anyhow::Context;
+use silrig_adapters::in_process::Models;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::sim::LeftEnvelope;
 use silrig_flight::summary::{Response, Summary};
 use silrig_flight::trace::Trace;
 use silrig_plot::plot_title;
-use silrig_rig::in_process::Models;
 use std::path::{Path, PathBuf};
 
 /// Write trace, summary, scenario and figures into `out_dir` (created if needed); returns the paths written. The
@@ -59,7 +59,7 @@ pub struct FlownScenario {
 }
 
 /// Fly `scenario` in one process: the built-in F-16 against our controller by the reference loop
-/// ([`silrig_flight::sim`]), a scenario with an FMU by the rig's generic loop ([`silrig_rig::in_process`]) with
+/// ([`silrig_flight::sim`]), a scenario with an FMU by the rig's generic loop ([`silrig_adapters::in_process`]) with
 /// `models` (opened from this scenario, or from the one it was sampled from: the same FMU files). An error says
 /// why it could not start.
 pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<FlownScenario, String> {

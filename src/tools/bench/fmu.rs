@@ -1,13 +1,13 @@
 //! `silrig bench fmu FILE.fmu`: what one plant tick costs through an FMU's call path (set the inputs, `doStep`, get
 //! the outputs: what the plant process does with an FMU each tick) beside the built-in F-16's tick (actuators, RK4,
-//! outputs: [`silrig_rig::f16_plant::F16Plant`]), both flown open loop from the scenario's initial condition with
+//! outputs: [`silrig_adapters::builtin::f16_plant::F16Plant`]), both flown open loop from the scenario's initial condition with
 //! their inputs held at what each announces as its failsafe hold (the F-16's trim). Each repeat is a fresh flight
 //! whose set-up (unpacking, instantiation, trim) is not timed; the medians over repeats are reported.
 
 use super::BenchFigure;
+use silrig_adapters::builtin::f16_plant::F16Plant;
+use silrig_adapters::fmu::plant::FmuPlant;
 use silrig_flight::scenario::Scenario;
-use silrig_rig::f16_plant::F16Plant;
-use silrig_rig::fmu_plant::FmuPlant;
 use silrig_rig::plant_model::PlantModel;
 use std::hint::black_box;
 use std::path::PathBuf;

@@ -4,6 +4,7 @@
 
 use crate::outputs::{FlownScenario, fly_one_process};
 use serde::{Deserialize, Serialize};
+use silrig_adapters::in_process::Models;
 use silrig_flight::criteria::{Criteria, Judgement};
 use silrig_flight::dispersion;
 use silrig_flight::judge::judge_flight;
@@ -11,7 +12,6 @@ use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::summary::{Summary, summarize};
 use silrig_flight::trace::Trace;
-use silrig_rig::in_process::Models;
 
 /// How a case ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

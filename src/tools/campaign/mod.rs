@@ -21,9 +21,9 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::{Duration, Instant};
 
+use silrig_adapters::in_process::{FmuFlags, Models};
 use silrig_flight::criteria::Criteria;
 use silrig_flight::scenario::Scenario;
-use silrig_rig::in_process::{FmuFlags, Models};
 
 /// `silrig sweep`: every case on this machine, or (with a subcommand) a sweep split over many.
 #[derive(Debug, Clone, clap::Args)]

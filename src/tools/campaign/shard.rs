@@ -139,7 +139,7 @@ pub struct PlanOptions {
     pub out: PathBuf,
     /// The plant or controller as an FMU, in place of the scenario's (every worker must reach the file).
     #[command(flatten)]
-    pub fmus: silrig_rig::in_process::FmuFlags,
+    pub fmus: silrig_adapters::in_process::FmuFlags,
     /// Sweep your own controller through the lockstep rig (as `silrig sweep --controller-cmd`); every worker runs
     /// this command from the folder it starts in, so it must find the program and its files from there.
     #[arg(long, value_name = "CMD")]

@@ -289,8 +289,11 @@ fn in_process_case(
     started: std::time::Instant,
 ) -> anyhow::Result<CaseVerdict> {
     let mut case = case.clone();
-    silrig_rig::in_process::FmuFlags { plant_fmu: opts.plant_fmu.clone(), controller_fmu: opts.controller_fmu.clone() }
-        .apply(&mut case.scenario)?;
+    silrig_adapters::in_process::FmuFlags {
+        plant_fmu: opts.plant_fmu.clone(),
+        controller_fmu: opts.controller_fmu.clone(),
+    }
+    .apply(&mut case.scenario)?;
     let (judgements, run_dirs) = one_process::fly_and_judge(&case, case_dir)?;
     let wall_s = started.elapsed().as_secs_f64();
     let mode = "lockstep, one process".into();
@@ -309,7 +312,7 @@ fn sweep_case(
     started: std::time::Instant,
 ) -> anyhow::Result<CaseVerdict> {
     let mut scenario = case.scenario.clone();
-    let fmus = silrig_rig::in_process::FmuFlags {
+    let fmus = silrig_adapters::in_process::FmuFlags {
         plant_fmu: opts.plant_fmu.clone(),
         controller_fmu: opts.controller_fmu.clone(),
     };

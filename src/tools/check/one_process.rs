@@ -7,12 +7,12 @@
 //! flies.
 
 use super::suite::Case;
+use silrig_adapters::in_process::{EndedBy, Models};
 use silrig_flight::criteria::Judgement;
 use silrig_flight::judge::{judge_flight, judgement};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::trace::Trace;
 use silrig_rig::RigMode;
-use silrig_rig::in_process::{EndedBy, Models};
 use std::path::Path;
 
 /// Whether `--in-process` flies this case in one process: a lockstep case that is not a sweep (a sweep case flies

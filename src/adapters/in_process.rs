@@ -1,5 +1,5 @@
 //! The closed loop of any plant and any controller the rig flies in one process, with no clock and no transport:
-//! the built-in F-16 or an FMU ([`super::fmu_plant::FmuModel`]) against our controller or a controller FMU, tick
+//! the built-in F-16 or an FMU ([`crate::fmu::plant::FmuModel`]) against our controller or a controller FMU, tick
 //! by tick in lockstep. `silrig sim` and `silrig sweep` fly scenarios that name an FMU here, so a user's models get
 //! Monte Carlo at in-process speed.
 //!
@@ -12,16 +12,20 @@
 //!
 //! [`Models`] opens a scenario's FMUs once (unpacking is the slow part) and flies any number of flights of it, each
 //! with fresh instances, from any number of threads unless an FMU says its binary allows one instance per process.
+//! What it opens and flies is a match on the scenario's [`PlantKind`] and [`ControllerKind`], one arm per adapter,
+//! as in [`crate::process`].
 
-use super::controller::{AttitudeLaw, Controller};
-use super::f16_plant::F16Plant;
-use super::fmu_controller::FmuController;
-use super::fmu_plant::{FmuModel, FmuPlant};
-use super::plant_model::PlantModel;
+use crate::builtin::attitude_law::AttitudeLaw;
+use crate::builtin::f16_plant::F16Plant;
+use crate::fmu::controller::FmuController;
+use crate::fmu::plant::{FmuModel, FmuPlant};
+use crate::process::{ControllerKind, PlantKind};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
 use silrig_fmi::Fmu;
+use silrig_rig::controller::Controller;
+use silrig_rig::plant_model::PlantModel;
 use silrig_wire::wire::{self, CommandSample, PlantSample, WireSample};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -207,8 +211,38 @@ impl FmuFlags {
 
 /// A scenario's plant and controller, their FMUs unpacked once, ready to fly any number of times.
 pub struct Models {
-    plant_fmu: Option<Arc<Fmu>>,
-    controller_fmu: Option<Arc<Fmu>>,
+    plant: OpenedPlant,
+    controller: OpenedController,
+}
+
+/// A plant of each [`PlantKind`], opened: what [`Models::fly`] makes each flight's plant from.
+enum OpenedPlant {
+    F16,
+    Fmu(Arc<Fmu>),
+}
+
+/// A controller of each [`ControllerKind`], opened: what [`Models::fly`] makes each flight's controller from.
+enum OpenedController {
+    AttitudeLaw,
+    Fmu(Arc<Fmu>),
+}
+
+impl OpenedPlant {
+    fn fmu(&self) -> Option<&Arc<Fmu>> {
+        match self {
+            Self::Fmu(fmu) => Some(fmu),
+            Self::F16 => None,
+        }
+    }
+}
+
+impl OpenedController {
+    fn fmu(&self) -> Option<&Arc<Fmu>> {
+        match self {
+            Self::Fmu(fmu) => Some(fmu),
+            Self::AttitudeLaw => None,
+        }
+    }
 }
 
 /// Why a flight could not start (not a verdict on the controller: the case is infeasible).
@@ -220,34 +254,39 @@ impl Models {
     /// Unpack and load the FMUs `scenario` names (`[plant] fmu`, `[controller] fmu`); the built-in F-16 and our
     /// controller need nothing.
     pub fn open(scenario: &Scenario) -> anyhow::Result<Self> {
-        let open = |path: &Option<std::path::PathBuf>| -> anyhow::Result<Option<Arc<Fmu>>> {
-            path.as_deref().map(|p: &Path| Ok(Arc::new(Fmu::open(p)?))).transpose()
+        let plant = match PlantKind::of(scenario) {
+            PlantKind::F16 => OpenedPlant::F16,
+            PlantKind::Fmu(path) => OpenedPlant::Fmu(Arc::new(Fmu::open(&path)?)),
         };
-        Ok(Self { plant_fmu: open(&scenario.plant.fmu)?, controller_fmu: open(&scenario.controller.fmu)? })
+        let controller = match ControllerKind::of(scenario) {
+            ControllerKind::AttitudeLaw => OpenedController::AttitudeLaw,
+            ControllerKind::Fmu(path) => OpenedController::Fmu(Arc::new(Fmu::open(&path)?)),
+        };
+        Ok(Self { plant, controller })
     }
 
     /// Whether the scenario flies an FMU (otherwise `silrig_flight::sim` flies it, the reference loop).
     pub fn has_fmu(&self) -> bool {
-        self.plant_fmu.is_some() || self.controller_fmu.is_some()
+        self.plant.fmu().is_some() || self.controller.fmu().is_some()
     }
 
     /// `plant`, a flight's announcement, when the plant is one of your own (an FMU); `None` for the built-in F-16
     /// under any controller, whose actuators are its own: what the summary and the figures take.
     pub fn own_plant(&self, plant: PlantSignals) -> Option<PlantSignals> {
-        self.plant_fmu.is_some().then_some(plant)
+        self.plant.fmu().is_some().then_some(plant)
     }
 
     /// The plant FMU's signals under `scenario`, as it announces them when it flies; `None` for the built-in F-16
     /// (what the summary takes: `silrig_flight::summary::summarize`).
     pub fn plant_signals(&self, scenario: &Scenario) -> Result<Option<PlantSignals>, String> {
-        let Some(fmu) = &self.plant_fmu else { return Ok(None) };
-        super::fmu_plant::fmu_signals(fmu.file(), &fmu.description, scenario).map(|f| Some(f.signals))
+        let Some(fmu) = self.plant.fmu() else { return Ok(None) };
+        crate::fmu::plant::fmu_signals(fmu.file(), &fmu.description, scenario).map(|f| Some(f.signals))
     }
 
     /// The FMU whose binary allows one instance per process (`canBeInstantiatedOnlyOncePerProcess`), if any:
     /// its flights must be flown one after the other.
     pub fn one_instance_per_process(&self) -> Option<String> {
-        [&self.plant_fmu, &self.controller_fmu]
+        [self.plant.fmu(), self.controller.fmu()]
             .into_iter()
             .flatten()
             .find(|f| f.description.co_simulation.one_instance_per_process)
@@ -265,12 +304,12 @@ impl Models {
                 fmu.file()
             )
         };
-        if let Some(fmu) = &self.plant_fmu
+        if let Some(fmu) = self.plant.fmu()
             && silrig_flight::dispersion::is_f16_only(key)
         {
             return Err(unread(fmu, "plant"));
         }
-        if let Some(fmu) = &self.controller_fmu
+        if let Some(fmu) = self.controller.fmu()
             && key.starts_with("controller.")
             && !key.starts_with("controller.parameters.")
         {
@@ -282,22 +321,22 @@ impl Models {
     /// Fly `scenario` (this scenario, or a sample of its dispersions: the same FMU files) with fresh instances.
     pub fn fly(&self, scenario: &Scenario) -> Result<Flown, SetupError> {
         let setup = |e: anyhow::Error| SetupError(e);
-        let mut controller: Box<dyn Controller> = match &self.controller_fmu {
-            Some(fmu) => Box::new(FmuController::new(fmu.clone(), scenario).map_err(setup)?),
-            None => Box::new(AttitudeLaw::new(scenario)),
+        let mut controller: Box<dyn Controller> = match &self.controller {
+            OpenedController::AttitudeLaw => Box::new(AttitudeLaw::new(scenario)),
+            OpenedController::Fmu(fmu) => Box::new(FmuController::new(fmu.clone(), scenario).map_err(setup)?),
         };
         let connect = |e: String| setup(anyhow::anyhow!(e));
-        match &self.plant_fmu {
-            Some(fmu) => {
+        match &self.plant {
+            OpenedPlant::F16 => {
+                let mut plant = F16Plant::new(scenario).map_err(|e| setup(e.into()))?;
+                fly(scenario, &mut plant, controller.as_mut()).map_err(connect)
+            }
+            OpenedPlant::Fmu(fmu) => {
                 let plant = FmuPlant::new(fmu.clone(), scenario).map_err(setup)?;
                 let mut model = FmuModel::new(plant, scenario).map_err(setup)?;
                 let mut flown = fly(scenario, &mut model, controller.as_mut()).map_err(connect)?;
                 flown.outputs_refused = model.outputs_refused.clone();
                 Ok(flown)
-            }
-            None => {
-                let mut plant = F16Plant::new(scenario).map_err(|e| setup(e.into()))?;
-                fly(scenario, &mut plant, controller.as_mut()).map_err(connect)
             }
         }
     }

@@ -16,21 +16,21 @@
 //! (how the exported F-16 keeps the built-in plant's names): `name` renames it, `trace="false"` keeps an output out
 //! of `trace.csv` (an input's command out of it), `position_of` names the input whose actuator an output reports.
 
-use super::ProcessArgs;
-use super::fmu_variables::{can_checkpoint, from_hex, set_parameters, signal_variables, to_hex};
-use super::plant_model::{ActuatorFlags, PlantModel};
-use super::plant_session::{PlantSession, PlantTick};
-use super::report::ProcessReport;
+use super::variables::{can_checkpoint, from_hex, set_parameters, signal_variables, to_hex};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signal_chain::SignalChain;
 use silrig_flight::signals::{InputSignal, OutputSignal, PlantSignals, valid_name, valid_unit};
 use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
 use silrig_fmi::numbers::Numbers;
 use silrig_fmi::{Fmu, Instance};
+use silrig_rig::ProcessArgs;
+use silrig_rig::plant_model::{ActuatorFlags, PlantModel};
+use silrig_rig::plant_session::{PlantSession, PlantTick};
+use silrig_rig::report::ProcessReport;
 use std::path::Path;
 use std::sync::Arc;
 
-pub use super::fmu_variables::signal_name;
+pub use super::variables::signal_name;
 
 /// The plant's signals of an FMU, and where each lives in it.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,7 +42,7 @@ pub struct FmuSignals {
     /// The kind and value reference of each input, in the announced order.
     pub input_refs: Vec<(ValueKind, u32)>,
     /// `[plant.parameters]`: kinds, value references and the values set before initialization.
-    pub parameters: Vec<super::fmu_variables::Parameter>,
+    pub parameters: Vec<super::variables::Parameter>,
     /// The inputs and outputs that are not signals, each `"name" (why)`.
     pub left_out: Vec<String>,
 }
@@ -115,7 +115,7 @@ pub fn fmu_signals(file: &str, d: &ModelDescription, scenario: &Scenario) -> Res
         };
         bad(format!("its variables as the plant's signals: {e}{why}"))
     })?;
-    let parameters = super::fmu_variables::parameters(file, d, "plant.parameters", &scenario.plant.parameters)?;
+    let parameters = super::variables::parameters(file, d, "plant.parameters", &scenario.plant.parameters)?;
     Ok(FmuSignals {
         output_refs: outputs.iter().map(|v| (v.kind, v.value_reference)).collect(),
         input_refs: inputs.iter().map(|v| (v.kind, v.value_reference)).collect(),
@@ -260,7 +260,7 @@ pub fn run_fmu_plant(args: &ProcessArgs, scenario: Scenario, path: &Path) -> any
 }
 
 /// An FMU with the rig's actuators and sensors around it, as one [`PlantModel`]: what the in-process loop
-/// ([`super::in_process`]) flies. The same steps as [`run_fmu_plant`] takes through its [`PlantSession`], in the
+/// ([`crate::in_process`]) flies. The same steps as [`run_fmu_plant`] takes through its [`PlantSession`], in the
 /// same order (the chain's actuators move under the command, the FMU steps with their positions, its outputs are
 /// read, refused when not finite, and measured once per tick), so both give the same trace.
 pub struct FmuModel {

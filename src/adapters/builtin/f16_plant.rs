@@ -2,12 +2,12 @@
 //! [`PlantRunner`] as `silrig sim` (actuators, sensor faults, RK4), announcing the F-16's signals
 //! ([`silrig_flight::f16_signals`]) with the scenario's trim as its failsafe's hold values.
 
-use super::plant_model::{ActuatorFlags, PlantModel};
 use silrig_flight::f16_signals::{f16_outputs, f16_signals};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::sim::{ActuatorCommand, PlantCheckpoint, PlantRunner, SetupError, StepHits};
 use silrig_model::control::SurfaceCommand;
+use silrig_rig::plant_model::{ActuatorFlags, PlantModel};
 
 /// The F-16 of the scenario, at its initial condition.
 pub struct F16Plant {

@@ -1,5 +1,5 @@
 //! A co-simulation FMU as the run's controller (`silrig run --controller-fmu`, a scenario's `[controller] fmu`):
-//! [`FmuController`] is one more [`Controller`], served by [`super::controller::serve`] in `silrig-controller`, so
+//! [`FmuController`] is one more [`Controller`], served by [`silrig_rig::controller::serve`] in `silrig-controller`, so
 //! it gets the session, supervision, the in-loop and process faults, the bumpless blend after a restart, checkpoints
 //! and the report as any controller does. What it owns is the mapping between the FMU's variables and the plant's
 //! signals, by name:
@@ -26,19 +26,17 @@
 //! failed FMI call ends the controller with the FMU's own message. Checkpoints are the FMU's serialized state where
 //! its description offers it; where it does not, the `controller-fmu` event says so and a restart starts it fresh.
 
-use super::ProcessArgs;
-use super::controller::{Controller, serve};
-use super::events::EventLog;
-use super::fmu_variables::{
-    can_checkpoint, from_hex, parameters, set_parameters, signal_name, signal_variables, to_hex,
-};
-use super::report::ProcessReport;
+use super::variables::{can_checkpoint, from_hex, parameters, set_parameters, signal_name, signal_variables, to_hex};
 use silrig_flight::controller_map::MapTarget;
 use silrig_flight::scenario::{ControllerOptions, Scenario, Setpoint};
 use silrig_flight::signals::{PlantSignals, valid_name};
 use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
 use silrig_fmi::numbers::Numbers;
 use silrig_fmi::{Fmu, Instance};
+use silrig_rig::ProcessArgs;
+use silrig_rig::controller::{Controller, serve};
+use silrig_rig::events::EventLog;
+use silrig_rig::report::ProcessReport;
 use silrig_wire::wire::{ControllerInfo, MAX_DIAGNOSTICS, PlantSample};
 use std::cell::RefCell;
 use std::path::Path;
@@ -78,7 +76,7 @@ pub struct ControllerMap {
     /// The diagnostics' names: the signal names of the first [`MAX_DIAGNOSTICS`] outputs.
     pub diagnostics: Vec<String>,
     /// `[controller.parameters]`: kinds, value references and the values set before initialization.
-    pub parameters: Vec<super::fmu_variables::Parameter>,
+    pub parameters: Vec<super::variables::Parameter>,
 }
 
 /// Where an FMU input's value comes from each tick.

@@ -1,4 +1,4 @@
-//! What an FMU as the plant ([`super::fmu_plant`]) and an FMU as the controller ([`super::fmu_controller`]) share:
+//! What an FMU as the plant ([`super::plant`]) and an FMU as the controller ([`super::controller`]) share:
 //! a variable's signal name, which of its inputs and outputs are signals (numbers: Real, Integer, Boolean) and why
 //! the others are not, a scenario's parameters table checked against the FMU's variables and set by value
 //! reference, whether its state can be checkpointed, and that state as hex text.

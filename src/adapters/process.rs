@@ -1,0 +1,94 @@
+//! Which adapter the rig's processes fly: [`run_plant`] (`silrig-plant`) and [`run_controller`]
+//! (`silrig-controller`) read the scenario, name its plant's and controller's kind ([`PlantKind`],
+//! [`ControllerKind`]), and hand the adapter of that kind to the rig's process body. A new adapter is one variant
+//! of a kind and one arm of its match.
+
+use crate::builtin::attitude_law::AttitudeLaw;
+use crate::builtin::f16_plant::F16Plant;
+use crate::fmu::controller::run_fmu_controller;
+use crate::fmu::plant::run_fmu_plant;
+use silrig_flight::scenario::Scenario;
+use silrig_rig::ProcessArgs;
+use silrig_rig::controller::serve;
+use silrig_rig::plant::run_plant_model;
+use silrig_rig::report::ProcessReport;
+use std::path::PathBuf;
+
+/// What flies as the plant.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PlantKind {
+    /// The built-in F-16 (a scenario without `[plant] fmu`).
+    F16,
+    /// A co-simulation FMU (`[plant] fmu`).
+    Fmu(PathBuf),
+}
+
+impl PlantKind {
+    /// The kind of plant `scenario` flies.
+    pub fn of(scenario: &Scenario) -> Self {
+        match &scenario.plant.fmu {
+            Some(path) => Self::Fmu(path.clone()),
+            None => Self::F16,
+        }
+    }
+}
+
+/// What flies as the controller.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ControllerKind {
+    /// Ours, the paper's adaptive SMC/RBF law (a scenario without `[controller] fmu`).
+    AttitudeLaw,
+    /// A co-simulation FMU (`[controller] fmu`).
+    Fmu(PathBuf),
+}
+
+impl ControllerKind {
+    /// The kind of controller `scenario` flies.
+    pub fn of(scenario: &Scenario) -> Self {
+        match &scenario.controller.fmu {
+            Some(path) => Self::Fmu(path.clone()),
+            None => Self::AttitudeLaw,
+        }
+    }
+}
+
+/// Run the plant process to the end of the scenario (or SIGTERM) and write its report.
+pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
+    silrig_rig::signals::install_termination_flag();
+    let scenario = args.scenario()?;
+    match PlantKind::of(&scenario) {
+        PlantKind::F16 => {
+            let model = Box::new(F16Plant::new(&scenario)?);
+            run_plant_model(args, scenario, model)
+        }
+        PlantKind::Fmu(path) => run_fmu_plant(args, scenario, &path),
+    }
+}
+
+/// Run the controller process until the run ends (or SIGTERM) and write its report.
+pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
+    let scenario = args.scenario()?;
+    match ControllerKind::of(&scenario) {
+        ControllerKind::AttitudeLaw => {
+            let law = Box::new(AttitudeLaw::new(&scenario));
+            serve(args, scenario, law)
+        }
+        ControllerKind::Fmu(path) => run_fmu_controller(args, scenario, &path),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_scenario_names_the_kind_of_plant_and_controller() {
+        let mut scenario = Scenario::embedded_default();
+        assert_eq!(PlantKind::of(&scenario), PlantKind::F16);
+        assert_eq!(ControllerKind::of(&scenario), ControllerKind::AttitudeLaw);
+        scenario.plant.fmu = Some("airframe.fmu".into());
+        scenario.controller.fmu = Some("pid.fmu".into());
+        assert_eq!(PlantKind::of(&scenario), PlantKind::Fmu("airframe.fmu".into()));
+        assert_eq!(ControllerKind::of(&scenario), ControllerKind::Fmu("pid.fmu".into()));
+    }
+}
