@@ -24,9 +24,9 @@
 //! All processes of one run load the same scenario and use the same run id, which selects the iceoryx2
 //! namespace (see [`silrig_wire::ipc::rig_config`]), so rigs side by side never see each other.
 //!
-//! Layers: uses `silrig-model`, `silrig-flight`, `silrig-wire` and `silrig-recording` (the logger's files); the adapters (the F-16, our law, FMUs, which of
-//! them a process flies) are `silrig-adapters`, and the launcher that starts these processes is `silrig-launch`,
-//! both above.
+//! Layers: uses `silrig-model`, `silrig-flight`, `silrig-wire` and `silrig-recording` (the logger's files); the
+//! adapters (the F-16, our law, FMUs, which of them a process flies) are `silrig-adapters`, and the launcher that
+//! starts these processes is `silrig-launch`, both above.
 
 pub mod controller;
 pub mod events;
