@@ -92,6 +92,63 @@ impl Flown {
     }
 }
 
+/// What the controller's session does in one process: ask the controller for a command on its ticks, check it as
+/// the session would (a refused one holds the plant's inputs and shows no diagnostics), and repeat its last answer
+/// on the plant's ticks between (`timing.controller_every_ticks`).
+struct Answers {
+    signals: PlantSignals,
+    dt_s: f64,
+    command: Vec<f64>,
+    diagnostics: Vec<f64>,
+    /// Whether the last answer was valid.
+    valid: bool,
+    /// The last valid command sent: what the session repeats for a refused one (the hold values before any).
+    last_sent: Vec<f64>,
+    refused: (u64, Option<String>),
+}
+
+impl Answers {
+    /// The answer to `tick`'s sample (`outputs`, at `t_s`); an error: the controller's failure.
+    fn answer(
+        &mut self,
+        scenario: &Scenario,
+        controller: &mut dyn Controller,
+        tick: u64,
+        t_s: f64,
+        outputs: &[f64],
+    ) -> Result<(), String> {
+        if !scenario.timing.is_controller_tick(tick) {
+            return Ok(());
+        }
+        let mut sample = PlantSample { t_sim_s: t_s, ..PlantSample::with_outputs(outputs) };
+        sample.header.tick = tick;
+        for (c, i) in self.command.iter_mut().zip(&self.signals.inputs) {
+            *c = i.held_output.map(|o| outputs[o]).filter(|v| v.is_finite()).unwrap_or(i.hold);
+        }
+        controller.step(&sample, self.dt_s, &mut self.command, &mut self.diagnostics);
+        if let Some(why) = controller.failure() {
+            return Err(why);
+        }
+        let inputs = self.command.len();
+        let mut sent = CommandSample { answers_tick: tick, ..CommandSample::zeroed() };
+        sent.inputs_len = inputs as u32;
+        sent.inputs[..inputs].copy_from_slice(&self.command);
+        sent.diagnostics_len = self.diagnostics.len() as u32;
+        sent.diagnostics[..self.diagnostics.len()].copy_from_slice(&self.diagnostics);
+        let refused =
+            sent.validate().map_err(|e| e.to_string()).and_then(|()| wire::check_command(&self.signals, &sent));
+        self.valid = refused.is_ok();
+        match refused {
+            Err(reason) => {
+                self.refused.0 += 1;
+                self.refused.1.get_or_insert(format!("tick {tick}: {reason}"));
+            }
+            Ok(()) => self.last_sent.copy_from_slice(&self.command),
+        }
+        Ok(())
+    }
+}
+
 /// Fly `plant` against `controller` under `scenario` from tick 0 to its end. An error: the controller cannot
 /// connect to the plant (a signal it needs is missing).
 pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn Controller) -> Result<Flown, String> {
@@ -99,53 +156,36 @@ pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn
     controller.connect(&signals)?;
     let names = controller.diagnostic_names();
     let mut trace = Trace::new(signals.trace_columns(&names));
-    let (dt_s, ticks) = (scenario.timing.dt_s, scenario.timing.ticks());
+    let ticks = scenario.timing.ticks();
     trace.rows.reserve(ticks as usize + 1);
     let delay = scenario.timing.command_delay_ticks() as usize;
-    let inputs = signals.inputs.len();
-    let hold = signals.hold();
     let mut applied = plant.initial_inputs();
     // Answers not yet acting, oldest first: whether valid, and the command (buffers recycled through `spare`).
-    let mut answers: VecDeque<(bool, Vec<f64>)> = VecDeque::with_capacity(delay + 1);
+    let mut pending: VecDeque<(bool, Vec<f64>)> = VecDeque::with_capacity(delay + 1);
     let mut spare: Vec<Vec<f64>> = Vec::new();
-    // The last valid command sent: what the session repeats for a refused one (the hold values before any).
-    let mut last_sent = hold.clone();
-    let mut commands_refused = (0, None);
-    let mut diagnostics = vec![0.0; names.len()];
+    let mut answers = Answers {
+        dt_s: scenario.timing.controller_dt_s(),
+        command: vec![0.0; signals.inputs.len()],
+        diagnostics: vec![0.0; names.len()],
+        valid: true,
+        last_sent: signals.hold(),
+        refused: (0, None),
+        signals: signals.clone(),
+    };
     let no_diagnostics = vec![f64::NAN; names.len()];
-    let mut command = vec![0.0; inputs];
     let mut ended_early = None;
     let mut outputs = plant.outputs();
     for tick in 0..=ticks {
         let t_s = plant.t_s();
-        let mut sample = PlantSample { t_sim_s: t_s, ..PlantSample::with_outputs(&outputs) };
-        sample.header.tick = tick;
-        for (c, i) in command.iter_mut().zip(&signals.inputs) {
-            *c = i.held_output.map(|o| outputs[o]).filter(|v| v.is_finite()).unwrap_or(i.hold);
-        }
-        controller.step(&sample, dt_s, &mut command, &mut diagnostics);
-        if let Some(why) = controller.failure() {
+        if let Err(why) = answers.answer(scenario, controller, tick, t_s, &outputs) {
             ended_early = Some(EndedEarly { by: EndedBy::Controller, tick, t_s, why });
             break;
         }
-        let mut sent = CommandSample { answers_tick: tick, ..CommandSample::zeroed() };
-        sent.inputs_len = inputs as u32;
-        sent.inputs[..inputs].copy_from_slice(&command);
-        sent.diagnostics_len = diagnostics.len() as u32;
-        sent.diagnostics[..diagnostics.len()].copy_from_slice(&diagnostics);
-        let refused = sent.validate().map_err(|e| e.to_string()).and_then(|()| wire::check_command(&signals, &sent));
-        let valid = refused.is_ok();
-        if let Err(reason) = refused {
-            commands_refused.0 += 1;
-            commands_refused.1.get_or_insert(format!("tick {tick}: {reason}"));
-        } else {
-            last_sent.copy_from_slice(&command);
-        }
-        let mut answer = spare.pop().unwrap_or_else(|| vec![0.0; inputs]);
-        answer.copy_from_slice(&command);
-        answers.push_back((valid, answer));
-        if answers.len() > delay
-            && let Some((valid, answer)) = answers.pop_front()
+        let mut answer = spare.pop().unwrap_or_else(|| vec![0.0; answers.command.len()]);
+        answer.copy_from_slice(&answers.command);
+        pending.push_back((answers.valid, answer));
+        if pending.len() > delay
+            && let Some((valid, answer)) = pending.pop_front()
         {
             if valid {
                 applied.copy_from_slice(&answer);
@@ -156,9 +196,9 @@ pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn
         let next = plant.outputs();
         // The trace shows what the session sends: the command, or for a refused one the last valid command and no
         // diagnostics.
-        let shown_diagnostics = if valid { &diagnostics } else { &no_diagnostics };
+        let shown_diagnostics = if answers.valid { &answers.diagnostics } else { &no_diagnostics };
         let mut row = Vec::with_capacity(trace.columns.len());
-        signals.trace_row(&mut row, t_s, &outputs, Some(&last_sent), Some(&next), 0, shown_diagnostics);
+        signals.trace_row(&mut row, t_s, &outputs, Some(&answers.last_sent), Some(&next), 0, shown_diagnostics);
         trace.rows.push(row);
         if let Err(why) = stepped {
             ended_early = Some(EndedEarly { by: EndedBy::Plant, tick, t_s, why });
@@ -166,6 +206,7 @@ pub fn fly(scenario: &Scenario, plant: &mut dyn PlantModel, controller: &mut dyn
         }
         outputs = next;
     }
+    let commands_refused = answers.refused;
     Ok(Flown { plant: signals, trace, ended_early, commands_refused, outputs_refused: (0, None) })
 }
 

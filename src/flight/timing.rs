@@ -42,6 +42,22 @@ pub struct Timing {
     /// the run).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub late_window_s: Option<f64>,
+    /// The controller computes every this many plant ticks (1..=1000, from tick 0): a controller at a divisor of
+    /// the plant's rate (4 at a 1 kHz plant is 250 Hz). Between its ticks its last answer is repeated, so the plant
+    /// and the trace keep the plant's rate; the controller's step is this many periods.
+    #[serde(default = "every_tick", skip_serializing_if = "is_every_tick")]
+    pub controller_every_ticks: u64,
+}
+
+/// Most plant ticks between two controller ticks.
+pub const MAX_CONTROLLER_EVERY_TICKS: u64 = 1000;
+
+fn every_tick() -> u64 {
+    1
+}
+
+fn is_every_tick(n: &u64) -> bool {
+    *n == 1
 }
 
 impl Timing {
@@ -52,6 +68,16 @@ impl Timing {
             CommandTiming::NextTick => 1,
         };
         offset + self.transport_delay_ticks
+    }
+
+    /// Whether the controller computes at plant tick `tick` (else its last answer is repeated).
+    pub fn is_controller_tick(&self, tick: u64) -> bool {
+        tick.is_multiple_of(self.controller_every_ticks.max(1))
+    }
+
+    /// The controller's step, s: `controller_every_ticks` plant periods.
+    pub fn controller_dt_s(&self) -> f64 {
+        self.dt_s * self.controller_every_ticks.max(1) as f64
     }
 
     /// Number of ticks in the run.
@@ -98,6 +124,18 @@ impl Timing {
                 format!("must be within 0..={MAX_TRANSPORT_DELAY_TICKS}, got {}", self.transport_delay_ticks),
             );
         }
+        let every = self.controller_every_ticks;
+        if !(1..=MAX_CONTROLLER_EVERY_TICKS).contains(&every) || every > self.ticks().max(1) {
+            return err(
+                "timing.controller_every_ticks",
+                format!(
+                    "must be within 1..={} plant ticks and at most the run's {} ticks, got {every}: the controller \
+                     computes every this many plant ticks",
+                    MAX_CONTROLLER_EVERY_TICKS,
+                    self.ticks()
+                ),
+            );
+        }
         if let Some(w) = self.late_window_s
             && !(w > 0.0 && w <= self.duration_s)
         {
@@ -125,6 +163,7 @@ mod tests {
             command_timing: CommandTiming::NextTick,
             transport_delay_ticks: 0,
             late_window_s,
+            controller_every_ticks: 1,
         }
     }
 

@@ -169,6 +169,9 @@ pub struct ControllerSession {
     pending: Option<Pending>,
     /// The last command sent; what a refused command is replaced by.
     last_sent: Option<[f64; MAX_INPUTS]>,
+    /// The controller's last answer as published (refused or not): what the plant's ticks between the
+    /// controller's own are answered with.
+    last_answer: Option<CommandSample>,
     /// Consecutive refused commands (an event marks the first of each run).
     refusing: u64,
     opened_ns: u64,
@@ -232,6 +235,7 @@ impl ControllerSession {
             last_tick: None,
             pending: None,
             last_sent: None,
+            last_answer: None,
             refusing: 0,
             opened_ns: monotonic_ns(),
             ended: None,
@@ -255,9 +259,23 @@ impl ControllerSession {
         &self.scenario
     }
 
-    /// The controller's step, s.
+    /// The controller's step, s: the plant's period times `timing.controller_every_ticks`.
     pub fn dt_s(&self) -> f64 {
-        self.scenario.timing.dt_s
+        self.scenario.timing.controller_dt_s()
+    }
+
+    /// A plant tick between the controller's own (`timing.controller_every_ticks`): answered at once with the
+    /// controller's last answer, unchanged, and true. False for a tick the controller computes, and for the first
+    /// sample it sees (it has no answer yet, as when it joins a flying plant).
+    fn repeat_last_answer(&mut self, tick: u64) -> Result<bool, SessionError> {
+        let Some(last) = self.last_answer.filter(|_| !self.scenario.timing.is_controller_tick(tick)) else {
+            return Ok(false);
+        };
+        let p = self.pending.take().expect("a sample was just handed out");
+        let repeated = CommandSample { answers_tick: p.tick, compute_ns: 0, ..last };
+        self.rec.count("commands_repeated", 1);
+        self.publish(p.tick, &repeated)?;
+        Ok(true)
     }
 
     /// What a predecessor of this controller saved, when the session was opened with `--resume`.
@@ -361,6 +379,7 @@ impl ControllerSession {
         }
         out.compute_ns = monotonic_ns() - p.delivered_ns;
         self.rec.record(COMPUTE, out.compute_ns as i64);
+        self.last_answer = Some(out);
         self.publish(p.tick, &out)?;
         match refused {
             Some(reason) => Err(SessionError::CommandRefused { tick: p.tick, reason }),

@@ -318,6 +318,9 @@ pub struct FmuController {
     /// Its variables and how they meet `[controller]`.
     pub map: ControllerMap,
     setpoint: Setpoint,
+    /// The plant's period, s: a sample's tick at this period is its time (the controller's own step may be longer,
+    /// `timing.controller_every_ticks`).
+    plant_dt_s: f64,
     binding: Option<Binding>,
     inputs: Numbers,
     outputs: Numbers,
@@ -356,6 +359,7 @@ impl FmuController {
             fmu,
             map,
             setpoint: scenario.setpoint.clone(),
+            plant_dt_s: scenario.timing.dt_s,
             binding: None,
             last_tick: 0,
             fmu_time_s: None,
@@ -411,7 +415,7 @@ impl FmuController {
         // A plant resumed from its checkpoint sends ticks the controller has flown already; an FMU refuses a
         // communication point before its own time, so the controller's time goes on, as a controller's clock on a
         // bench does (in lockstep, and in a run without a plant restart, it is the sample's tick).
-        let t_s = (sample.header.tick as f64 * dt_s).max(self.fmu_time_s.unwrap_or(f64::NEG_INFINITY));
+        let t_s = (sample.header.tick as f64 * self.plant_dt_s).max(self.fmu_time_s.unwrap_or(f64::NEG_INFINITY));
         instance.do_step(t_s, dt_s).map_err(|e| e.to_string())?;
         self.fmu_time_s = Some(t_s + dt_s);
         instance.get_numbers(&mut self.outputs, &mut self.output_values).map_err(|e| e.to_string())?;

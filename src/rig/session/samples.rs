@@ -16,11 +16,23 @@ use silrig_wire::wire::{self, MAX_INPUTS, PlantSample};
 use std::time::Duration;
 
 impl ControllerSession {
-    /// Block until the next plant sample to answer (the newest one waiting: after a stall, older ones are skipped
-    /// and counted), or until the session should stop. While the plant is silent the session idles and says so
-    /// once; with no sample at all within twice `--startup-timeout-s` of opening, it gives up
-    /// ([`SessionError::NoRig`]).
+    /// Block until the next plant sample the controller computes for (the newest one waiting: after a stall,
+    /// older ones are skipped and counted), or until the session should stop. A controller slower than the plant
+    /// (`timing.controller_every_ticks`) sees only its own ticks: the session answers the plant's ticks between
+    /// with the controller's last answer. While the plant is silent the session idles and says so once; with no
+    /// sample at all within twice `--startup-timeout-s` of opening, it gives up ([`SessionError::NoRig`]).
     pub fn next_sample(&mut self) -> Result<Next, SessionError> {
+        loop {
+            let next = self.next_plant_sample()?;
+            match &next {
+                Next::Sample(sample) if self.repeat_last_answer(sample.header.tick)? => continue,
+                _ => return Ok(next),
+            }
+        }
+    }
+
+    /// The next plant sample to answer, whoever computes its answer.
+    fn next_plant_sample(&mut self) -> Result<Next, SessionError> {
         if self.pending.take().is_some() {
             self.rec.count("samples_unanswered", 1);
         }
