@@ -698,8 +698,7 @@ impl PlantLoop {
     }
 }
 
-/// Fly a built-in vehicle (`model`: the F-16, the quadrotor) as the plant process to the end of the scenario (or
-/// SIGTERM) and write its report.
+/// Fly a built-in vehicle (the F-16, the quadrotor) as the plant process to the scenario's end and write its report.
 pub fn run_model_plant(
     args: &ProcessArgs,
     scenario: Scenario,
