@@ -1,5 +1,6 @@
 //! The closed loop of any plant and any controller the rig flies in one process, with no clock and no transport:
-//! the built-in F-16 or an FMU ([`crate::fmu::plant::FmuModel`]) against our controller or a controller FMU, tick
+//! a built-in vehicle (the F-16, the quadrotor) or an FMU ([`crate::fmu::plant::FmuModel`]) against our controller or
+//! a controller FMU, tick
 //! by tick in lockstep. `silrig sim` and `silrig sweep` fly scenarios that name an FMU here, so a user's models get
 //! Monte Carlo at in-process speed.
 //!
@@ -17,6 +18,8 @@
 
 use crate::builtin::attitude_law::AttitudeLaw;
 use crate::builtin::f16_plant::F16Plant;
+use crate::builtin::quad_law::QuadLaw;
+use crate::builtin::quad_plant::QuadPlant;
 use crate::fmu::controller::FmuController;
 use crate::fmu::plant::{FmuModel, FmuPlant};
 use crate::process::{ControllerKind, PlantKind};
@@ -259,12 +262,14 @@ pub struct Models {
 /// A plant of each [`PlantKind`], opened: what [`Models::fly`] makes each flight's plant from.
 enum OpenedPlant {
     F16,
+    Quad,
     Fmu(Arc<Fmu>),
 }
 
 /// A controller of each [`ControllerKind`], opened: what [`Models::fly`] makes each flight's controller from.
 enum OpenedController {
     AttitudeLaw,
+    QuadLaw,
     Fmu(Arc<Fmu>),
 }
 
@@ -272,7 +277,7 @@ impl OpenedPlant {
     fn fmu(&self) -> Option<&Arc<Fmu>> {
         match self {
             Self::Fmu(fmu) => Some(fmu),
-            Self::F16 => None,
+            Self::F16 | Self::Quad => None,
         }
     }
 }
@@ -281,7 +286,7 @@ impl OpenedController {
     fn fmu(&self) -> Option<&Arc<Fmu>> {
         match self {
             Self::Fmu(fmu) => Some(fmu),
-            Self::AttitudeLaw => None,
+            Self::AttitudeLaw | Self::QuadLaw => None,
         }
     }
 }
@@ -293,33 +298,48 @@ pub struct SetupError(pub anyhow::Error);
 
 impl Models {
     /// Unpack and load the FMUs `scenario` names (`[plant] fmu`, `[controller] fmu`); the built-in F-16 and our
-    /// controller need nothing.
+    /// controller need nothing, the quadrotor a scenario it can fly (checked here, naming the key).
     pub fn open(scenario: &Scenario) -> anyhow::Result<Self> {
         let plant = match PlantKind::of(scenario) {
             PlantKind::F16 => OpenedPlant::F16,
+            PlantKind::Quad => {
+                silrig_flight::quad::check_for_quad(scenario).map_err(|(k, p)| anyhow::anyhow!("`{k}`: {p}"))?;
+                OpenedPlant::Quad
+            }
             PlantKind::Fmu(path) => OpenedPlant::Fmu(Arc::new(Fmu::open(&path)?)),
         };
         let controller = match ControllerKind::of(scenario) {
             ControllerKind::AttitudeLaw => OpenedController::AttitudeLaw,
+            ControllerKind::QuadLaw => OpenedController::QuadLaw,
             ControllerKind::Fmu(path) => OpenedController::Fmu(Arc::new(Fmu::open(&path)?)),
         };
         Ok(Self { plant, controller })
     }
 
-    /// Whether the scenario flies an FMU (otherwise `silrig_flight::sim` flies it, the reference loop).
+    /// Whether the scenario flies an FMU.
     pub fn has_fmu(&self) -> bool {
         self.plant.fmu().is_some() || self.controller.fmu().is_some()
     }
 
-    /// `plant`, a flight's announcement, when the plant is one of your own (an FMU); `None` for the built-in F-16
-    /// under any controller, whose actuators are its own: what the summary and the figures take.
-    pub fn own_plant(&self, plant: PlantSignals) -> Option<PlantSignals> {
-        self.plant.fmu().is_some().then_some(plant)
+    /// Whether `scenario` is the F-16 against our controller at the plant's rate, which `silrig_flight::sim` flies
+    /// (the reference loop); anything else flies here.
+    pub fn flies_reference_loop(&self, scenario: &Scenario) -> bool {
+        matches!((&self.plant, &self.controller), (OpenedPlant::F16, OpenedController::AttitudeLaw))
+            && scenario.timing.controller_every_ticks == 1
     }
 
-    /// The plant FMU's signals under `scenario`, as it announces them when it flies; `None` for the built-in F-16
-    /// (what the summary takes: `silrig_flight::summary::summarize`).
+    /// `plant`, a flight's announcement, when the plant is not the built-in F-16 (an FMU, the quadrotor); `None`
+    /// for the F-16 under any controller, whose actuators are its own: what the summary and the figures take.
+    pub fn own_plant(&self, plant: PlantSignals) -> Option<PlantSignals> {
+        (!matches!(self.plant, OpenedPlant::F16)).then_some(plant)
+    }
+
+    /// The plant FMU's or the quadrotor's signals under `scenario`, as it announces them when it flies; `None` for
+    /// the built-in F-16 (what the summary takes: `silrig_flight::summary::summarize`).
     pub fn plant_signals(&self, scenario: &Scenario) -> Result<Option<PlantSignals>, String> {
+        if let OpenedPlant::Quad = self.plant {
+            return silrig_flight::quad::builtin_signals(scenario).map(Some).map_err(|(k, p)| format!("`{k}`: {p}"));
+        }
         let Some(fmu) = self.plant.fmu() else { return Ok(None) };
         crate::fmu::plant::fmu_signals(fmu.file(), &fmu.description, scenario).map(|f| Some(f.signals))
     }
@@ -350,6 +370,14 @@ impl Models {
         {
             return Err(unread(fmu, "plant"));
         }
+        if let OpenedPlant::Quad = self.plant
+            && silrig_flight::dispersion::is_f16_only(key)
+        {
+            return Err(format!(
+                "the plant is the built-in quadrotor: it does not read `{key}`; disperse its parameters as \
+                 `plant.parameters.<name>`"
+            ));
+        }
         if let Some(fmu) = self.controller.fmu()
             && key.starts_with("controller.")
             && !key.starts_with("controller.parameters.")
@@ -364,12 +392,17 @@ impl Models {
         let setup = |e: anyhow::Error| SetupError(e);
         let mut controller: Box<dyn Controller> = match &self.controller {
             OpenedController::AttitudeLaw => Box::new(AttitudeLaw::new(scenario)),
+            OpenedController::QuadLaw => Box::new(QuadLaw::new(scenario).map_err(|e| setup(anyhow::anyhow!(e)))?),
             OpenedController::Fmu(fmu) => Box::new(FmuController::new(fmu.clone(), scenario).map_err(setup)?),
         };
         let connect = |e: String| setup(anyhow::anyhow!(e));
         match &self.plant {
             OpenedPlant::F16 => {
                 let mut plant = F16Plant::new(scenario).map_err(|e| setup(e.into()))?;
+                fly(scenario, &mut plant, controller.as_mut()).map_err(connect)
+            }
+            OpenedPlant::Quad => {
+                let mut plant = QuadPlant::new(scenario).map_err(setup)?;
                 fly(scenario, &mut plant, controller.as_mut()).map_err(connect)
             }
             OpenedPlant::Fmu(fmu) => {

@@ -5,6 +5,8 @@
 
 use crate::builtin::attitude_law::AttitudeLaw;
 use crate::builtin::f16_plant::F16Plant;
+use crate::builtin::quad_law::QuadLaw;
+use crate::builtin::quad_plant::QuadPlant;
 use crate::fmu::controller::run_fmu_controller;
 use crate::fmu::plant::run_fmu_plant;
 use silrig_flight::scenario::Scenario;
@@ -17,8 +19,10 @@ use std::path::PathBuf;
 /// What flies as the plant.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum PlantKind {
-    /// The built-in F-16 (a scenario without `[plant] fmu`).
+    /// The built-in F-16 (a scenario without `[plant] fmu` or `[plant] model`).
     F16,
+    /// The built-in X quadrotor (`[plant] model = "quad"`).
+    Quad,
     /// A co-simulation FMU (`[plant] fmu`).
     Fmu(PathBuf),
 }
@@ -28,6 +32,7 @@ impl PlantKind {
     pub fn of(scenario: &Scenario) -> Self {
         match &scenario.plant.fmu {
             Some(path) => Self::Fmu(path.clone()),
+            None if silrig_flight::quad::is_quad(scenario) => Self::Quad,
             None => Self::F16,
         }
     }
@@ -36,8 +41,10 @@ impl PlantKind {
 /// What flies as the controller.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ControllerKind {
-    /// Ours, the paper's adaptive SMC/RBF law (a scenario without `[controller] fmu`).
+    /// Ours for the F-16, the paper's adaptive SMC/RBF law (a scenario without `[controller] fmu`).
     AttitudeLaw,
+    /// Ours for the quadrotor, cascaded attitude and rate loops with a mixer.
+    QuadLaw,
     /// A co-simulation FMU (`[controller] fmu`).
     Fmu(PathBuf),
 }
@@ -47,6 +54,7 @@ impl ControllerKind {
     pub fn of(scenario: &Scenario) -> Self {
         match &scenario.controller.fmu {
             Some(path) => Self::Fmu(path.clone()),
+            None if silrig_flight::quad::is_quad(scenario) => Self::QuadLaw,
             None => Self::AttitudeLaw,
         }
     }
@@ -61,6 +69,10 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             let model = Box::new(F16Plant::new(&scenario)?);
             run_plant_model(args, scenario, model)
         }
+        PlantKind::Quad => {
+            let model = Box::new(QuadPlant::new(&scenario)?);
+            run_plant_model(args, scenario, model)
+        }
         PlantKind::Fmu(path) => run_fmu_plant(args, scenario, &path),
     }
 }
@@ -72,6 +84,10 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
         ControllerKind::AttitudeLaw => {
             let law = Box::new(AttitudeLaw::new(&scenario));
             serve(args, scenario, law)
+        }
+        ControllerKind::QuadLaw => {
+            let law = QuadLaw::new(&scenario).map_err(|e| anyhow::anyhow!("the scenario: {e}"))?;
+            serve(args, scenario, Box::new(law))
         }
         ControllerKind::Fmu(path) => run_fmu_controller(args, scenario, &path),
     }
