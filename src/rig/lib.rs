@@ -35,6 +35,7 @@ pub mod fmu_variables;
 pub mod in_process;
 pub mod live_foxglove;
 pub mod logger;
+mod logger_writer;
 pub mod loop_faults;
 pub mod plant;
 pub mod plant_model;
