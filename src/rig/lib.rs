@@ -10,7 +10,8 @@
 //!   through that session; [`plant_process`]: which of the two `silrig-plant` flies; [`fmu_controller`]: a
 //!   co-simulation FMU as the controller, one more [`controller::Controller`]; [`controller_process`]: which
 //!   controller `silrig-controller` flies; [`fmu_variables`]: what the FMU plant and controller share.
-//! - [`live_foxglove`]: the logger's Foxglove WebSocket server (`silrig run --live foxglove`, feature `live`).
+//! - `logger_writer`: the logger's rows to every sink, flushed in batches, continued after a restarted logger's last
+//!   row; [`live_foxglove`]: the logger's Foxglove WebSocket server (`silrig run --live foxglove`, feature `live`).
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
