@@ -418,7 +418,7 @@ fn a_controller_that_writes_without_end_has_its_log_capped_and_the_drop_counted(
     let cmd = "python3 -c \"import sys; [sys.stderr.write('x' * 100000 + '\\n') for _ in range(300)]\"";
     let r = run("log-cap", &["--duration-s", "1", "--controller-cmd", cmd, &robust()]);
     let log = std::fs::read(r.out.join("controller.stderr.log")).unwrap();
-    let cap = silrig::launch::supervision::STDERR_LOG_CAP_BYTES as usize;
+    let cap = silrig::launch::child::STDERR_LOG_CAP_BYTES as usize;
     assert!(log.len() <= cap + 200 && log.len() > cap - 200_000, "{} bytes", log.len());
     let tail = String::from_utf8_lossy(&log[log.len() - 200..]);
     assert!(tail.contains("lines (") && tail.contains("bytes) past the cap were dropped"), "{tail}");

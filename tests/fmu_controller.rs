@@ -113,6 +113,8 @@ fn the_pid_fmu_builds_validates_and_compiles_cleanly() {
     let o = Command::new("cc")
         .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-fsyntax-only", "-I"])
         .arg(common::fmu::fmi_headers())
+        .arg("-I")
+        .arg(Path::new(ROOT).join("examples/fmu/common"))
         .arg(Path::new(ROOT).join("examples/fmu/pid/pid.c"))
         .output()
         .unwrap();

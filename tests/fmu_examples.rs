@@ -68,6 +68,8 @@ fn fmu_sources_compile_without_warnings() {
         let o = Command::new("cc")
             .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-fsyntax-only", "-I"])
             .arg(headers)
+            .arg("-I")
+            .arg(Path::new(ROOT).join("examples/fmu/common"))
             .arg(Path::new(ROOT).join(src))
             .output()
             .expect("cc runs");

@@ -3,7 +3,8 @@
 #
 #   examples/fmu/build.sh SRC_DIR OUT.fmu
 #
-# compiles SRC_DIR/*.c with the system C compiler (`cc`, or $CC) into binaries/linux64/<modelIdentifier>.so (FMI 3.0:
+# compiles SRC_DIR/*.c with the system C compiler (`cc`, or $CC; common/ beside this script, the example FMUs' shared
+# FMI 2.0 glue, on its include path) into binaries/linux64/<modelIdentifier>.so (FMI 3.0:
 # binaries/x86_64-linux/), adds SRC_DIR/modelDescription.xml (and SRC_DIR/resources/, if there is one) and packs them into OUT.fmu with Python's zipfile module
 # (no `zip` needed). The FMI headers come from $FMI_HEADERS (a folder holding fmi2Functions.h and fmi3Functions.h), else from the fmpy package that
 # `python3` ($PYTHON) imports (pip install fmpy). Everything happens in a temporary folder: OUT.fmu appears whole or
@@ -59,12 +60,15 @@ fi
 header=fmi${version%%.*}Functions.h
 [ -f "$FMI_HEADERS/$header" ] || die "$FMI_HEADERS has no $header (FMI_HEADERS must hold the FMI $version headers)"
 
+# The FMI 2.0 glue the example FMUs share (fmi2_glue.h), beside this script: on the include path of every build.
+glue=$(cd "$(dirname "$0")/common" && pwd) || die "the folder common/ beside build.sh is missing (it holds fmi2_glue.h)"
+
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/fmu-build.XXXXXX") || die "cannot create a temporary folder"
 trap 'rm -rf "$tmp"' EXIT
 trap 'exit 1' HUP INT TERM
 mkdir -p "$tmp/fmu/binaries/$platform"
 
-"$compiler" -shared -fPIC -O2 -Wall -I "$FMI_HEADERS" -o "$tmp/fmu/binaries/$platform/$id.so" "$@" -lm ||
+"$compiler" -shared -fPIC -O2 -Wall -I "$FMI_HEADERS" -I "$glue" -o "$tmp/fmu/binaries/$platform/$id.so" "$@" -lm ||
     die "compiling $* failed"
 cp "$src/modelDescription.xml" "$tmp/fmu/modelDescription.xml"
 set -- modelDescription.xml binaries

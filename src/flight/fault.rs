@@ -236,20 +236,45 @@ impl Fault {
 
     /// Check the fault against a run of `duration_s`; the error names the key and the problem.
     pub fn validate(&self, duration_s: f64) -> Result<(), (String, String)> {
-        let err = |k: &str, p: String| Err((k.to_string(), p));
         let Some(target) = self.target else {
-            return err("target", "missing: plant, controller, logger or bridge".into());
+            return refuse("target", "missing: plant, controller, logger or bridge".into());
         };
         let Some(action) = self.action else {
             let names: Vec<&str> = FaultAction::ALL.iter().map(|a| a.label()).collect();
-            return err("action", format!("missing: one of {}", names.join(", ")));
+            return refuse("action", format!("missing: one of {}", names.join(", ")));
         };
         if !(self.at_s >= 0.0 && self.at_s.is_finite()) {
-            return err("at_s", format!("must be >= 0, got {}", self.at_s));
+            return refuse("at_s", format!("must be >= 0, got {}", self.at_s));
         }
         if self.at_s >= duration_s {
-            return err("at_s", format!("{} s is beyond the run ({duration_s} s)", self.at_s));
+            return refuse("at_s", format!("{} s is beyond the run ({duration_s} s)", self.at_s));
         }
+        self.check_keys_of(action)?;
+        check_target_of(target, action)?;
+        self.check_ranges(duration_s)?;
+        if action == FaultAction::Drop {
+            match (self.ticks, self.probability) {
+                (None, None) | (Some(_), Some(_)) => {
+                    return refuse("ticks", "drop needs either ticks or probability".into());
+                }
+                (Some(0), _) => return refuse("ticks", "must be >= 1".into()),
+                (_, Some(p)) if !(p > 0.0 && p <= 1.0) => {
+                    return refuse("probability", format!("must be in (0, 1], got {p}"));
+                }
+                _ => {}
+            }
+        }
+        if let Some(l) = &self.limit
+            && l != "min"
+            && l != "max"
+        {
+            return refuse("limit", format!("must be \"min\" or \"max\", got {l:?}"));
+        }
+        Ok(())
+    }
+
+    /// Every key the action needs is given, and no key it does not use.
+    fn check_keys_of(&self, action: FaultAction) -> Result<(), (String, String)> {
         let given: [(&str, bool); 12] = [
             ("duration_s", self.duration_s.is_some()),
             ("restart_after_s", self.restart_after_s.is_some()),
@@ -277,29 +302,20 @@ impl Fault {
         };
         for (key, present) in given {
             if present && !required.contains(&key) && !optional.contains(&key) {
-                return err(key, format!("does not apply to action \"{}\"", action.label()));
+                return refuse(key, format!("does not apply to action \"{}\"", action.label()));
             }
             if !present && required.contains(&key) {
-                return err(key, format!("is required for action \"{}\"", action.label()));
+                return refuse(key, format!("is required for action \"{}\"", action.label()));
             }
         }
-        if target == FaultTarget::Bridge && !action.is_process_fault() {
-            return err(
-                "target",
-                format!("the bridge can be killed, terminated or stopped; \"{}\" is not one of those", action.label()),
-            );
-        }
-        if action == FaultAction::Drop && target == Role::Logger {
-            return err("target", "drop needs a publisher the loop depends on: plant or controller".into());
-        }
-        if action.is_plant_model_fault() && target != Role::Plant {
-            return err(
-                "target",
-                format!("action \"{}\" acts on the plant model: target must be plant", action.label()),
-            );
-        }
+        Ok(())
+    }
+
+    /// The numbers within their ranges: positive where a zero means nothing, and below the bounds past which a
+    /// value is a typo.
+    fn check_ranges(&self, duration_s: f64) -> Result<(), (String, String)> {
         let positive = |k: &str, v: Option<f64>| match v {
-            Some(x) if !(x > 0.0 && x.is_finite()) => err(k, format!("must be > 0, got {x}")),
+            Some(x) if !(x > 0.0 && x.is_finite()) => refuse(k, format!("must be > 0, got {x}")),
             _ => Ok(()),
         };
         positive("duration_s", self.duration_s)?;
@@ -319,42 +335,50 @@ impl Fault {
             if let Some(x) = v
                 && x > max
             {
-                return err(key, format!("must be at most {max}, got {x}"));
+                return refuse(key, format!("must be at most {max}, got {x}"));
             }
         }
         if let Some(r) = self.restart_after_s
             && !(r >= 0.0 && r.is_finite())
         {
-            return err("restart_after_s", format!("must be >= 0, got {r}"));
+            return refuse("restart_after_s", format!("must be >= 0, got {r}"));
         }
         if self.every_ticks == Some(0) {
-            return err("every_ticks", "must be >= 1".into());
-        }
-        if action == FaultAction::Drop {
-            match (self.ticks, self.probability) {
-                (None, None) | (Some(_), Some(_)) => {
-                    return err("ticks", "drop needs either ticks or probability".into());
-                }
-                (Some(0), _) => return err("ticks", "must be >= 1".into()),
-                (_, Some(p)) if !(p > 0.0 && p <= 1.0) => {
-                    return err("probability", format!("must be in (0, 1], got {p}"));
-                }
-                _ => {}
-            }
+            return refuse("every_ticks", "must be >= 1".into());
         }
         if let Some(b) = self.bias
             && !b.is_finite()
         {
-            return err("bias", format!("must be finite, got {b}"));
-        }
-        if let Some(l) = &self.limit
-            && l != "min"
-            && l != "max"
-        {
-            return err("limit", format!("must be \"min\" or \"max\", got {l:?}"));
+            return refuse("bias", format!("must be finite, got {b}"));
         }
         Ok(())
     }
+}
+
+/// A fault refused: the key and the problem.
+fn refuse(key: &str, problem: String) -> Result<(), (String, String)> {
+    Err((key.to_string(), problem))
+}
+
+/// The action can happen to the target: the bridge is only a process, a drop needs a publisher the loop depends
+/// on, and a fault in the plant model needs the plant.
+fn check_target_of(target: FaultTarget, action: FaultAction) -> Result<(), (String, String)> {
+    if target == FaultTarget::Bridge && !action.is_process_fault() {
+        return refuse(
+            "target",
+            format!("the bridge can be killed, terminated or stopped; \"{}\" is not one of those", action.label()),
+        );
+    }
+    if action == FaultAction::Drop && target == Role::Logger {
+        return refuse("target", "drop needs a publisher the loop depends on: plant or controller".into());
+    }
+    if action.is_plant_model_fault() && target != Role::Plant {
+        return refuse(
+            "target",
+            format!("action \"{}\" acts on the plant model: target must be plant", action.label()),
+        );
+    }
+    Ok(())
 }
 
 impl Fault {

@@ -2,7 +2,7 @@
 //! limit it is held to, and the sentence that explains a failure to someone who has not read the code. Pure: the
 //! same code judges `silrig check` runs and sweep cases.
 
-use crate::criteria::{BodyRateLimit, Criteria, Judgement, OutputCriteria, Settled, SettledBand};
+use crate::criteria::{AbsMax, BodyRateLimit, Criteria, Judgement, OutputCriteria, Settled, SettledBand};
 use crate::scenario::Scenario;
 use crate::summary::{Summary, settle_time};
 use crate::trace::Trace;
@@ -81,6 +81,44 @@ pub fn judge_flight(
 /// lacks fails every one of them, naming the trace's columns.
 fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Option<&Trace>) -> Vec<Judgement> {
     let setpoint = scenario.setpoint.get(name).unwrap_or(f64::NAN);
+    let asked = asked_of_output(c, setpoint, scenario);
+    let label = |key: &str| format!("outputs.{name}.{key}");
+    let (t, x) = match trace.map(|tr| (tr.column("t_s"), tr.column(name), tr)) {
+        Some((Some(t), Some(x), _)) => (t, x),
+        Some((_, _, tr)) => {
+            let what = format!("the trace has no column `{name}`; its columns: {}", tr.columns.join(", "));
+            return asked.into_iter().map(|(key, limit)| no_evidence(&label(key), limit, &what)).collect();
+        }
+        None => {
+            return asked
+                .into_iter()
+                .map(|(key, limit)| no_evidence(&label(key), limit, "no trace was logged"))
+                .collect();
+        }
+    };
+    let output = OutputSeries { name, setpoint, t: &t, x: &x };
+    asked
+        .into_iter()
+        .map(|(key, limit)| {
+            let (measured, failure, value) = match key {
+                "settled" => output.settled(c.settled.expect("asked")),
+                "overshoot_max" => output.overshoot(c.overshoot_max.expect("asked")),
+                "final_error_max" => output.final_error(c.final_error_max.expect("asked")),
+                "max" => output.beyond(true, c.max.expect("asked")),
+                "min" => output.beyond(false, c.min.expect("asked")),
+                "abs_max" => match output.abs_max(c.abs_max.expect("asked")) {
+                    Some(m) => m,
+                    None => return no_evidence(&label(key), limit, "the trace ends before `after_s`"),
+                },
+                _ => output.oscillation(c.oscillation_max.expect("asked"), scenario.timing.late_window_s()),
+            };
+            judgement(&label(key), measured, limit, failure).with_value(value)
+        })
+        .collect()
+}
+
+/// The criteria asked of one output, in their fixed order, each with its limit in words.
+fn asked_of_output(c: &OutputCriteria, setpoint: f64, scenario: &Scenario) -> Vec<(&'static str, String)> {
     let mut asked: Vec<(&str, String)> = Vec::new();
     if let Some(s) = c.settled {
         asked.push(("settled", format!("within {} of {setpoint} from {} s", s.band, s.within_s)));
@@ -104,122 +142,113 @@ fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Opti
         let late = crate::summary::seconds(scenario.timing.late_window_s());
         asked.push(("oscillation_max", format!("none sustained beyond +-{o} in the last {late} s")));
     }
-    let label = |key: &str| format!("outputs.{name}.{key}");
-    let (t, x) = match trace.map(|tr| (tr.column("t_s"), tr.column(name), tr)) {
-        Some((Some(t), Some(x), _)) => (t, x),
-        Some((_, _, tr)) => {
-            let what = format!("the trace has no column `{name}`; its columns: {}", tr.columns.join(", "));
-            return asked.into_iter().map(|(key, limit)| no_evidence(&label(key), limit, &what)).collect();
-        }
-        None => {
-            return asked
-                .into_iter()
-                .map(|(key, limit)| no_evidence(&label(key), limit, "no trace was logged"))
-                .collect();
-        }
-    };
-    // The highest (or lowest) value and when; NaN, a flight that is no longer a number, is beyond every bound.
-    let extreme = |upper: bool| {
-        t.iter().zip(&x).map(|(ti, v)| (*v, *ti)).reduce(|w, c| {
+    asked
+}
+
+/// One criterion measured on an output: the measurement in words, why it failed (if it did) and its value.
+type Measured = (String, Option<String>, f64);
+
+/// One output of the trace over time, with its set point: what each of its criteria measures.
+struct OutputSeries<'a> {
+    name: &'a str,
+    setpoint: f64,
+    t: &'a [f64],
+    x: &'a [f64],
+}
+
+impl OutputSeries<'_> {
+    fn settled(&self, s: SettledBand) -> Measured {
+        let (name, setpoint) = (self.name, self.setpoint);
+        let at = crate::summary::settle_time(self.t, self.x, setpoint, s.band);
+        let failure = match at {
+            Some(a) if a <= s.within_s => None,
+            Some(a) => Some(format!(
+                "{name} only stayed within {} of its set point {setpoint} from {a:.2} s on, later than the {} s \
+                 allowed",
+                s.band, s.within_s
+            )),
+            None => Some(format!(
+                "{name} was still more than {} from its set point {setpoint} at the end of the run",
+                s.band
+            )),
+        };
+        let measured = at.map_or("never settled".to_string(), |a| format!("settled at {a:.2} s"));
+        (measured, failure, at.unwrap_or(f64::INFINITY))
+    }
+
+    fn overshoot(&self, max: f64) -> Measured {
+        let (name, setpoint) = (self.name, self.setpoint);
+        let over = crate::summary::overshoot(self.x, setpoint);
+        let failure = (over > max).then(|| {
+            format!("{name} went {} past its set point {setpoint}, more than the {max} allowed", figure(over))
+        });
+        (figure(over), failure, over)
+    }
+
+    fn final_error(&self, max: f64) -> Measured {
+        let (name, setpoint) = (self.name, self.setpoint);
+        let e = self.x.last().map_or(f64::INFINITY, |v| (v - setpoint).abs());
+        let e = if e.is_nan() { f64::INFINITY } else { e };
+        let failure = (e > max)
+            .then(|| format!("{name} ended {} from its set point {setpoint}, more than the {max} allowed", figure(e)));
+        (figure(e), failure, e)
+    }
+
+    /// Above `bound` (`upper`) or below it: the highest (or lowest) value and when; NaN, a flight that is no longer
+    /// a number, is beyond every bound.
+    fn beyond(&self, upper: bool, bound: f64) -> Measured {
+        let extreme = self.t.iter().zip(self.x).map(|(ti, v)| (*v, *ti)).reduce(|w, c| {
             let beats = !w.0.is_nan() && (c.0.is_nan() || if upper { c.0 > w.0 } else { c.0 < w.0 });
             if beats { c } else { w }
-        })
-    };
-    asked
-        .into_iter()
-        .map(|(key, limit)| {
-            let (measured, failure, value) = match key {
-                "settled" => {
-                    let s = c.settled.expect("asked");
-                    let at = crate::summary::settle_time(&t, &x, setpoint, s.band);
-                    let failure = match at {
-                        Some(a) if a <= s.within_s => None,
-                        Some(a) => Some(format!(
-                            "{name} only stayed within {} of its set point {setpoint} from {a:.2} s on, later than the \
-                             {} s allowed",
-                            s.band, s.within_s
-                        )),
-                        None => Some(format!(
-                            "{name} was still more than {} from its set point {setpoint} at the end of the run",
-                            s.band
-                        )),
-                    };
-                    let measured = at.map_or("never settled".to_string(), |a| format!("settled at {a:.2} s"));
-                    (measured, failure, at.unwrap_or(f64::INFINITY))
-                }
-                "overshoot_max" => {
-                    let (over, max) = (crate::summary::overshoot(&x, setpoint), c.overshoot_max.expect("asked"));
-                    let failure = (over > max).then(|| {
-                        format!("{name} went {} past its set point {setpoint}, more than the {max} allowed", figure(over))
-                    });
-                    (figure(over), failure, over)
-                }
-                "final_error_max" => {
-                    let e = x.last().map_or(f64::INFINITY, |v| (v - setpoint).abs());
-                    let e = if e.is_nan() { f64::INFINITY } else { e };
-                    let max = c.final_error_max.expect("asked");
-                    let failure = (e > max).then(|| {
-                        format!("{name} ended {} from its set point {setpoint}, more than the {max} allowed", figure(e))
-                    });
-                    (figure(e), failure, e)
-                }
-                "max" | "min" => {
-                    let upper = key == "max";
-                    let bound = if upper { c.max } else { c.min }.expect("asked");
-                    let (v, at) = extreme(upper).unwrap_or((f64::NAN, 0.0));
-                    let beyond = v.is_nan() || if upper { v > bound } else { v < bound };
-                    let word = if upper { "above" } else { "below" };
-                    let failure = beyond.then(|| format!("{name} reached {} at {at:.2} s, {word} the {bound} allowed", figure(v)));
-                    let excess = if upper { v - bound } else { bound - v };
-                    (format!("{} at {at:.2} s", figure(v)), failure, excess)
-                }
-                "abs_max" => {
-                    let a = c.abs_max.expect("asked");
-                    let peak = t
-                        .iter()
-                        .zip(&x)
-                        .filter(|(ti, _)| **ti >= a.after_s)
-                        .map(|(ti, v)| (if v.is_nan() { f64::INFINITY } else { v.abs() }, *ti))
-                        .max_by(|p, q| p.0.total_cmp(&q.0));
-                    match peak {
-                        None => return no_evidence(&label(key), limit, "the trace ends before `after_s`"),
-                        Some((v, at)) => {
-                            let failure = (v > a.max).then(|| {
-                                format!(
-                                    "|{name}| reached {} at {at:.2} s, after the {} s by which it should stay within {}",
-                                    figure(v),
-                                    a.after_s,
-                                    a.max
-                                )
-                            });
-                            (format!("{} at {at:.2} s", figure(v)), failure, v)
-                        }
-                    }
-                }
-                _ => {
-                    let threshold = c.oscillation_max.expect("asked");
-                    let window_s = scenario.timing.late_window_s();
-                    let o = crate::summary::oscillation_above(name, &t, &x, threshold, window_s);
-                    let period_s = o.period_s.unwrap_or(f64::NAN);
-                    let failure = o.sustained.then(|| {
-                        format!(
-                            "{name} did not come to rest: +-{} every {period_s:.2} s in the last {} s of the run, not \
-                             decaying",
-                            figure(o.amplitude),
-                            crate::summary::seconds(window_s)
-                        )
-                    });
-                    let measured = if o.sustained {
-                        format!("+-{} every {period_s:.2} s", figure(o.amplitude))
-                    } else {
-                        format!("none sustained (swing +-{})", figure(o.amplitude))
-                    };
-                    (measured, failure, o.amplitude)
-                }
-            };
-            judgement(&label(key), measured, limit, failure).with_value(value)
-        })
-        .collect()
+        });
+        let (v, at) = extreme.unwrap_or((f64::NAN, 0.0));
+        let beyond = v.is_nan() || if upper { v > bound } else { v < bound };
+        let word = if upper { "above" } else { "below" };
+        let failure =
+            beyond.then(|| format!("{} reached {} at {at:.2} s, {word} the {bound} allowed", self.name, figure(v)));
+        let excess = if upper { v - bound } else { bound - v };
+        (format!("{} at {at:.2} s", figure(v)), failure, excess)
+    }
+
+    /// None when the trace ends before `after_s`.
+    fn abs_max(&self, a: AbsMax) -> Option<Measured> {
+        let (v, at) = self
+            .t
+            .iter()
+            .zip(self.x)
+            .filter(|(ti, _)| **ti >= a.after_s)
+            .map(|(ti, v)| (if v.is_nan() { f64::INFINITY } else { v.abs() }, *ti))
+            .max_by(|p, q| p.0.total_cmp(&q.0))?;
+        let failure = (v > a.max).then(|| {
+            format!(
+                "|{}| reached {} at {at:.2} s, after the {} s by which it should stay within {}",
+                self.name,
+                figure(v),
+                a.after_s,
+                a.max
+            )
+        });
+        Some((format!("{} at {at:.2} s", figure(v)), failure, v))
+    }
+
+    fn oscillation(&self, threshold: f64, window_s: f64) -> Measured {
+        let o = crate::summary::oscillation_above(self.name, self.t, self.x, threshold, window_s);
+        let period_s = o.period_s.unwrap_or(f64::NAN);
+        let failure = o.sustained.then(|| {
+            format!(
+                "{} did not come to rest: +-{} every {period_s:.2} s in the last {} s of the run, not decaying",
+                self.name,
+                figure(o.amplitude),
+                crate::summary::seconds(window_s)
+            )
+        });
+        let measured = if o.sustained {
+            format!("+-{} every {period_s:.2} s", figure(o.amplitude))
+        } else {
+            format!("none sustained (swing +-{})", figure(o.amplitude))
+        };
+        (measured, failure, o.amplitude)
+    }
 }
 
 fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement {

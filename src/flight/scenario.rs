@@ -513,20 +513,47 @@ impl Scenario {
 
     /// Check every value; on error return (dotted key, problem).
     pub fn validate(&self) -> Result<(), (String, String)> {
-        let err = |key: &str, problem: String| Err((key.to_string(), problem));
-        let finite = |key: &str, v: f64| {
-            if v.is_finite() { Ok(()) } else { err(key, format!("must be a finite number, got {v}")) }
-        };
         if self.name.trim().is_empty() || !self.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
         {
-            return err("name", format!("must be non-empty letters, digits, '-' or '_', got {:?}", self.name));
+            return refuse("name", format!("must be non-empty letters, digits, '-' or '_', got {:?}", self.name));
         }
+        self.validate_initial()?;
+        self.validate_setpoint()?;
+        self.validate_plant()?;
+        self.validate_named_values()?;
+        let t = &self.timing;
+        t.validate()?;
+        for (i, f) in self.faults.iter().enumerate() {
+            f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
+            // The same fault twice would be injected twice; a plan that means it twice gives two times.
+            if let Some(j) = self.faults[..i].iter().position(|g| g == f) {
+                return refuse(&format!("faults[{i}]"), format!("{} is faults[{j}] again: give it once", f.describe()));
+            }
+        }
+        if let Some(c) = &self.criteria {
+            if let Some(rig) = c.rig_criteria_set().first() {
+                return refuse(
+                    &format!("criteria.{rig}"),
+                    "is judged by `silrig check` on the rig; a scenario's [criteria] (for sweeps) takes the flight \
+                     criteria only"
+                        .into(),
+                );
+            }
+            c.validate_flight(t.duration_s, &|name| self.setpoint.get(name).is_some())
+                .map_err(|e| ("criteria".to_string(), e))?;
+        }
+        self.validate_dispersions()?;
+        Ok(())
+    }
+
+    /// `[initial]`: the F-16's initial state within the ranges its tables and equations cover.
+    fn validate_initial(&self) -> Result<(), (String, String)> {
         let i = &self.initial;
         if !(i.airspeed_mps > 0.0 && i.airspeed_mps <= 400.0) {
-            return err("initial.airspeed_mps", format!("must be within (0, 400], got {}", i.airspeed_mps));
+            return refuse("initial.airspeed_mps", format!("must be within (0, 400], got {}", i.airspeed_mps));
         }
         if !(0.0..=50_000.0).contains(&i.altitude_ft) {
-            return err("initial.altitude_ft", format!("must be within 0..50000, got {}", i.altitude_ft));
+            return refuse("initial.altitude_ft", format!("must be within 0..50000, got {}", i.altitude_ft));
         }
         for (key, v, limit) in [
             ("initial.alpha_deg", i.alpha_deg, 45.0),
@@ -540,17 +567,22 @@ impl Scenario {
         ] {
             finite(key, v)?;
             if v.abs() > limit {
-                return err(key, format!("must be within -{limit}..{limit}, got {v}"));
+                return refuse(key, format!("must be within -{limit}..{limit}, got {v}"));
             }
         }
         if let Some(t) = i.throttle
             && !(0.0..=1.0).contains(&t)
         {
-            return err("initial.throttle", format!("must be within 0..1, got {t}"));
+            return refuse("initial.throttle", format!("must be within 0..1, got {t}"));
         }
+        Ok(())
+    }
+
+    /// `[setpoint]`: named outputs' set points and the F-16's attitude set points.
+    fn validate_setpoint(&self) -> Result<(), (String, String)> {
         for (name, v) in &self.setpoint.outputs {
             if !crate::signals::valid_name(name) {
-                return err(
+                return refuse(
                     &format!("setpoint.{name}"),
                     format!(
                         "is not an output name: use 1..={} of ASCII letters, digits and '_'",
@@ -567,47 +599,57 @@ impl Scenario {
         ] {
             finite(key, v)?;
             if v.abs() > limit {
-                return err(key, format!("must be within -{limit}..{limit} deg, got {v}"));
+                return refuse(key, format!("must be within -{limit}..{limit} deg, got {v}"));
             }
         }
+        Ok(())
+    }
+
+    /// `[disturbance]` and `[plant]`: what acts on the F-16 and how it differs from the tables.
+    fn validate_plant(&self) -> Result<(), (String, String)> {
         let d = &self.disturbance;
         if !(d.amplitude_radps2.abs() <= 100.0) {
-            return err(
+            return refuse(
                 "disturbance.amplitude_radps2",
                 format!("must be within -100..100 rad/s^2, got {}", d.amplitude_radps2),
             );
         }
         if d.frequency_radps > 1000.0 {
-            return err(
+            return refuse(
                 "disturbance.frequency_radps",
                 format!("must be at most 1000 rad/s, got {}", d.frequency_radps),
             );
         }
         if !(d.frequency_radps >= 0.0 && d.frequency_radps.is_finite()) {
-            return err("disturbance.frequency_radps", format!("must be >= 0, got {}", d.frequency_radps));
+            return refuse("disturbance.frequency_radps", format!("must be >= 0, got {}", d.frequency_radps));
         }
         if let Some(c) = d.channels.iter().find(|c| !silrig_model::control::CHANNEL_NAMES.contains(&c.as_str())) {
-            return err("disturbance.channels", format!("unknown channel {c:?}; use \"phi\", \"theta\" or \"psi\""));
+            return refuse("disturbance.channels", format!("unknown channel {c:?}; use \"phi\", \"theta\" or \"psi\""));
         }
         if !(0.0..=1.0).contains(&self.plant.xcg) {
-            return err("plant.xcg", format!("must be a fraction of the chord in 0..1, got {}", self.plant.xcg));
+            return refuse("plant.xcg", format!("must be a fraction of the chord in 0..1, got {}", self.plant.xcg));
         }
         let a = &self.plant.aero_scale;
         for (key, v) in [("cx", a.cx), ("cy", a.cy), ("cz", a.cz), ("cl", a.cl), ("cm", a.cm), ("cn", a.cn)] {
             if !(0.0..=3.0).contains(&v) {
-                return err(&format!("plant.aero_scale.{key}"), format!("must be within 0..3, got {v}"));
+                return refuse(&format!("plant.aero_scale.{key}"), format!("must be within 0..3, got {v}"));
             }
         }
         if !(self.plant.mass_scale >= 0.5 && self.plant.mass_scale <= 2.0) {
-            return err("plant.mass_scale", format!("must be within 0.5..2, got {}", self.plant.mass_scale));
+            return refuse("plant.mass_scale", format!("must be within 0.5..2, got {}", self.plant.mass_scale));
         }
         let held = self.plant.outputs_held_fraction_max;
         if !(0.0..=1.0).contains(&held) {
-            return err(
+            return refuse(
                 "plant.outputs_held_fraction_max",
                 format!("must be a fraction of the ticks in 0..1, got {held}"),
             );
         }
+        Ok(())
+    }
+
+    /// The controller's options, the actuators, parameters and the controller map: values by name.
+    fn validate_named_values(&self) -> Result<(), (String, String)> {
         self.controller.validate().map_err(|e| {
             let key = e.split([' ', '[', ':']).next().unwrap_or("").to_string();
             (format!("controller.{key}"), e)
@@ -626,30 +668,18 @@ impl Scenario {
         for (variable, target) in &self.controller.map {
             target.check().map_err(|e| (format!("controller.map.{variable}"), e))?;
         }
-        let t = &self.timing;
-        t.validate()?;
-        for (i, f) in self.faults.iter().enumerate() {
-            f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
-            // The same fault twice would be injected twice; a plan that means it twice gives two times.
-            if let Some(j) = self.faults[..i].iter().position(|g| g == f) {
-                return err(&format!("faults[{i}]"), format!("{} is faults[{j}] again: give it once", f.describe()));
-            }
-        }
-        if let Some(c) = &self.criteria {
-            if let Some(rig) = c.rig_criteria_set().first() {
-                return err(
-                    &format!("criteria.{rig}"),
-                    "is judged by `silrig check` on the rig; a scenario's [criteria] (for sweeps) takes the flight \
-                     criteria only"
-                        .into(),
-                );
-            }
-            c.validate_flight(t.duration_s, &|name| self.setpoint.get(name).is_some())
-                .map_err(|e| ("criteria".to_string(), e))?;
-        }
-        self.validate_dispersions()?;
         Ok(())
     }
+}
+
+/// A scenario refused: the dotted key and the problem.
+fn refuse(key: &str, problem: String) -> Result<(), (String, String)> {
+    Err((key.to_string(), problem))
+}
+
+/// `v` is a finite number, or the key is refused saying so.
+fn finite(key: &str, v: f64) -> Result<(), (String, String)> {
+    if v.is_finite() { Ok(()) } else { refuse(key, format!("must be a finite number, got {v}")) }
 }
 
 #[cfg(test)]

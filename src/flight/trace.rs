@@ -260,38 +260,7 @@ pub fn push_f64_debug(out: &mut String, v: f64, digits: &mut zmij::Buffer) {
         return;
     }
     // zmij's text of |v| (`1.234`, `0.0001`, `1e16`, `1.5e-5`, `123.0`): its digits and where the point goes.
-    let text = digits.format_finite(abs).as_bytes();
-    // One pass: the significant digits into `buf`, the point's position among them, the exponent after `e`.
-    let mut buf = [0u8; 40];
-    let (mut n, mut point, mut seen_point) = (0, 0i32, false);
-    let mut exponent = 0i32;
-    let mut bytes = text.iter();
-    for &b in bytes.by_ref() {
-        match b {
-            b'.' => seen_point = true,
-            b'e' | b'E' => break,
-            b'0' if n == 0 => point -= i32::from(seen_point),
-            _ => {
-                buf[n] = b;
-                n += 1;
-                point += i32::from(!seen_point);
-            }
-        }
-    }
-    let mut exponent_sign = 1;
-    for &b in bytes {
-        match b {
-            b'-' => exponent_sign = -1,
-            b'+' => {}
-            _ => exponent = exponent * 10 + i32::from(b - b'0'),
-        }
-    }
-    exponent *= exponent_sign;
-    while n > 1 && buf[n - 1] == b'0' {
-        n -= 1;
-    }
-    // |v| = 0.d × 10^k
-    let mut k = point + exponent;
+    let Digits { mut buf, mut n, mut k } = Digits::of(digits.format_finite(abs).as_bytes());
     match exact_tie(abs, n) {
         Tie::No => {}
         Tie::Unknown => {
@@ -311,10 +280,59 @@ pub fn push_f64_debug(out: &mut String, v: f64, digits: &mut zmij::Buffer) {
             buf[..n].copy_from_slice(&text.as_bytes()[..n]);
         }
     }
-    let d = std::str::from_utf8(&buf[..n]).expect("ASCII digits");
     if v.is_sign_negative() {
         out.push('-');
     }
+    lay_out_debug(out, abs, std::str::from_utf8(&buf[..n]).expect("ASCII digits"), k);
+}
+
+/// The significant digits of a decimal text, trailing zeros dropped, and its power of ten: the value is
+/// `0.d × 10^k`.
+struct Digits {
+    buf: [u8; 40],
+    n: usize,
+    k: i32,
+}
+
+impl Digits {
+    /// In one pass: the significant digits into `buf`, the point's position among them, the exponent after `e`.
+    fn of(text: &[u8]) -> Digits {
+        let mut buf = [0u8; 40];
+        let (mut n, mut point, mut seen_point) = (0, 0i32, false);
+        let mut exponent = 0i32;
+        let mut bytes = text.iter();
+        for &b in bytes.by_ref() {
+            match b {
+                b'.' => seen_point = true,
+                b'e' | b'E' => break,
+                b'0' if n == 0 => point -= i32::from(seen_point),
+                _ => {
+                    buf[n] = b;
+                    n += 1;
+                    point += i32::from(!seen_point);
+                }
+            }
+        }
+        let mut exponent_sign = 1;
+        for &b in bytes {
+            match b {
+                b'-' => exponent_sign = -1,
+                b'+' => {}
+                _ => exponent = exponent * 10 + i32::from(b - b'0'),
+            }
+        }
+        exponent *= exponent_sign;
+        while n > 1 && buf[n - 1] == b'0' {
+            n -= 1;
+        }
+        Digits { buf, n, k: point + exponent }
+    }
+}
+
+/// The digits `d` of `abs = 0.d × 10^k` laid out as Rust's `Debug` does: plain decimals with at least one
+/// fractional digit for 1e-4 <= |v| < 1e16, otherwise `1.5e-5`, `1e16`.
+fn lay_out_debug(out: &mut String, abs: f64, d: &str, k: i32) {
+    let n = d.len();
     if !(1e-4..1e16).contains(&abs) {
         out.push_str(&d[..1]);
         if n > 1 {

@@ -1,7 +1,7 @@
 //! What the FMI 2.0 and 3.0 instances share: the status codes both standards give the same numbers, every call's
 //! check (anything but OK or a warning is an error naming the call, the status and what the FMU logged; after
-//! Error only freeing is allowed, after Fatal nothing), the FMU state's take-serialize-free and
-//! deserialize-set-free sequences, and the log callback's line.
+//! Error only freeing is allowed, after Fatal nothing), the get and set of values by reference, the end of an
+//! instance, the FMU state's take-serialize-free and deserialize-set-free sequences, and the log callback's line.
 
 use crate::{CallContext, FmiError, Log, SavedState};
 use std::ffi::{c_char, c_int, c_void};
@@ -78,6 +78,33 @@ impl Calls {
                 log: String::new(),
             }),
         }
+    }
+
+    /// One get or set of scalar values by reference (`run` makes the call): one value per reference, the instance
+    /// still usable, the status checked, an error naming the call and the references.
+    pub(crate) fn values(
+        &mut self,
+        call: &str,
+        refs: &[u32],
+        n_values: usize,
+        run: impl FnOnce() -> Status,
+    ) -> Result<(), FmiError> {
+        assert_eq!(refs.len(), n_values, "one value per reference");
+        self.usable(call)?;
+        let status = run();
+        self.check(status, || format!("{call} of value references {refs:?}"))
+    }
+
+    /// The end of an instance: `terminate` if it was initialized and no call failed, then `free`, unless a Fatal
+    /// status forbids any call at all. Terminate's status changes nothing: freeing follows either way.
+    pub(crate) fn close(&self, initialized: bool, terminate: impl FnOnce() -> Status, free: impl FnOnce()) {
+        if !self.may_free() {
+            return;
+        }
+        if initialized && self.healthy() {
+            let _ = terminate();
+        }
+        free();
     }
 
     /// Whether the instance may be terminated (no error so far).

@@ -201,20 +201,7 @@ impl ModelDescription {
         if root.tag_name().name() != "fmiModelDescription" {
             return Err(bad(format!("the root element is <{}>, not <fmiModelDescription>", root.tag_name().name())));
         }
-        let version_text = root.attribute("fmiVersion").unwrap_or("");
-        let version = if version_text.starts_with("2.") {
-            FmiVersion::V2
-        } else if version_text.starts_with("3.") {
-            FmiVersion::V3
-        } else {
-            return Err(FmiError::Unsupported {
-                file: file.to_string(),
-                what: format!(
-                    "fmiVersion {version_text:?}: silrig imports FMI 2.0 and 3.0 co-simulation FMUs (FMI 1.0 is not \
-                     supported; re-export the model as FMI 2.0 or 3.0)"
-                ),
-            });
-        };
+        let version = version_of(root, file)?;
         let required = |name: &str| {
             root.attribute(name)
                 .map(str::to_string)
@@ -226,34 +213,7 @@ impl ModelDescription {
             FmiVersion::V3 => "instantiationToken",
         })?;
         let child = |name: &str| root.children().find(|n| n.has_tag_name(name));
-        let Some(cs) = child("CoSimulation") else {
-            let offers: Vec<&str> =
-                ["ModelExchange", "ScheduledExecution"].into_iter().filter(|k| child(k).is_some()).collect();
-            return Err(FmiError::Unsupported {
-                file: file.to_string(),
-                what: match offers.is_empty() {
-                    true => "no <CoSimulation> interface: silrig steps co-simulation FMUs".into(),
-                    false => format!(
-                        "{} only, no <CoSimulation> interface: silrig steps co-simulation FMUs (export the model \
-                         for co-simulation, with its own solver)",
-                        offers.join(" and ")
-                    ),
-                },
-            });
-        };
-        let flag = |names: [&str; 2]| names.iter().any(|n| cs.attribute(*n) == Some("true"));
-        let co_simulation = CoSimulation {
-            model_identifier: cs
-                .attribute("modelIdentifier")
-                .map(str::to_string)
-                .ok_or_else(|| bad("<CoSimulation> has no modelIdentifier".into()))?,
-            can_get_and_set_state: flag(["canGetAndSetFMUstate", "canGetAndSetFMUState"]),
-            can_serialize_state: flag(["canSerializeFMUstate", "canSerializeFMUState"]),
-            one_instance_per_process: flag([
-                "canBeInstantiatedOnlyOncePerProcess",
-                "canBeInstantiatedOnlyOncePerProcess",
-            ]),
-        };
+        let co_simulation = co_simulation_of(root, file)?;
         let default_step_s = child("DefaultExperiment").and_then(|d| d.attribute("stepSize")).and_then(number);
         let units = declared_units(&root);
         let variables = match child("ModelVariables") {
@@ -286,6 +246,54 @@ impl ModelDescription {
     pub fn variable(&self, name: &str) -> Option<&Variable> {
         self.variables.iter().find(|v| v.name == name)
     }
+}
+
+/// The FMI version `<fmiModelDescription>` declares: 2.x or 3.x, anything else refused saying what silrig imports.
+fn version_of(root: roxmltree::Node, file: &str) -> Result<FmiVersion, FmiError> {
+    let version_text = root.attribute("fmiVersion").unwrap_or("");
+    if version_text.starts_with("2.") {
+        Ok(FmiVersion::V2)
+    } else if version_text.starts_with("3.") {
+        Ok(FmiVersion::V3)
+    } else {
+        Err(FmiError::Unsupported {
+            file: file.to_string(),
+            what: format!(
+                "fmiVersion {version_text:?}: silrig imports FMI 2.0 and 3.0 co-simulation FMUs (FMI 1.0 is not \
+                 supported; re-export the model as FMI 2.0 or 3.0)"
+            ),
+        })
+    }
+}
+
+/// The `<CoSimulation>` interface, or a refusal naming the interfaces the FMU offers instead.
+fn co_simulation_of(root: roxmltree::Node, file: &str) -> Result<CoSimulation, FmiError> {
+    let child = |name: &str| root.children().find(|n| n.has_tag_name(name));
+    let Some(cs) = child("CoSimulation") else {
+        let offers: Vec<&str> =
+            ["ModelExchange", "ScheduledExecution"].into_iter().filter(|k| child(k).is_some()).collect();
+        return Err(FmiError::Unsupported {
+            file: file.to_string(),
+            what: match offers.is_empty() {
+                true => "no <CoSimulation> interface: silrig steps co-simulation FMUs".into(),
+                false => format!(
+                    "{} only, no <CoSimulation> interface: silrig steps co-simulation FMUs (export the model \
+                     for co-simulation, with its own solver)",
+                    offers.join(" and ")
+                ),
+            },
+        });
+    };
+    let flag = |names: [&str; 2]| names.iter().any(|n| cs.attribute(*n) == Some("true"));
+    Ok(CoSimulation {
+        model_identifier: cs.attribute("modelIdentifier").map(str::to_string).ok_or_else(|| FmiError::Description {
+            file: file.to_string(),
+            problem: "<CoSimulation> has no modelIdentifier".into(),
+        })?,
+        can_get_and_set_state: flag(["canGetAndSetFMUstate", "canGetAndSetFMUState"]),
+        can_serialize_state: flag(["canSerializeFMUstate", "canSerializeFMUState"]),
+        one_instance_per_process: flag(["canBeInstantiatedOnlyOncePerProcess", "canBeInstantiatedOnlyOncePerProcess"]),
+    })
 }
 
 /// A number as FMI writes one (xs:double: `INF`, `-INF` and `NaN` included).

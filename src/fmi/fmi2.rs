@@ -148,52 +148,52 @@ impl Instance {
     }
 
     pub(crate) fn set_reals(&mut self, refs: &[u32], values: &[f64]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi2SetReal")?;
-        // SAFETY: both slices hold refs.len() elements.
-        let status = unsafe { (self.f.set_real)(self.component, refs.as_ptr(), refs.len(), values.as_ptr()) };
-        self.calls.check(status, || format!("fmi2SetReal of value references {refs:?}"))
+        let (f, c) = (&self.f, self.component);
+        // SAFETY: both slices hold refs.len() elements (`values` checks it first).
+        self.calls.values("fmi2SetReal", refs, values.len(), || unsafe {
+            (f.set_real)(c, refs.as_ptr(), refs.len(), values.as_ptr())
+        })
     }
 
     pub(crate) fn get_reals(&mut self, refs: &[u32], values: &mut [f64]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi2GetReal")?;
-        // SAFETY: both slices hold refs.len() elements.
-        let status = unsafe { (self.f.get_real)(self.component, refs.as_ptr(), refs.len(), values.as_mut_ptr()) };
-        self.calls.check(status, || format!("fmi2GetReal of value references {refs:?}"))
+        let (f, c) = (&self.f, self.component);
+        // SAFETY: both slices hold refs.len() elements (`values` checks it first).
+        self.calls.values("fmi2GetReal", refs, values.len(), || unsafe {
+            (f.get_real)(c, refs.as_ptr(), refs.len(), values.as_mut_ptr())
+        })
     }
 
     pub(crate) fn set_integers(&mut self, refs: &[u32], values: &[c_int]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi2SetInteger")?;
-        // SAFETY: both slices hold refs.len() elements.
-        let status = unsafe { (self.f.set_integer)(self.component, refs.as_ptr(), refs.len(), values.as_ptr()) };
-        self.calls.check(status, || format!("fmi2SetInteger of value references {refs:?}"))
+        let (f, c) = (&self.f, self.component);
+        // SAFETY: both slices hold refs.len() elements (`values` checks it first).
+        self.calls.values("fmi2SetInteger", refs, values.len(), || unsafe {
+            (f.set_integer)(c, refs.as_ptr(), refs.len(), values.as_ptr())
+        })
     }
 
     pub(crate) fn get_integers(&mut self, refs: &[u32], values: &mut [c_int]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi2GetInteger")?;
-        // SAFETY: both slices hold refs.len() elements.
-        let status = unsafe { (self.f.get_integer)(self.component, refs.as_ptr(), refs.len(), values.as_mut_ptr()) };
-        self.calls.check(status, || format!("fmi2GetInteger of value references {refs:?}"))
+        let (f, c) = (&self.f, self.component);
+        // SAFETY: both slices hold refs.len() elements (`values` checks it first).
+        self.calls.values("fmi2GetInteger", refs, values.len(), || unsafe {
+            (f.get_integer)(c, refs.as_ptr(), refs.len(), values.as_mut_ptr())
+        })
     }
 
     /// fmi2Boolean is a C int (0 or 1).
     pub(crate) fn set_booleans(&mut self, refs: &[u32], values: &[c_int]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi2SetBoolean")?;
-        // SAFETY: both slices hold refs.len() elements.
-        let status = unsafe { (self.f.set_boolean)(self.component, refs.as_ptr(), refs.len(), values.as_ptr()) };
-        self.calls.check(status, || format!("fmi2SetBoolean of value references {refs:?}"))
+        let (f, c) = (&self.f, self.component);
+        // SAFETY: both slices hold refs.len() elements (`values` checks it first).
+        self.calls.values("fmi2SetBoolean", refs, values.len(), || unsafe {
+            (f.set_boolean)(c, refs.as_ptr(), refs.len(), values.as_ptr())
+        })
     }
 
     pub(crate) fn get_booleans(&mut self, refs: &[u32], values: &mut [c_int]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi2GetBoolean")?;
-        // SAFETY: both slices hold refs.len() elements.
-        let status = unsafe { (self.f.get_boolean)(self.component, refs.as_ptr(), refs.len(), values.as_mut_ptr()) };
-        self.calls.check(status, || format!("fmi2GetBoolean of value references {refs:?}"))
+        let (f, c) = (&self.f, self.component);
+        // SAFETY: both slices hold refs.len() elements (`values` checks it first).
+        self.calls.values("fmi2GetBoolean", refs, values.len(), || unsafe {
+            (f.get_boolean)(c, refs.as_ptr(), refs.len(), values.as_mut_ptr())
+        })
     }
 
     pub(crate) fn do_step(&mut self, t_s: f64, step_s: f64) -> Result<(), FmiError> {
@@ -229,15 +229,8 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
-        // SAFETY: a live component, freed once; after fmi2Fatal the standard allows no call at all.
-        unsafe {
-            if !self.calls.may_free() {
-                return;
-            }
-            if self.initialized && self.calls.healthy() {
-                (self.f.terminate)(self.component);
-            }
-            (self.f.free_instance)(self.component);
-        }
+        let (f, c) = (&self.f, self.component);
+        // SAFETY: a live component, freed once (after fmi2Fatal, `close` makes no call at all).
+        self.calls.close(self.initialized, || unsafe { (f.terminate)(c) }, || unsafe { (f.free_instance)(c) });
     }
 }

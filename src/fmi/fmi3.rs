@@ -116,59 +116,53 @@ impl Instance {
     }
 
     pub(crate) fn set_reals(&mut self, refs: &[u32], values: &[f64]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi3SetFloat64")?;
-        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
-        let status =
-            unsafe { (self.f.set_float64)(self.handle, refs.as_ptr(), refs.len(), values.as_ptr(), values.len()) };
-        self.calls.check(status, || format!("fmi3SetFloat64 of value references {refs:?}"))
+        let (f, h) = (&self.f, self.handle);
+        // SAFETY: both slices hold refs.len() elements, one value a scalar variable (`values` checks it first).
+        self.calls.values("fmi3SetFloat64", refs, values.len(), || unsafe {
+            (f.set_float64)(h, refs.as_ptr(), refs.len(), values.as_ptr(), values.len())
+        })
     }
 
     pub(crate) fn get_reals(&mut self, refs: &[u32], values: &mut [f64]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi3GetFloat64")?;
-        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
-        let status =
-            unsafe { (self.f.get_float64)(self.handle, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len()) };
-        self.calls.check(status, || format!("fmi3GetFloat64 of value references {refs:?}"))
+        let (f, h) = (&self.f, self.handle);
+        // SAFETY: both slices hold refs.len() elements, one value a scalar variable (`values` checks it first).
+        self.calls.values("fmi3GetFloat64", refs, values.len(), || unsafe {
+            (f.get_float64)(h, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len())
+        })
     }
 
     pub(crate) fn set_integers(&mut self, refs: &[u32], values: &[i32]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi3SetInt32")?;
-        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
-        let status =
-            unsafe { (self.f.set_int32)(self.handle, refs.as_ptr(), refs.len(), values.as_ptr(), values.len()) };
-        self.calls.check(status, || format!("fmi3SetInt32 of value references {refs:?}"))
+        let (f, h) = (&self.f, self.handle);
+        // SAFETY: both slices hold refs.len() elements, one value a scalar variable (`values` checks it first).
+        self.calls.values("fmi3SetInt32", refs, values.len(), || unsafe {
+            (f.set_int32)(h, refs.as_ptr(), refs.len(), values.as_ptr(), values.len())
+        })
     }
 
     pub(crate) fn get_integers(&mut self, refs: &[u32], values: &mut [i32]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi3GetInt32")?;
-        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
-        let status =
-            unsafe { (self.f.get_int32)(self.handle, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len()) };
-        self.calls.check(status, || format!("fmi3GetInt32 of value references {refs:?}"))
+        let (f, h) = (&self.f, self.handle);
+        // SAFETY: both slices hold refs.len() elements, one value a scalar variable (`values` checks it first).
+        self.calls.values("fmi3GetInt32", refs, values.len(), || unsafe {
+            (f.get_int32)(h, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len())
+        })
     }
 
     /// fmi3Boolean is a C bool, read and written as its byte (0 or 1) so that no other byte an FMU writes is ever
     /// a Rust bool.
     pub(crate) fn set_booleans(&mut self, refs: &[u32], values: &[u8]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi3SetBoolean")?;
-        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
-        let status =
-            unsafe { (self.f.set_boolean)(self.handle, refs.as_ptr(), refs.len(), values.as_ptr(), values.len()) };
-        self.calls.check(status, || format!("fmi3SetBoolean of value references {refs:?}"))
+        let (f, h) = (&self.f, self.handle);
+        // SAFETY: both slices hold refs.len() elements, one value a scalar variable (`values` checks it first).
+        self.calls.values("fmi3SetBoolean", refs, values.len(), || unsafe {
+            (f.set_boolean)(h, refs.as_ptr(), refs.len(), values.as_ptr(), values.len())
+        })
     }
 
     pub(crate) fn get_booleans(&mut self, refs: &[u32], values: &mut [u8]) -> Result<(), FmiError> {
-        assert_eq!(refs.len(), values.len(), "one value per reference");
-        self.calls.usable("fmi3GetBoolean")?;
-        // SAFETY: both slices hold refs.len() elements (scalar variables: one value each).
-        let status =
-            unsafe { (self.f.get_boolean)(self.handle, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len()) };
-        self.calls.check(status, || format!("fmi3GetBoolean of value references {refs:?}"))
+        let (f, h) = (&self.f, self.handle);
+        // SAFETY: both slices hold refs.len() elements, one value a scalar variable (`values` checks it first).
+        self.calls.values("fmi3GetBoolean", refs, values.len(), || unsafe {
+            (f.get_boolean)(h, refs.as_ptr(), refs.len(), values.as_mut_ptr(), values.len())
+        })
     }
 
     pub(crate) fn do_step(&mut self, t_s: f64, step_s: f64) -> Result<(), FmiError> {
@@ -214,15 +208,8 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
-        // SAFETY: a live instance, freed once; after fmi3Fatal the standard allows no call at all.
-        unsafe {
-            if !self.calls.may_free() {
-                return;
-            }
-            if self.initialized && self.calls.healthy() {
-                (self.f.terminate)(self.handle);
-            }
-            (self.f.free_instance)(self.handle);
-        }
+        let (f, h) = (&self.f, self.handle);
+        // SAFETY: a live instance, freed once (after fmi3Fatal, `close` makes no call at all).
+        self.calls.close(self.initialized, || unsafe { (f.terminate)(h) }, || unsafe { (f.free_instance)(h) });
     }
 }

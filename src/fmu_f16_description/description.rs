@@ -95,6 +95,53 @@ fn escape(text: &str) -> String {
 
 /// The description with `guid` in its place.
 fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid: &str) -> String {
+    let (variables, mut units) = model_variables(p, input_starts);
+    units.sort_unstable();
+    units.dedup();
+    let unit_definitions: String = units.iter().map(|u| format!("    <Unit name=\"{}\"/>\n", escape(u))).collect();
+    // ModelStructure indices are 1-based positions in ModelVariables; the outputs come first.
+    let unknowns: String = (1..=outputs().len()).map(|i| format!("      <Unknown index=\"{i}\"/>\n")).collect();
+    let Experiment { stop_time_s, step_s } = experiment;
+    format!(
+        r#"<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription
+  fmiVersion="2.0"
+  modelName="silrig_f16"
+  guid="{guid}"
+  description="The Stevens &amp; Lewis F-16 of silrig with its actuators, trimmed as silrig trims it: the built-in plant of `silrig run`, one doStep one tick"
+  generationTool="silrig-fmu-f16 {version}"
+  variableNamingConvention="flat"
+  numberOfEventIndicators="0">
+  <CoSimulation
+    modelIdentifier="{MODEL_IDENTIFIER}"
+    canHandleVariableCommunicationStepSize="false"
+    canGetAndSetFMUstate="true"
+    canSerializeFMUstate="true"
+    canNotUseMemoryManagementFunctions="true"
+    providesDirectionalDerivative="false"/>
+  <UnitDefinitions>
+{unit_definitions}  </UnitDefinitions>
+  <DefaultExperiment startTime="0.0" stopTime="{stop_time_s:?}" stepSize="{step_s:?}"/>
+  <VendorAnnotations>
+    <Tool name="silrig"><Plant name="{PLANT_NAME}"/></Tool>
+  </VendorAnnotations>
+  <ModelVariables>
+{variables}  </ModelVariables>
+  <ModelStructure>
+    <Outputs>
+{unknowns}    </Outputs>
+    <InitialUnknowns>
+{unknowns}    </InitialUnknowns>
+  </ModelStructure>
+</fmiModelDescription>
+"#,
+        version = env!("CARGO_PKG_VERSION"),
+    )
+}
+
+/// Every `<ScalarVariable>` (outputs first, then inputs, real and boolean parameters) and the units they use, in
+/// that order, each unit once per use.
+fn model_variables(p: &Parameters, input_starts: &[f64; 4]) -> (String, Vec<&'static str>) {
     let mut units: Vec<&str> = Vec::new();
     let mut variables = String::new();
     let mut add = |name: &str, vr: u32, causality: &str, variability: &str, description: &str, element: String| {
@@ -150,47 +197,7 @@ fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid
     for (k, ((name, description), v)) in BOOLEAN_PARAMETERS.iter().zip(p.booleans).enumerate() {
         add(name, k as u32, "parameter", "fixed", description, format!("<Boolean start=\"{v}\"/>"));
     }
-    units.sort_unstable();
-    units.dedup();
-    let unit_definitions: String = units.iter().map(|u| format!("    <Unit name=\"{}\"/>\n", escape(u))).collect();
-    // ModelStructure indices are 1-based positions in ModelVariables; the outputs come first.
-    let unknowns: String = (1..=outputs.len()).map(|i| format!("      <Unknown index=\"{i}\"/>\n")).collect();
-    let Experiment { stop_time_s, step_s } = experiment;
-    format!(
-        r#"<?xml version="1.0" encoding="UTF-8"?>
-<fmiModelDescription
-  fmiVersion="2.0"
-  modelName="silrig_f16"
-  guid="{guid}"
-  description="The Stevens &amp; Lewis F-16 of silrig with its actuators, trimmed as silrig trims it: the built-in plant of `silrig run`, one doStep one tick"
-  generationTool="silrig-fmu-f16 {version}"
-  variableNamingConvention="flat"
-  numberOfEventIndicators="0">
-  <CoSimulation
-    modelIdentifier="{MODEL_IDENTIFIER}"
-    canHandleVariableCommunicationStepSize="false"
-    canGetAndSetFMUstate="true"
-    canSerializeFMUstate="true"
-    canNotUseMemoryManagementFunctions="true"
-    providesDirectionalDerivative="false"/>
-  <UnitDefinitions>
-{unit_definitions}  </UnitDefinitions>
-  <DefaultExperiment startTime="0.0" stopTime="{stop_time_s:?}" stepSize="{step_s:?}"/>
-  <VendorAnnotations>
-    <Tool name="silrig"><Plant name="{PLANT_NAME}"/></Tool>
-  </VendorAnnotations>
-  <ModelVariables>
-{variables}  </ModelVariables>
-  <ModelStructure>
-    <Outputs>
-{unknowns}    </Outputs>
-    <InitialUnknowns>
-{unknowns}    </InitialUnknowns>
-  </ModelStructure>
-</fmiModelDescription>
-"#,
-        version = env!("CARGO_PKG_VERSION"),
-    )
+    (variables, units)
 }
 
 /// 128-bit FNV-1a: a fixed, dependency-free hash (not for security: the GUID only tells descriptions apart).

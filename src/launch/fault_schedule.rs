@@ -5,8 +5,9 @@
 //! wall time: a stopped plant's simulated time stands still), a restart after a kill or term. Loop and plant-model
 //! faults are the processes' own business. The plant-side bridge of a run across hosts takes process faults too.
 
+use super::child::ChildProcess;
 use super::remote::RemoteBridge;
-use super::supervision::{ChildProcess, Supervisor};
+use super::supervision::Supervisor;
 use silrig_flight::fault::{Fault, FaultAction};
 use silrig_rig::events::EventLog;
 use silrig_rig::tick_beacon::TickBeacon;

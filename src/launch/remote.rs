@@ -2,8 +2,8 @@
 //! (`silrig-bridge`, see [`silrig::bridge`] when built with the `bridge` feature) instead of a controller, starts it
 //! again if it dies, and stops it at the end. The controller, and the bridge beside it, run on the other host.
 
+use crate::child::{ChildProcess, end_with_launcher};
 use crate::program::binary_dir;
-use crate::supervision::{ChildProcess, end_with_launcher};
 use anyhow::Context;
 use silrig_rig::ProcessArgs;
 use silrig_rig::events::{EventLog, read_events};
@@ -95,14 +95,14 @@ impl RemoteBridge {
         }
         let Some(status) = self.child.poll()? else { return Ok(()) };
         if let Some(restart_at) = self.planned_restart_at.take() {
-            let detail = format!("bridge {} (planned)", super::supervision::describe(status));
+            let detail = format!("bridge {} (planned)", super::child::describe(status));
             self.events.emit(None, "process-ended", detail);
             self.restart_at = Some(restart_at);
             return Ok(());
         }
         let young = self.started.elapsed() < QUICK_DEATH;
         self.quick_deaths = if young { self.quick_deaths + 1 } else { 0 };
-        let died = format!("bridge {}", super::supervision::describe(status));
+        let died = format!("bridge {}", super::child::describe(status));
         self.events.emit(None, "process-died", died.clone());
         if self.quick_deaths >= MAX_QUICK_DEATHS {
             let failure = format!(

@@ -11,7 +11,8 @@
 //!   [`session::ControllerSession`]: the controller side of the contract as one reusable session (open a run, wait
 //!   for a sample, send a command, stamps, checks, in-loop faults; the plant's side as it sees it in
 //!   `session/samples.rs`, its errors and the C ABI's status codes in `session/errors.rs`).
-//! - [`logger`]: the logger process; [`live_foxglove`]: its Foxglove WebSocket server (`silrig run --live
+//! - [`logger`]: the logger process, and `logger_writer`: its rows to every sink, flushed in batches, continued
+//!   after a restarted logger's last row; [`live_foxglove`]: its Foxglove WebSocket server (`silrig run --live
 //!   foxglove`, feature `live`).
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
@@ -32,6 +33,7 @@ pub mod controller;
 pub mod events;
 pub mod live_foxglove;
 pub mod logger;
+mod logger_writer;
 pub mod loop_faults;
 pub mod plant;
 pub mod plant_model;

@@ -11,9 +11,9 @@ use anyhow::Context;
 use serde::Serialize;
 use silrig_flight::role::Role;
 use silrig_flight::signals::PlantSignals;
+use silrig_launch::child::start_process;
 use silrig_launch::launcher::fresh_run_id;
 use silrig_launch::program::binary_dir;
-use silrig_launch::supervision::start_process;
 use silrig_recording::reader::RecordedRun;
 use silrig_rig::{ProcessArgs, ProcessOptions, RigMode};
 use silrig_wire::ipc::{self, RunId};
@@ -256,7 +256,7 @@ impl Comparison {
 /// The controller process of a replay, and the plant side of its run.
 struct ReplayRig {
     run_id: RunId,
-    child: silrig_launch::supervision::ChildProcess,
+    child: silrig_launch::child::ChildProcess,
     publisher: ipc::StreamPublisher<PlantSample>,
     announcer: ipc::StreamPublisher<PlantInfo>,
     commands: ipc::StreamSubscriber<CommandSample>,
@@ -334,7 +334,7 @@ impl ReplayRig {
         if let Some(status) = self.child.poll()? {
             anyhow::bail!(
                 "the controller ended ({}) while the replay waited for {waiting_for}{}",
-                silrig_launch::supervision::describe(status),
+                silrig_launch::child::describe(status),
                 self.controller_said()
             );
         }

@@ -266,31 +266,7 @@ impl F16Model {
         let air = atmosphere::air_data(vt, x.alt_ft);
         let power_dot = engine::power_rate_pctps(x.power_pct, engine::commanded_power_pct(u.throttle));
         let thrust = engine::thrust_lbf(self.tables, x.power_pct, x.alt_ft, air.mach);
-        let k = aero::coefficients(
-            self.tables,
-            &aero::AeroInput {
-                alpha_deg: x.alpha_rad * DEG_PER_RAD_BOOK,
-                beta_deg: x.beta_rad * DEG_PER_RAD_BOOK,
-                elevator_deg: u.elevator_deg,
-                aileron_deg: u.aileron_deg,
-                rudder_deg: u.rudder_deg,
-                vt_fps: vt,
-                p_radps: p,
-                q_radps: q,
-                r_radps: r,
-                xcg: self.xcg,
-            },
-        );
-
-        let [sx, sy, sz, sl, sm, sn] = self.scales.aero;
-        let k = aero::AeroCoefficients {
-            cx: k.cx * sx,
-            cy: k.cy * sy,
-            cz: k.cz * sz,
-            cl: k.cl * sl,
-            cm: k.cm * sm,
-            cn: k.cn * sn,
-        };
+        let k = self.scaled_coefficients(x, u);
         // Mass and inertias scaled together: 1/m and the inverse-inertia terms c3, c4, c7, c9 divide by the
         // scale; the inertia ratios c1, c2, c5, c6, c8 are unchanged.
         let mass = self.scales.mass;
@@ -325,32 +301,14 @@ impl F16Model {
         let psi_dot = (qsph + r * cph) / cth;
 
         // Moment equations.
-        let mut p_dot = (c2 * p + c1 * r + c4 * he) * q + qsb * (c3 * k.cl + c4 * k.cn);
-        let mut q_dot = (c5 * p - c7 * he) * r + c6 * (r * r - p * p) + qs * aero::MEAN_CHORD_FT * c7 * k.cm;
-        let mut r_dot = (c8 * p - c2 * r + c9 * he) * q + qsb * (c4 * k.cl + c9 * k.cn);
+        let p_dot = (c2 * p + c1 * r + c4 * he) * q + qsb * (c3 * k.cl + c4 * k.cn);
+        let q_dot = (c5 * p - c7 * he) * r + c6 * (r * r - p * p) + qs * aero::MEAN_CHORD_FT * c7 * k.cm;
+        let r_dot = (c8 * p - c2 * r + c9 * he) * q + qsb * (c4 * k.cl + c9 * k.cn);
         let d = forcing.euler_accel_disturbance_radps2;
-        if d != [0.0; 3] {
-            // Inverse of the Euler-rate matrix T(phi, theta): body-rate increments that add d to (phi, theta, psi)''.
-            p_dot += d[0] - sth * d[2];
-            q_dot += cph * d[1] + sph * cth * d[2];
-            r_dot += -sph * d[1] + cph * cth * d[2];
-        }
+        let [p_dot, q_dot, r_dot] = with_euler_disturbance([p_dot, q_dot, r_dot], d, (sph, cph), (sth, cth));
 
-        // Navigation.
-        let t1 = sph * cpsi;
-        let t2 = cph * sth;
-        let t3 = sph * spsi;
-        let s1 = cth * cpsi;
-        let s2 = cth * spsi;
-        let s3 = t1 * sth - cph * spsi;
-        let s4 = t3 * sth + cph * cpsi;
-        let s5 = sph * cth;
-        let s6 = t2 * cpsi + t3;
-        let s7 = t2 * spsi - t1;
-        let s8 = cph * cth;
-        let north_dot = u_fps * s1 + v_fps * s3 + w_fps * s6;
-        let east_dot = u_fps * s2 + v_fps * s4 + w_fps * s7;
-        let alt_dot = u_fps * sth - v_fps * s5 - w_fps * s8;
+        let [north_dot, east_dot, alt_dot] =
+            navigation_rates([u_fps, v_fps, w_fps], (sph, cph), (sth, cth), (spsi, cpsi));
 
         // Load factors: the specific force of the aerodynamic forces (thrust acts along body x only) at the
         // accelerometer station, whose angular-acceleration terms are q_dot and r_dot times its lever arm (the
@@ -368,4 +326,77 @@ impl F16Model {
             ModelOutputs { qbar_psf: air.qbar_psf, mach: air.mach, thrust_lbf: thrust, nz_g, ny_g },
         )
     }
+
+    /// The aerodynamic coefficients at the state and the surfaces, scaled by the plant's `aero_scale`.
+    #[inline]
+    fn scaled_coefficients(&self, x: &F16State, u: &ControlInputs) -> aero::AeroCoefficients {
+        let k = aero::coefficients(
+            self.tables,
+            &aero::AeroInput {
+                alpha_deg: x.alpha_rad * DEG_PER_RAD_BOOK,
+                beta_deg: x.beta_rad * DEG_PER_RAD_BOOK,
+                elevator_deg: u.elevator_deg,
+                aileron_deg: u.aileron_deg,
+                rudder_deg: u.rudder_deg,
+                vt_fps: x.vt_fps,
+                p_radps: x.p_radps,
+                q_radps: x.q_radps,
+                r_radps: x.r_radps,
+                xcg: self.xcg,
+            },
+        );
+
+        let [sx, sy, sz, sl, sm, sn] = self.scales.aero;
+        aero::AeroCoefficients {
+            cx: k.cx * sx,
+            cy: k.cy * sy,
+            cz: k.cz * sz,
+            cl: k.cl * sl,
+            cm: k.cm * sm,
+            cn: k.cn * sn,
+        }
+    }
+}
+
+/// The body-rate accelerations with the disturbance `d` added to the Euler angles' (phi, theta, psi)'': through the
+/// inverse of the Euler-rate matrix T(phi, theta).
+#[inline]
+fn with_euler_disturbance(
+    [mut p_dot, mut q_dot, mut r_dot]: [f64; 3],
+    d: [f64; 3],
+    (sph, cph): (f64, f64),
+    (sth, cth): (f64, f64),
+) -> [f64; 3] {
+    if d != [0.0; 3] {
+        p_dot += d[0] - sth * d[2];
+        q_dot += cph * d[1] + sph * cth * d[2];
+        r_dot += -sph * d[1] + cph * cth * d[2];
+    }
+    [p_dot, q_dot, r_dot]
+}
+
+/// Navigation: the rates of north, east and altitude from the body-axis velocities through the direction cosines of
+/// the Euler angles (each given as its sine and cosine).
+#[inline]
+fn navigation_rates(
+    [u_fps, v_fps, w_fps]: [f64; 3],
+    (sph, cph): (f64, f64),
+    (sth, cth): (f64, f64),
+    (spsi, cpsi): (f64, f64),
+) -> [f64; 3] {
+    let t1 = sph * cpsi;
+    let t2 = cph * sth;
+    let t3 = sph * spsi;
+    let s1 = cth * cpsi;
+    let s2 = cth * spsi;
+    let s3 = t1 * sth - cph * spsi;
+    let s4 = t3 * sth + cph * cpsi;
+    let s5 = sph * cth;
+    let s6 = t2 * cpsi + t3;
+    let s7 = t2 * spsi - t1;
+    let s8 = cph * cth;
+    let north_dot = u_fps * s1 + v_fps * s3 + w_fps * s6;
+    let east_dot = u_fps * s2 + v_fps * s4 + w_fps * s7;
+    let alt_dot = u_fps * sth - v_fps * s5 - w_fps * s8;
+    [north_dot, east_dot, alt_dot]
 }

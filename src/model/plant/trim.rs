@@ -106,6 +106,50 @@ fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     x.iter().all(|v| v.is_finite()).then(|| [x[0], x[1], x[2]])
 }
 
+/// Newton's method on the trim residual from `start` (throttle, elevator_deg, alpha_rad), with a central-difference
+/// Jacobian and a backtracking line search, for at most 100 steps: the point reached, its residual and the steps.
+fn newton(model: &F16Model, vt_fps: f64, alt_ft: f64, start: [f64; 3]) -> ([f64; 3], [f64; 3], usize) {
+    let mut z = start;
+    let mut r = residual(model, vt_fps, alt_ft, &z);
+    let mut iterations = 0;
+    for _ in 0..100 {
+        if norm(&r) < 1e-14 {
+            break;
+        }
+        iterations += 1;
+        let h = [1e-6, 1e-5, 1e-7];
+        let mut jac = [[0.0; 3]; 3];
+        for j in 0..3 {
+            let (mut zp, mut zm) = (z, z);
+            zp[j] += h[j];
+            zm[j] -= h[j];
+            let (rp, rm) = (residual(model, vt_fps, alt_ft, &zp), residual(model, vt_fps, alt_ft, &zm));
+            for i in 0..3 {
+                jac[i][j] = (rp[i] - rm[i]) / (2.0 * h[j]);
+            }
+        }
+        let Some(step) = solve3(jac, [-r[0], -r[1], -r[2]]) else { break };
+        // Backtracking: halve the step until the residual falls (tables are only piecewise smooth).
+        let mut lambda = 1.0;
+        let improved = loop {
+            let cand: [f64; 3] = std::array::from_fn(|i| z[i] + lambda * step[i]);
+            let rc = residual(model, vt_fps, alt_ft, &cand);
+            if norm(&rc) < norm(&r) {
+                break Some((cand, rc));
+            }
+            lambda *= 0.5;
+            if lambda < 1e-6 {
+                break None;
+            }
+        };
+        match improved {
+            Some((cand, rc)) => (z, r) = (cand, rc),
+            None => break,
+        }
+    }
+    (z, r, iterations)
+}
+
 /// Trim for steady wings-level flight at `vt_fps` and `alt_ft` with the model's CG.
 pub fn trim_level_flight(model: &F16Model, vt_fps: f64, alt_ft: f64) -> Result<Trim, TrimError> {
     if !(vt_fps.is_finite() && vt_fps > 0.0) {
@@ -118,44 +162,7 @@ pub fn trim_level_flight(model: &F16Model, vt_fps: f64, alt_ft: f64) -> Result<T
     let mut best: Option<([f64; 3], f64, usize)> = None;
     // Starting points from low to high alpha; the first converged solution inside the data wins.
     for start in [[0.2, -1.0, 3f64.to_radians()], [0.5, -3.0, 10f64.to_radians()], [0.8, -5.0, 25f64.to_radians()]] {
-        let mut z = start;
-        let mut r = residual(model, vt_fps, alt_ft, &z);
-        let mut iterations = 0;
-        for _ in 0..100 {
-            if norm(&r) < 1e-14 {
-                break;
-            }
-            iterations += 1;
-            let h = [1e-6, 1e-5, 1e-7];
-            let mut jac = [[0.0; 3]; 3];
-            for j in 0..3 {
-                let (mut zp, mut zm) = (z, z);
-                zp[j] += h[j];
-                zm[j] -= h[j];
-                let (rp, rm) = (residual(model, vt_fps, alt_ft, &zp), residual(model, vt_fps, alt_ft, &zm));
-                for i in 0..3 {
-                    jac[i][j] = (rp[i] - rm[i]) / (2.0 * h[j]);
-                }
-            }
-            let Some(step) = solve3(jac, [-r[0], -r[1], -r[2]]) else { break };
-            // Backtracking: halve the step until the residual falls (tables are only piecewise smooth).
-            let mut lambda = 1.0;
-            let improved = loop {
-                let cand: [f64; 3] = std::array::from_fn(|i| z[i] + lambda * step[i]);
-                let rc = residual(model, vt_fps, alt_ft, &cand);
-                if norm(&rc) < norm(&r) {
-                    break Some((cand, rc));
-                }
-                lambda *= 0.5;
-                if lambda < 1e-6 {
-                    break None;
-                }
-            };
-            match improved {
-                Some((cand, rc)) => (z, r) = (cand, rc),
-                None => break,
-            }
-        }
+        let (z, r, iterations) = newton(model, vt_fps, alt_ft, start);
         let n = norm(&r);
         if best.as_ref().is_none_or(|b| n < b.1) {
             best = Some((z, n, iterations));

@@ -7,6 +7,7 @@
 use super::case::{CaseResult, EnvelopeSignal, Outcome};
 use super::report::{SweepSummary, spearman};
 use silrig_flight::criteria::Criteria;
+use silrig_plot::{Envelope, Histogram, Scatter};
 use std::collections::BinaryHeap;
 use std::path::{Path, PathBuf};
 
@@ -117,16 +118,16 @@ impl Figures {
         signals: &[EnvelopeSignal],
         out: &Path,
     ) -> anyhow::Result<Vec<PathBuf>> {
-        use silrig_plot::{Envelope, Histogram, Scatter, plot_envelope, plot_histograms, plot_scatter};
+        use silrig_plot::{plot_envelope, plot_histograms, plot_scatter};
         let mut files = Vec::new();
         if self.flown == 0 {
             return Ok(files);
         }
+        let (envelopes, envelope_title) = self.envelopes(summary, signals);
         let mut flown = self.sample.into_vec();
         flown.sort_by_key(|p| p.index);
         let sampled = (flown.len() as u64) < self.flown;
         let limits = criterion_limits(criteria);
-        let limit_of = |criterion: &str| limits.iter().find(|(c, _)| c == criterion).and_then(|(_, l)| *l);
         let mut title = format!("{}: {} cases, seed {}", summary.scenario, summary.runs, summary.seed);
         let of_sample = if sampled {
             title += &format!(" (a sample of {} of the {} flown drawn)", flown.len(), self.flown);
@@ -134,67 +135,26 @@ impl Figures {
         } else {
             ""
         };
-        let histograms: Vec<Histogram> = summary
-            .failures_by_criterion
-            .iter()
-            .enumerate()
-            .map(|(k, (criterion, failures))| {
-                let limit = limit_of(criterion);
-                // Departed flights reach absurd figures; they are shown in the last bin, not as the axis.
-                let cap = limit.map_or(f64::INFINITY, |l| 3.0 * l.abs().max(1e-9));
-                let values: Vec<f64> = flown.iter().filter_map(|c| c.judged[k].0).map(|v| v.min(cap)).collect();
-                let missing = flown.len() - values.len();
-                let never = if missing > 0 { format!(", {missing}{of_sample} never") } else { String::new() };
-                Histogram {
-                    caption: format!("{criterion}: {failures} of {} failed{never}", self.flown),
-                    unit: criterion_unit(criterion).into(),
-                    values,
-                    limit,
-                }
-            })
-            .collect();
+        let histograms = histograms(summary, &flown, &limits, of_sample, self.flown);
         let histogram_title = format!("{title}: criteria");
+        let scatters = scatters(summary, &flown, &limits, &title);
+        // Each figure is drawn on a thread of its own: drawing is most of a short sweep's time after its flying.
+        let (h, s, e) = std::thread::scope(|scope| {
+            let h = scope.spawn(|| plot_histograms(&histograms, out, "histograms", &histogram_title));
+            let s = scope.spawn(|| scatters.map(|(panels, title)| plot_scatter(&panels, out, "scatter", &title)));
+            // A plant with no set point on its outputs has no envelope to draw.
+            let e = (!envelopes.is_empty()).then(|| plot_envelope(&envelopes, out, "envelope", &envelope_title));
+            (h.join().expect("drawing does not panic"), s.join().expect("drawing does not panic"), e)
+        });
+        files.extend(h?);
+        for drawn in [s, e].into_iter().flatten() {
+            files.extend(drawn?);
+        }
+        Ok(files)
+    }
 
-        // The criterion that failed most, and the parameters whose rank moves its figure most.
-        let scatters: Option<(Vec<Scatter>, String)> =
-            summary.failures_by_criterion.iter().enumerate().max_by_key(|(k, (_, n))| (*n, usize::MAX - k)).map(
-                |(k, (criterion, _))| {
-                    let figure: Vec<f64> = flown.iter().map(|c| c.judged[k].0.unwrap_or(f64::INFINITY)).collect();
-                    let mut influence: Vec<(usize, f64)> = (0..summary.parameters.len())
-                        .map(|p| {
-                            let x: Vec<f64> = flown.iter().map(|c| c.values[p]).collect();
-                            (p, spearman_or_zero(&x, &figure))
-                        })
-                        .collect();
-                    influence.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
-                    // Departed flights reach absurd figures: the axis stops at 3x the limit, and a case beyond it
-                    // (or that never settled) is drawn at that edge.
-                    let largest = figure.iter().copied().filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
-                    let shown = limit_of(criterion).map_or(largest, |l| largest.min(3.0 * l.abs()));
-                    let panels = influence
-                        .iter()
-                        .take(SCATTER_PARAMETERS)
-                        .map(|(p, rho)| {
-                            let split = |passed: bool| {
-                                flown
-                                    .iter()
-                                    .filter(|c| c.judged[k].1 == passed)
-                                    .map(|c| (c.values[*p], c.judged[k].0.unwrap_or(shown).min(shown)))
-                                    .collect()
-                            };
-                            Scatter {
-                                caption: format!("{} (Spearman rho {rho:+.2})", summary.parameters[*p]),
-                                x_desc: summary.parameters[*p].clone(),
-                                y_desc: format!("{} (cap {shown:.3})", criterion_unit(criterion)),
-                                passed: split(true),
-                                failed: split(false),
-                            }
-                        })
-                        .collect();
-                    (panels, format!("{title}: what drives {criterion}"))
-                },
-            );
-
+    /// The envelope of the passed cases with the failed ones drawn, a panel per set-point output, and its title.
+    fn envelopes(&self, summary: &SweepSummary, signals: &[EnvelopeSignal]) -> (Vec<Envelope>, String) {
         // A band row narrower than the signals (no case reached them) draws none of them.
         let at = |values: &[f64], a: usize| values.get(a).copied().unwrap_or(f64::NAN);
         let envelopes: Vec<Envelope> = signals
@@ -221,19 +181,7 @@ impl Figures {
             self.failed_drawn.len(),
             self.failed
         );
-        // Each figure is drawn on a thread of its own: drawing is most of a short sweep's time after its flying.
-        let (h, s, e) = std::thread::scope(|scope| {
-            let h = scope.spawn(|| plot_histograms(&histograms, out, "histograms", &histogram_title));
-            let s = scope.spawn(|| scatters.map(|(panels, title)| plot_scatter(&panels, out, "scatter", &title)));
-            // A plant with no set point on its outputs has no envelope to draw.
-            let e = (!envelopes.is_empty()).then(|| plot_envelope(&envelopes, out, "envelope", &envelope_title));
-            (h.join().expect("drawing does not panic"), s.join().expect("drawing does not panic"), e)
-        });
-        files.extend(h?);
-        for drawn in [s, e].into_iter().flatten() {
-            files.extend(drawn?);
-        }
-        Ok(files)
+        (envelopes, envelope_title)
     }
 }
 
@@ -246,6 +194,85 @@ fn envelope_caption(name: &str) -> String {
         "psi_deg" => "ψ yaw".into(),
         other => other.into(),
     }
+}
+
+/// A criterion's limit, if it has one.
+fn limit_of(limits: &[(String, Option<f64>)], criterion: &str) -> Option<f64> {
+    limits.iter().find(|(c, _)| c == criterion).and_then(|(_, l)| *l)
+}
+
+/// One histogram a criterion: its figure in every flown case (of the sample), with its limit.
+fn histograms(
+    summary: &SweepSummary,
+    flown: &[Point],
+    limits: &[(String, Option<f64>)],
+    of_sample: &str,
+    flown_total: u64,
+) -> Vec<Histogram> {
+    summary
+        .failures_by_criterion
+        .iter()
+        .enumerate()
+        .map(|(k, (criterion, failures))| {
+            let limit = limit_of(limits, criterion);
+            // Departed flights reach absurd figures; they are shown in the last bin, not as the axis.
+            let cap = limit.map_or(f64::INFINITY, |l| 3.0 * l.abs().max(1e-9));
+            let values: Vec<f64> = flown.iter().filter_map(|c| c.judged[k].0).map(|v| v.min(cap)).collect();
+            let missing = flown.len() - values.len();
+            let never = if missing > 0 { format!(", {missing}{of_sample} never") } else { String::new() };
+            Histogram {
+                caption: format!("{criterion}: {failures} of {flown_total} failed{never}"),
+                unit: criterion_unit(criterion).into(),
+                values,
+                limit,
+            }
+        })
+        .collect()
+}
+
+/// The criterion that failed most, and the parameters whose rank moves its figure most: one scatter panel each,
+/// with the figure's title.
+fn scatters(
+    summary: &SweepSummary,
+    flown: &[Point],
+    limits: &[(String, Option<f64>)],
+    title: &str,
+) -> Option<(Vec<Scatter>, String)> {
+    let (k, (criterion, _)) =
+        summary.failures_by_criterion.iter().enumerate().max_by_key(|(k, (_, n))| (*n, usize::MAX - k))?;
+    let figure: Vec<f64> = flown.iter().map(|c| c.judged[k].0.unwrap_or(f64::INFINITY)).collect();
+    let mut influence: Vec<(usize, f64)> = (0..summary.parameters.len())
+        .map(|p| {
+            let x: Vec<f64> = flown.iter().map(|c| c.values[p]).collect();
+            (p, spearman_or_zero(&x, &figure))
+        })
+        .collect();
+    influence.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
+    // Departed flights reach absurd figures: the axis stops at 3x the limit, and a case beyond it (or that never
+    // settled) is drawn at that edge.
+    let largest = figure.iter().copied().filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+    let shown = limit_of(limits, criterion).map_or(largest, |l| largest.min(3.0 * l.abs()));
+    let panels = influence
+        .iter()
+        .take(SCATTER_PARAMETERS)
+        .map(|(p, rho)| {
+            let split = |passed: bool| {
+                flown
+                    .iter()
+                    .filter(|c| c.judged[k].1 == passed)
+                    .map(|c| (c.values[*p], c.judged[k].0.unwrap_or(shown).min(shown)))
+                    .collect()
+            };
+            Scatter {
+                caption: format!("{} (Spearman rho {rho:+.2})", summary.parameters[*p]),
+                x_desc: summary.parameters[*p].clone(),
+                y_desc: format!("{} (cap {shown:.3})", criterion_unit(criterion)),
+                passed: split(true),
+                failed: split(false),
+            }
+        })
+        .collect();
+    Some((panels, format!("{title}: what drives {criterion}")))
 }
 
 fn spearman_or_zero(x: &[f64], y: &[f64]) -> f64 {

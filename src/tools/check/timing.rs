@@ -9,6 +9,7 @@ use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
 use silrig_launch::floor::timer_baseline::Stall;
 use silrig_launch::run_report::RigReport;
+use silrig_wire::timing::LatencySummary;
 
 /// What the machine itself added to every latency during a realtime run, µs: the p99 of the plant's own wake-up
 /// lateness (it sleeps to absolute deadlines: nothing but the OS makes it late) and of the OS floor's timer loop
@@ -90,27 +91,7 @@ pub(super) fn budget(
     b: &Budget,
 ) -> Judgement {
     let floor = report.timer_baseline.as_ref().map(|t| t.lateness_steady.as_ref().unwrap_or(&t.lateness).p99_us);
-    let mut limits = Vec::new();
-    let mut limit_us = f64::INFINITY;
-    if let Some(us) = b.max_us {
-        limits.push(format!("{us:.1} us"));
-        limit_us = limit_us.min(us);
-    }
-    if let Some(f) = b.max_period_fraction {
-        let us = f * scenario.timing.dt_s * 1e6;
-        limits.push(format!("{f} of the period ({us:.1} us)"));
-        limit_us = limit_us.min(us);
-    }
-    if let Some(r) = b.max_os_floor_ratio {
-        match floor {
-            Some(f) => {
-                limits.push(format!("{r}x OS floor p99 ({:.1} us)", r * f));
-                limit_us = limit_us.min(r * f);
-            }
-            None => limits.push(format!("{r}x OS floor p99 (not measured)")),
-        }
-    }
-    let limit = format!("p99 after 1 s: {}", limits.join(" and "));
+    let (limit, limit_us) = budget_limit(b, scenario, floor);
     let (l, phase) = match report.steady(steady).or_else(|| report.latency(steady)).filter(|l| l.count > 0) {
         Some(l) => (l, "steady"),
         None => match report.latency(latency).filter(|l| l.count > 0) {
@@ -153,17 +134,7 @@ pub(super) fn budget(
     match budget_outcome(timing) {
         Outcome::Pass => judgement(criterion, measured, limit, None),
         Outcome::Inconclusive => {
-            let because = match (&disturbed, &noise) {
-                (Some(how), _) => format!(
-                    "while the machine was disturbed ({how}) and the controller's own compute time fit the budget \
-                     (p99 {:.1} us)",
-                    own_work.map_or(f64::NAN, |c| c.p99_us)
-                ),
-                (None, Some((_, figures))) => {
-                    format!("by no more than the machine itself added to every wake-up during the run ({figures})")
-                }
-                (None, None) => "while the machine was disturbed".into(),
-            };
+            let because = inconclusive_because(disturbed.as_deref(), noise.as_ref().map(|n| n.1.as_str()), own_work);
             inconclusive(
                 criterion,
                 measured,
@@ -180,6 +151,49 @@ pub(super) fn budget(
             limit,
             Some(format!("{over}; latency.png in the run folder shows the whole distribution")),
         ),
+    }
+}
+
+/// The budget's limit in words, and in µs: the tightest of its parts (µs, a fraction of the period, a multiple of the
+/// OS floor's p99 when it was measured).
+fn budget_limit(b: &Budget, scenario: &Scenario, floor: Option<f64>) -> (String, f64) {
+    let mut limits = Vec::new();
+    let mut limit_us = f64::INFINITY;
+    if let Some(us) = b.max_us {
+        limits.push(format!("{us:.1} us"));
+        limit_us = limit_us.min(us);
+    }
+    if let Some(f) = b.max_period_fraction {
+        let us = f * scenario.timing.dt_s * 1e6;
+        limits.push(format!("{f} of the period ({us:.1} us)"));
+        limit_us = limit_us.min(us);
+    }
+    if let Some(r) = b.max_os_floor_ratio {
+        match floor {
+            Some(f) => {
+                limits.push(format!("{r}x OS floor p99 ({:.1} us)", r * f));
+                limit_us = limit_us.min(r * f);
+            }
+            None => limits.push(format!("{r}x OS floor p99 (not measured)")),
+        }
+    }
+    let limit = format!("p99 after 1 s: {}", limits.join(" and "));
+    (limit, limit_us)
+}
+
+/// Why a budget missed by a run on a disturbed or noisy machine is inconclusive: how the machine was disturbed
+/// (`disturbed`) beside the controller's own compute time, or what the machine added to every wake-up (`noise`).
+fn inconclusive_because(disturbed: Option<&str>, noise: Option<&str>, own_work: Option<&LatencySummary>) -> String {
+    match (disturbed, noise) {
+        (Some(how), _) => format!(
+            "while the machine was disturbed ({how}) and the controller's own compute time fit the budget (p99 {:.1} \
+             us)",
+            own_work.map_or(f64::NAN, |c| c.p99_us)
+        ),
+        (None, Some(figures)) => {
+            format!("by no more than the machine itself added to every wake-up during the run ({figures})")
+        }
+        (None, None) => "while the machine was disturbed".into(),
     }
 }
 

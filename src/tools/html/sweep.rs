@@ -61,6 +61,14 @@ pub fn page(s: &SweepSummary, out: &Path) -> Page {
     let figures: String = figure_stems(out).iter().filter_map(|stem| figure(out, out, stem)).collect();
     let figures = if figures.is_empty() { "<p>No figures: no case could be flown.</p>\n".to_string() } else { figures };
     page.section("figures", "Figures", &command, figures);
+    page.section("worst", "Worst cases", &command, worst_cases(s));
+
+    page.section_with("files", "Files", Vec::new(), super::files(out, out));
+    page
+}
+
+/// Each criterion's worst cases with the command that flies each alone, then the departed and the infeasible cases.
+fn worst_cases(s: &SweepSummary) -> String {
     let mut worst = String::from(
         "<p>Each criterion's worst cases that stayed within the model's data, worst first; each command flies that \
          case alone and prints the same numbers.</p>\n",
@@ -106,8 +114,5 @@ pub fn page(s: &SweepSummary, out: &Path) -> Page {
             s.infeasible_cases.iter().map(|c| vec![c.index.to_string(), esc(&c.reason)]).collect();
         worst += &table(&["case", "why"], &rows);
     }
-    page.section("worst", "Worst cases", &command, worst);
-
-    page.section_with("files", "Files", Vec::new(), super::files(out, out));
-    page
+    worst
 }

@@ -229,32 +229,8 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         .collect();
     let mut faults = faults;
     let (lost_in, lost_out) = losses(&logged, &mut faults, dt_s);
-    let mut ticks: Vec<u64> = logged.iter().map(|r| r.0).collect();
-    ticks.sort_unstable();
-    let before = ticks.len();
-    ticks.dedup();
-    let rows = Rows {
-        trace_rows: trace.rows.len() as u64,
-        timing_rows: timing.rows.len() as u64,
-        lost_in_fault_windows: lost_in,
-        lost_outside_fault_windows: lost_out.len() as u64,
-        lost_outside_ticks: lost_out.iter().take(20).copied().collect(),
-        torn: trace.torn + timing.torn,
-        duplicated: (before - ticks.len()) as u64,
-    };
+    let rows = rows(&trace, &timing, &logged, lost_in, &lost_out);
     let events = read_events(out);
-    let mut kinds: BTreeMap<String, KindFigures> = BTreeMap::new();
-    for (f, o) in plan.iter().zip(&faults) {
-        let k = kinds.entry(o.kind.clone()).or_insert_with(|| KindFigures {
-            kind: o.kind.clone(),
-            watched: watched(f.target(), f.action()),
-            ..KindFigures::default()
-        });
-        k.injected += o.injected_at_s.is_some() as u64;
-        k.detected += (o.injected_at_s.is_some() && o.detected_at_s.is_some()) as u64;
-        k.recovered += (o.injected_at_s.is_some() && o.recovered_at_s.is_some()) as u64;
-        k.flight_back += (o.injected_at_s.is_some() && o.flight_back_at_s.is_some()) as u64;
-    }
     let injected: Vec<&FaultOutcome> = faults.iter().filter(|o| o.injected_at_s.is_some()).collect();
     let mut r = SoakReport {
         seed: m.seed,
@@ -273,7 +249,7 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         watched: injected.iter().filter(|o| o.watched).count() as u64,
         recovered: injected.iter().filter(|o| o.recovered_at_s.is_some()).count() as u64,
         flight_back: injected.iter().filter(|o| o.flight_back_at_s.is_some()).count() as u64,
-        kinds: kinds.into_values().collect(),
+        kinds: kinds(&plan, &faults),
         failsafe_engagements: events.iter().filter(|e| e.kind == "failsafe-engaged").count() as u64,
         rows,
         processes_start: m.start.as_ref().map(|s| s.0.clone()).unwrap_or_default(),
@@ -288,6 +264,82 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
     };
     r.problems = problems(&r);
     r
+}
+
+/// The rows' figures: logged, lost inside and outside the faults' windows, torn and logged twice.
+fn rows(trace: &Csv, timing: &Csv, logged: &[(u64, bool)], lost_in: u64, lost_out: &[u64]) -> Rows {
+    let mut ticks: Vec<u64> = logged.iter().map(|r| r.0).collect();
+    ticks.sort_unstable();
+    let before = ticks.len();
+    ticks.dedup();
+    Rows {
+        trace_rows: trace.rows.len() as u64,
+        timing_rows: timing.rows.len() as u64,
+        lost_in_fault_windows: lost_in,
+        lost_outside_fault_windows: lost_out.len() as u64,
+        lost_outside_ticks: lost_out.iter().take(20).copied().collect(),
+        torn: trace.torn + timing.torn,
+        duplicated: (before - ticks.len()) as u64,
+    }
+}
+
+/// The figures of each kind of fault: injected, detected, recovered from, the flight back.
+fn kinds(plan: &[&Fault], faults: &[FaultOutcome]) -> Vec<KindFigures> {
+    let mut kinds: BTreeMap<String, KindFigures> = BTreeMap::new();
+    for (f, o) in plan.iter().zip(faults) {
+        let k = kinds.entry(o.kind.clone()).or_insert_with(|| KindFigures {
+            kind: o.kind.clone(),
+            watched: watched(f.target(), f.action()),
+            ..KindFigures::default()
+        });
+        k.injected += o.injected_at_s.is_some() as u64;
+        k.detected += (o.injected_at_s.is_some() && o.detected_at_s.is_some()) as u64;
+        k.recovered += (o.injected_at_s.is_some() && o.recovered_at_s.is_some()) as u64;
+        k.flight_back += (o.injected_at_s.is_some() && o.flight_back_at_s.is_some()) as u64;
+    }
+    kinds.into_values().collect()
+}
+
+/// The processes' table (pid, RSS, descriptors and shared-memory files at the start and the end), the lives that
+/// held more at last, and the run's /dev/shm entries.
+fn processes_text(r: &SoakReport) -> String {
+    let mut s = String::new();
+    s += &format!(
+        "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
+        "process", "pid", "pid", "RSS KiB", "RSS KiB", "fds", "fds", "shm", "shm"
+    );
+    s += &format!(
+        "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
+        "", "start", "end", "start", "end", "start", "end", "start", "end"
+    );
+    for a in &r.processes_start {
+        let e = r.processes_end.iter().find(|e| e.process == a.process);
+        let f = |v: Option<u64>| v.map_or("-".to_string(), |v| v.to_string());
+        s += &format!(
+            "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
+            a.process,
+            a.pid,
+            f(e.map(|e| e.pid as u64)),
+            a.rss_kib,
+            f(e.map(|e| e.rss_kib)),
+            a.fds,
+            f(e.map(|e| e.fds)),
+            a.shm_files,
+            f(e.map(|e| e.shm_files))
+        );
+    }
+    let grew = r.lives.iter().filter(|l| l.last.fds > l.settled.fds || l.last.shm_files > l.settled.shm_files);
+    s += &format!(
+        "  {} lives measured settled and last: {} held more descriptors or shared-memory files at last\n",
+        r.lives.len(),
+        grew.count()
+    );
+    s += &format!(
+        "  the run's /dev/shm entries: {} at the start, {} at the end\n",
+        r.run_shm_start.len(),
+        r.run_shm_end.len()
+    );
+    s
 }
 
 /// Why the soak failed: every figure that must be 0 and is not, every fault not injected, not detected (watched
@@ -540,41 +592,7 @@ pub fn to_text(r: &SoakReport) -> String {
         "rows: {} logged; lost {} inside the faults' windows, {} outside them; {} torn, {} logged twice\n",
         rows.trace_rows, rows.lost_in_fault_windows, rows.lost_outside_fault_windows, rows.torn, rows.duplicated
     );
-    s += &format!(
-        "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
-        "process", "pid", "pid", "RSS KiB", "RSS KiB", "fds", "fds", "shm", "shm"
-    );
-    s += &format!(
-        "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
-        "", "start", "end", "start", "end", "start", "end", "start", "end"
-    );
-    for a in &r.processes_start {
-        let e = r.processes_end.iter().find(|e| e.process == a.process);
-        let f = |v: Option<u64>| v.map_or("-".to_string(), |v| v.to_string());
-        s += &format!(
-            "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
-            a.process,
-            a.pid,
-            f(e.map(|e| e.pid as u64)),
-            a.rss_kib,
-            f(e.map(|e| e.rss_kib)),
-            a.fds,
-            f(e.map(|e| e.fds)),
-            a.shm_files,
-            f(e.map(|e| e.shm_files))
-        );
-    }
-    let grew = r.lives.iter().filter(|l| l.last.fds > l.settled.fds || l.last.shm_files > l.settled.shm_files);
-    s += &format!(
-        "  {} lives measured settled and last: {} held more descriptors or shared-memory files at last\n",
-        r.lives.len(),
-        grew.count()
-    );
-    s += &format!(
-        "  the run's /dev/shm entries: {} at the start, {} at the end\n",
-        r.run_shm_start.len(),
-        r.run_shm_end.len()
-    );
+    s += &processes_text(r);
     s += &format!(
         "left after the run: {} processes, {} shared-memory files, {} lock files\n",
         r.leftovers.processes.len(),

@@ -77,60 +77,12 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
     } else {
         None
     };
-    let host_prefix = host.as_ref().map(|h| h.local.prefix());
-    let mut host_trouble = String::new();
     let started_utc = utc_now();
     let load_start = load_average();
     let mut child =
         Command::new(silrig).args(&command).spawn().with_context(|| format!("starting {}", silrig.display()))?;
-    let launcher = child.id();
-    let shm_prefix = format!("sr_{run_id}_");
     let last_fault_s = plan.iter().map(|f| f.at_s).fold(0.0, f64::max);
-    let mut seen: BTreeSet<u32> = BTreeSet::from([launcher]);
-    let mut start: Option<(Vec<ProcessProbe>, Vec<String>)> = None;
-    let mut end: Option<(Vec<ProcessProbe>, Vec<String>)> = None;
-    let mut t0_ns: Option<u64> = None;
-    let mut lives = probe::Lives::default();
-    let status = loop {
-        if let Some(status) = child.try_wait()? {
-            break status;
-        }
-        if t0_ns.is_none() {
-            t0_ns = silrig_launch::fault_report::plant_t0_ns(&out);
-        }
-        let mut probes = probe::probe_run(launcher, &shm_prefix);
-        if let Some(h) = host.as_mut() {
-            if let Err(e) = h.keep_up() {
-                let said = format!("silrig soak: the controller's host: {e:#}");
-                if said != host_trouble {
-                    eprintln!("{said}");
-                    host_trouble = said;
-                }
-            }
-            probes.extend(h.probes());
-        }
-        seen.extend(probes.iter().map(|p| p.pid));
-        // Wall seconds from tick 0; measurements stop a second before the end, when the launcher ends the rig.
-        let wall_s = t0_ns.map(|t0| silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9);
-        if let Some(wall_s) = wall_s.filter(|t| *t <= args.duration_s - 1.0) {
-            lives.observe(&probes, wall_s);
-        }
-        let rig_up = ["plant", "controller", "logger"].iter().all(|r| probes.iter().any(|p| p.process == *r));
-        if let Some(wall_s) = wall_s
-            && rig_up
-        {
-            let mut shm = probe::shm_entries(&shm_prefix);
-            shm.extend(host_prefix.iter().flat_map(|p| probe::shm_entries(p)));
-            if start.is_none() && (probe::SETTLE_S..schedule::FIRST_FAULT_S - 0.5).contains(&wall_s) {
-                start = Some((probes.clone(), shm.clone()));
-            }
-            // After the last fault's recovery (the schedule leaves the last seconds quiet), before the run's end.
-            if wall_s >= last_fault_s + 3.0 && wall_s <= args.duration_s - 1.0 {
-                end = Some((probes, shm));
-            }
-        }
-        std::thread::sleep(POLL);
-    };
+    let (status, watched) = watch(&mut child, &out, &run_id, host.as_mut(), last_fault_s, args.duration_s)?;
     // The controller's host first: the bridge ends after sending the controller's report, the controller with the
     // flight; what had to be ended is a problem of its own, not a leftover.
     let controller_host = host.as_mut().map(|h| {
@@ -143,7 +95,7 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
             still_running,
         }
     });
-    let mut leftovers = probe::Leftovers::find(&run_id, &out, &seen);
+    let mut leftovers = probe::Leftovers::find(&run_id, &out, &watched.seen);
     if let Some(h) = &host {
         leftovers.extend(probe::Leftovers::find(h.local.as_str(), &h.out, &h.pids));
     }
@@ -156,9 +108,9 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
         started_utc,
         load_average: (load_start, load_average()),
         run_exit: status.code(),
-        start,
-        end,
-        lives: lives.into_vec(),
+        start: watched.start,
+        end: watched.end,
+        lives: watched.lives.into_vec(),
         leftovers,
         controller_host,
     };
@@ -169,6 +121,73 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(report)
+}
+
+/// What the soak saw of the run while it went: every pid, the processes and the run's /dev/shm entries once settled
+/// and after the last fault, and every life's figures.
+struct Watched {
+    seen: BTreeSet<u32>,
+    start: Option<(Vec<ProcessProbe>, Vec<String>)>,
+    end: Option<(Vec<ProcessProbe>, Vec<String>)>,
+    lives: probe::Lives,
+}
+
+/// Probe the run's processes (and the controller's host's, kept up) every [`POLL`] until the launcher exits.
+fn watch(
+    child: &mut std::process::Child,
+    out: &Path,
+    run_id: &str,
+    mut host: Option<&mut ControllerHost>,
+    last_fault_s: f64,
+    duration_s: f64,
+) -> anyhow::Result<(std::process::ExitStatus, Watched)> {
+    let launcher = child.id();
+    let host_prefix = host.as_ref().map(|h| h.local.prefix());
+    let mut host_trouble = String::new();
+    let shm_prefix = format!("sr_{run_id}_");
+    let mut w = Watched { seen: BTreeSet::from([launcher]), start: None, end: None, lives: probe::Lives::default() };
+    let mut t0_ns: Option<u64> = None;
+    let status = loop {
+        if let Some(status) = child.try_wait()? {
+            break status;
+        }
+        if t0_ns.is_none() {
+            t0_ns = silrig_launch::fault_report::plant_t0_ns(out);
+        }
+        let mut probes = probe::probe_run(launcher, &shm_prefix);
+        if let Some(h) = host.as_deref_mut() {
+            if let Err(e) = h.keep_up() {
+                let said = format!("silrig soak: the controller's host: {e:#}");
+                if said != host_trouble {
+                    eprintln!("{said}");
+                    host_trouble = said;
+                }
+            }
+            probes.extend(h.probes());
+        }
+        w.seen.extend(probes.iter().map(|p| p.pid));
+        // Wall seconds from tick 0; measurements stop a second before the end, when the launcher ends the rig.
+        let wall_s = t0_ns.map(|t0| silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9);
+        if let Some(wall_s) = wall_s.filter(|t| *t <= duration_s - 1.0) {
+            w.lives.observe(&probes, wall_s);
+        }
+        let rig_up = ["plant", "controller", "logger"].iter().all(|r| probes.iter().any(|p| p.process == *r));
+        if let Some(wall_s) = wall_s
+            && rig_up
+        {
+            let mut shm = probe::shm_entries(&shm_prefix);
+            shm.extend(host_prefix.iter().flat_map(|p| probe::shm_entries(p)));
+            if w.start.is_none() && (probe::SETTLE_S..schedule::FIRST_FAULT_S - 0.5).contains(&wall_s) {
+                w.start = Some((probes.clone(), shm.clone()));
+            }
+            // After the last fault's recovery (the schedule leaves the last seconds quiet), before the run's end.
+            if wall_s >= last_fault_s + 3.0 && wall_s <= duration_s - 1.0 {
+                w.end = Some((probes, shm));
+            }
+        }
+        std::thread::sleep(POLL);
+    };
+    Ok((status, w))
 }
 
 /// A TCP port of 127.0.0.1 nobody listens on now, for the plant-side bridge.

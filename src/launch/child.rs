@@ -1,0 +1,271 @@
+//! A child process the launcher starts: the rig's binary or a user's command for a role, tied to the launcher's
+//! life, its output copied to its log under a cap, reaped exactly once and signalled only until then (a user's
+//! command as a whole process group), and its exit status in words.
+
+use crate::program::split_command;
+use anyhow::Context;
+use silrig_flight::role::Role;
+use silrig_rig::ProcessArgs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+/// A child process the launcher started: reaped once, signalled only while not reaped.
+pub struct ChildProcess {
+    child: std::process::Child,
+    status: Option<ExitStatus>,
+    /// It leads a process group of its own (a user's shell command): signals go to the whole group.
+    group: bool,
+    /// The thread copying its output to its log ([`forward_output`]).
+    output: Option<std::thread::JoinHandle<()>>,
+}
+
+impl ChildProcess {
+    pub(crate) fn new(child: std::process::Child) -> Self {
+        Self { child, status: None, group: false, output: None }
+    }
+
+    /// A child started with `process_group(0)`: signalled as a group, so it and what it started stop together.
+    pub(crate) fn group_leader(child: std::process::Child) -> Self {
+        Self { child, status: None, group: true, output: None }
+    }
+
+    pub(crate) fn with_output(mut self, output: std::thread::JoinHandle<()>) -> Self {
+        self.output = Some(output);
+        self
+    }
+
+    /// Once it has ended, give the copy of its output a moment to reach the log, so what it said last is there
+    /// when its exit is judged (a grandchild still holding the pipe is not waited for).
+    fn let_output_catch_up(&mut self) {
+        let deadline = Instant::now() + Duration::from_millis(500);
+        while self.output.as_ref().is_some_and(|t| !t.is_finished()) && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    pub(crate) fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// The exit status, reaping the child if it has ended.
+    pub fn poll(&mut self) -> std::io::Result<Option<ExitStatus>> {
+        if self.status.is_none() {
+            self.status = self.child.try_wait()?;
+            if self.status.is_some() {
+                self.let_output_catch_up();
+            }
+        }
+        Ok(self.status)
+    }
+
+    pub(crate) fn has_ended(&self) -> bool {
+        self.status.is_some()
+    }
+
+    /// Send `signal` to the process, unless it has ended (its pid may be reused by then).
+    pub fn signal(&mut self, signal: libc::c_int) {
+        if self.status.is_none() {
+            let pid = self.child.id() as libc::pid_t;
+            // SAFETY: kill(2) on the pid of a child we have not reaped yet (or the group it leads), so the pid
+            // cannot have been reused.
+            unsafe {
+                libc::kill(if self.group { -pid } else { pid }, signal);
+            }
+        }
+    }
+
+    /// Wait up to `timeout` for the process to end; then SIGKILL it. Always reaps.
+    pub fn finish(&mut self, timeout: Duration) -> std::io::Result<ExitStatus> {
+        let deadline = Instant::now() + timeout;
+        while self.poll()?.is_none() && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        if self.status.is_none() {
+            self.signal(libc::SIGKILL);
+            self.status = Some(self.child.wait()?);
+            self.let_output_catch_up();
+        }
+        self.end_group_leftovers(timeout);
+        Ok(self.status.expect("reaped"))
+    }
+
+    /// A user's command may leave processes it started (`sh -c "helper & exec my_controller"`) after it ended:
+    /// they end with the run. Linux never gives out a pid still used as a process group id, so while any process
+    /// sits in the group the id names this group alone; SIGTERM, then SIGKILL past `timeout`.
+    fn end_group_leftovers(&self, timeout: Duration) {
+        let pgid = self.child.id() as libc::pid_t;
+        if !self.group {
+            return;
+        }
+        let deadline = Instant::now() + timeout;
+        let mut signal = libc::SIGTERM;
+        while !members_of_group(pgid).is_empty() {
+            // SAFETY: kill(2) on a process group that still has members (see above), so it is this group.
+            unsafe { libc::kill(-pgid, signal) };
+            if Instant::now() >= deadline {
+                signal = libc::SIGKILL;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
+/// The live processes in process group `pgid` (from `/proc/<pid>/stat`; zombies, which init reaps, left out).
+fn members_of_group(pgid: libc::pid_t) -> Vec<libc::pid_t> {
+    let Ok(entries) = std::fs::read_dir("/proc") else { return Vec::new() };
+    entries
+        .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<libc::pid_t>().ok())
+        .filter(|pid| {
+            std::fs::read_to_string(format!("/proc/{pid}/stat")).ok().is_some_and(|stat| {
+                // After the command in parentheses (which may hold spaces): state, ppid, pgrp.
+                let fields: Vec<&str> = stat.rsplit_once(')').map_or("", |(_, rest)| rest).split_whitespace().collect();
+                fields.first().is_some_and(|state| *state != "Z") && fields.get(2) == Some(&pgid.to_string().as_str())
+            })
+        })
+        .collect()
+}
+
+/// The child gets `signal` when the launcher dies, however it dies (`kill -9` included), so nothing outlives its
+/// run. Linux ties the signal to the thread that forked the child: the launcher starts and restarts every process
+/// from its main thread, which lives as long as the launcher.
+pub(crate) fn end_with_launcher(command: &mut Command, signal: libc::c_int) {
+    use std::os::unix::process::CommandExt;
+    let launcher = std::process::id() as libc::pid_t;
+    // SAFETY: the closure runs in the child between fork and exec and calls only async-signal-safe functions
+    // (prctl, getppid, raise).
+    unsafe {
+        command.pre_exec(move || {
+            libc::prctl(libc::PR_SET_PDEATHSIG, signal as libc::c_ulong, 0, 0, 0);
+            // The launcher may have died between fork and prctl: then the signal never comes, so send it now.
+            if libc::getppid() != launcher {
+                libc::raise(signal);
+            }
+            Ok(())
+        });
+    }
+}
+
+/// Start `role`'s process of the run `args` describes, tied to this process's life ([`end_with_launcher`]): the
+/// rig binary from `bin_dir`, or a user's `command` for the role (`--controller-cmd`, `--plant-cmd`) with the run's
+/// `SILRIG_*` variables, in a process group of its own so a stop or kill fault reaches whatever it started.
+/// `extra_args` follow the run's arguments on the rig binary's command line (the logger's `--live-foxglove`).
+pub fn start_process(
+    role: Role,
+    command: Option<&str>,
+    args: &ProcessArgs,
+    extra_args: &[String],
+    bin_dir: &Path,
+    stdout: Stdio,
+    stderr: Stdio,
+) -> anyhow::Result<ChildProcess> {
+    if let Some(cmd) = command {
+        use std::os::unix::process::CommandExt;
+        let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--{role}-cmd: {e}"))?;
+        let mut command = Command::new(&words[0]);
+        end_with_launcher(&mut command, libc::SIGTERM);
+        let child = command
+            .args(&words[1..])
+            .envs(args.to_env())
+            .env("SILRIG_CLIENT_LIB", bin_dir.join("libsilrig_client.so"))
+            .process_group(0)
+            .stdin(Stdio::null())
+            .stdout(stdout)
+            .stderr(stderr)
+            .spawn()
+            .with_context(|| format!("starting the {role} command `{cmd}`"))?;
+        return Ok(ChildProcess::group_leader(child));
+    }
+    let exe = bin_dir.join(role.binary());
+    let mut command = Command::new(&exe);
+    // A stopped plant cannot act on SIGTERM until continued, and nobody is left to continue it: it gets SIGKILL
+    // (the next run removes what it leaves); the others end cleanly on SIGTERM, writing what they hold.
+    end_with_launcher(&mut command, if role == Role::Plant { libc::SIGKILL } else { libc::SIGTERM });
+    let child = command
+        .args(args.to_argv())
+        .args(extra_args)
+        .stdin(Stdio::null())
+        .stdout(stdout)
+        .stderr(stderr)
+        .spawn()
+        .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
+    Ok(ChildProcess::new(child))
+}
+
+/// Copy a child's output (stdout and stderr, one pipe) into `log_path` line by line. When the log cannot be
+/// written (a full disk), the rest goes to the launcher's own stderr after one line saying why, so nothing the
+/// process said is lost; the child itself never sees the failure, and never dies writing its error to a full disk.
+/// Largest `<role>.stderr.log`, bytes: a process that writes without end (100 KB a tick is 6 GB in ten minutes)
+/// must not fill the disk the trace is written to. Past it lines are counted, and the count closes the log.
+pub const STDERR_LOG_CAP_BYTES: u64 = 16 << 20;
+
+pub(crate) fn forward_output(
+    reader: std::io::PipeReader,
+    log_path: PathBuf,
+    role: Role,
+    marker: Option<String>,
+) -> std::thread::JoinHandle<()> {
+    use std::io::{BufRead, Write};
+    std::thread::spawn(move || {
+        let mut log = std::fs::OpenOptions::new().create(true).append(true).open(&log_path);
+        let mut to_log = |line: &[u8]| -> std::io::Result<()> {
+            let file = log.as_mut().map_err(|e| std::io::Error::new(e.kind(), e.to_string()))?;
+            let before = file.metadata()?.len();
+            let mut whole = line.to_vec();
+            whole.push(b'\n');
+            // A line the disk takes only in part is cut back out.
+            file.write_all(&whole).inspect_err(|_| {
+                let _ = file.set_len(before);
+            })
+        };
+        let mut failed = false;
+        // A restarted process appends to its predecessor's log: the cap counts what is there already.
+        let mut logged = std::fs::metadata(&log_path).map_or(0, |m| m.len());
+        let (mut dropped_bytes, mut dropped_lines) = (0u64, 0u64);
+        for line in
+            marker.into_iter().map(String::into_bytes).map(Ok).chain(std::io::BufReader::new(reader).split(b'\n'))
+        {
+            let Ok(line) = line else { break };
+            if logged + line.len() as u64 + 1 > STDERR_LOG_CAP_BYTES {
+                if dropped_lines == 0 {
+                    let cap_mib = STDERR_LOG_CAP_BYTES >> 20;
+                    let _ = to_log(
+                        format!("--- silrig run: this log reached its cap of {cap_mib} MiB; what follows is counted, not kept ---")
+                            .as_bytes(),
+                    );
+                }
+                dropped_lines += 1;
+                dropped_bytes += line.len() as u64 + 1;
+                continue;
+            }
+            logged += line.len() as u64 + 1;
+            if !failed && let Err(e) = to_log(&line) {
+                failed = true;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "silrig run: cannot write {}: {e}; what the {role} says follows here",
+                    log_path.display()
+                );
+            }
+            if failed {
+                let _ = writeln!(std::io::stderr(), "silrig run: {role}: {}", String::from_utf8_lossy(&line));
+            }
+        }
+        if dropped_lines > 0 {
+            let _ = to_log(
+                format!("--- silrig run: {dropped_lines} lines ({dropped_bytes} bytes) past the cap were dropped ---")
+                    .as_bytes(),
+            );
+        }
+    })
+}
+
+/// An exit status as a person reads it.
+pub fn describe(status: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(c), _) => format!("exit status {c}"),
+        (None, Some(s)) => format!("killed by signal {s}"),
+        _ => "ended".into(),
+    }
+}
