@@ -193,3 +193,51 @@ fn the_f16s_keys_are_refused_for_the_quadrotor_by_every_command() {
     assert!(text(&o).contains("`plant.model`: is \"quad\": this flies the built-in F-16 only"), "{}", text(&o));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn our_controller_at_250_hz_flies_the_1_khz_plant_alike_in_sim_lockstep_and_realtime() {
+    let dir = common::temp_dir("quad", "rates");
+    // The hover with the controller every 4th plant tick: 250 Hz against the plant's 1 kHz.
+    let hover = std::fs::read_to_string(config("quad-hover")).unwrap();
+    let slower = hover.replace("dt_s = 0.001\n", "dt_s = 0.001\ncontroller_every_ticks = 4\n");
+    assert_ne!(slower, hover);
+    let scenario = dir.join("quad-hover-250hz.toml");
+    std::fs::write(&scenario, slower).unwrap();
+    let scenario = scenario.to_str().unwrap();
+    let out = dir.join("sim");
+    let o = silrig(&["sim", scenario, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let reference = std::fs::read(out.join("trace.csv")).unwrap();
+    assert_ne!(
+        reference,
+        std::fs::read(sim(&dir, "quad-hover").join("trace.csv")).unwrap(),
+        "the rate changed nothing"
+    );
+    // The trace keeps the plant's rate; the commands change only on the controller's ticks.
+    let text_trace = String::from_utf8(reference.clone()).unwrap();
+    let mut lines = text_trace.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let motor = header.iter().position(|h| *h == "motor1_cmd").unwrap();
+    let commands: Vec<&str> = lines.map(|l| l.split(',').nth(motor).unwrap()).collect();
+    assert_eq!(commands.len(), 10001);
+    let changes: Vec<usize> = (1..commands.len()).filter(|&k| commands[k] != commands[k - 1]).collect();
+    assert!(changes.len() > 100 && changes.iter().all(|k| k % 4 == 0), "commands changed off the controller's ticks");
+    assert!((setpoint(&summary(&out), "alt_m")["final_value"].as_f64().unwrap() - 2.0).abs() < 0.05);
+    let lockstep = Run::start(SILRIG, "quad", "q", "rates-lockstep", &[scenario, "--mode", "lockstep"]);
+    assert_eq!(lockstep.code, Some(0), "{}{}", lockstep.stdout, lockstep.stderr);
+    assert!(std::fs::read(lockstep.out.join("trace.csv")).unwrap() == reference, "lockstep's trace is not sim's");
+    // 2,501 controller ticks of 10,001: the session answered the other 7,500 with the controller's last answer.
+    assert_eq!(lockstep.counter("controller", "commands_repeated"), 7500);
+    assert_eq!(lockstep.counter("controller", "commands_sent"), 10001);
+    assert_eq!(lockstep.counter("plant", "command_misses"), 0);
+    lockstep.finish();
+    let realtime = Run::start(SILRIG, "quad", "q", "rates-realtime", &[scenario, "--mode", "realtime"]);
+    assert_eq!(realtime.code, Some(0), "{}{}", realtime.stdout, realtime.stderr);
+    assert_eq!(realtime.counter("plant", "ticks"), 10001);
+    assert!(realtime.counter("controller", "commands_repeated") > 0);
+    let (header, rows) = realtime.trace();
+    let alt = Run::column(&header, "alt_m");
+    assert!((rows.last().unwrap()[alt] - 2.0).abs() < 0.05, "{:?}", rows.last());
+    realtime.finish();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
