@@ -34,7 +34,13 @@ fn short_config(dir: &Path) -> PathBuf {
         .replace(
             "[dispersions]\n",
             "[dispersions]\n\"setpoint.theta_deg\" = { dist = \"uniform\", min = 5.0, max = 15.0 }\n",
+        )
+        // Descents too (the shipped sweep draws none), so that some case cannot be trimmed.
+        .replace(
+            "\"initial.theta_deg\" = { dist = \"normal\", mean = 7.0, std = 2.0, min = 5.0, max = 15.0 }",
+            "\"initial.theta_deg\" = { dist = \"normal\", mean = 5.0, std = 2.0, min = -5.0, max = 15.0 }",
         );
+    assert!(text.contains("min = -5.0, max = 15.0"), "the shipped sweep's initial.theta_deg changed");
     let path = dir.join("short.toml");
     std::fs::write(&path, text).unwrap();
     path
