@@ -10,6 +10,7 @@
 //!   transport.
 //! - `silrig-plot` ([`plot`]): every figure.
 //! - `silrig-rig` ([`rig`]): the plant, controller and logger processes and the controller session.
+//! - `silrig-adapters` ([`adapters`]): what turns a foreign thing into a plant or a controller (a device over UDP).
 //! - `silrig-launch` ([`launch`]): `silrig run`, supervision, faults, the run's report.
 //! - `silrig-tools` ([`check`], [`campaign`], [`replay`], [`bench`], [`contract`], [`outputs`],
 //!   [`derivative_csv`], [`export_fmu`], [`html`], [`soak`]): the tools on top.
@@ -20,6 +21,7 @@
 #[cfg(feature = "bridge")]
 pub use silrig_bridge as bridge;
 
+pub use silrig_adapters as adapters;
 pub use silrig_flight::{
     criteria, dispersion, f_true, f16_signals, fault, files, judge, role, scenario, signals, sim, summary, trace,
 };

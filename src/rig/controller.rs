@@ -56,6 +56,22 @@ pub trait Controller {
     fn restore(&mut self, _saved: &str) -> Result<(), String> {
         Err("this controller keeps no state to resume".into())
     }
+
+    /// Figures of its own for the controller's report, asked once at the end of the session (a device's link round
+    /// trip beside the rig's own distributions, its refused packets beside the rig's counters).
+    fn figures(&self) -> ControllerFigures {
+        ControllerFigures::default()
+    }
+}
+
+/// What a [`Controller`] adds to the controller's report: distributions (short name, what was measured from when
+/// to when, the histogram) and counters by name.
+#[derive(Debug, Default)]
+pub struct ControllerFigures {
+    /// Distributions, named as the session's own (the report prefixes `controller.`).
+    pub distributions: Vec<(String, String, silrig_wire::timing::LatencyHistogram)>,
+    /// Counters.
+    pub counters: Vec<(String, u64)>,
 }
 
 /// The paper's adaptive SMC/RBF controller behind the [`Controller`] trait; its checkpoint is its RBF weights. It
@@ -164,6 +180,7 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
     if let Some(e) = &error {
         session.fail(e);
     }
+    session.add_figures(law.figures());
     let report = session.finish()?;
     match error {
         Some(e) => Err(e),

@@ -157,6 +157,11 @@ impl Recorder {
         }
     }
 
+    /// Add a distribution measured elsewhere (named as those of [`Recorder::new`]), reported beside the others.
+    pub fn add_distribution(&mut self, name: &str, description: &str, h: LatencyHistogram) {
+        self.histograms.push((format!("{}.{name}", self.process), description.to_string(), h));
+    }
+
     /// Make sure a counter shows up in the report even when it stays 0.
     pub fn declare(&mut self, counters: &[&str]) {
         for c in counters {
