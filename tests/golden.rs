@@ -25,6 +25,16 @@ const GOLDEN: [(&str, u64, usize, f64); 9] = [
     ("sweep-hard-over", 0x95b7_db40_a84e_4af4, 14001, 10.068518443977899),
 ];
 
+/// The quadrotor's scenarios (`[plant] model = "quad"`), flown as `silrig sim` flies them (the rig's loop in one
+/// process, `silrig::rig::in_process`, which the lockstep rig equals bit for bit: `tests/quad.rs`): (scenario, FNV-1a
+/// 64 of trace.csv, rows, alt_m in the last row).
+const QUAD_GOLDEN: [(&str, u64, usize, f64); 3] = [
+    ("quad-hover", 0xad95_2939_d46d_75bf, 10001, 1.9981750010637147),
+    // quad-hover with dispersions and criteria, which sim ignores.
+    ("quad-sweep", 0xad95_2939_d46d_75bf, 10001, 1.9981750010637147),
+    ("quad-steps", 0xcd44_33a8_a949_7659, 6001, 2.021917073461814),
+];
+
 fn fnv1a64(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3))
 }
@@ -56,6 +66,25 @@ fn every_shipped_scenario_flies_its_golden_trace() {
 }
 
 #[test]
+fn every_quadrotor_scenario_flies_its_golden_trace() {
+    let mut moved = Vec::new();
+    for (name, fingerprint, rows, final_alt_m) in QUAD_GOLDEN {
+        let s = scenario(name);
+        let trace = silrig::rig::in_process::Models::open(&s).unwrap().fly(&s).unwrap().trace;
+        let mut csv = Vec::new();
+        trace.write_csv(&mut csv).unwrap();
+        let got = (fnv1a64(&csv), trace.rows.len(), *trace.column("alt_m").unwrap().last().unwrap());
+        if got != (fingerprint, rows, final_alt_m) {
+            moved.push(format!(
+                "{name}: fingerprint {:#018x}, {} rows, final alt {} m (golden {fingerprint:#018x}, {rows}, {final_alt_m})",
+                got.0, got.1, got.2
+            ));
+        }
+    }
+    assert!(moved.is_empty(), "traces moved:\n{}", moved.join("\n"));
+}
+
+#[test]
 fn every_shipped_scenario_has_a_golden_trace() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
     for entry in std::fs::read_dir(dir).unwrap() {
@@ -67,6 +96,7 @@ fn every_shipped_scenario_has_a_golden_trace() {
         if name == "any-plant" {
             continue;
         }
-        assert!(GOLDEN.iter().any(|g| g.0 == name), "{} has no golden trace ({})", path.display(), scenario.name);
+        let mut golden = GOLDEN.iter().map(|g| g.0).chain(QUAD_GOLDEN.iter().map(|g| g.0));
+        assert!(golden.any(|g| g == name), "{} has no golden trace ({})", path.display(), scenario.name);
     }
 }

@@ -9,7 +9,8 @@
 //!   reuse so both give the same trace; [`trace`]: the trace rows and `trace.csv`.
 //! - [`signals`]: a plant's named signals as data (what it announces, the checks, lookups by name, the trace's
 //!   columns of any plant); [`f16_signals`]: the F-16's table, and its snapshot read back by name;
-//!   [`signal_chain`]: the rig's actuators and sensor faults on the named signals of a plant of your own.
+//!   [`signal_chain`]: the rig's actuators and sensor faults on the named signals of a plant of your own;
+//!   [`quad`]: the built-in quadrotor as a scenario flies it (`[plant] model = "quad"`).
 //! - [`summary`]: control-quality figures; [`f_true`]: the true lumped function the RBF networks estimate;
 //!   [`criteria`] and [`judge`]: pass/fail criteria and how a flight is judged against them.
 //! - [`files`]: writing a run's files without ever leaving a torn one.
@@ -24,6 +25,7 @@ pub mod f_true;
 pub mod fault;
 pub mod files;
 pub mod judge;
+pub mod quad;
 pub mod role;
 pub mod scenario;
 pub mod signal_chain;

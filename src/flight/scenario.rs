@@ -146,10 +146,31 @@ impl Disturbance {
     }
 }
 
+/// The built-in vehicle a scenario flies (`[plant] model`) when no plant of your own replaces it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BuiltinVehicle {
+    /// The Stevens & Lewis F-16 (the default).
+    #[default]
+    F16,
+    /// The X quadrotor ([`crate::quad`]): its parameters and start values in `[plant.parameters]`.
+    Quad,
+}
+
+impl BuiltinVehicle {
+    fn is_f16(&self) -> bool {
+        *self == BuiltinVehicle::F16
+    }
+}
+
 /// Plant options.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlantOptions {
+    /// Which built-in vehicle flies: `"f16"` (default) or `"quad"`. Left out of a scenario written down when it is
+    /// the F-16, so the F-16's scenarios read as they always have.
+    #[serde(default, skip_serializing_if = "BuiltinVehicle::is_f16")]
+    pub model: BuiltinVehicle,
     /// Freeze the airspeed (VT_dot = 0), as the paper assumes.
     #[serde(default)]
     pub speed_hold: bool,
@@ -203,6 +224,7 @@ fn one() -> f64 {
 impl Default for PlantOptions {
     fn default() -> Self {
         Self {
+            model: BuiltinVehicle::F16,
             speed_hold: false,
             sideslip_hold: false,
             xcg: default_xcg(),

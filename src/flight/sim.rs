@@ -161,10 +161,24 @@ pub struct PlantRunner {
     noise: SplitMix64,
 }
 
+/// What the built-in vehicle the scenario names can check before it flies: [`check_for_f16`], or the quadrotor's
+/// [`crate::quad::check_for_quad`]. On error (dotted key, problem).
+pub fn check_builtin(s: &Scenario) -> Result<(), (String, String)> {
+    if crate::quad::is_quad(s) { crate::quad::check_for_quad(s) } else { check_for_f16(s) }
+}
+
 /// What only the built-in F-16 can check: `[actuators]` names its inputs within their travel, sensor and
 /// actuator faults name its channels and surfaces, and `[plant.parameters]` (a plant of your own's) is empty.
 /// On error (dotted key, problem).
 pub fn check_for_f16(s: &Scenario) -> Result<(), (String, String)> {
+    if crate::quad::is_quad(s) {
+        return Err((
+            "plant.model".into(),
+            "is \"quad\": this flies the built-in F-16 only; the quadrotor flies in `silrig sim`, `run`, `sweep` \
+             and `check`"
+                .into(),
+        ));
+    }
     if let Some(fmu) = &s.plant.fmu {
         return Err((
             "plant.fmu".into(),

@@ -177,9 +177,14 @@ pub enum PlantKind {
 }
 
 impl LaunchOptions {
-    /// Whether the plant is the built-in F-16 (no `--plant-cmd`, `--plant external` or plant FMU).
-    fn flies_builtin_f16(&self, scenario: &Scenario) -> bool {
+    /// Whether the plant is a built-in vehicle (no `--plant-cmd`, `--plant external` or plant FMU).
+    fn flies_builtin(&self, scenario: &Scenario) -> bool {
         self.plant_cmd.is_none() && self.plant != PlantKind::External && scenario.plant.fmu.is_none()
+    }
+
+    /// Whether the plant is the built-in F-16.
+    fn flies_builtin_f16(&self, scenario: &Scenario) -> bool {
+        self.flies_builtin(scenario) && !silrig_flight::quad::is_quad(scenario)
     }
 
     fn controller_launch(&self) -> ControllerLaunch {
@@ -256,11 +261,11 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         );
         let fmu = std::path::absolute(&fmu).map_err(|e| anyhow::anyhow!("--controller-fmu {}: {e}", fmu.display()))?;
         // The file and `[controller]` are checked here; against the plant's signals too when they are known before
-        // it runs (the F-16, an FMU plant), else when the plant announces them.
+        // it runs (a built-in vehicle, an FMU plant), else when the plant announces them.
         let plant = if let Some(plant_fmu) = &scenario.plant.fmu {
             Some(silrig_rig::fmu_plant::FmuPlant::check(plant_fmu, &scenario)?.signals)
-        } else if opts.plant_cmd.is_none() && opts.plant == PlantKind::Builtin {
-            Some(silrig_flight::f16_signals::f16_signals([0.0; 4]))
+        } else if opts.flies_builtin(&scenario) {
+            Some(silrig_flight::quad::builtin_signals(&scenario).map_err(|(k, p)| anyhow::anyhow!("`{k}`: {p}"))?)
         } else {
             None
         };
@@ -288,10 +293,10 @@ fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
     {
         anyhow::bail!("fault plan: {} needs a plant the launcher starts, not --plant external", f.describe());
     }
-    // The built-in F-16 is known now; a plant of your own is checked against the signals it announces when it joins
+    // A built-in vehicle is known now; a plant of your own is checked against the signals it announces when it joins
     // (its `[actuators]`, sensor and actuator faults by its own names: `silrig_flight::signal_chain`).
-    if opts.flies_builtin_f16(&scenario) {
-        silrig_flight::sim::check_for_f16(&scenario)
+    if opts.flies_builtin(&scenario) {
+        silrig_flight::sim::check_builtin(&scenario)
             .map_err(|(key, problem)| anyhow::anyhow!("the scenario: `{key}`: {problem}"))?;
     }
     for (flag, cmd) in [("controller-cmd", &opts.controller_cmd), ("plant-cmd", &opts.plant_cmd)] {

@@ -1,5 +1,5 @@
 //! The sweep figures: histograms of each criterion's figure over the cases, scatter plots of the most influential
-//! dispersed parameters against a criterion, and the envelope of the attitude over all cases with the failures
+//! dispersed parameters against a criterion, and the envelope of each output with a set point over all cases with the failures
 //! drawn one by one. Plain data in (the campaign module computes it), figures out.
 
 use std::path::{Path, PathBuf};
@@ -38,10 +38,12 @@ pub struct Scatter {
     pub failed: Vec<(f64, f64)>,
 }
 
-/// One envelope panel: an angle over time.
+/// One envelope panel: an output with a set point over time.
 pub struct Envelope {
     /// Panel caption.
     pub caption: String,
+    /// The output's unit.
+    pub unit: String,
     /// (t, lowest, highest) over the passed cases.
     pub band: Vec<(f64, f64, f64)>,
     /// The failed cases drawn one by one (at most a few dozen).
@@ -152,7 +154,7 @@ pub fn plot_scatter(panels: &[Scatter], out_dir: &Path, stem: &str, title: &str)
     write_figure(&fig, out_dir, stem)
 }
 
-/// `<stem>.{png,svg}`: per angle, the band the passed cases stay in, the set point, and each failed case.
+/// `<stem>.{png,svg}`: per output with a set point, the band the passed cases stay in, the set point, and each failed case.
 pub fn plot_envelope(panels: &[Envelope], out_dir: &Path, stem: &str, title: &str) -> Result<Vec<PathBuf>, PlotError> {
     let panels: Vec<Panel> = panels
         .iter()
@@ -175,7 +177,7 @@ pub fn plot_envelope(panels: &[Envelope], out_dir: &Path, stem: &str, title: &st
                 s.stroke.width = 3;
                 series.push(s);
             }
-            let mut p = Panel::new(&e.caption, "deg", series);
+            let mut p = Panel::new(&e.caption, &e.unit, series);
             p.legend = false;
             p
         })

@@ -1,5 +1,5 @@
 //! The closed loop of any plant and any controller the rig flies in one process, with no clock and no transport:
-//! the built-in F-16 or an FMU ([`super::fmu_plant::FmuModel`]) against our controller or a controller FMU, tick
+//! the built-in F-16, the quadrotor or an FMU ([`super::fmu_plant::FmuModel`]) against our controller or a controller FMU, tick
 //! by tick in lockstep. `silrig sim` and `silrig sweep` fly scenarios that name an FMU here, so a user's models get
 //! Monte Carlo at in-process speed.
 //!
@@ -18,6 +18,8 @@ use super::f16_plant::F16Plant;
 use super::fmu_controller::FmuController;
 use super::fmu_plant::{FmuModel, FmuPlant};
 use super::plant_model::PlantModel;
+use super::quad_law::QuadLaw;
+use super::quad_plant::QuadPlant;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
@@ -209,6 +211,8 @@ impl FmuFlags {
 pub struct Models {
     plant_fmu: Option<Arc<Fmu>>,
     controller_fmu: Option<Arc<Fmu>>,
+    /// The built-in quadrotor flies (`[plant] model = "quad"`).
+    quad: bool,
 }
 
 /// Why a flight could not start (not a verdict on the controller: the case is infeasible).
@@ -218,28 +222,41 @@ pub struct SetupError(pub anyhow::Error);
 
 impl Models {
     /// Unpack and load the FMUs `scenario` names (`[plant] fmu`, `[controller] fmu`); the built-in F-16 and our
-    /// controller need nothing.
+    /// controller need nothing, the quadrotor a scenario it can fly (checked here, naming the key).
     pub fn open(scenario: &Scenario) -> anyhow::Result<Self> {
         let open = |path: &Option<std::path::PathBuf>| -> anyhow::Result<Option<Arc<Fmu>>> {
             path.as_deref().map(|p: &Path| Ok(Arc::new(Fmu::open(p)?))).transpose()
         };
-        Ok(Self { plant_fmu: open(&scenario.plant.fmu)?, controller_fmu: open(&scenario.controller.fmu)? })
+        let quad = silrig_flight::quad::is_quad(scenario);
+        if quad {
+            silrig_flight::quad::check_for_quad(scenario).map_err(|(k, p)| anyhow::anyhow!("`{k}`: {p}"))?;
+        }
+        Ok(Self { plant_fmu: open(&scenario.plant.fmu)?, controller_fmu: open(&scenario.controller.fmu)?, quad })
     }
 
-    /// Whether the scenario flies an FMU (otherwise `silrig_flight::sim` flies it, the reference loop).
+    /// Whether the scenario flies an FMU.
     pub fn has_fmu(&self) -> bool {
         self.plant_fmu.is_some() || self.controller_fmu.is_some()
     }
 
-    /// `plant`, a flight's announcement, when the plant is one of your own (an FMU); `None` for the built-in F-16
-    /// under any controller, whose actuators are its own: what the summary and the figures take.
-    pub fn own_plant(&self, plant: PlantSignals) -> Option<PlantSignals> {
-        self.plant_fmu.is_some().then_some(plant)
+    /// Whether the scenario is the F-16 against our controller, which `silrig_flight::sim` flies (the reference
+    /// loop); anything else flies here.
+    pub fn flies_reference_loop(&self) -> bool {
+        !self.has_fmu() && !self.quad
     }
 
-    /// The plant FMU's signals under `scenario`, as it announces them when it flies; `None` for the built-in F-16
-    /// (what the summary takes: `silrig_flight::summary::summarize`).
+    /// `plant`, a flight's announcement, when the plant is not the built-in F-16 (an FMU, the quadrotor); `None`
+    /// for the F-16 under any controller, whose actuators are its own: what the summary and the figures take.
+    pub fn own_plant(&self, plant: PlantSignals) -> Option<PlantSignals> {
+        (self.plant_fmu.is_some() || self.quad).then_some(plant)
+    }
+
+    /// The plant FMU's or the quadrotor's signals under `scenario`, as it announces them when it flies; `None` for
+    /// the built-in F-16 (what the summary takes: `silrig_flight::summary::summarize`).
     pub fn plant_signals(&self, scenario: &Scenario) -> Result<Option<PlantSignals>, String> {
+        if self.quad && self.plant_fmu.is_none() {
+            return silrig_flight::quad::builtin_signals(scenario).map(Some).map_err(|(k, p)| format!("`{k}`: {p}"));
+        }
         let Some(fmu) = &self.plant_fmu else { return Ok(None) };
         super::fmu_plant::fmu_signals(fmu.file(), &fmu.description, scenario).map(|f| Some(f.signals))
     }
@@ -270,6 +287,12 @@ impl Models {
         {
             return Err(unread(fmu, "plant"));
         }
+        if self.quad && silrig_flight::dispersion::is_f16_only(key) {
+            return Err(format!(
+                "the plant is the built-in quadrotor: it does not read `{key}`; disperse its parameters as \
+                 `plant.parameters.<name>`"
+            ));
+        }
         if let Some(fmu) = &self.controller_fmu
             && key.starts_with("controller.")
             && !key.starts_with("controller.parameters.")
@@ -284,6 +307,7 @@ impl Models {
         let setup = |e: anyhow::Error| SetupError(e);
         let mut controller: Box<dyn Controller> = match &self.controller_fmu {
             Some(fmu) => Box::new(FmuController::new(fmu.clone(), scenario).map_err(setup)?),
+            None if self.quad => Box::new(QuadLaw::new(scenario).map_err(|e| setup(anyhow::anyhow!(e)))?),
             None => Box::new(AttitudeLaw::new(scenario)),
         };
         let connect = |e: String| setup(anyhow::anyhow!(e));
@@ -294,6 +318,10 @@ impl Models {
                 let mut flown = fly(scenario, &mut model, controller.as_mut()).map_err(connect)?;
                 flown.outputs_refused = model.outputs_refused.clone();
                 Ok(flown)
+            }
+            None if self.quad => {
+                let mut plant = QuadPlant::new(scenario).map_err(setup)?;
+                fly(scenario, &mut plant, controller.as_mut()).map_err(connect)
             }
             None => {
                 let mut plant = F16Plant::new(scenario).map_err(|e| setup(e.into()))?;

@@ -9,7 +9,8 @@
 //!   in, inputs out, tick by tick), with the same loop around it; [`fmu_plant`]: a co-simulation FMU flown
 //!   through that session; [`plant_process`]: which of the two `silrig-plant` flies; [`fmu_controller`]: a
 //!   co-simulation FMU as the controller, one more [`controller::Controller`]; [`controller_process`]: which
-//!   controller `silrig-controller` flies; [`fmu_variables`]: what the FMU plant and controller share.
+//!   controller `silrig-controller` flies; [`fmu_variables`]: what the FMU plant and controller share;
+//!   [`quad_plant`] and [`quad_law`]: the built-in quadrotor and our controller for it.
 //! - [`live_foxglove`]: the logger's Foxglove WebSocket server (`silrig run --live foxglove`, feature `live`).
 //! - [`loop_faults`]: faults a process applies to its own loop (delay, jitter, drop); [`events`]: the run's event
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
@@ -40,6 +41,8 @@ pub mod plant;
 pub mod plant_model;
 pub mod plant_process;
 pub mod plant_session;
+pub mod quad_law;
+pub mod quad_plant;
 pub mod report;
 pub mod session;
 pub mod signals;

@@ -698,9 +698,13 @@ impl PlantLoop {
     }
 }
 
-/// Fly the built-in F-16 as the plant process to the end of the scenario (or SIGTERM) and write its report.
-pub fn run_f16_plant(args: &ProcessArgs, scenario: Scenario) -> anyhow::Result<ProcessReport> {
-    let model = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
+/// Fly a built-in vehicle (`model`: the F-16, the quadrotor) as the plant process to the end of the scenario (or
+/// SIGTERM) and write its report.
+pub fn run_model_plant(
+    args: &ProcessArgs,
+    scenario: Scenario,
+    model: Box<dyn PlantModel>,
+) -> anyhow::Result<ProcessReport> {
     let mut plant = PlantLoop::setup(args, scenario, model)?;
     let mut ports = PlantPorts::connect(args, &plant.info)?;
     let ended = if ports.wait_for_peers(args.options.startup_timeout_s)? {

@@ -1,5 +1,6 @@
-//! What `silrig-plant` flies: the scenario's FMU when it names one ([`super::fmu_plant`]), else the built-in F-16
-//! ([`super::plant`]).
+//! What `silrig-plant` flies: the scenario's FMU when it names one ([`super::fmu_plant`]), else the built-in vehicle
+//! it names (`[plant] model`: the quadrotor, [`super::quad_plant`]; the F-16, [`super::f16_plant`]) in
+//! [`super::plant`]'s loop.
 
 use super::ProcessArgs;
 use super::report::ProcessReport;
@@ -10,6 +11,10 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let scenario = args.scenario()?;
     match scenario.plant.fmu.clone() {
         Some(fmu) => super::fmu_plant::run_fmu_plant(args, scenario, &fmu),
-        None => super::plant::run_f16_plant(args, scenario),
+        None if silrig_flight::quad::is_quad(&scenario) => super::quad_plant::run_quad_plant(args, scenario),
+        None => {
+            let model = Box::new(super::f16_plant::F16Plant::new(&scenario)?);
+            super::plant::run_model_plant(args, scenario, model)
+        }
     }
 }

@@ -63,7 +63,7 @@ pub struct FlownScenario {
 /// `models` (opened from this scenario, or from the one it was sampled from: the same FMU files). An error says
 /// why it could not start.
 pub fn fly_one_process(models: &Models, scenario: &Scenario) -> Result<FlownScenario, String> {
-    if !models.has_fmu() {
+    if models.flies_reference_loop() {
         let (trace, left) = silrig_flight::sim::fly(scenario).map_err(|e| e.to_string())?;
         let ended_early = left.map(|exit| (exit.t_s, exit.to_string()));
         return Ok(FlownScenario { trace, plant: None, ended_early, refusals: Vec::new() });

@@ -100,6 +100,23 @@ impl QuadController {
         Self { gains, vehicle, climb_integral_mps2: 0.0, rate_integral_radps2: [0.0; 3] }
     }
 
+    /// The integrators (climb, then roll, pitch and yaw rate), rad/s^2 and m/s^2: what a restarted controller
+    /// resumes from so the vehicle does not sag or twitch while they build up again.
+    pub fn integrators(&self) -> [f64; 4] {
+        let [p, q, r] = self.rate_integral_radps2;
+        [self.climb_integral_mps2, p, q, r]
+    }
+
+    /// Resume the integrators [`QuadController::integrators`] saved; refused unless every one is finite.
+    pub fn set_integrators(&mut self, saved: [f64; 4]) -> Result<(), String> {
+        if let Some(v) = saved.iter().find(|v| !v.is_finite()) {
+            return Err(format!("an integrator of the saved state is {v}, not a finite number"));
+        }
+        self.climb_integral_mps2 = saved[0];
+        self.rate_integral_radps2 = [saved[1], saved[2], saved[3]];
+        Ok(())
+    }
+
     /// One step over `dt_s`: the motor commands (0..1, motor order) for this measurement and set point.
     pub fn step(&mut self, m: &QuadMeasurement, sp: &QuadSetpoint, dt_s: f64) -> [f64; ROTORS] {
         let g = self.gains;
@@ -248,6 +265,23 @@ mod tests {
         let sp = QuadSetpoint { euler_rad: [0.0; 3], alt_m: 1.0 };
         let worst = fly(&mut v, &mut c, &sp, 12.0, 4);
         assert!(worst[3] < 0.02, "the climb integrator takes up 20 % more weight: {worst:?}");
+    }
+
+    #[test]
+    fn the_integrators_resume_as_saved_and_refuse_nan() {
+        let p = QuadParams::default();
+        let mut v = QuadVehicle::hovering(p, 1.0, 0.0).unwrap();
+        let mut c = QuadController::new(QuadGains::default(), p);
+        let sp = QuadSetpoint { euler_rad: [0.1, 0.0, 0.0], alt_m: 1.5 };
+        fly(&mut v, &mut c, &sp, 0.5, 1);
+        let saved = c.integrators();
+        assert!(saved.iter().any(|i| *i != 0.0), "{saved:?}");
+        let mut resumed = QuadController::new(QuadGains::default(), p);
+        resumed.set_integrators(saved).unwrap();
+        assert_eq!(resumed, c);
+        let e = resumed.set_integrators([0.0, f64::NAN, 0.0, 0.0]).unwrap_err();
+        assert!(e.contains("NaN, not a finite number"), "{e}");
+        assert_eq!(resumed, c, "a refused state leaves the controller as it was");
     }
 
     #[test]

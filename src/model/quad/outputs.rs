@@ -71,14 +71,15 @@ pub fn quad_outputs(v: &QuadVehicle) -> [f64; OUTPUTS.len()] {
     let f = v.specific_force_b_mps2();
     let pressure = isa_pressure_pa(v.params.ground_altitude_m - down);
     let w = s.rotor_speeds_radps();
+    // `+ 0.0` turns a negative zero into zero, so a level vehicle on the ground prints 0.000, not -0.000.
     [
-        rad_to_deg(phi),
-        rad_to_deg(theta),
-        rad_to_deg(psi),
+        rad_to_deg(phi) + 0.0,
+        rad_to_deg(theta) + 0.0,
+        rad_to_deg(psi) + 0.0,
         rad_to_deg(p),
         rad_to_deg(q),
         rad_to_deg(r),
-        -down,
+        0.0 - down,
         vd,
         north,
         east,

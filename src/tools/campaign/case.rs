@@ -88,8 +88,38 @@ pub fn departure(trace: &Trace) -> Option<(f64, String)> {
     })
 }
 
-/// Every `ENVELOPE_STEP`th tick of phi, theta, psi is kept for the envelope plot.
+/// Every `ENVELOPE_STEP`th tick of the set-point outputs is kept for the envelope plot.
 pub const ENVELOPE_STEP: usize = 5;
+
+/// One output the envelope draws: its name, its set point and its unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvelopeSignal {
+    /// The output (`theta_deg`, `alt_m`).
+    pub name: String,
+    /// Its set point in the scenario.
+    pub setpoint: f64,
+    /// Its unit.
+    pub unit: String,
+}
+
+/// What the envelope draws: every set point of `scenario` whose output the plant announces, in
+/// [`silrig_flight::scenario::Setpoint::all`]'s order (the F-16's three angles first, then any other of its
+/// outputs given one; the quadrotor's angles and `alt_m`). `plant` is `None` for the built-in F-16.
+pub fn envelope_signals(scenario: &Scenario, plant: Option<&PlantSignals>) -> Vec<EnvelopeSignal> {
+    let f16;
+    let plant = match plant {
+        Some(p) => p,
+        None => {
+            f16 = silrig_flight::f16_signals::f16_signals([0.0; 4]);
+            &f16
+        }
+    };
+    let signal = |(name, setpoint): (&str, f64)| {
+        let output = plant.outputs.iter().find(|o| o.name == name && o.in_trace)?;
+        Some(EnvelopeSignal { name: name.to_string(), setpoint, unit: output.unit.clone() })
+    };
+    scenario.setpoint.all().into_iter().filter_map(signal).collect()
+}
 
 /// One case's result.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -106,10 +136,10 @@ pub struct CaseResult {
     pub figures: Option<CaseFigures>,
     /// The criteria, judged (empty if infeasible).
     pub judgements: Vec<Judgement>,
-    /// (t, phi, theta, psi) every `ENVELOPE_STEP` ticks, deg (empty if infeasible); carried by shard files so a merged
-    /// sweep draws the same envelope.
+    /// (t, then each of [`envelope_signals`]) every `ENVELOPE_STEP` ticks (empty if infeasible); carried by shard
+    /// files so a merged sweep draws the same envelope.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub envelope: Vec<[f32; 4]>,
+    pub envelope: Vec<Vec<f32>>,
 }
 
 /// A flown case in full: the sampled scenario, its trace and its summary (what `silrig sim --sample` writes).
@@ -168,15 +198,17 @@ pub fn judge(
     }
     // What the rig refuses (a NaN command or output) is a fault of the controller or the plant under test.
     failed.extend(refusals.into_iter().map(|r| format!("{r};")));
-    // Up to the first row that is no longer a number (a departed flight): nothing past it can be drawn. A plant
-    // without the attitude's columns has no envelope to draw.
-    let columns = ["t_s", "phi_deg", "theta_deg", "psi_deg"].map(|c| trace.index(c));
+    // Up to the first row that is no longer a number (a departed flight): nothing past it can be drawn. A trace
+    // without a set-point output's column has no envelope to draw.
+    let names = envelope_signals(&case, plant.as_ref()).into_iter().map(|s| s.name);
+    let columns: Option<Vec<usize>> =
+        std::iter::once("t_s".to_string()).chain(names).map(|c| trace.index(&c)).collect();
     let envelope = match columns {
-        [Some(t), Some(phi), Some(theta), Some(psi)] => trace
+        Some(columns) if columns.len() > 1 => trace
             .rows
             .iter()
             .step_by(ENVELOPE_STEP)
-            .map(|r| [t, phi, theta, psi].map(|c| r[c] as f32))
+            .map(|r| columns.iter().map(|c| r[*c] as f32).collect::<Vec<f32>>())
             .take_while(|r| r.iter().all(|v| v.is_finite()))
             .collect(),
         _ => Vec::new(),

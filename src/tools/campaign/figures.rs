@@ -4,7 +4,7 @@
 //! [`FIGURE_SAMPLE_MAX`], past it a sample of that many (the same cases whatever the threads or shards, and the
 //! figures say so).
 
-use super::case::{CaseResult, Outcome};
+use super::case::{CaseResult, EnvelopeSignal, Outcome};
 use super::report::{SweepSummary, spearman};
 use silrig_flight::criteria::Criteria;
 use std::collections::BinaryHeap;
@@ -59,10 +59,11 @@ pub struct Figures {
     sample: BinaryHeap<Point>,
     flown: u64,
     failed: u64,
-    /// Per envelope row: t, and the lowest and highest phi, theta, psi over the passed cases that reached it.
-    band: Vec<(f32, [f64; 3], [f64; 3])>,
-    /// The first failed cases' (t, phi, theta, psi), up to their departure.
-    failed_drawn: Vec<Vec<[f32; 4]>>,
+    /// Per envelope row: t, and the lowest and highest of each set-point output over the passed cases that reached
+    /// it.
+    band: Vec<(f32, Vec<f64>, Vec<f64>)>,
+    /// The first failed cases' (t, then each set-point output), up to their departure.
+    failed_drawn: Vec<Vec<Vec<f32>>>,
 }
 
 impl Figures {
@@ -84,13 +85,14 @@ impl Figures {
         match c.outcome {
             Outcome::Pass => {
                 for (k, r) in c.envelope.iter().enumerate() {
+                    let signals = r.len() - 1;
                     if k == self.band.len() {
-                        self.band.push((r[0], [f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
+                        self.band.push((r[0], vec![f64::INFINITY; signals], vec![f64::NEG_INFINITY; signals]));
                     }
                     let (_, lo, hi) = &mut self.band[k];
-                    for a in 0..3 {
-                        lo[a] = lo[a].min(r[a + 1] as f64);
-                        hi[a] = hi[a].max(r[a + 1] as f64);
+                    for (a, v) in r[1..].iter().enumerate().take(lo.len()) {
+                        lo[a] = lo[a].min(*v as f64);
+                        hi[a] = hi[a].max(*v as f64);
                     }
                 }
             }
@@ -99,19 +101,20 @@ impl Figures {
                 if self.failed_drawn.len() < ENVELOPE_FAILED_DRAWN {
                     // A departed flight is drawn up to its departure: past it the model has no data to show.
                     let until = c.figures.as_ref().and_then(|f| f.departed_at_s).unwrap_or(f64::INFINITY);
-                    self.failed_drawn.push(c.envelope.iter().filter(|r| (r[0] as f64) <= until).copied().collect());
+                    self.failed_drawn.push(c.envelope.iter().filter(|r| (r[0] as f64) <= until).cloned().collect());
                 }
             }
         }
     }
 
     /// Draw `histograms`, `scatter` (the parameters that move the most-failed criterion's figure the most, by
-    /// |Spearman's rho|) and `envelope` of the sweep `summary` into `out`; `setpoints` are phi, theta, psi's, deg.
+    /// |Spearman's rho|) and `envelope` of the sweep `summary` into `out`; `signals` are what the cases' envelope rows
+    /// carry ([`super::case::envelope_signals`]).
     pub fn write(
         self,
         summary: &SweepSummary,
         criteria: &Criteria,
-        setpoints: [f64; 3],
+        signals: &[EnvelopeSignal],
         out: &Path,
     ) -> anyhow::Result<Vec<PathBuf>> {
         use silrig_plot::{Envelope, Histogram, Scatter, plot_envelope, plot_histograms, plot_scatter};
@@ -192,22 +195,25 @@ impl Figures {
                 },
             );
 
-        let envelopes: Vec<Envelope> = ["φ roll", "θ pitch", "ψ yaw"]
+        // A band row narrower than the signals (no case reached them) draws none of them.
+        let at = |values: &[f64], a: usize| values.get(a).copied().unwrap_or(f64::NAN);
+        let envelopes: Vec<Envelope> = signals
             .iter()
             .enumerate()
-            .map(|(a, caption)| Envelope {
-                caption: caption.to_string(),
-                band: self.band.iter().map(|(t, lo, hi)| (*t as f64, lo[a], hi[a])).collect(),
+            .map(|(a, s)| Envelope {
+                caption: envelope_caption(&s.name),
+                unit: s.unit.clone(),
+                band: self.band.iter().map(|(t, lo, hi)| (*t as f64, at(lo, a), at(hi, a))).collect(),
                 failed: self
                     .failed_drawn
                     .iter()
-                    .map(|rows| rows.iter().map(|r| (r[0] as f64, r[a + 1] as f64)).collect())
+                    .map(|rows| rows.iter().filter_map(|r| Some((r[0] as f64, *r.get(a + 1)? as f64))).collect())
                     .collect(),
-                setpoint: setpoints[a],
+                setpoint: s.setpoint,
             })
             .collect();
         let envelope_title = format!(
-            "{}: {} cases, seed {}: attitude, {} passed (band), {} of {} failed (drawn to their departure, if any)",
+            "{}: {} cases, seed {}: set points, {} passed (band), {} of {} failed (drawn to their departure, if any)",
             summary.scenario,
             summary.runs,
             summary.seed,
@@ -228,6 +234,17 @@ impl Figures {
         }
         files.extend(e?);
         Ok(files)
+    }
+}
+
+/// A panel's caption: the attitude's by its axis (as the F-16's envelope has always named them), any other output
+/// by its name.
+fn envelope_caption(name: &str) -> String {
+    match name {
+        "phi_deg" => "φ roll".into(),
+        "theta_deg" => "θ pitch".into(),
+        "psi_deg" => "ψ yaw".into(),
+        other => other.into(),
     }
 }
 
@@ -278,7 +295,7 @@ mod tests {
             reason: String::new(),
             figures: None,
             judgements: Vec::new(),
-            envelope: vec![[0.0, index as f32, 0.0, 0.0]],
+            envelope: vec![vec![0.0, index as f32, 0.0, 0.0]],
         };
         let n = FIGURE_SAMPLE_MAX as u64 * 3;
         let (mut forward, mut backward) = (Figures::default(), Figures::default());

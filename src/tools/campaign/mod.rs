@@ -439,14 +439,10 @@ impl<'a> SweepWriter<'a> {
         let json = out.join("sweep.json");
         std::fs::write(&json, serde_json::to_string_pretty(&summary)? + "\n")
             .with_context(|| format!("writing {}", json.display()))?;
-        let setpoint = &campaign.scenario.setpoint;
+        let plant = campaign.models.plant_signals(&campaign.scenario).ok().flatten();
+        let signals = case::envelope_signals(&campaign.scenario, plant.as_ref());
         let mut files = vec![csv, json];
-        files.extend(figures.write(
-            &summary,
-            &campaign.criteria,
-            [setpoint.phi_deg, setpoint.theta_deg, setpoint.psi_deg],
-            &out,
-        )?);
+        files.extend(figures.write(&summary, &campaign.criteria, &signals, &out)?);
         files.push(crate::html::sweep::write(&summary, &out)?);
         Ok((summary, files))
     }

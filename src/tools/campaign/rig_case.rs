@@ -158,13 +158,18 @@ pub fn fly(
         Ok(scenario) => scenario,
         Err(reason) => return Ok((case::infeasible(index, values, reason), None)),
     };
-    // The built-in F-16 is trimmed in the plant's process, which would fail the case with only its stderr to say
-    // why: a case that cannot be trimmed is infeasible, as in one process, with the same reason.
-    if scenario.plant.fmu.is_none()
-        && campaign.commands.plant_cmd.is_none()
-        && let Err(e) = silrig_flight::sim::PlantRunner::new(&scenario)
-    {
-        return Ok((case::infeasible(index, values, e.to_string()), None));
+    // A built-in vehicle is built in the plant's process, which would fail the case with only its stderr to say
+    // why: a case that cannot be trimmed (the F-16) or flown (the quadrotor's parameters) is infeasible, as in one
+    // process, with the same reason.
+    if scenario.plant.fmu.is_none() && campaign.commands.plant_cmd.is_none() {
+        let built = if silrig_flight::quad::is_quad(&scenario) {
+            silrig_flight::quad::check_for_quad(&scenario).map_err(|(key, problem)| format!("`{key}`: {problem}"))
+        } else {
+            silrig_flight::sim::PlantRunner::new(&scenario).map(drop).map_err(|e| e.to_string())
+        };
+        if let Err(e) = built {
+            return Ok((case::infeasible(index, values, e), None));
+        }
     }
     let config = run_dir.join(CASE_SCENARIO);
     let report = std::fs::create_dir_all(run_dir)

@@ -61,7 +61,7 @@ struct Flight {
 }
 
 fn fly(models: &Models, scenario: &Scenario) -> anyhow::Result<(Flight, Option<silrig_flight::signals::PlantSignals>)> {
-    if !models.has_fmu() {
+    if models.flies_reference_loop() {
         // The reference loop: our controller never sends an invalid command (its law saturates at the stops).
         let (trace, left) = silrig_flight::sim::fly(scenario)?;
         let ended_early = left.map(|exit| (exit.t_s, EndedBy::Plant, exit.to_string()));

@@ -323,6 +323,10 @@ fn case_scenario(c: &CaseFile, path: Option<&Path>, base: BaseScenario) -> Resul
         scenario.faults.push(parse_fault_flag(flag).map_err(|e| format!("`faults[{i}]`: {e}"))?);
     }
     scenario.validate().map_err(|(key, problem)| format!("`faults`: `{key}`: {problem}"))?;
+    // The quadrotor's own checks (every key of the F-16's refused) need nothing that flies: a case is refused now.
+    if silrig_flight::quad::is_quad(&scenario) {
+        silrig_flight::quad::check_for_quad(&scenario).map_err(|(key, problem)| format!("`{key}`: {problem}"))?;
+    }
     if c.mode == RigMode::Lockstep
         && let Some(f) = scenario.faults.iter().find(|f: &&Fault| !f.action().is_plant_model_fault())
     {
