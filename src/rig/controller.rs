@@ -14,6 +14,7 @@
 //! ours restores its RBF weights, so it need not re-learn them.
 
 use super::ProcessArgs;
+pub use super::report::ControllerFigures;
 use super::report::ProcessReport;
 use super::session::{ControllerSession, Next, SessionError};
 use silrig_flight::f16_signals::F16Outputs;
@@ -62,16 +63,6 @@ pub trait Controller {
     fn figures(&self) -> ControllerFigures {
         ControllerFigures::default()
     }
-}
-
-/// What a [`Controller`] adds to the controller's report: distributions (short name, what was measured from when
-/// to when, the histogram) and counters by name.
-#[derive(Debug, Default)]
-pub struct ControllerFigures {
-    /// Distributions, named as the session's own (the report prefixes `controller.`).
-    pub distributions: Vec<(String, String, silrig_wire::timing::LatencyHistogram)>,
-    /// Counters.
-    pub counters: Vec<(String, u64)>,
 }
 
 /// The paper's adaptive SMC/RBF controller behind the [`Controller`] trait; its checkpoint is its RBF weights. It

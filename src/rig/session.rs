@@ -844,8 +844,8 @@ impl ControllerSession {
         self.ended = Some(format!("error: {error}"));
     }
 
-    /// Add the controller's own figures ([`super::controller::Controller::figures`]) to its report.
-    pub fn add_figures(&mut self, figures: super::controller::ControllerFigures) {
+    /// Add the controller's own figures (`Controller::figures`) to its report.
+    pub fn add_figures(&mut self, figures: super::report::ControllerFigures) {
         for (name, description, h) in figures.distributions {
             self.rec.add_distribution(&name, &description, h);
         }

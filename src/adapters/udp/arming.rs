@@ -4,7 +4,6 @@
 //! (the throttle) are held at 0 until it reports itself armed. Not armed within `within_s` of its (re)start, the
 //! run fails naming the flags that kept it from arming, in words. After a restart of the device, the same again.
 
-use super::layout::DeviceLayout;
 use super::msp::{StatusWatch, flags_in_words};
 use serde::Deserialize;
 use silrig_flight::scenario::Scenario;
@@ -36,32 +35,45 @@ pub struct Arming {
     started_ns: Option<u64>,
     raised: bool,
     armed: bool,
+    /// How long the device took to arm the last time, ms, and how often it was armed.
+    armed_after_ms: Option<u64>,
+    armings: u64,
+    /// The device's PID loop cycle as it last said it, µs.
+    cycle_us: u16,
 }
 
 impl Arming {
     /// Start reading the device's status; the set points are checked against the scenario.
-    pub fn new(options: &ArmingOptions, layout: &DeviceLayout, scenario: &Scenario) -> Result<Self, String> {
+    /// `device`: its name; `address`: its IP address.
+    pub fn new(
+        options: &ArmingOptions,
+        device: &str,
+        address: std::net::IpAddr,
+        scenario: &Scenario,
+    ) -> Result<Self, String> {
         if !(options.within_s > 0.0 && options.within_s <= 3600.0) {
-            return Err(format!("device `{}`: arming within_s must be within 0..3600 s", layout.name));
+            return Err(format!("device `{device}`: arming within_s must be within 0..3600 s"));
         }
         for name in std::iter::once(&options.switch).chain(&options.low_until_armed) {
             if scenario.setpoint.get(name).is_none() {
                 return Err(format!(
-                    "device `{}`: [arming] names the set point `{name}`, which the scenario does not give; add it \
-                     under [setpoint]",
-                    layout.name
+                    "device `{device}`: [arming] names the set point `{name}`, which the scenario does not give; add \
+                     it under [setpoint]"
                 ));
             }
         }
         Ok(Self {
             options: options.clone(),
-            device: layout.name.clone(),
-            watch: StatusWatch::start(SocketAddr::new(layout.address, options.msp_port)),
+            device: device.to_string(),
+            watch: StatusWatch::start(SocketAddr::new(address, options.msp_port)),
             switch: (0, 0.0),
             held: Vec::new(),
             started_ns: None,
             raised: false,
             armed: false,
+            armed_after_ms: None,
+            armings: 0,
+            cycle_us: 0,
         })
     }
 
@@ -77,6 +89,13 @@ impl Arming {
         Ok(())
     }
 
+    /// Whether the device has said its status since it (re)started: before that it is still starting, and
+    /// Betaflight's SITL must not be sent anything yet (an RC packet that comes before its receiver is set up is
+    /// taken, then the set-up replaces the SITL's RC link with the default receiver, and `RX_FAILSAFE` never clears).
+    pub fn ready(&self) -> bool {
+        self.watch.latest().status.is_some()
+    }
+
     /// Hold the switch and the held set points low while they must be, else at the scenario's values.
     pub fn hold(&self, setpoints: &mut [f64]) {
         let (index, value) = self.switch;
@@ -90,13 +109,20 @@ impl Arming {
     /// when it has not armed in time.
     pub fn check(&mut self, now_ns: u64) -> Result<(), String> {
         let started = *self.started_ns.get_or_insert(now_ns);
+        let latest = self.watch.latest();
+        if let Some(status) = latest.status {
+            self.cycle_us = status.cycle_us;
+        }
         if self.armed {
             return Ok(());
         }
-        let latest = self.watch.latest();
         if let Some(status) = latest.status {
             self.raised |= status.arming_disabled == 0;
             self.armed = status.armed;
+        }
+        if self.armed {
+            self.armed_after_ms = Some(now_ns.saturating_sub(started) / 1_000_000);
+            self.armings += 1;
         }
         if self.armed || now_ns.saturating_sub(started) < (self.options.within_s * 1e9) as u64 {
             return Ok(());
@@ -115,8 +141,12 @@ impl Arming {
         (self.started_ns, self.raised, self.armed) = (Some(now_ns), false, false);
     }
 
-    /// Whether the device has said it is armed.
-    pub fn armed(&self) -> bool {
-        self.armed
+    /// Counters for the controller's report: how often it armed, how long the last arming took (ms), and the
+    /// PID loop's cycle it last said (µs).
+    pub fn counters(&self) -> Vec<(String, u64)> {
+        let mut counters = vec![("device_armings".to_string(), self.armings)];
+        counters.extend(self.armed_after_ms.map(|ms| ("device_armed_after_ms".to_string(), ms)));
+        counters.push(("device_pid_cycle_us".to_string(), u64::from(self.cycle_us)));
+        counters
     }
 }

@@ -53,8 +53,14 @@ pub struct DeviceController {
     /// The command the newest valid packet gave, one value per plant input (inputs the device does not command
     /// stay where the session's held command puts them).
     command: Vec<f64>,
+    /// Per packet to the device, the tick it is next due at.
+    next_due: Vec<u64>,
     /// The plant inputs the device commands.
     commanded: Vec<usize>,
+    /// Lockstep: the plant waits for each command, so a device starting up is waited for ([`Self::await_first`]);
+    /// realtime, its start-up costs misses, as any controller's does, and the device sees time go on (Betaflight's
+    /// clock follows the packets' time: the same packet sent again and again would stop it).
+    lockstep: bool,
     /// Whether the device has sent a valid packet since it was (re)started.
     answered: bool,
     /// When the device last sent a valid packet (or the link started, or the device was restarted), monotonic ns.
@@ -72,7 +78,8 @@ pub struct DeviceController {
 impl DeviceController {
     /// Read the layout, check every field's type, listen on its ports and start the device's program if it has
     /// one: everything that can be refused before the plant is known, named. `run_dir` takes the device's log.
-    pub fn open(path: &Path, scenario: &Scenario, budget_ms: f64, run_dir: &Path) -> Result<Self, String> {
+    pub fn open(path: &Path, scenario: &Scenario, args: &ProcessArgs) -> Result<Self, String> {
+        let (budget_ms, run_dir) = (args.options.command_budget_ms, args.out.as_path());
         let layout = DeviceLayout::load(path).map_err(|e| e.to_string())?;
         layout.check_types().map_err(|e| format!("device layout {}: {e}", path.display()))?;
         if !(layout.silent_after_s > 0.0 && layout.silent_after_s <= 3600.0) {
@@ -86,7 +93,8 @@ impl DeviceController {
         let folder = path.parent().unwrap_or(Path::new("."));
         let supervisor = layout.process.as_ref().map(|p| Supervisor::start(&layout.name, p, folder, run_dir));
         let supervisor = supervisor.transpose()?;
-        let arming = layout.arming.as_ref().map(|a| Arming::new(a, &layout, scenario)).transpose()?;
+        let arming =
+            layout.arming.as_ref().map(|a| Arming::new(a, &layout.name, layout.address, scenario)).transpose()?;
         let (setpoint_names, setpoints) = scenario.setpoint.all().into_iter().map(|(n, v)| (n.to_string(), v)).unzip();
         Ok(Self {
             silent_after_ns: (layout.silent_after_s * 1e9) as u64,
@@ -98,8 +106,10 @@ impl DeviceController {
             budget_ns: (budget_ms * 1e6) as u64,
             command: Vec::new(),
             commanded: Vec::new(),
+            next_due: Vec::new(),
             heard_ns: None,
             answered: false,
+            lockstep: args.mode == silrig_rig::RigMode::Lockstep,
             round_trip: LatencyHistogram::new(),
             counts: [0; COUNTERS.len()],
             first_refusal: None,
@@ -114,11 +124,23 @@ impl DeviceController {
     fn send(&mut self, sample: &PlantSample) -> Option<u64> {
         let bound = self.bound.as_ref().expect("connect comes before the first step");
         if let Some(arming) = &self.arming {
+            if !arming.ready() {
+                // Still starting: its silence is counted from when it is ready.
+                self.heard_ns = Some(monotonic_ns());
+                return None;
+            }
             arming.hold(&mut self.setpoints);
         }
         let values = SendValues { t_s: sample.t_sim_s, outputs: sample.outputs(), setpoints: &self.setpoints };
         let mut sent_ns = None;
-        for packet in bound.to_device.iter().filter(|p| p.due(sample.header.tick)) {
+        let tick = sample.header.tick;
+        // Due when its period has passed since it last went out: a controller that skipped samples (a stall) still
+        // sends it at its rate, not only on the ticks that are multiples of it.
+        for (packet, next) in bound.to_device.iter().zip(&mut self.next_due) {
+            if tick < *next && tick >= next.saturating_sub(u64::from(packet.every_ticks)) {
+                continue;
+            }
+            *next = tick + u64::from(packet.every_ticks);
             packet.encode(bound.byte_order, &values, &mut self.packet);
             sent_ns.get_or_insert_with(monotonic_ns);
             if self.link.send(packet.port, &self.packet).is_ok() {
@@ -171,12 +193,14 @@ impl DeviceController {
         }
     }
 
-    /// Until the device (just started, or restarted) has answered once, send it the tick's packets again every
-    /// budget until it does or `silent_after_s` has passed since the first: a program starting up is not yet
+    /// Lockstep, until the device (just started, or restarted) has answered once, send it the tick's packets again
+    /// every budget until it does or `silent_after_s` has passed since the first: a program starting up is not yet
     /// listening, and its start-up should not count as misses.
     fn await_first(&mut self, sample: &PlantSample) -> Option<Option<u64>> {
         let since_ns = self.heard_ns.unwrap_or_else(monotonic_ns);
         while monotonic_ns() < since_ns + self.silent_after_ns {
+            // Every packet of the tick again, whatever its period.
+            self.next_due.fill(0);
             let sent_ns = self.send(sample)?;
             if let Some(round_trip_ns) = self.await_reply(sent_ns) {
                 return Some(Some(round_trip_ns));
@@ -246,6 +270,7 @@ impl Controller for DeviceController {
             .flat_map(|p| p.groups.iter().flat_map(|g| g.targets.iter().flatten().copied()))
             .collect();
         self.command = plant.inputs.iter().map(|i| i.hold).collect();
+        self.next_due = vec![0; bound.to_device.len()];
         if let Some(arming) = &mut self.arming {
             arming.bind(&self.setpoint_names, &self.setpoints)?;
         }
@@ -266,7 +291,7 @@ impl Controller for DeviceController {
         // Packets that came since the last step answer earlier ticks: taken as the newest command, not as fresh.
         self.receive();
         let reply = match self.send(sample).map(|sent_ns| self.await_reply(sent_ns)) {
-            Some(None) if !self.answered => self.await_first(sample),
+            Some(None) if !self.answered && self.lockstep => self.await_first(sample),
             reply => reply,
         };
         match reply {
@@ -296,7 +321,12 @@ impl Controller for DeviceController {
         );
         ControllerFigures {
             distributions: vec![("device_round_trip".into(), description, self.round_trip.clone())],
-            counters: COUNTERS.iter().zip(self.counts).map(|(n, c)| (n.to_string(), c)).collect(),
+            counters: COUNTERS
+                .iter()
+                .zip(self.counts)
+                .map(|(n, c)| (n.to_string(), c))
+                .chain(self.arming.iter().flat_map(Arming::counters))
+                .collect(),
         }
     }
 }
@@ -305,7 +335,6 @@ impl Controller for DeviceController {
 /// and write the controller's report.
 pub fn run_device_controller(args: &ProcessArgs, layout: &Path) -> anyhow::Result<ProcessReport> {
     let scenario = args.scenario()?;
-    let device = DeviceController::open(layout, &scenario, args.options.command_budget_ms, &args.out)
-        .map_err(anyhow::Error::msg)?;
+    let device = DeviceController::open(layout, &scenario, args).map_err(anyhow::Error::msg)?;
     serve(args, scenario, Box::new(device))
 }

@@ -26,7 +26,7 @@ pub const ARMING_DISABLE_FLAGS: [(&str, &str); 29] = [
     ("BOOT_GRACE_TIME", "it booted less than a few seconds ago"),
     ("NOPREARM", "the pre-arm switch is off"),
     ("LOAD", "its CPU load is too high"),
-    ("CALIBRATING", "the gyro is calibrating (it needs a still, level craft)"),
+    ("CALIBRATING", "the gyro is calibrating: it needs a still, level craft"),
     ("CLI", "its CLI is open"),
     ("CMS_MENU", "its on-screen menu is open"),
     ("BST", "BST"),
@@ -133,18 +133,21 @@ impl StatusWatch {
             let mut stream: Option<TcpStream> = None;
             while !stopping.load(Ordering::Relaxed) {
                 let read = stream.as_mut().map(read_status).unwrap_or_else(|| Err("not connected".into()));
-                let mut latest = shared.lock().unwrap_or_else(|e| e.into_inner());
-                match read {
-                    Ok(status) => (latest.status, latest.problem) = (Some(status), None),
-                    Err(why) => {
-                        latest.problem = Some(why);
-                        drop(latest);
-                        stream = TcpStream::connect_timeout(&address, Duration::from_millis(500)).ok();
-                        if let Some(s) = &stream {
-                            let _ = s.set_read_timeout(Some(Duration::from_millis(500)));
-                            // Betaflight's SITL loses what is sent at once after a connection: let it attach first.
-                            std::thread::sleep(Duration::from_millis(300));
-                        }
+                // Held only to store what was read: the control loop reads it every tick.
+                let failed = {
+                    let mut latest = shared.lock().unwrap_or_else(|e| e.into_inner());
+                    match read {
+                        Ok(status) => (latest.status, latest.problem) = (Some(status), None),
+                        Err(why) => latest.problem = Some(why),
+                    }
+                    latest.problem.is_some()
+                };
+                if failed {
+                    stream = TcpStream::connect_timeout(&address, Duration::from_millis(500)).ok();
+                    if let Some(s) = &stream {
+                        let _ = s.set_read_timeout(Some(Duration::from_millis(500)));
+                        // Betaflight's SITL loses what is sent at once after a connection: let it attach first.
+                        std::thread::sleep(Duration::from_millis(300));
                     }
                 }
                 std::thread::sleep(Duration::from_millis(100));
