@@ -312,6 +312,11 @@ impl Models {
             ControllerKind::AttitudeLaw => OpenedController::AttitudeLaw,
             ControllerKind::QuadLaw => OpenedController::QuadLaw,
             ControllerKind::Fmu(path) => OpenedController::Fmu(Arc::new(Fmu::open(&path)?)),
+            ControllerKind::Device(layout) => anyhow::bail!(
+                "the controller is the device of {}: a device flies through the rig (`silrig run`), not in one \
+                 process",
+                layout.display()
+            ),
         };
         Ok(Self { plant, controller })
     }

@@ -9,6 +9,7 @@ use crate::builtin::quad_law::QuadLaw;
 use crate::builtin::quad_plant::QuadPlant;
 use crate::fmu::controller::run_fmu_controller;
 use crate::fmu::plant::run_fmu_plant;
+use crate::udp::device::run_device_controller;
 use silrig_flight::scenario::Scenario;
 use silrig_rig::ProcessArgs;
 use silrig_rig::controller::serve;
@@ -47,11 +48,16 @@ pub enum ControllerKind {
     QuadLaw,
     /// A co-simulation FMU (`[controller] fmu`).
     Fmu(PathBuf),
+    /// A device over UDP (`[controller] device`, its packet layout file): flight software in the loop.
+    Device(PathBuf),
 }
 
 impl ControllerKind {
     /// The kind of controller `scenario` flies.
     pub fn of(scenario: &Scenario) -> Self {
+        if let Some(layout) = &scenario.controller.device {
+            return Self::Device(layout.clone());
+        }
         match &scenario.controller.fmu {
             Some(path) => Self::Fmu(path.clone()),
             None if silrig_flight::quad::is_quad(scenario) => Self::QuadLaw,
@@ -90,6 +96,7 @@ pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
             serve(args, scenario, Box::new(law))
         }
         ControllerKind::Fmu(path) => run_fmu_controller(args, scenario, &path),
+        ControllerKind::Device(layout) => run_device_controller(args, &layout),
     }
 }
 

@@ -238,7 +238,8 @@ impl Default for PlantOptions {
 }
 
 /// `[controller]`: our controller's gains (the keys of [`ControllerGains`], which it dereferences to), or a
-/// controller FMU flown in its place with the keys `fmu`, `[controller.map]` and `[controller.parameters]`.
+/// controller FMU flown in its place with the keys `fmu`, `[controller.map]` and `[controller.parameters]`, or a
+/// device over UDP with the key `device` (its layout file).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ControllerOptions {
     /// The paper's controller's gains (what `silrig-controller` flies without an FMU).
@@ -248,6 +249,10 @@ pub struct ControllerOptions {
     /// relative to the scenario file's folder.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fmu: Option<std::path::PathBuf>,
+    /// A device over UDP flown in place of ours: its layout file (`configs/devices/*.toml`); a relative path is
+    /// relative to the scenario file's folder.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub device: Option<std::path::PathBuf>,
     /// FMU variable name = plant signal name, for the variables whose names differ from the plant's signals (an
     /// FMU input takes the plant output, or the set point `<output>_sp`, it is mapped to, or a constant; an FMU
     /// output commands the plant input it is mapped to).
@@ -282,6 +287,13 @@ impl<'de> Deserialize<'de> for ControllerOptions {
             .map(|v| v.try_into::<std::path::PathBuf>())
             .transpose()
             .map_err(|e| D::Error::custom(format!("controller.fmu: {e}")))?;
+        let device = take("device")
+            .map(|v| v.try_into::<std::path::PathBuf>())
+            .transpose()
+            .map_err(|e| D::Error::custom(format!("controller.device: {e}")))?;
+        if fmu.is_some() && device.is_some() {
+            return Err(D::Error::custom("controller: `fmu` and `device` each name the controller; keep one of them"));
+        }
         let map = take("map")
             .map(crate::controller_map::from_toml)
             .transpose()
@@ -301,7 +313,7 @@ impl<'de> Deserialize<'de> for ControllerOptions {
                 .try_into::<ControllerGains>()
                 .map_err(|e| D::Error::custom(format!("controller: {e}")))?
         };
-        Ok(Self { gains, fmu, map, parameters })
+        Ok(Self { gains, fmu, device, map, parameters })
     }
 }
 
@@ -488,9 +500,10 @@ impl Scenario {
             let beside = path.parent().unwrap_or(Path::new("")).join(&*fmu);
             *fmu = std::path::absolute(&beside).unwrap_or(beside);
         }
-        if let Some(fmu) = scenario.controller.fmu.as_mut().filter(|f| f.is_relative()) {
-            let beside = path.parent().unwrap_or(Path::new("")).join(&*fmu);
-            *fmu = std::path::absolute(&beside).unwrap_or(beside);
+        let controller = &mut scenario.controller;
+        for file in controller.fmu.iter_mut().chain(controller.device.iter_mut()).filter(|f| f.is_relative()) {
+            let beside = path.parent().unwrap_or(Path::new("")).join(&*file);
+            *file = std::path::absolute(&beside).unwrap_or(beside);
         }
         Ok(scenario)
     }
@@ -718,5 +731,18 @@ mod tests {
         let bad = text.replace("pitch = \"theta_deg\"", "pitch = \"theta deg\"");
         let e = Scenario::from_toml(&bad, "bad").unwrap_err().to_string();
         assert!(e.contains("controller.map.pitch"), "{e}");
+    }
+
+    #[test]
+    fn a_device_is_one_controller_key_and_not_beside_an_fmu() {
+        let only = "name = \"x\"\n[timing]\ndt_s = 0.01\nduration_s = 1.0\ncommand_timing = \"same-tick\"\n\
+                    [controller]\ndevice = \"devices/fake.toml\"\n";
+        let s = Scenario::from_toml(only, "only").unwrap();
+        assert_eq!(s.controller.device.as_deref(), Some(Path::new("devices/fake.toml")));
+        assert_eq!(s.controller.gains, ControllerGains::default());
+        assert_eq!(Scenario::from_toml(&s.to_toml(), "again").unwrap(), s);
+        let both = only.replace("[controller]\n", "[controller]\nfmu = \"pid.fmu\"\n");
+        let e = Scenario::from_toml(&both, "both").unwrap_err().to_string();
+        assert!(e.contains("`fmu` and `device` each name the controller; keep one of them"), "{e}");
     }
 }

@@ -66,8 +66,10 @@ impl SignalChain {
             actuators[k] = Some(Actuator::new(*limits, initial_inputs[k]));
         }
         // A set point is in an output's own unit, so it must name one (the attitude our controller flies excepted:
-        // it is always there, 0 when not given).
-        if let Some(name) = scenario.setpoint.outputs.keys().find(|n| !output_names.contains(&n.as_str())) {
+        // it is always there, 0 when not given); a device's layout may also send set points that are no output
+        // (Betaflight's sticks, `rc_*`), and its binding names any it does not find.
+        let device = scenario.controller.device.is_some();
+        if let Some(name) = scenario.setpoint.outputs.keys().find(|n| !device && !output_names.contains(&n.as_str())) {
             return Err((
                 format!("setpoint.{name}"),
                 format!("plant {} has no output `{name}`; its outputs: {}", plant.plant, output_names.join(", ")),

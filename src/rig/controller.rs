@@ -10,6 +10,7 @@
 //! controller (`--resume`) what it saved.
 
 use super::ProcessArgs;
+pub use super::report::ControllerFigures;
 use super::report::ProcessReport;
 use super::session::{ControllerSession, Next, SessionError};
 use silrig_flight::scenario::Scenario;
@@ -48,6 +49,12 @@ pub trait Controller {
     /// as it was, and the run's events say the controller started fresh and why.
     fn restore(&mut self, _saved: &str) -> Result<(), String> {
         Err("this controller keeps no state to resume".into())
+    }
+
+    /// Figures of its own for the controller's report, asked once at the end of the session (a device's link round
+    /// trip beside the rig's own distributions, its refused packets beside the rig's counters).
+    fn figures(&self) -> ControllerFigures {
+        ControllerFigures::default()
     }
 }
 
@@ -93,6 +100,7 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
     if let Some(e) = &error {
         session.fail(e);
     }
+    session.add_figures(law.figures());
     let report = session.finish()?;
     match error {
         Some(e) => Err(e),

@@ -84,6 +84,16 @@ fn process_cpu_s() -> f64 {
     s(usage.ru_utime) + s(usage.ru_stime)
 }
 
+/// What a controller (`super::controller::Controller::figures`) adds to the controller's report: distributions
+/// (short name, what was measured from when to when, the histogram) and counters by name.
+#[derive(Debug, Default)]
+pub struct ControllerFigures {
+    /// Distributions, named as the session's own (the report prefixes `controller.`).
+    pub distributions: Vec<(String, String, LatencyHistogram)>,
+    /// Counters.
+    pub counters: Vec<(String, u64)>,
+}
+
 /// Collects a process's distributions and counters while it runs.
 #[derive(Debug)]
 pub struct Recorder {
@@ -155,6 +165,11 @@ impl Recorder {
         } else {
             self.counters.insert(counter.to_string(), n);
         }
+    }
+
+    /// Add a distribution measured elsewhere (named as those of [`Recorder::new`]), reported beside the others.
+    pub fn add_distribution(&mut self, name: &str, description: &str, h: LatencyHistogram) {
+        self.histograms.push((format!("{}.{name}", self.process), description.to_string(), h));
     }
 
     /// Make sure a counter shows up in the report even when it stays 0.

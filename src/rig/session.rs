@@ -434,6 +434,16 @@ impl ControllerSession {
         self.ended = Some(format!("error: {error}"));
     }
 
+    /// Add the controller's own figures (`Controller::figures`) to its report.
+    pub fn add_figures(&mut self, figures: super::report::ControllerFigures) {
+        for (name, description, h) in figures.distributions {
+            self.rec.add_distribution(&name, &description, h);
+        }
+        for (name, n) in figures.counters {
+            self.rec.count(&name, n);
+        }
+    }
+
     /// Write the report (`controller.report.json` in the run's folder) and close the session.
     pub fn finish(mut self) -> anyhow::Result<ProcessReport> {
         let stats = self.samples.stats();

@@ -167,6 +167,16 @@ fn bind_receive(names: &SignalNames, packet: &PacketLayout) -> Result<BoundRecei
 }
 
 impl DeviceLayout {
+    /// Every field's type known, checked before the plant is (an unknown type named with its packet and field).
+    pub fn check_types(&self) -> Result<(), LayoutError> {
+        for packet in self.to_device.iter().chain(&self.from_device) {
+            for (k, field) in packet.fields.iter().enumerate() {
+                scalar_type(packet, k, field)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Binds the layout to a plant's signals and the scenario's set points; every problem is named.
     pub fn bind(&self, names: &SignalNames) -> Result<BoundLayout, LayoutError> {
         let mut ports = BTreeSet::new();

@@ -28,6 +28,27 @@ pub struct DeviceLayout {
     /// What the device sends the rig.
     #[serde(default)]
     pub from_device: Vec<PacketLayout>,
+    /// The device's IP address: where packets to it go (the rig listens on every address).
+    #[serde(default = "loopback")]
+    pub address: std::net::IpAddr,
+    /// How long the device may send no valid packet (from the first packet sent to it, or from its last valid
+    /// one) before the run fails naming it, s.
+    #[serde(default = "silent_after_s")]
+    pub silent_after_s: f64,
+    /// The device's program, when the rig starts, watches and restarts it (a SITL).
+    #[serde(default)]
+    pub process: Option<super::supervise::DeviceProcess>,
+    /// How the device is armed, when it must be (Betaflight's arm switch, its flags read over MSP).
+    #[serde(default)]
+    pub arming: Option<super::arming::ArmingOptions>,
+}
+
+fn loopback() -> std::net::IpAddr {
+    std::net::Ipv4Addr::LOCALHOST.into()
+}
+
+fn silent_after_s() -> f64 {
+    5.0
 }
 
 /// Byte order.

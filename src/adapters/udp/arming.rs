@@ -1,0 +1,152 @@
+//! Arming a device that must be armed before it flies (Betaflight): the arm switch's set point is held low until
+//! the device's arming-disable flags clear (read over MSP, [`super::msp`]), then raised to the scenario's value, so
+//! the switch goes low to high after the flags clear, as Betaflight requires; the set points it must see low to arm
+//! (the throttle) are held at 0 until it reports itself armed. Not armed within `within_s` of its (re)start, the
+//! run fails naming the flags that kept it from arming, in words. After a restart of the device, the same again.
+
+use super::msp::{StatusWatch, flags_in_words};
+use serde::Deserialize;
+use silrig_flight::scenario::Scenario;
+use std::net::SocketAddr;
+
+/// `[arming]` of a layout file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArmingOptions {
+    /// The set point carrying the arm switch: held at 0 until the device's arming-disable flags clear.
+    pub switch: String,
+    /// Set points held at 0 until the device reports itself armed (Betaflight refuses to arm with the throttle up).
+    #[serde(default)]
+    pub low_until_armed: Vec<String>,
+    /// The TCP port of the device's MSP (Betaflight's UART1 on 5761), on the layout's `address`.
+    pub msp_port: u16,
+    /// Armed within this many seconds of the device's (re)start, or the run fails naming its flags.
+    pub within_s: f64,
+}
+
+/// Where arming stands.
+pub struct Arming {
+    options: ArmingOptions,
+    device: String,
+    watch: StatusWatch,
+    /// (index into the bound set points, the scenario's value) of the switch, then of each held set point.
+    switch: (usize, f64),
+    held: Vec<(usize, f64)>,
+    started_ns: Option<u64>,
+    raised: bool,
+    armed: bool,
+    /// How long the device took to arm the last time, ms, and how often it was armed.
+    armed_after_ms: Option<u64>,
+    armings: u64,
+    /// The device's PID loop cycle as it last said it, µs.
+    cycle_us: u16,
+}
+
+impl Arming {
+    /// Start reading the device's status; the set points are checked against the scenario.
+    /// `device`: its name; `address`: its IP address.
+    pub fn new(
+        options: &ArmingOptions,
+        device: &str,
+        address: std::net::IpAddr,
+        scenario: &Scenario,
+    ) -> Result<Self, String> {
+        if !(options.within_s > 0.0 && options.within_s <= 3600.0) {
+            return Err(format!("device `{device}`: arming within_s must be within 0..3600 s"));
+        }
+        for name in std::iter::once(&options.switch).chain(&options.low_until_armed) {
+            if scenario.setpoint.get(name).is_none() {
+                return Err(format!(
+                    "device `{device}`: [arming] names the set point `{name}`, which the scenario does not give; add \
+                     it under [setpoint]"
+                ));
+            }
+        }
+        Ok(Self {
+            options: options.clone(),
+            device: device.to_string(),
+            watch: StatusWatch::start(SocketAddr::new(address, options.msp_port)),
+            switch: (0, 0.0),
+            held: Vec::new(),
+            started_ns: None,
+            raised: false,
+            armed: false,
+            armed_after_ms: None,
+            armings: 0,
+            cycle_us: 0,
+        })
+    }
+
+    /// Find the set points among those the layout was bound against (the scenario's `names` and `values`).
+    pub fn bind(&mut self, names: &[String], values: &[f64]) -> Result<(), String> {
+        let find = |name: &String| {
+            let k =
+                names.iter().position(|n| n == name).ok_or_else(|| format!("[arming] set point `{name}` not found"));
+            k.map(|k| (k, values[k]))
+        };
+        self.switch = find(&self.options.switch)?;
+        self.held = self.options.low_until_armed.iter().map(find).collect::<Result<_, _>>()?;
+        Ok(())
+    }
+
+    /// Whether the device has said its status since it (re)started: before that it is still starting, and
+    /// Betaflight's SITL must not be sent anything yet (an RC packet that comes before its receiver is set up is
+    /// taken, then the set-up replaces the SITL's RC link with the default receiver, and `RX_FAILSAFE` never clears).
+    pub fn ready(&self) -> bool {
+        self.watch.latest().status.is_some()
+    }
+
+    /// Hold the switch and the held set points low while they must be, else at the scenario's values.
+    pub fn hold(&self, setpoints: &mut [f64]) {
+        let (index, value) = self.switch;
+        setpoints[index] = if self.raised { value } else { 0.0 };
+        for &(index, value) in &self.held {
+            setpoints[index] = if self.armed { value } else { 0.0 };
+        }
+    }
+
+    /// Raise the switch once the flags clear, note when the device says it is armed; an error, naming the flags,
+    /// when it has not armed in time.
+    pub fn check(&mut self, now_ns: u64) -> Result<(), String> {
+        let started = *self.started_ns.get_or_insert(now_ns);
+        let latest = self.watch.latest();
+        if let Some(status) = latest.status {
+            self.cycle_us = status.cycle_us;
+        }
+        if self.armed {
+            return Ok(());
+        }
+        if let Some(status) = latest.status {
+            self.raised |= status.arming_disabled == 0;
+            self.armed = status.armed;
+        }
+        if self.armed {
+            self.armed_after_ms = Some(now_ns.saturating_sub(started) / 1_000_000);
+            self.armings += 1;
+        }
+        if self.armed || now_ns.saturating_sub(started) < (self.options.within_s * 1e9) as u64 {
+            return Ok(());
+        }
+        let why = match (latest.status, latest.problem) {
+            (Some(status), _) => format!("its arming-disable flags: {}", flags_in_words(status.arming_disabled)),
+            (None, Some(problem)) => format!("its MSP on port {} never answered: {problem}", self.options.msp_port),
+            (None, None) => format!("its MSP on port {} never answered", self.options.msp_port),
+        };
+        Err(format!("device `{}` did not arm within {} s; {why}", self.device, self.options.within_s))
+    }
+
+    /// The device restarted: lower the switch and the held set points, and arm it again.
+    pub fn restart(&mut self, now_ns: u64) {
+        self.watch.forget();
+        (self.started_ns, self.raised, self.armed) = (Some(now_ns), false, false);
+    }
+
+    /// Counters for the controller's report: how often it armed, how long the last arming took (ms), and the
+    /// PID loop's cycle it last said (µs).
+    pub fn counters(&self) -> Vec<(String, u64)> {
+        let mut counters = vec![("device_armings".to_string(), self.armings)];
+        counters.extend(self.armed_after_ms.map(|ms| ("device_armed_after_ms".to_string(), ms)));
+        counters.push(("device_pid_cycle_us".to_string(), u64::from(self.cycle_us)));
+        counters
+    }
+}

@@ -1,0 +1,35 @@
+"""A fake device for tests/udp_device.rs: a real UDP peer that answers each packet it receives on PORT_IN with
+three little-endian f32 commands (aileron, elevator, rudder) sent to REPLY_PORT on 127.0.0.1, misbehaving as MODE
+says:
+
+  good        every reply (0.0, ELEVATOR, 0.0)
+  nan         every 10th reply carries NaN in its elevator instead
+  short       every 10th reply is 8 bytes instead of 12
+  silent      never replies
+  die-after   exits after N=50 replies (the rig's supervision starts it again)
+
+Usage: fake_device.py PORT_IN REPLY_PORT MODE ELEVATOR
+"""
+
+import socket
+import struct
+import sys
+
+port_in, reply_port, mode, elevator = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], float(sys.argv[4])
+rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+rx.bind(("127.0.0.1", port_in))
+tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+n = 0
+while True:
+    rx.recv(65536)
+    n += 1
+    if mode == "silent":
+        continue
+    reply = struct.pack("<3f", 0.0, elevator, 0.0)
+    if mode == "nan" and n % 10 == 0:
+        reply = struct.pack("<3f", 0.0, float("nan"), 0.0)
+    if mode == "short" and n % 10 == 0:
+        reply = reply[:8]
+    tx.sendto(reply, ("127.0.0.1", reply_port))
+    if mode == "die-after" and n == 50:
+        sys.exit(3)
