@@ -418,14 +418,10 @@ pub fn parse_fault_flag(text: &str) -> Result<Fault, String> {
         .into_iter()
         .find(|r| r.label() == target.trim())
         .ok_or_else(|| bad(format!("unknown target {:?}; plant, controller, logger or bridge", target.trim())))?;
-    let action = FaultAction::ALL
-        .iter()
-        .copied()
-        .find(|a| a.label() == action.trim())
-        .ok_or_else(|| {
-            let actions: Vec<&str> = FaultAction::ALL.iter().map(|a| a.label()).collect();
-            bad(format!("unknown action {:?}; the actions: {}", action.trim(), actions.join(", ")))
-        })?;
+    let action = FaultAction::ALL.iter().copied().find(|a| a.label() == action.trim()).ok_or_else(|| {
+        let actions: Vec<&str> = FaultAction::ALL.iter().map(|a| a.label()).collect();
+        bad(format!("unknown action {:?}; the actions: {}", action.trim(), actions.join(", ")))
+    })?;
     let mut parts = rest.split(',');
     let at = parts.next().unwrap_or("");
     let mut fault = Fault {

@@ -7,11 +7,11 @@ use super::events::EventLog;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
-use silrig_wire::clock::monotonic_ns;
-use silrig_wire::ipc::Received;
 use silrig_recording::csv::CsvSink;
 use silrig_recording::mcap_file::McapSink;
 use silrig_recording::{LoggedRow, RecordingMeta, RowSink};
+use silrig_wire::clock::monotonic_ns;
+use silrig_wire::ipc::Received;
 use silrig_wire::wire::{CommandSample, PlantInfo, PlantSample};
 use std::net::SocketAddr;
 

@@ -4,13 +4,13 @@
 //! Hummingbird whatever `[plant.parameters]` says, as a flight computer knows its vehicle only nominally: a sweep
 //! over the parameters tests it against vehicles it was not tuned for.
 
-use silrig_rig::controller::Controller;
 use silrig_flight::quad::quad_setpoint;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_model::control::quad::{QuadController, QuadGains, QuadMeasurement, QuadSetpoint};
 use silrig_model::quad::params::QuadParams;
 use silrig_model::quad::rotors::ROTORS;
+use silrig_rig::controller::Controller;
 use silrig_wire::wire::PlantSample;
 
 /// The outputs the law reads, in the order [`QuadLaw::measure`] takes them.

@@ -2,7 +2,6 @@
 //! [`QuadVehicle`] (`[plant] model = "quad"`), with the rig's actuators and sensor faults on its named signals
 //! ([`SignalChain`], as for a plant of your own) and its state as the checkpoint a restarted plant resumes from.
 
-use silrig_rig::plant_model::{ActuatorFlags, PlantModel};
 use serde::{Deserialize, Serialize};
 use silrig_flight::quad::{check_for_quad, quad_signals, quad_vehicle};
 use silrig_flight::scenario::Scenario;
@@ -10,6 +9,7 @@ use silrig_flight::signal_chain::SignalChain;
 use silrig_flight::signals::PlantSignals;
 use silrig_model::quad::outputs::{INPUT_RANGE, quad_outputs};
 use silrig_model::quad::{QUAD_STATE_LEN, QuadVehicle};
+use silrig_rig::plant_model::{ActuatorFlags, PlantModel};
 
 /// The scenario's quadrotor at its start, behind the rig's actuators and sensors.
 pub struct QuadPlant {
