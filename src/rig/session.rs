@@ -170,7 +170,7 @@ pub struct ControllerSession {
     /// The last command sent; what a refused command is replaced by.
     last_sent: Option<[f64; MAX_INPUTS]>,
     /// The controller's last answer as published (refused or not): what the plant's ticks between the
-    /// controller's own are answered with.
+    /// controller's own are answered with (kept only for a controller slower than the plant).
     last_answer: Option<CommandSample>,
     /// Consecutive refused commands (an event marks the first of each run).
     refusing: u64,
@@ -268,9 +268,10 @@ impl ControllerSession {
     /// controller's last answer, unchanged, and true. False for a tick the controller computes, and for the first
     /// sample it sees (it has no answer yet, as when it joins a flying plant).
     fn repeat_last_answer(&mut self, tick: u64) -> Result<bool, SessionError> {
-        let Some(last) = self.last_answer.filter(|_| !self.scenario.timing.is_controller_tick(tick)) else {
+        if self.scenario.timing.is_controller_tick(tick) {
             return Ok(false);
-        };
+        }
+        let Some(last) = self.last_answer else { return Ok(false) };
         let p = self.pending.take().expect("a sample was just handed out");
         let repeated = CommandSample { answers_tick: p.tick, compute_ns: 0, ..last };
         self.rec.count("commands_repeated", 1);
@@ -379,7 +380,9 @@ impl ControllerSession {
         }
         out.compute_ns = monotonic_ns() - p.delivered_ns;
         self.rec.record(COMPUTE, out.compute_ns as i64);
-        self.last_answer = Some(out);
+        if self.scenario.timing.controller_every_ticks > 1 {
+            self.last_answer = Some(out);
+        }
         self.publish(p.tick, &out)?;
         match refused {
             Some(reason) => Err(SessionError::CommandRefused { tick: p.tick, reason }),

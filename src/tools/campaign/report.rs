@@ -311,9 +311,8 @@ impl SweepSummary {
             self.departed,
             self.infeasible
         );
-        let listed = |worst: &[WorstCase]| worst.iter().take(3).cloned().collect::<Vec<_>>();
-        // One column for every table, as wide as its widest figure.
-        let width = self.worst.iter().flat_map(|(_, w)| listed(w)).map(|w| w.measured.chars().count()).max();
+        // One column for every table, as wide as its widest figure listed.
+        let width = self.worst.iter().flat_map(|(_, w)| w.iter().take(3)).map(|w| w.measured.chars().count()).max();
         let width = width.unwrap_or(0).max(34);
         for (k, ((name, failures), (_, worst))) in self.failures_by_criterion.iter().zip(&self.worst).enumerate() {
             let departed = self.departed_failures_by_criterion.get(k).copied().unwrap_or(0);
@@ -322,7 +321,7 @@ impl SweepSummary {
                 d if d == *failures => writeln!(out, "  {name}: failed in {failures} of {flown}, all departed (below)"),
                 d => writeln!(out, "  {name}: failed in {failures} of {flown}, {d} of them departed (below)"),
             };
-            for w in listed(worst) {
+            for w in worst.iter().take(3) {
                 let verdict = if w.passed { "pass" } else { "FAIL" };
                 let _ = writeln!(out, "    case {:<6} {:<width$} {verdict}   {}", w.index, w.measured, w.reproduce);
             }
