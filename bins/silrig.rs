@@ -105,8 +105,8 @@ enum Command {
     /// Fly a suite of cases with one controller and give a verdict a CI pipeline can gate on: a table,
     /// check.json and check.junit.xml. Exit status 0: every case passed; 1: a case failed; 2: nothing could be
     /// judged (a malformed suite, a controller command that cannot run); 3: inconclusive (nothing failed, but the
-    /// machine disturbed a timing figure in every flight of a case: retry on a quieter machine); 130, 143:
-    /// interrupted (the cases flown are in check.json).
+    /// machine disturbed a timing figure in every flight of a case: retry on a quieter machine); 130:
+    /// interrupted by Ctrl-C or SIGTERM (the cases flown are in check.json).
     Check(silrig::check::CheckOptions),
     /// Fly a controller against a recorded flight: the recorded plant samples, tick by tick in lockstep, to our
     /// controller or yours (--controller-cmd), and compare its commands with the recorded ones. Exit status 0: every
