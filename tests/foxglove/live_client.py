@@ -6,7 +6,7 @@ It connects to ws://ADDR (trying again until --connect-timeout-s, since the logg
 starts), subscribes to every channel the server advertises, as it advertises them, and writes to OUT one JSON line
 per advertised channel ({"advertised": {...}}) and one per message received, in arrival order: {"topic", "log_time_ns",
 "data" (hex)}. It ends when the server closes the connection, or after --disconnect-after-s (a client that leaves
-mid-run). --slow-ms blocks the client that long after each message (a client that cannot keep up).
+mid-run); --connect-after-s waits that long before connecting (a client that joins late). --slow-ms blocks the client that long after each message (a client that cannot keep up).
 """
 
 import argparse
@@ -73,8 +73,10 @@ async def main():
     parser.add_argument("out", help="where the JSON lines go")
     parser.add_argument("--connect-timeout-s", type=float, default=30.0)
     parser.add_argument("--disconnect-after-s", type=float, default=None)
+    parser.add_argument("--connect-after-s", type=float, default=0.0)
     parser.add_argument("--slow-ms", type=float, default=0.0)
     args = parser.parse_args()
+    await asyncio.sleep(args.connect_after_s)
     with open(args.out, "w") as out:
         if args.disconnect_after_s is None:
             await serve(args, out)
