@@ -2,7 +2,8 @@
 //! WebSocket protocol while the run flies. Four clients written in Python (`foxglove/live_client.py`, PyPI
 //! `websockets`, in the virtual environment `.ci/run` creates) connect to a realtime run: one that reads
 //! everything, one too slow to keep up, one that leaves mid-run, one that joins late (it must still get the plant's
-//! announcement, `/plant_info`, sent once when the plant started). The first must have been advertised every channel
+//! announcement, `/plant_info`, sent once when the plant started: it connects once the first client has a `/trace`
+//! message). The first must have been advertised every channel
 //! of the recording, with the recording's encodings and schemas, and must receive each channel's messages exactly as
 //! the recording holds them from its first message on: same bytes, same log times, in order, none missing (for
 //! `/trace` one a tick, by the trace's time). Whatever the clients do, the run must succeed and keep every row:
@@ -121,7 +122,7 @@ fn clients_receive_every_channel_in_order_and_the_run_loses_nothing() {
     let slow = client(&python, &addr, &slow_out, &["--slow-ms", "20"]);
     let leaver = client(&python, &addr, &leaver_out, &["--disconnect-after-s", "2.5"]);
     let late_out = clients_dir.join("late.jsonl");
-    let late = client(&python, &addr, &late_out, &["--connect-after-s", "3"]);
+    let late = client(&python, &addr, &late_out, &["--connect-after-trace-in", full_out.to_str().unwrap()]);
     // A fault mid-run puts events on /events while the clients listen.
     let live = format!("foxglove={addr}");
     let run_args = ["--duration-s", "4", "--quiet", "--live", &live, "--fault", "controller:delay@2s,delay=1ms"];
@@ -179,7 +180,7 @@ fn clients_receive_every_channel_in_order_and_the_run_loses_nothing() {
         let live = r.messages.get("/trace").unwrap_or_else(|| panic!("{who}: no /trace message"));
         contiguous("/trace", live, &messages["/trace"], who);
     }
-    // The client that joined 3 s into the run got the plant's announcement, as recorded, before anything else of it.
+    // The client that joined once the run was flying got the plant's announcement, as recorded, before anything else of it.
     let announced =
         late.messages.get("/plant_info").unwrap_or_else(|| panic!("late: no /plant_info: {:?}", late.messages.keys()));
     assert_eq!(announced[0], *messages["/plant_info"].last().unwrap(), "late: /plant_info is not the recording's");
