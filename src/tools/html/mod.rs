@@ -280,6 +280,7 @@ fn file_role(name: &str) -> &'static str {
         "scenario.toml" | "case-scenario.toml" => "the scenario as flown",
         "controller.env" | "plant.env" => "the run's SILRIG_* variables",
         "timer-baseline.json" => "the OS timer floor measured beside the run",
+        "foxglove-layout.json" => "a Foxglove or Lichtblick layout for this plant's recording: import it there",
         n if n.ends_with(".mcap") => "the recording (MCAP)",
         n if n.ends_with(".report.json") => "a process's own report",
         n if n.ends_with(".checkpoint.json") => "a process's checkpoint (a restart resumes from it)",
