@@ -179,7 +179,7 @@ fn faults_and_signals_of_a_plant_that_is_not_the_f16() {
     let plant = attitude();
     let trace = attitude_trace(&plant);
     let setpoint = |name: &str| [("phi_deg", 10.0), ("theta_deg", 5.0)].iter().find(|(n, _)| *n == name).map(|p| p.1);
-    let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into() }];
+    let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into(), end_s: Some(3.5) }];
     let faults = plot_timeline(&trace, &plant, &setpoint, &events, &dir.path, "faults", "attitude: faults").unwrap();
     let signals =
         plot_signals(&trace, Some(&plant), &setpoint, &dir.path, "signals", "attitude: every signal").unwrap();
@@ -201,7 +201,7 @@ fn faults_and_signals_of_a_plant_that_is_not_the_f16() {
         );
     }
     // The paper's states figure needs the F-16's columns: the run leaves it out with this reason.
-    let missing = plot_closed_loop(&trace, None, &dir.path, "x").unwrap_err();
+    let missing = plot_closed_loop(&trace, None, &f16_setpoint, &dir.path, "x").unwrap_err();
     assert!(matches!(missing, PlotError::MissingColumn { .. }), "{missing}");
 }
 
@@ -238,9 +238,10 @@ fn closed_loop_figures_are_written_with_their_legends() {
     // The true f the figure sets beside each RBF estimate (crate::f_true computes it from a flight).
     let t = trace.column("t_s").unwrap();
     let f_true = [0.3, -1.0, 2.0].map(|a| t.iter().map(|t| a * (2.0 * t).cos()).collect::<Vec<f64>>());
-    let paths =
-        timed("closed loop, 3 figures", || plot_closed_loop(&trace, Some(&f_true), &dir.path, "synthetic 10 s run"))
-            .expect("closed-loop figures");
+    let paths = timed("closed loop, 3 figures", || {
+        plot_closed_loop(&trace, Some(&f_true), &f16_setpoint, &dir.path, "synthetic 10 s run")
+    })
+    .expect("closed-loop figures");
     check_files(
         &paths,
         &["fig1_states", "fig2_sliding", "fig3_weights"],
@@ -263,7 +264,7 @@ fn weight_legend_follows_the_number_of_weight_columns() {
             .rows
             .push(names.iter().enumerate().map(|(i, _)| if i == 0 { t } else { (t * i as f64 * 0.1).sin() }).collect());
     }
-    let paths = plot_closed_loop(&trace, None, &dir.path, "12 nodes").expect("figures");
+    let paths = plot_closed_loop(&trace, None, &f16_setpoint, &dir.path, "12 nodes").expect("figures");
     let svg = std::fs::read_to_string(&paths[5]).unwrap();
     assert!(svg.contains("\nW12\n"), "no W12 in the legend");
     assert!(!svg.contains("\nW13\n"));
@@ -315,11 +316,11 @@ fn timeline_marks_events() {
     let dir = OutDir::new("timeline");
     let trace = synthetic(1000, 0.0);
     let events = vec![
-        TimelineEvent { t_s: 2.0, label: "aileron stuck".into() },
-        TimelineEvent { t_s: 2.2, label: "sensor dropout".into() },
-        TimelineEvent { t_s: 7.5, label: "elevator 50 % effective".into() },
-        TimelineEvent { t_s: 9.8, label: "controller restarted".into() },
-        TimelineEvent { t_s: 42.0, label: "after the end".into() },
+        TimelineEvent { t_s: 2.0, label: "aileron stuck".into(), end_s: Some(f64::INFINITY) },
+        TimelineEvent { t_s: 2.2, label: "sensor dropout".into(), end_s: None },
+        TimelineEvent { t_s: 7.5, label: "elevator 50 % effective".into(), end_s: None },
+        TimelineEvent { t_s: 9.8, label: "controller restarted".into(), end_s: None },
+        TimelineEvent { t_s: 42.0, label: "after the end".into(), end_s: None },
     ];
     let paths = timed("timeline", || {
         plot_timeline(&trace, &f16(), &f16_setpoint, &events, &dir.path, "faults", "Fault injection")
@@ -361,8 +362,16 @@ fn a_missing_column_is_an_error_naming_it() {
         t.rows = full.rows.iter().map(|r| [&r[..i], &r[i + 1..]].concat()).collect();
         t
     };
-    expect_missing(plot_closed_loop(&without("alpha_deg"), None, &dir.path, "x"), "alpha_deg", "fig1_states.png");
-    expect_missing(plot_closed_loop(&without("fhat_theta"), None, &dir.path, "x"), "fhat_theta", "fig2_sliding.png");
+    expect_missing(
+        plot_closed_loop(&without("alpha_deg"), None, &f16_setpoint, &dir.path, "x"),
+        "alpha_deg",
+        "fig1_states.png",
+    );
+    expect_missing(
+        plot_closed_loop(&without("fhat_theta"), None, &f16_setpoint, &dir.path, "x"),
+        "fhat_theta",
+        "fig2_sliding.png",
+    );
     assert!(!dir.path.join("fig1_states.png").exists(), "a figure was written before the missing column was found");
     // Without any weight column there is no weights figure to draw, and nothing is missing.
     let mut no_weights = full.clone();
@@ -370,7 +379,8 @@ fn a_missing_column_is_an_error_naming_it() {
     no_weights.columns.truncate(first_weight);
     no_weights.rows.iter_mut().for_each(|r| r.truncate(first_weight));
     let no_weights_dir = dir.path.join("no_weights");
-    let paths = plot_closed_loop(&no_weights, None, &no_weights_dir, "x").expect("a trace without weights");
+    let paths =
+        plot_closed_loop(&no_weights, None, &f16_setpoint, &no_weights_dir, "x").expect("a trace without weights");
     check_files(&paths, &["fig1_states", "fig2_sliding"], &[&["α"], &["S (rad/s)", "RBF estimate f_hat, ψ channel"]]);
     assert!(!no_weights_dir.join("fig3_weights.png").exists() && !no_weights_dir.join("fig3_weights.svg").exists());
     let message = expect_missing(
@@ -383,7 +393,10 @@ fn a_missing_column_is_an_error_naming_it() {
 
     // Nothing to draw is an error too, not a panic or an empty picture.
     assert!(matches!(plot_overlay(&[], &dir.path, "none"), Err(PlotError::NoData { .. })));
-    assert!(matches!(plot_closed_loop(&Trace::new(columns(2)), None, &dir.path, "x"), Err(PlotError::NoData { .. })));
+    assert!(matches!(
+        plot_closed_loop(&Trace::new(columns(2)), None, &f16_setpoint, &dir.path, "x"),
+        Err(PlotError::NoData { .. })
+    ));
 }
 
 /// `trace` with only the columns `keep` accepts.
@@ -403,7 +416,8 @@ fn a_trace_of_another_controller_gets_the_states_figure_only() {
     let dir = OutDir::new("states_only");
     let full = synthetic(300, 0.0);
     let states = only(&full, |c| !is_controller_column(c));
-    let paths = plot_closed_loop(&states, None, &dir.path, "another controller").expect("the states figure");
+    let paths =
+        plot_closed_loop(&states, None, &f16_setpoint, &dir.path, "another controller").expect("the states figure");
     check_files(&paths, &["fig1_states"], &[&["another controller", "α", "φ roll", "rudder cmd", "t (s)"]]);
     let mut written: Vec<_> = std::fs::read_dir(&dir.path).unwrap().map(|e| e.unwrap().file_name()).collect();
     written.sort();
@@ -411,7 +425,8 @@ fn a_trace_of_another_controller_gets_the_states_figure_only() {
 
     // The states figure does not depend on the controller's columns.
     let with_controller = dir.path.join("with_controller");
-    let all = plot_closed_loop(&full, None, &with_controller, "another controller").expect("all figures");
+    let all =
+        plot_closed_loop(&full, None, &f16_setpoint, &with_controller, "another controller").expect("all figures");
     assert_eq!(all.len(), 6);
     for (a, b) in paths.iter().zip(&all) {
         assert!(std::fs::read(a).unwrap() == std::fs::read(b).unwrap(), "{} and {} differ", a.display(), b.display());
@@ -423,11 +438,19 @@ fn a_partly_present_controller_figure_is_an_error_naming_the_missing_column() {
     let dir = OutDir::new("partly");
     let full = synthetic(50, 0.0);
     let no_psi_weights = only(&full, |c| !c.starts_with("w_psi_"));
-    expect_missing(plot_closed_loop(&no_psi_weights, None, &dir.path, "x"), "w_psi_1", "fig3_weights.png");
+    expect_missing(
+        plot_closed_loop(&no_psi_weights, None, &f16_setpoint, &dir.path, "x"),
+        "w_psi_1",
+        "fig3_weights.png",
+    );
     let one_surface = only(&full, |c| !is_controller_column(c) || c == "s_phi");
-    expect_missing(plot_closed_loop(&one_surface, None, &dir.path, "x"), "fhat_phi", "fig2_sliding.png");
+    expect_missing(plot_closed_loop(&one_surface, None, &f16_setpoint, &dir.path, "x"), "fhat_phi", "fig2_sliding.png");
     let no_fhat_theta = only(&full, |c| !c.starts_with("w_") && c != "fhat_theta");
-    expect_missing(plot_closed_loop(&no_fhat_theta, None, &dir.path, "x"), "fhat_theta", "fig2_sliding.png");
+    expect_missing(
+        plot_closed_loop(&no_fhat_theta, None, &f16_setpoint, &dir.path, "x"),
+        "fhat_theta",
+        "fig2_sliding.png",
+    );
     assert!(!dir.path.exists(), "a figure was written before the missing column was found");
 }
 
@@ -442,10 +465,10 @@ fn extreme_and_non_finite_values_do_not_panic() {
         row[theta] = f64::NAN;
         row[p] = if k == 3 { f64::INFINITY } else { 1e-300 * k as f64 };
     }
-    let paths = plot_closed_loop(&trace, None, &dir.path, "extreme").expect("figures");
+    let paths = plot_closed_loop(&trace, None, &f16_setpoint, &dir.path, "extreme").expect("figures");
     assert!(paths.iter().all(|p| p.exists()));
     let one_row = synthetic(1, 0.0);
-    let start = [TimelineEvent { t_s: 0.0, label: "start".into() }];
+    let start = [TimelineEvent { t_s: 0.0, label: "start".into(), end_s: None }];
     plot_timeline(&one_row, &f16(), &f16_setpoint, &start, &dir.path, "one", "one row").expect("a one-row trace");
     plot_percentile_distributions(&[("empty".into(), Vec::new())], &dir.path, "empty", "no points").expect("empty");
 }
@@ -466,7 +489,7 @@ fn a_60_s_trace_plots_in_well_under_a_second_per_figure() {
     let dir = OutDir::new("long");
     let trace = synthetic(6000, 0.3);
     let start = Instant::now();
-    let paths = plot_closed_loop(&trace, None, &dir.path, "60 s").unwrap();
+    let paths = plot_closed_loop(&trace, None, &f16_setpoint, &dir.path, "60 s").unwrap();
     let per_figure = start.elapsed().as_secs_f64() / 3.0;
     eprintln!("60 s trace: {:.0} ms per figure (PNG + SVG)", per_figure * 1e3);
     assert!(Path::new(&paths[0]).exists());
