@@ -382,7 +382,9 @@ input.filter{width:360px;max-width:100%;padding:4px 8px;font-size:13px}
 
 /// The page's only script: click a figure to zoom it to the window's width, type to filter a table, and, once the
 /// page has loaded, mark on `<body>` how many figures there are (`data-figures`), how many rendered with a size
-/// (`data-figures-rendered`) and how many script errors happened (`data-errors`): what the browser test reads.
+/// (`data-figures-rendered`), how many script errors happened (`data-errors`) and where the first figure ends,
+/// px from the page's top (`data-first-figure-bottom`, whether it is on the first screen): what the browser test
+/// reads.
 const SCRIPT: &str = "
 (function(){
 var errors=0;
@@ -403,6 +405,8 @@ figs.forEach(function(s){var r=s.getBoundingClientRect();if(r.width>0&&r.height>
 document.body.setAttribute('data-figures',String(figs.length));
 document.body.setAttribute('data-figures-rendered',String(shown));
 document.body.setAttribute('data-errors',String(errors));
+var first=figs.length?figs[0].getBoundingClientRect():null;
+document.body.setAttribute('data-first-figure-bottom',String(first?Math.ceil(first.bottom+window.scrollY):0));
 });
 })();
 ";
