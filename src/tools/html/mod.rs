@@ -12,6 +12,7 @@ pub mod check;
 mod control;
 pub mod run;
 pub mod sweep;
+pub mod view3d;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -377,6 +378,9 @@ ul.verdict .tag{min-width:74px;text-align:center;margin-right:8px}
 details{margin:6px 0}details>summary{cursor:pointer;font-weight:600;font-size:14px;padding:3px 0}
 .hint{font-size:12px}
 input.filter{width:360px;max-width:100%;padding:4px 8px;font-size:13px}
+#view3d canvas{width:100%;max-width:960px;height:auto;display:block;border:1px solid var(--line);cursor:grab}
+.view3d-controls{margin:6px 0;font-size:13px}.view3d-controls input[type=range]{width:420px;max-width:60%;vertical-align:middle}
+.view3d-status{color:var(--muted);font-variant-numeric:tabular-nums}
 @media print{header{position:static}.scroll{max-height:none}.hint,input.filter{display:none}}
 ";
 

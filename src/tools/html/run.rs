@@ -1,9 +1,9 @@
 //! The page of one `silrig run` (also of each run a check flies), answer first: the verdict (what passed, what
 //! failed, the faults the rig saw and how it came back), the response of every output with a set point and the
-//! control quality as tables, the faults on a timeline, timing against the OS floor, every other figure, then the
-//! processes, counters and the run's metadata, the events and the files folded away. The same order for every
-//! plant: the figures are drawn from the plant's signals by name. Built from `report.json`'s [`RigReport`] and the
-//! folder it names.
+//! control quality as tables, the faults on a timeline, timing against the OS floor, every other figure, the flight
+//! in 3-D, then the processes, counters and the run's metadata, the events and the files folded away. The same
+//! order for every plant: the figures are drawn from the plant's signals by name. Built from `report.json`'s
+//! [`RigReport`] and the folder it names.
 
 use super::{Page, Tone, esc, facts, figure_stems, figure_with, table};
 use silrig_launch::fault_report::FaultRecord;
@@ -95,6 +95,7 @@ pub fn page(report: &RigReport, command: &str) -> Page {
     };
     let others = left_out(report) + &others;
     page.section("figures", "Figures", command, others);
+    page.section("view3d-section", "The flight in 3-D", command, super::view3d::section(out));
     page.section(
         "run",
         "Run, processes and counters",
