@@ -114,3 +114,13 @@ def test_start_is_handed_the_runs_set_up():
     assert seen == {"dt_s": 0.01, "theta": 10.0, "alt": 7.0, "plant": "f16", "elevator": seen["elevator"]}
     # An input left alone stays where its actuator is: the held command is the trace's elevator position.
     assert flown["trace"]["held_elevator_deg"][1:] == flown["trace"]["elevator_deg"][:-1]
+
+
+def test_the_ctypes_modules_sample_names_the_plants_outputs_too():
+    import silrig_client
+
+    sample = silrig_client.Sample(silrig_client.PlantSample(), {"theta_deg": 0, "q_dps": 1})
+    assert sample["q_dps"] == 0.0
+    with pytest.raises(KeyError) as missing:
+        sample["theta_dg"]
+    assert "no output `theta_dg`; its outputs: theta_deg, q_dps" in str(missing.value)
