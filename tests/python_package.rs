@@ -154,3 +154,50 @@ fn the_abi3_wheel_installs_without_rust_and_its_pytest_suite_passes() {
     pytest(&python, &path, &format!("py{}-whl", std::process::id()));
     let _ = std::fs::remove_dir_all(&fresh);
 }
+
+/// Each package's features in a `cargo tree` of `args` (`name version` to the sets it is compiled with).
+fn features_in_tree(args: &[&str]) -> std::collections::BTreeMap<String, std::collections::BTreeSet<String>> {
+    let o = Command::new(env!("CARGO"))
+        .args(["tree", "--locked", "--edges", "normal,build", "--prefix", "none", "--format", "{p}|{f}"])
+        .args(args)
+        .current_dir(ROOT)
+        .output()
+        .expect("cargo tree runs");
+    assert!(o.status.success(), "cargo tree {args:?}:\n{}", said(&o));
+    let mut features = std::collections::BTreeMap::<String, std::collections::BTreeSet<String>>::new();
+    for line in String::from_utf8_lossy(&o.stdout).lines() {
+        let Some((package, set)) = line.split_once('|') else { continue };
+        // `name v1.2.3 (/path)`: the name and version say which package it is.
+        let package = package.split(' ').take(2).collect::<Vec<_>>().join(" ");
+        features.entry(package).or_default().insert(set.trim_end_matches(" (*)").to_string());
+    }
+    features
+}
+
+/// What `pip install ./python` compiles beyond `cargo build --release` (the README's first command) is PyO3 and the
+/// package alone: every crate both builds share is resolved with the same features (the workspace's Cargo.toml asks
+/// for `syn`'s features PyO3's macros need), or else that crate and all above it would compile a second time.
+#[test]
+fn the_package_shares_every_crate_of_cargo_build_release_with_the_same_features() {
+    let workspace = features_in_tree(&[]);
+    let package = features_in_tree(&["-p", "silrig-python"]);
+    let differing: Vec<String> = package
+        .iter()
+        .filter_map(|(name, theirs)| {
+            workspace
+                .get(name)
+                .filter(|ours| *ours != theirs)
+                .map(|ours| format!("{name}: {ours:?} in `cargo build --release`, {theirs:?} in the package's build"))
+        })
+        .collect();
+    assert!(differing.is_empty(), "crates that would compile twice:\n{}", differing.join("\n"));
+    let only_package: Vec<&String> = package.keys().filter(|name| !workspace.contains_key(*name)).collect();
+    assert!(
+        only_package.iter().all(|name| name.starts_with("pyo3")
+            || name.starts_with("silrig-python")
+            || name.starts_with("target-lexicon")),
+        "{only_package:?}"
+    );
+    // Both trees were read: the package's holds the rig's crates.
+    assert!(package.contains_key("silrig-rig v0.1.0") && workspace.contains_key("silrig-rig v0.1.0"), "{package:?}");
+}

@@ -137,7 +137,13 @@ impl PythonController {
         Ok(())
     }
 
-    fn answer(&mut self, py: Python<'_>, sample: &PlantSample, command: &mut [f64], diagnostics: &mut [f64]) -> PyResult<()> {
+    fn answer(
+        &mut self,
+        py: Python<'_>,
+        sample: &PlantSample,
+        command: &mut [f64],
+        diagnostics: &mut [f64],
+    ) -> PyResult<()> {
         let (Some(session), Some(index)) = (&self.session, &self.output_index) else {
             return Err(silrig_error(py, Status::ErrInternal, "a step before the plant was connected"));
         };
@@ -173,9 +179,8 @@ impl Controller for PythonController {
         if self.failed.is_some() {
             return;
         }
-        self.failed = Python::attach(|py| {
-            self.answer(py, sample, command, diagnostics).err().map(|e| keep(py, &self.raised, e))
-        });
+        self.failed =
+            Python::attach(|py| self.answer(py, sample, command, diagnostics).err().map(|e| keep(py, &self.raised, e)));
     }
 
     fn failure(&mut self) -> Option<String> {
@@ -186,7 +191,12 @@ impl Controller for PythonController {
 /// Each flight's controller: `controller` itself (`copy` false: one flight, the caller's object flies and keeps
 /// its state), or a `copy.deepcopy` of it per flight (a sweep: every case starts from the object as given). An
 /// exception raised on the way is kept in `raised`.
-pub fn maker(py: Python<'_>, controller: &Bound<'_, PyAny>, copy: bool, raised: RaisedSlot) -> PyResult<MakeController> {
+pub fn maker(
+    py: Python<'_>,
+    controller: &Bound<'_, PyAny>,
+    copy: bool,
+    raised: RaisedSlot,
+) -> PyResult<MakeController> {
     if !controller.hasattr(intern!(py, "step"))? {
         return Err(pyo3::exceptions::PyTypeError::new_err(format!(
             "controller must have a step(sample, dt_s) method (a silrig.Controller); got {}",
@@ -201,8 +211,7 @@ pub fn maker(py: Python<'_>, controller: &Bound<'_, PyAny>, copy: bool, raised: 
                 Some(deepcopy) => deepcopy.bind(py).call1((controller.bind(py),))?.unbind(),
                 None => controller.clone_ref(py),
             };
-            PythonController::new(py, flown, scenario, raised.clone())
-                .map(|c| Box::new(c) as Box<dyn Controller>)
+            PythonController::new(py, flown, scenario, raised.clone()).map(|c| Box::new(c) as Box<dyn Controller>)
         })
         .map_err(|e| Python::attach(|py| keep(py, &raised, e)))
     }))

@@ -502,7 +502,7 @@ mod tests {
         models.fly_controller(Arc::new(|_: &Scenario| -> Result<Box<dyn Controller>, String> {
             Err("copying the controller failed: no".into())
         }));
-        let err = models.fly(&scenario).err().expect("refused");
+        let err = models.fly(&scenario).expect_err("refused");
         assert_eq!(err.to_string(), "copying the controller failed: no");
     }
 }
