@@ -9,7 +9,8 @@
 //!   (target/py-wheel-venv) whose PATH holds no cargo or rustc: what a user without Rust gets.
 //!
 //! A pytest that collects no test fails here like one that fails; every run a suite started must leave no shared
-//! memory behind.
+//! memory behind. And the package's build shares every crate `cargo build --release` compiles, with the same
+//! features (`cargo tree`), so `pip install ./python` after it compiles PyO3 and the package alone.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
