@@ -127,12 +127,13 @@ enum Command {
         #[arg(long)]
         python: Option<PathBuf>,
     },
-    /// Write the built-in F-16 (its actuators, trim and parameters) as an FMI 2.0 co-simulation FMU, for
-    /// `--plant-fmu` or any FMI importer; with a scenario, the parameters' start values come from it.
+    /// Write the built-in plant a scenario flies (the F-16 with its actuators, trim and parameters, or the
+    /// quadrotor of `[plant] model = "quad"`) as an FMI 2.0 co-simulation FMU, for `--plant-fmu` or any FMI
+    /// importer; the parameters' start values come from the scenario.
     ExportFmu {
-        /// Scenario file (TOML); without it, the book's aircraft at the model's default initial condition.
+        /// Scenario file (TOML); without it, the book's F-16 at the model's default initial condition.
         config: Option<PathBuf>,
-        /// The FMU to write (`f16.fmu`).
+        /// The FMU to write (`f16.fmu`, `quad.fmu`).
         #[arg(long)]
         out: PathBuf,
     },
