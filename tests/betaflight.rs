@@ -1,13 +1,20 @@
 //! Betaflight's SITL in the loop: `examples/betaflight/setup.sh` builds and configures it once (cached under
 //! `target/betaflight`), and `configs/quad-betaflight.toml` flies the quadrotor with it as the controller in
-//! realtime at 1 kHz. Skipped, saying why, only outside CI when the source distribution cannot be fetched (no network
-//! and no cached copy); in CI (`CI` set) that fails it.
+//! realtime at 1 kHz: armed and climbing with nothing disarming it; its RC cut (Betaflight's own failsafe engages and
+//! drops it, read over MSP and judged in the fault report); its program killed (the rig's failsafe holds, it is
+//! started again and armed again). Skipped, saying why, only outside CI when the source distribution cannot be
+//! fetched (no network and no cached copy); in CI (`CI` set) that fails it. The SITL binds fixed ports, so the tests
+//! fly one at a time.
 
 mod common;
 
 use common::Run;
 use std::path::Path;
 use std::process::Command;
+use std::sync::Mutex;
+
+/// One SITL at a time: it binds UDP 9002..9004 and TCP 5761.
+static SITL: Mutex<()> = Mutex::new(());
 
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 const SUITE: &str = "betaflight";
@@ -30,6 +37,7 @@ fn sitl() -> Option<()> {
 
 #[test]
 fn betaflight_arms_and_flies_the_quadrotor_in_realtime() {
+    let _one = SITL.lock().unwrap_or_else(|e| e.into_inner());
     if sitl().is_none() {
         return;
     }
@@ -49,5 +57,78 @@ fn betaflight_arms_and_flies_the_quadrotor_in_realtime() {
     let alt = Run::column(&header, "alt_m");
     let top = rows.iter().map(|r| r[alt]).fold(f64::MIN, f64::max);
     assert!(top > 0.5, "it never took off: highest {top} m\n{controller}");
+    // What Betaflight said of itself over MSP, as events: armed, and nothing disarmed it in the climb.
+    let armed =
+        run.event("controller", "device-armed").unwrap_or_else(|| panic!("no device-armed event\n{}", run.stderr));
+    assert!(armed["detail"].as_str().unwrap().contains("armed at"), "{armed}");
+    assert!(run.event("controller", "device-state").is_some(), "{}", run.stderr);
+    let said: Vec<String> = run
+        .events()
+        .iter()
+        .filter(|e| e["kind"].as_str().unwrap().starts_with("device-"))
+        .map(|e| e["detail"].to_string())
+        .collect();
+    assert!(run.event("controller", "device-disarmed").is_none(), "it disarmed in the climb:\n{}", said.join("\n"));
+    assert_eq!(run.counter("controller", "device_disarms"), 0, "{controller}");
     run.finish();
+}
+
+/// The device's events of `kind`, with their simulated time (their tick, ms).
+fn device_events(run: &Run, kind: &str) -> Vec<f64> {
+    let ticks = run.events().into_iter().filter(|e| e["process"] == "controller" && e["kind"] == kind);
+    ticks.filter_map(|e| e["tick"].as_u64()).map(|t| t as f64 / 1000.0).collect()
+}
+
+#[test]
+fn an_rc_cut_engages_betaflights_failsafe_and_a_killed_sitl_is_restarted_and_armed_again() {
+    let _one = SITL.lock().unwrap_or_else(|e| e.into_inner());
+    if sitl().is_none() {
+        return;
+    }
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/quad-betaflight.toml");
+    let args = [scenario.to_str().unwrap(), "--mode", "realtime", "--command-budget-ms", "0.8", "--duration-s", "40"];
+    let faults = ["--fault", "device:cut@12s,packet=rc,for=3s", "--fault", "device:kill@21s"];
+    let run = Run::start(SILRIG, SUITE, "bf", "faults", &[&args[..], &faults[..]].concat());
+    assert_eq!(run.code, Some(0), "{}\n{}", run.stdout, run.stderr);
+    let said: Vec<String> =
+        run.events().iter().map(|e| format!("{} {} {}", e["tick"], e["kind"], e["detail"])).collect();
+    let said = said.join("\n");
+    // Armed before the cut, so that the cut meets a flying Betaflight.
+    let armed = device_events(&run, "device-armed");
+    assert!(armed.first().is_some_and(|&t| t < 12.0), "not armed before the cut at 12 s:\n{said}");
+    // The cut: no RC for 3 s. Betaflight loses its link (RXLOSS after 150 ms), holds 1.5 s (failsafe_delay), then
+    // its failsafe engages and drops (its default procedure: disarm).
+    let engaged = device_events(&run, "device-failsafe-engaged");
+    assert!(engaged.first().is_some_and(|&t| (12.0..15.0).contains(&t)), "failsafe not engaged in the cut:\n{said}");
+    let disarmed = device_events(&run, "device-disarmed");
+    assert!(disarmed.first().is_some_and(|&t| (12.0..15.5).contains(&t)), "not dropped in the cut:\n{said}");
+    // The fault report judges the cut by Betaflight's own failsafe.
+    let records = run.report["faults"].as_array().unwrap_or_else(|| panic!("no faults in {}", run.report));
+    let cut = records.iter().find(|r| r["fault"].as_str().unwrap().starts_with("device cut")).unwrap();
+    assert_eq!(cut["detected_by"], "controller (device-failsafe-engaged)", "{cut}");
+    assert!(cut["failsafe_at_s"].as_f64().is_some_and(|t| (12.0..15.0).contains(&t)), "{cut}");
+    // The kill: started again at once, the plant's failsafe holds while it boots, then it is armed again.
+    let restarted = run.event("controller", "device-restarted").unwrap_or_else(|| panic!("not restarted:\n{said}"));
+    assert!(restarted["detail"].as_str().unwrap().contains("started again"), "{restarted}");
+    assert_eq!(run.counter("controller", "device_restarts"), 1, "{said}");
+    assert!(in_failsafe_at(&run, 22.0), "the rig's failsafe did not hold 1 s after the kill:\n{said}");
+    assert!(armed.iter().any(|&t| t > 21.0), "not armed again after the kill:\n{said}");
+    assert_eq!(run.counter("controller", "device_armings"), 2, "{said}");
+    let kill = records.iter().find(|r| r["fault"].as_str().unwrap().starts_with("device kill")).unwrap();
+    assert_eq!(kill["detected_by"], "controller (device-restarted)", "{kill}");
+    assert!(kill["recovered_at_s"].as_f64().is_some_and(|t| t > 21.0), "{kill}");
+    run.finish();
+}
+
+/// Whether the plant flew its failsafe at simulated time `t_s`: its last `failsafe-engaged` before then came after its
+/// last recovery (on a loaded machine it may have engaged already before the fault, from a late command).
+fn in_failsafe_at(run: &Run, t_s: f64) -> bool {
+    let last = |kind: &str| {
+        let events = run.events().into_iter().filter(|e| e["process"] == "plant" && e["kind"] == kind);
+        events.filter_map(|e| e["tick"].as_u64()).map(|t| t as f64 / 1000.0).filter(|&t| t <= t_s).last()
+    };
+    match (last("failsafe-engaged"), last("controller-recovered")) {
+        (Some(engaged), Some(recovered)) => engaged > recovered,
+        (engaged, _) => engaged.is_some(),
+    }
 }

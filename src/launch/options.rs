@@ -45,8 +45,8 @@ pub struct LaunchOptions {
     #[command(flatten)]
     pub process: ProcessOptions,
     /// A fault to inject, added to the scenario's [[faults]]: TARGET:ACTION@TIME[,KEY=VALUE...], e.g.
-    /// `controller:kill@3s,restart_after=0.5s`, `logger:stop@2s,for=500ms`, `plant:delay@2s,delay=15ms`.
-    /// Repeatable.
+    /// `controller:kill@3s,restart_after=0.5s`, `logger:stop@2s,for=500ms`, `plant:delay@2s,delay=15ms`,
+    /// `device:cut@12s,packet=rc,for=3s` (a device's packet not sent), `device:kill@20s`. Repeatable.
     #[arg(long = "fault", value_parser = silrig_flight::fault::parse_fault_flag)]
     pub faults: Vec<Fault>,
     /// What to do when a process dies.

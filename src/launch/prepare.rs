@@ -179,6 +179,17 @@ fn check_fault_plan(opts: &LaunchOptions, scenario: &Scenario) -> anyhow::Result
     {
         anyhow::bail!("fault plan: {} needs a plant-side bridge: a run with --bridge-listen", f.describe());
     }
+    // A device fault is carried out by the controller process that flies the device.
+    if (scenario.controller.device.is_none()
+        || opts.controller_cmd.is_some()
+        || opts.controller == ControllerKind::External)
+        && let Some(f) = scenario.faults.iter().find(|f| f.target() == FaultTarget::Device)
+    {
+        anyhow::bail!(
+            "fault plan: {} needs a device flown as the controller: a scenario with [controller] device = \"<layout>\"",
+            f.describe()
+        );
+    }
     if opts.plant == PlantKind::External
         && let Some(f) = scenario.faults.iter().find(|f| f.target() == Role::Plant && f.action().is_process_fault())
     {

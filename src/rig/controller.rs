@@ -40,6 +40,13 @@ pub trait Controller {
         None
     }
 
+    /// Whether the controller has no command for the sample it just stepped (a device of its own is down): none is
+    /// sent, and the plant holds the last one and then flies its failsafe, as for any silent controller. Realtime
+    /// only: in lockstep the plant waits for every command.
+    fn withholds(&self) -> bool {
+        false
+    }
+
     /// The state a restarted controller should resume from, as text (`None`: nothing worth saving).
     fn checkpoint(&self) -> Option<String> {
         None
@@ -85,6 +92,9 @@ pub fn serve(args: &ProcessArgs, scenario: Scenario, mut law: Box<dyn Controller
         law.step(&sample, dt_s, &mut command, &mut diagnostics);
         if let Some(why) = law.failure() {
             break Some(anyhow::anyhow!(why));
+        }
+        if law.withholds() {
+            continue;
         }
         match session.send(&command, &diagnostics) {
             // Refused: the session said why in the run's events and the plant holds; the next sample may do.

@@ -4,7 +4,15 @@
 //! (the throttle) are held at 0 until it reports itself armed. Not armed within `within_s` of its (re)start, the
 //! run fails naming the flags that kept it from arming, in words. After a restart of the device, the same again.
 
-use super::msp::{StatusWatch, flags_in_words};
+use super::msp::{Latest, Status, StatusWatch, flags_in_words};
+
+/// Betaflight's `RX_FAILSAFE` arming-disable flag (bit 2, `runtime_config.h`).
+const RX_FAILSAFE: u32 = 1 << 2;
+
+/// Whether a status shows the receiver set up: `RX_FAILSAFE` (it looked for RC and found none), or armed.
+fn receiver_up(status: &Status) -> bool {
+    status.arming_disabled & RX_FAILSAFE != 0 || status.armed
+}
 use serde::Deserialize;
 use silrig_flight::scenario::Scenario;
 use std::net::SocketAddr;
@@ -34,6 +42,8 @@ pub struct Arming {
     held: Vec<(usize, f64)>,
     started_ns: Option<u64>,
     raised: bool,
+    /// Its receiver is set up: it has said `RX_FAILSAFE` (no RC yet) or that it is armed, since it (re)started.
+    receiver_up: bool,
     armed: bool,
     /// How long the device took to arm the last time, ms, and how often it was armed.
     armed_after_ms: Option<u64>,
@@ -70,6 +80,7 @@ impl Arming {
             held: Vec::new(),
             started_ns: None,
             raised: false,
+            receiver_up: false,
             armed: false,
             armed_after_ms: None,
             armings: 0,
@@ -89,11 +100,13 @@ impl Arming {
         Ok(())
     }
 
-    /// Whether the device has said its status since it (re)started: before that it is still starting, and
-    /// Betaflight's SITL must not be sent anything yet (an RC packet that comes before its receiver is set up is
-    /// taken, then the set-up replaces the SITL's RC link with the default receiver, and `RX_FAILSAFE` never clears).
+    /// Whether the device's receiver is set up since it (re)started: Betaflight's SITL must not be sent anything
+    /// before (an RC packet that comes earlier is taken, then its receiver set-up replaces the SITL's UDP RC link
+    /// with the default receiver, and `RX_FAILSAFE` never clears; a SITL sent packets while its status still showed
+    /// neither `RX_FAILSAFE` nor `CALIBRATING`, its tasks not yet running, answered once and then fell silent). Its
+    /// status says `RX_FAILSAFE` once its receiver task has looked for RC and found none.
     pub fn ready(&self) -> bool {
-        self.watch.latest().status.is_some()
+        self.receiver_up
     }
 
     /// Hold the switch and the held set points low while they must be, else at the scenario's values.
@@ -112,6 +125,7 @@ impl Arming {
         let latest = self.watch.latest();
         if let Some(status) = latest.status {
             self.cycle_us = status.cycle_us;
+            self.receiver_up |= receiver_up(&status);
         }
         if self.armed {
             return Ok(());
@@ -135,10 +149,20 @@ impl Arming {
         Err(format!("device `{}` did not arm within {} s; {why}", self.device, self.options.within_s))
     }
 
+    /// Whether the device has said it is armed since it was (re)started.
+    pub fn armed(&self) -> bool {
+        self.armed
+    }
+
+    /// What the device last said over MSP (read every 100 ms), for watching its state beyond arming.
+    pub fn latest(&self) -> Latest {
+        self.watch.latest()
+    }
+
     /// The device restarted: lower the switch and the held set points, and arm it again.
     pub fn restart(&mut self, now_ns: u64) {
         self.watch.forget();
-        (self.started_ns, self.raised, self.armed) = (Some(now_ns), false, false);
+        (self.started_ns, self.raised, self.armed, self.receiver_up) = (Some(now_ns), false, false, false);
     }
 
     /// Counters for the controller's report: how often it armed, how long the last arming took (ms), and the
@@ -148,5 +172,20 @@ impl Arming {
         counters.extend(self.armed_after_ms.map(|ms| ("device_armed_after_ms".to_string(), ms)));
         counters.push(("device_pid_cycle_us".to_string(), u64::from(self.cycle_us)));
         counters
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_receiver_is_up_once_it_says_rx_failsafe_or_armed() {
+        let status = |armed, flags| Status { cycle_us: 125, armed, arming_disabled: flags, modes: u64::from(armed) };
+        // BOOT_GRACE_TIME alone: its tasks have not looked for RC yet (the SITL that then fell silent).
+        assert!(!receiver_up(&status(false, 1 << 9)));
+        // RX_FAILSAFE ANGLE BOOT_GRACE_TIME CALIBRATING: the first status of a SITL that armed.
+        assert!(receiver_up(&status(false, (1 << 2) | (1 << 8) | (1 << 9) | (1 << 12))));
+        assert!(receiver_up(&status(true, 0)));
     }
 }

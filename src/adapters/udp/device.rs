@@ -7,10 +7,13 @@
 //! nothing valid for `silent_after_s` fails the run naming its address and ports.
 //!
 //! When the layout says how to start the device ([`super::supervise`]), the adapter starts it, restarts it if it
-//! dies, and arms it ([`super::arming`]) before the scenario's throttle reaches it.
+//! dies, and arms it ([`super::arming`]) before the scenario's throttle reaches it; what it then says of its state
+//! (armed, flight modes, its own failsafe) is told as the run's events ([`super::device_state`]).
 
 use super::arming::Arming;
 use super::codec::SendValues;
+use super::device_faults::DeviceFaults;
+use super::device_state::StateLog;
 use super::layout::{BoundLayout, DeviceLayout, SignalNames};
 use super::link::Link;
 use super::supervise::Supervisor;
@@ -18,6 +21,7 @@ use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_rig::ProcessArgs;
 use silrig_rig::controller::{Controller, ControllerFigures, serve};
+use silrig_rig::events::EventLog;
 use silrig_rig::report::ProcessReport;
 use silrig_wire::clock::monotonic_ns;
 use silrig_wire::timing::LatencyHistogram;
@@ -72,6 +76,15 @@ pub struct DeviceController {
     failure: Option<String>,
     supervisor: Option<Supervisor>,
     arming: Option<Arming>,
+    /// The device's state over MSP (with `[arming]`), each change an event.
+    state: Option<StateLog>,
+    events: EventLog,
+    /// The plan's device faults (a packet cut, the program killed).
+    faults: DeviceFaults,
+    /// Realtime, from the device's restart until it is armed again (or, without `[arming]`, answers): no command
+    /// is sent, so the plant holds the last one and then flies its failsafe, as for any silent controller, rather
+    /// than flying a restarted device's idle motors.
+    down: bool,
     packet: Vec<u8>,
 }
 
@@ -96,6 +109,10 @@ impl DeviceController {
         let arming =
             layout.arming.as_ref().map(|a| Arming::new(a, &layout.name, layout.address, scenario)).transpose()?;
         let (setpoint_names, setpoints) = scenario.setpoint.all().into_iter().map(|(n, v)| (n.to_string(), v)).unzip();
+        let events = EventLog::new(run_dir, silrig_flight::role::Role::Controller.label());
+        let state = arming.as_ref().map(|_| StateLog::new(&layout.name, events.clone()));
+        let packets: Vec<&str> = layout.to_device.iter().map(|p| p.name.as_str()).collect();
+        let faults = DeviceFaults::new(&scenario.faults, &layout.name, &packets, supervisor.is_some(), events.clone())?;
         Ok(Self {
             silent_after_ns: (layout.silent_after_s * 1e9) as u64,
             layout,
@@ -116,6 +133,10 @@ impl DeviceController {
             failure: None,
             supervisor,
             arming,
+            state,
+            events,
+            faults,
+            down: false,
             packet: Vec::new(),
         })
     }
@@ -136,11 +157,15 @@ impl DeviceController {
         let tick = sample.header.tick;
         // Due when its period has passed since it last went out: a controller that skipped samples (a stall) still
         // sends it at its rate, not only on the ticks that are multiples of it.
-        for (packet, next) in bound.to_device.iter().zip(&mut self.next_due) {
+        for (k, (packet, next)) in bound.to_device.iter().zip(&mut self.next_due).enumerate() {
             if tick < *next && tick >= next.saturating_sub(u64::from(packet.every_ticks)) {
                 continue;
             }
             *next = tick + u64::from(packet.every_ticks);
+            // Cut: due, but not sent (its cadence goes on, so it comes back at its rate when the window ends).
+            if self.faults.is_cut(k) {
+                continue;
+            }
             packet.encode(bound.byte_order, &values, &mut self.packet);
             sent_ns.get_or_insert_with(monotonic_ns);
             if self.link.send(packet.port, &self.packet).is_ok() {
@@ -244,10 +269,19 @@ impl DeviceController {
             Ok(false) => {}
             Ok(true) => {
                 self.counts[RESTARTS] += 1;
-                (self.heard_ns, self.answered) = (Some(now_ns), false);
+                (self.heard_ns, self.answered, self.down) = (Some(now_ns), false, !self.lockstep);
                 if let Some(arming) = &mut self.arming {
                     arming.restart(now_ns);
                 }
+                if let Some(state) = &mut self.state {
+                    state.restart();
+                }
+                let detail = format!(
+                    "device `{}`: its program ended; started again (pid {})",
+                    self.layout.name,
+                    supervisor.pid()
+                );
+                self.events.emit(None, "device-restarted", detail);
             }
             Err(e) => self.failure = Some(e),
         }
@@ -279,12 +313,22 @@ impl Controller for DeviceController {
     }
 
     fn step(&mut self, sample: &PlantSample, _dt_s: f64, command: &mut [f64], _diagnostics: &mut [f64]) {
+        let pid = self.supervisor.as_ref().map(Supervisor::pid);
+        if self.faults.at(sample.t_sim_s, sample.header.tick, pid)
+            && let Some(supervisor) = &mut self.supervisor
+        {
+            supervisor.kill();
+            self.down = !self.lockstep;
+        }
         let now_ns = monotonic_ns();
         self.supervise(now_ns);
-        if let Some(arming) = &mut self.arming
-            && let Err(e) = arming.check(now_ns)
-        {
-            self.failure = Some(e);
+        if let Some(arming) = &mut self.arming {
+            if let Err(e) = arming.check(now_ns) {
+                self.failure = Some(e);
+            }
+            if let Some(state) = &mut self.state {
+                state.observe(&arming.latest(), sample.header.tick, sample.t_sim_s);
+            }
         }
         // Silence is counted from the first packet sent.
         self.heard_ns.get_or_insert(now_ns);
@@ -305,6 +349,8 @@ impl Controller for DeviceController {
         for &k in &self.commanded {
             command[k] = self.command[k];
         }
+        // Down until armed again (or, without arming, until it answers).
+        self.down &= !self.arming.as_ref().map_or(self.answered, Arming::armed);
         if self.failure.is_none() {
             self.failure = self.silence(monotonic_ns());
         }
@@ -312,6 +358,10 @@ impl Controller for DeviceController {
 
     fn failure(&mut self) -> Option<String> {
         self.failure.take()
+    }
+
+    fn withholds(&self) -> bool {
+        self.down
     }
 
     fn figures(&self) -> ControllerFigures {
@@ -326,6 +376,7 @@ impl Controller for DeviceController {
                 .zip(self.counts)
                 .map(|(n, c)| (n.to_string(), c))
                 .chain(self.arming.iter().flat_map(Arming::counters))
+                .chain(self.state.iter().flat_map(StateLog::counters))
                 .collect(),
         }
     }

@@ -1,7 +1,9 @@
-//! Betaflight's MultiWii Serial Protocol (MSP v1) over TCP, as far as arming needs it: `MSP_STATUS_EX` (150) read
-//! for the PID loop's cycle time, the flight-mode boxes (ARM is box 0) and the arming-disable flags, named as
-//! `src/main/fc/runtime_config.h` names them, with what each means in words. [`StatusWatch`] reads it on a thread
-//! of its own every 100 ms, so the control loop never waits on TCP.
+//! Betaflight's MultiWii Serial Protocol (MSP v1) over TCP, as far as arming and watching the flight need it:
+//! `MSP_STATUS_EX` (150) read for the PID loop's cycle time, the flight modes active and the arming-disable flags,
+//! named as `src/main/fc/runtime_config.h` names them, with what each means in words. The status numbers its flight
+//! modes by the boxes the firmware has enabled, so `MSP_BOXIDS` (119) is read once per connection to turn them into
+//! the boxes' permanent ids (ARM 0, ANGLE 1, ALTHOLD 3, FAILSAFE 27: `src/main/msp/msp_box.c`). [`StatusWatch`]
+//! reads it on a thread of its own every 100 ms, so the control loop never waits on TCP.
 
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -11,6 +13,45 @@ use std::time::Duration;
 
 /// `MSP_STATUS_EX`.
 const MSP_STATUS_EX: u8 = 150;
+/// `MSP_BOXIDS`: the permanent id of each enabled box, in the order the status numbers them.
+const MSP_BOXIDS: u8 = 119;
+
+/// The flight modes' boxes by permanent id (`msp_box.c`), as the events name them; `FAILSAFE` is Betaflight's own
+/// failsafe having engaged (its flight mode), not a switch.
+pub const FLIGHT_MODES: [(u8, &str); 10] = [
+    (0, "ARM"),
+    (1, "ANGLE"),
+    (2, "HORIZON"),
+    (3, "ALTHOLD"),
+    (5, "MAG"),
+    (6, "HEADFREE"),
+    (11, "POSHOLD"),
+    (12, "PASSTHRU"),
+    (27, "FAILSAFE"),
+    (46, "GPS RESCUE"),
+];
+/// The permanent id of ARM.
+pub const BOX_ARM: u8 = 0;
+/// The permanent id of FAILSAFE.
+pub const BOX_FAILSAFE: u8 = 27;
+
+/// The flight modes set in `modes` (a bit per permanent id), by name: "ARM ANGLE"; "none" when none is.
+pub fn modes_in_words(modes: u64) -> String {
+    let set: Vec<&str> = FLIGHT_MODES.iter().filter(|(id, _)| modes & (1 << id) != 0).map(|(_, n)| *n).collect();
+    let known = FLIGHT_MODES.iter().fold(0u64, |m, (id, _)| m | 1 << id);
+    let mut words = if set.is_empty() { "none".to_string() } else { set.join(" ") };
+    for id in (0..64).filter(|id| modes & !known & (1u64 << id) != 0) {
+        words += &format!(" box{id}");
+    }
+    words
+}
+
+/// The arming-disable flags set in `flags`, by name only: "RX_FAILSAFE CALIBRATING"; "none" when none is.
+pub fn flag_names(flags: u32) -> String {
+    let set: Vec<&str> =
+        ARMING_DISABLE_FLAGS.iter().enumerate().filter(|(bit, _)| flags & (1 << bit) != 0).map(|(_, f)| f.0).collect();
+    if set.is_empty() { "none".to_string() } else { set.join(" ") }
+}
 
 /// Betaflight 4.6's arming-disable flags, bit by bit, with what each asks of the pilot (or the rig).
 pub const ARMING_DISABLE_FLAGS: [(&str, &str); 29] = [
@@ -70,6 +111,15 @@ pub struct Status {
     pub armed: bool,
     /// The arming-disable flags.
     pub arming_disabled: u32,
+    /// The flight modes active, a bit per box permanent id ([`FLIGHT_MODES`]); ARM among them.
+    pub modes: u64,
+}
+
+impl Status {
+    /// Whether the box of permanent id `id` is active.
+    pub fn mode(&self, id: u8) -> bool {
+        self.modes & (1 << id) != 0
+    }
 }
 
 /// One MSP v1 request frame: `$M<`, size, command, payload, XOR checksum of size, command and payload.
@@ -99,13 +149,20 @@ pub fn reply(bytes: &[u8], command: u8) -> Option<&[u8]> {
 
 /// `MSP_STATUS_EX`'s payload read: cycle (u16), i2c errors (u16), sensors (u16), boxes (u32), profile (u8), load
 /// (u16), profile count (u8), rate profile (u8), more box bytes (u8 count, then them), flag count (u8), flags (u32).
-pub fn parse_status(p: &[u8]) -> Option<Status> {
+/// `box_ids`: `MSP_BOXIDS`'s reply, the permanent id of each of the first 32 boxes' bits.
+pub fn parse_status(p: &[u8], box_ids: &[u8]) -> Option<Status> {
     let u16_at = |k: usize| Some(u16::from_le_bytes(p.get(k..k + 2)?.try_into().ok()?));
     let u32_at = |k: usize| Some(u32::from_le_bytes(p.get(k..k + 4)?.try_into().ok()?));
     let boxes = u32_at(6)?;
     let extra = *p.get(15)? as usize;
     let flags_at = 16 + extra + 1;
-    Some(Status { cycle_us: u16_at(0)?, armed: boxes & 1 != 0, arming_disabled: u32_at(flags_at)? })
+    let modes = box_ids
+        .iter()
+        .take(32)
+        .enumerate()
+        .filter(|&(bit, &id)| boxes & (1 << bit) != 0 && id < 64)
+        .fold(0u64, |m, (_, &id)| m | 1 << id);
+    Some(Status { cycle_us: u16_at(0)?, armed: boxes & 1 != 0, arming_disabled: u32_at(flags_at)?, modes })
 }
 
 /// The newest status read, or why there is none.
@@ -113,6 +170,8 @@ pub fn parse_status(p: &[u8]) -> Option<Status> {
 pub struct Latest {
     /// The newest status, if one was read since the last [`StatusWatch::forget`].
     pub status: Option<Status>,
+    /// When it was read, CLOCK_MONOTONIC ns.
+    pub read_ns: u64,
     /// The last problem reaching MSP.
     pub problem: Option<String>,
 }
@@ -131,18 +190,30 @@ impl StatusWatch {
         let (shared, stopping) = (latest.clone(), stop.clone());
         std::thread::spawn(move || {
             let mut stream: Option<TcpStream> = None;
+            // The boxes' permanent ids, read once per connection (they change only with the firmware's settings).
+            let mut box_ids: Option<Vec<u8>> = None;
             while !stopping.load(Ordering::Relaxed) {
-                let read = stream.as_mut().map(read_status).unwrap_or_else(|| Err("not connected".into()));
+                let read = match stream.as_mut() {
+                    None => Err("not connected".into()),
+                    Some(s) => match &box_ids {
+                        Some(ids) => read_status(s, ids),
+                        None => ask(s, MSP_BOXIDS).and_then(|ids| read_status(s, box_ids.insert(ids))),
+                    },
+                };
                 // Held only to store what was read: the control loop reads it every tick.
                 let failed = {
                     let mut latest = shared.lock().unwrap_or_else(|e| e.into_inner());
                     match read {
-                        Ok(status) => (latest.status, latest.problem) = (Some(status), None),
+                        Ok(status) => {
+                            (latest.status, latest.problem) = (Some(status), None);
+                            latest.read_ns = silrig_wire::clock::monotonic_ns();
+                        }
                         Err(why) => latest.problem = Some(why),
                     }
                     latest.problem.is_some()
                 };
                 if failed {
+                    box_ids = None;
                     stream = TcpStream::connect_timeout(&address, Duration::from_millis(500)).ok();
                     if let Some(s) = &stream {
                         let _ = s.set_read_timeout(Some(Duration::from_millis(500)));
@@ -173,18 +244,24 @@ impl Drop for StatusWatch {
     }
 }
 
-fn read_status(stream: &mut TcpStream) -> Result<Status, String> {
-    stream.write_all(&request(MSP_STATUS_EX, &[])).map_err(|e| e.to_string())?;
+fn read_status(stream: &mut TcpStream, box_ids: &[u8]) -> Result<Status, String> {
+    let payload = ask(stream, MSP_STATUS_EX)?;
+    parse_status(&payload, box_ids).ok_or_else(|| "an MSP_STATUS_EX reply too short to read".into())
+}
+
+/// Send `command` without a payload and wait for its reply's payload.
+fn ask(stream: &mut TcpStream, command: u8) -> Result<Vec<u8>, String> {
+    stream.write_all(&request(command, &[])).map_err(|e| e.to_string())?;
     let mut bytes = Vec::new();
     let mut chunk = [0u8; 512];
     loop {
-        let n = stream.read(&mut chunk).map_err(|e| format!("no MSP_STATUS_EX reply: {e}"))?;
+        let n = stream.read(&mut chunk).map_err(|e| format!("no reply to MSP command {command}: {e}"))?;
         if n == 0 {
             return Err("it closed the MSP connection".into());
         }
         bytes.extend_from_slice(&chunk[..n]);
-        if let Some(payload) = reply(&bytes, MSP_STATUS_EX) {
-            return parse_status(payload).ok_or_else(|| "an MSP_STATUS_EX reply too short to read".into());
+        if let Some(payload) = reply(&bytes, command) {
+            return Ok(payload.to_vec());
         }
     }
 }
@@ -221,8 +298,14 @@ mod tests {
         frame.push(150);
         frame.extend_from_slice(&payload);
         frame.push(frame[8..].iter().fold(0, |a, b| a ^ b));
-        let status = parse_status(reply(&frame, 150).unwrap()).unwrap();
-        assert_eq!(status, Status { cycle_us: 125, armed: true, arming_disabled: (1 << 12) | (1 << 28) });
+        // The first two boxes enabled are ARM (0) and ANGLE (1); bit 1 set is ANGLE active.
+        let status = parse_status(reply(&frame, 150).unwrap(), &[0, 1, 36]).unwrap();
+        let flags = (1 << 12) | (1 << 28);
+        assert_eq!(status, Status { cycle_us: 125, armed: true, arming_disabled: flags, modes: 0b11 });
+        // The bits name the boxes the firmware enabled, in its order: here bit 1 is FAILSAFE.
+        let status = parse_status(reply(&frame, 150).unwrap(), &[0, 27]).unwrap();
+        assert!(status.mode(BOX_FAILSAFE) && status.mode(BOX_ARM) && !status.mode(1));
+        assert_eq!(modes_in_words(status.modes), "ARM FAILSAFE");
         // A corrupted checksum, another command or a cut frame is no reply.
         let mut bad = frame.clone();
         *bad.last_mut().unwrap() ^= 1;
@@ -240,5 +323,9 @@ mod tests {
             "{words}"
         );
         assert!(words.ends_with("unknown bits 0x40000000"), "{words}");
+        assert_eq!(flag_names((1 << 1) | (1 << 2)), "FAILSAFE RX_FAILSAFE");
+        assert_eq!(flag_names(0), "none");
+        assert_eq!(modes_in_words(0), "none");
+        assert_eq!(modes_in_words((1 << 1) | (1 << 3) | (1 << 40)), "ANGLE ALTHOLD box40");
     }
 }

@@ -93,6 +93,14 @@ impl Supervisor {
         Ok(true)
     }
 
+    /// SIGKILL to the program (a `device:kill` fault): [`Self::check`] then sees it dead and starts it again.
+    pub fn kill(&mut self) {
+        // SAFETY: signalling our own child by its pid; it is reaped by `check`'s try_wait.
+        unsafe { libc::kill(self.child.id() as libc::pid_t, libc::SIGKILL) };
+        // Checked at once on the next tick, not after CHECK_EVERY_NS.
+        self.checked_ns = 0;
+    }
+
     /// The program's process id (tests kill it to see it restarted).
     pub fn pid(&self) -> u32 {
         self.child.id()

@@ -141,6 +141,7 @@ fn flag(rng: &mut SplitMix64, target: FaultTarget, action: FaultAction, at_s: f6
             };
             format!("surface={s}{limit},for={}s", r(0.2, 0.4))
         }
+        FaultAction::Cut => unreachable!("the soak flies the F-16 without a device: KINDS has no cut"),
     };
     format!("{}:{}@{}s,{keys}", target.label(), action.label(), at_s)
 }
