@@ -666,4 +666,64 @@ mod tests {
                 && j.why_failed.unwrap().contains("name no output of this plant (the trace's columns: t_s, speed_mps)")
         );
     }
+
+    #[test]
+    fn a_set_point_that_steps_is_judged_from_each_step_on_against_its_value() {
+        // alt_ft held at 4000, then a step to 4100 at 0.05 s: up to 4120 and settled at 4101 from 0.08 s on.
+        let (mut s, t) =
+            altitude(&[4000.0, 4000.0, 4000.0, 4000.0, 4000.0, 4000.0, 4060.0, 4120.0, 4101.0, 4101.0, 4101.0]);
+        s.setpoint_steps =
+            vec![crate::setpoints::SetpointStep { at_s: 0.05, values: [("alt_ft".to_string(), 4100.0)].into() }];
+        let c = criteria(
+            "settled = { within_s = 0.03, band = 5.0 }
+overshoot_max = 15.0
+final_error_max = 1.0",
+        );
+        let j = judge_flight(&c, &s, Some(&t), None);
+        let by = |key: &str| j.iter().find(|j| j.criterion == format!("outputs.alt_ft.{key}")).unwrap();
+        // Settled 0.03 s after the step, not at 0.08 s from t = 0: within the 0.03 s allowed.
+        let settled = by("settled");
+        assert!(settled.passed, "{settled:?}");
+        assert_eq!(settled.measured, "settled at 0.08 s, 0.03 s after its step at 0.05 s");
+        assert!(settled.limit.contains("and each of its steps"), "{}", settled.limit);
+        // 20 past the new value 4100, measured from 4000 at the step: more than the 15 allowed.
+        let over = by("overshoot_max");
+        assert!(!over.passed && over.value.unwrap() == 20.0, "{over:?}");
+        assert!(over.why_failed.as_ref().unwrap().contains("past its set point 4100 (its step at 0.05 s)"), "{over:?}");
+        assert!(by("final_error_max").passed, "1 from the 4100 in force at the end: {:?}", by("final_error_max"));
+        // 0.02 s allowed after the step: too slow, said with the step.
+        let strict = criteria("settled = { within_s = 0.02, band = 5.0 }");
+        let j = judge_flight(&strict, &s, Some(&t), None);
+        let why = j[0].why_failed.clone().unwrap();
+        assert!(
+            why.contains("from 0.08 s on, 0.03 s after its step at 0.05 s, later than the 0.02 s allowed"),
+            "{why}"
+        );
+        // The same criteria held over the whole schedule: setpoints_held names the step too.
+        let held: Criteria = toml::from_str("setpoints_held = { within_s = 0.03, band = 5.0 }").unwrap();
+        let j = judge_flight(&held, &s, Some(&t), None);
+        assert!(j[0].measured.starts_with("alt_ft settled at 0.08 s, 0.03 s after its step at 0.05 s"), "{:?}", j[0]);
+    }
+
+    #[test]
+    fn an_attitude_step_is_judged_from_its_time_by_settled_overshoot_and_final_error() {
+        // theta held at 0, a step to 10 deg at 0.03 s reached at 0.05 s, past it to 11 on the way.
+        let rows: Vec<[f64; 3]> = [0.0, 0.0, 0.0, 5.0, 11.0, 10.0, 10.0, 10.0].map(|th| [0.0, th, 0.0]).into();
+        let mut s = Scenario::embedded_default();
+        s.setpoint.theta_deg = 0.0;
+        s.setpoint_steps =
+            vec![crate::setpoints::SetpointStep { at_s: 0.03, values: [("theta_deg".to_string(), 10.0)].into() }];
+        let c: Criteria = toml::from_str(
+            "overshoot_max_deg = 0.5
+final_error_max_deg = 0.1
+settled = { within_s = 0.03, band_deg = 0.5 }",
+        )
+        .unwrap();
+        let j = judge_flight(&c, &s, Some(&trace(&rows)), None);
+        let by = |key: &str| j.iter().find(|j| j.criterion == key).unwrap();
+        assert_eq!(by("settled").measured, "theta settled at 0.05 s, 0.02 s after its step at 0.03 s");
+        assert!(by("settled").passed);
+        assert_eq!((by("overshoot_max_deg").value, by("overshoot_max_deg").passed), (Some(1.0), false));
+        assert!(by("final_error_max_deg").passed, "{:?}", by("final_error_max_deg"));
+    }
 }
