@@ -13,6 +13,7 @@ use silrig::plot::{
     PlotError, TimelineEvent, plot_closed_loop, plot_overlay, plot_percentile_distributions, plot_signals,
     plot_timeline,
 };
+use silrig::setpoints::SetpointTrack;
 use silrig::signals::{InputSignal, OutputSignal, PlantSignals};
 use silrig::trace::{OUTPUTS_HELD_COLUMN, Trace, columns};
 
@@ -109,8 +110,9 @@ fn f16() -> PlantSignals {
 }
 
 /// The F-16 scenario's set points: the attitude, wings level at 5 deg of pitch.
-fn f16_setpoint(name: &str) -> Option<f64> {
-    [("phi_deg", 0.0), ("theta_deg", 5.0), ("psi_deg", 0.0)].iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
+fn f16_setpoint(name: &str) -> Option<SetpointTrack> {
+    let angles = [("phi_deg", 0.0), ("theta_deg", 5.0), ("psi_deg", 0.0)];
+    angles.iter().find(|(n, _)| *n == name).map(|(_, v)| SetpointTrack::constant(*v))
 }
 
 /// A foreign three-axis vehicle as tests/fmu/attitude announces itself: inputs named with their unit, no output
@@ -178,7 +180,9 @@ fn faults_and_signals_of_a_plant_that_is_not_the_f16() {
     let dir = OutDir::new("foreign");
     let plant = attitude();
     let trace = attitude_trace(&plant);
-    let setpoint = |name: &str| [("phi_deg", 10.0), ("theta_deg", 5.0)].iter().find(|(n, _)| *n == name).map(|p| p.1);
+    let setpoint = |name: &str| {
+        [("phi_deg", 10.0), ("theta_deg", 5.0)].iter().find(|(n, _)| *n == name).map(|p| SetpointTrack::constant(p.1))
+    };
     let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into() }];
     let faults = plot_timeline(&trace, &plant, &setpoint, &events, &dir.path, "faults", "attitude: faults").unwrap();
     let signals =

@@ -36,6 +36,7 @@ mod timeline;
 pub use closed_loop::plot_closed_loop;
 pub use latency::{plot_latency_histograms, plot_percentile_distributions};
 pub use overlay::plot_overlay;
+pub use plant_series::SetpointOf;
 pub use signals::plot_signals;
 pub use sweep::{Envelope, Histogram, Scatter, plot_envelope, plot_histograms, plot_scatter};
 pub use timeline::plot_timeline;

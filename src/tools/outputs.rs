@@ -37,7 +37,7 @@ pub fn write_run(
         files.extend(silrig_plot::plot_closed_loop(trace, f_true.as_ref(), out_dir, &plot_title(scenario))?);
     } else if let Some(plant) = plant {
         let title = format!("{}, plant {}: every signal, commands in orange", scenario.name, plant.plant);
-        let setpoint = |name: &str| scenario.setpoint.get(name);
+        let setpoint = |name: &str| scenario.setpoint_track(name);
         files.extend(silrig_plot::plot_signals(trace, Some(plant), &setpoint, out_dir, "signals", &title)?);
     }
     Ok(files)
