@@ -3,7 +3,9 @@
 //! page; headless Chromium (Debian's `chromium`) loads each, the test fails on any console message (the pages log
 //! none) and on a script error, checks that every figure the folder holds is in the page and rendered with a size,
 //! and takes a screenshot that must be a PNG. The page's own script marks on `<body>` how many figures there are,
-//! how many rendered and how many errors happened; `--dump-dom` gives the test the document after loading.
+//! how many rendered and how many errors happened; `--dump-dom` gives the test the document after loading. A run's
+//! page answers first: verdict, response, faults, timing, then the details folded, and its first screen (1400x900)
+//! shows the response figure whole.
 //!
 //! `SILRIG_HTML_KEEP=dir` keeps the pages' folders and screenshots there for a look.
 
@@ -67,7 +69,14 @@ fn browse(browser: &str, page: &Path, scratch: &Path, args: &[&str]) -> Browsed 
     let profile = scratch.join("chromium-profile");
     let (stdout, stderr) = (scratch.join("chromium.stdout"), scratch.join("chromium.stderr"));
     let mut child = Command::new(browser)
-        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--hide-scrollbars"])
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--enable-unsafe-swiftshader",
+            "--no-first-run",
+            "--hide-scrollbars",
+        ])
         .arg(format!("--user-data-dir={}", profile.display()))
         .args(args)
         .arg(format!("file://{}", page.display()))
@@ -113,6 +122,14 @@ fn load(browser: &str, page: &Path, scratch: &Path, name: &str) -> Loaded {
     let png = std::fs::read(&shot).unwrap_or_else(|e| panic!("no screenshot {}: {e}", shot.display()));
     assert!(png.len() > 1000 && png.starts_with(b"\x89PNG\r\n\x1a\n"), "{} is not a PNG screenshot", shot.display());
     loaded
+}
+
+/// Where the page's first figure ends in a 1400x900 window (the first screen of a laptop, what a reader sees before
+/// scrolling), px from the top, as the page's script measured it.
+fn load_first_figure_bottom(browser: &str, page: &Path, scratch: &Path) -> usize {
+    let o = browse(browser, page, scratch, &["--dump-dom", "--window-size=1400,900"]);
+    assert!(o.success, "chromium --dump-dom {}: {}", page.display(), o.stderr);
+    Loaded { dom: o.stdout, console: Vec::new() }.body_number("data-first-figure-bottom")
 }
 
 /// `text` as the pages write it.
@@ -177,7 +194,7 @@ fn silrig(args: &[&str]) -> std::process::Output {
 }
 
 #[test]
-fn a_runs_page_shows_its_summary_timing_faults_figures_and_events() {
+fn a_runs_page_answers_first_then_gives_timing_figures_and_the_details_folded() {
     let Some(browser) = chromium() else { return };
     let (dir, keep) = scratch("run");
     let id = format!("html{}-run", std::process::id());
@@ -199,21 +216,47 @@ fn a_runs_page_shows_its_summary_timing_faults_figures_and_events() {
     let page = out.join("report.html");
     assert!(stdout.contains(&format!("page: {}", page.display())), "{stdout}");
     let figures = svgs(&out, &out);
-    for expected in ["faults", "fig1_states", "latency", "latency_histogram", "signals"] {
+    for expected in ["faults", "fig1_states", "latency", "latency_histogram", "response", "signals"] {
         assert!(figures.iter().any(|f| f == expected), "the run drew no {expected}: {figures:?}");
     }
     let figures: Vec<&str> = figures.iter().map(String::as_str).collect();
     let html = check_page(browser, &page, &dir, "run", &figures);
-    for section in ["summary", "timing", "faults", "figures", "events", "files"] {
-        assert!(html.contains(&format!("<section id=\"{section}\">")), "no {section} section");
+    // Answer first: the verdict, the response, the faults, timing, the figures; the details folded below.
+    let sections = ["verdict", "response", "faults", "timing", "figures", "view3d-section", "run", "events", "files"];
+    let at: Vec<usize> = sections
+        .iter()
+        .map(|s| html.find(&format!("<section id=\"{s}\">")).unwrap_or_else(|| panic!("no {s} section")))
+        .collect();
+    assert!(at.windows(2).all(|w| w[0] < w[1]), "the sections are not in the order {sections:?}");
+    for folded in ["run", "events", "files"] {
+        let body = &html[html.find(&format!("<section id=\"{folded}\">")).unwrap()..];
+        let body = &body[..body.find("</section>").unwrap()];
+        assert!(body.contains("<details><summary>"), "the {folded} section is not folded");
     }
+    let first = &html[at[0]..at[1]];
+    assert!(
+        first.contains(
+            "<span class=\"tag pass\">survived</span>controller kill at 1 s, restart after 0.3 s: injected at"
+        ),
+        "the verdict does not say the rig survived the fault: {first}"
+    );
+    let response = &html[at[1]..at[2]];
+    assert!(response.find("<figure data-figure=\"response\">").is_some(), "the response figure is not in its section");
+    for header in ["<th>output</th>", "<th>set point</th>", "<th>actuator</th>"] {
+        assert!(response.contains(header), "the control quality has no table with {header}");
+    }
+    assert!(!response.contains("<pre>"), "the control quality is a monospace dump");
+    assert_eq!(html.matches("<span class=\"look\">").count(), figures.len(), "a figure without what to look for");
+    // The first screen (1400x900) shows the verdict and the response figure whole: it is the page's first figure.
+    let bottom = load_first_figure_bottom(browser, &page, &dir);
+    assert!(bottom > 0 && bottom <= 900, "the response figure ends {bottom} px down, below the first screen");
     // Each section names the command that flies the run again, as a shell reads it.
     let command = format!(
         "<code>silrig run --duration-s 3 --quiet --fault {} --run-id {id} --out {}</code>",
         esc("'controller:kill@1s,restart_after=0.3s'"),
         out.display()
     );
-    assert_eq!(html.matches(&command).count(), 5, "{command} in every section but the files");
+    assert_eq!(html.matches(&command).count(), 8, "{command} in every section but the files");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     for latency in report["processes"].as_array().unwrap().iter().flat_map(|p| p["latencies"].as_array().unwrap()) {
@@ -331,6 +374,122 @@ fn a_sweeps_page_gives_the_pass_rate_the_worst_cases_and_the_figures() {
             let reproduce = case["reproduce"].as_str().unwrap();
             assert!(html.contains(&format!("<code>{reproduce}</code>")), "no {reproduce}");
         }
+    }
+    if !keep {
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+/// `<div id="view3d" ...>`'s attribute `name`, as the view's script set it.
+fn view_attribute(dom: &str, name: &str) -> Option<u64> {
+    let div = &dom[dom.find("<div id=\"view3d\"")?..];
+    let div = &div[..div.find('>')?];
+    let at = div.find(&format!("{name}=\""))? + name.len() + 2;
+    div[at..at + div[at..].find('"')?].parse().ok()
+}
+
+/// Load `page` with the address `#view3d-test` (the view then reads its pixels back at the first and last frame).
+fn load_view(browser: &str, page: &Path, scratch: &Path) -> Loaded {
+    let o = browse(
+        browser,
+        Path::new(&format!("{}#view3d-test", page.display())),
+        scratch,
+        &["--enable-logging=stderr", "--v=0", "--dump-dom"],
+    );
+    assert!(o.success, "chromium --dump-dom {}: {}", page.display(), o.stderr);
+    // The browser's notice that reading pixels back stalled its GPU is what the test asked for: any other message
+    // fails the test.
+    let console = o.stderr.lines().filter(|l| l.contains(":CONSOLE") && !l.contains("GPU stall due to ReadPixels"));
+    Loaded { console: console.map(str::to_string).collect(), dom: o.stdout }
+}
+
+/// The 3-D view's bytes in `html`: its data and its script.
+fn view_bytes(html: &str) -> usize {
+    let start = html.find("<div id=\"view3d\"").expect("a 3-D view");
+    let data = start + html[start..].find("id=\"view3d-data\"").unwrap();
+    data + html[data..].find("</div>").unwrap() - start
+}
+
+#[test]
+fn the_flight_is_drawn_in_3d_and_moves_for_the_f16_and_the_quadrotor() {
+    let Some(browser) = chromium() else { return };
+    let (dir, keep) = scratch("view3d");
+    for (name, config, kind) in
+        [("f16", None, "\"kind\":\"aircraft\""), ("quad", Some("configs/quad-steps.toml"), "\"kind\":\"quadrotor\"")]
+    {
+        let id = format!("html{}-{name}", std::process::id());
+        let out = dir.join(name);
+        let mut args = vec!["run", "--duration-s", "10", "--mode", "lockstep", "--quiet", "--run-id", &id];
+        let out_arg = out.to_str().unwrap();
+        args.extend(["--out", out_arg]);
+        args.extend(config);
+        let o = silrig(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let page = out.join("report.html");
+        let html = std::fs::read_to_string(&page).unwrap();
+        assert!(html.contains(kind), "{name}: the view draws the wrong vehicle");
+        // A 10 s run's view (its data and our script) stays small: the page's size is the figures'.
+        let bytes = view_bytes(&html);
+        assert!(bytes < 80_000, "{name}: the 3-D view takes {bytes} bytes of the page");
+        let loaded = load_view(browser, &page, &dir);
+        assert!(loaded.console.is_empty(), "{name}: console messages: {:#?}", loaded.console);
+        assert_eq!(loaded.body_number("data-errors"), 0, "{name}: script errors");
+        assert_eq!(view_attribute(&loaded.dom, "data-view3d-frames"), Some(501), "{name}: 50 frames a second of 10 s");
+        let (first, last) =
+            (view_attribute(&loaded.dom, "data-view3d-first"), view_attribute(&loaded.dom, "data-view3d-last"));
+        assert!(first.is_some() && first != last, "{name}: the first and last frames draw alike: {first:?} {last:?}");
+        let colours = view_attribute(&loaded.dom, "data-view3d-colours").unwrap();
+        assert!(colours > 20, "{name}: {colours} colours: the vehicle, grid and path were not drawn");
+        common::no_shared_memory_left(&id);
+    }
+    if !keep {
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[test]
+fn the_views_surfaces_turn_as_foxgloves_and_its_rotation_is_the_quaternions() {
+    let Some(browser) = chromium() else { return };
+    let (dir, keep) = scratch("view3d-math");
+    let angles = [[0.0, 0.0, 0.0], [0.2, -0.3, 0.1], [-0.35, 0.4, -0.25]];
+    let quaternion = silrig::recording::foxglove::enu_flu_quaternion(0.3, -0.2, 1.1);
+    let page = dir.join("math.html");
+    std::fs::write(
+        &page,
+        format!(
+            "<!DOCTYPE html><html><body><script>{}</script><script>\
+             var model={},out=[];{angles:?}.forEach(function(a){{model.surfaces.forEach(function(s){{\
+             var p=silrigView3d.surfacePose(s,a);out.push(p.center.concat(p.q));}});}});\
+             document.body.setAttribute('data-poses',JSON.stringify(out));\
+             document.body.setAttribute('data-matrix',JSON.stringify(silrigView3d.quatMatrix({quaternion:?})));\
+             </script></body></html>",
+            silrig::html::view3d::SCRIPT,
+            silrig::recording::foxglove::aircraft_model(),
+        ),
+    )
+    .unwrap();
+    let loaded = load_view(browser, &page, &dir);
+    let attribute = |name: &str| -> Vec<Vec<f64>> {
+        let at = loaded.dom.find(&format!("{name}=\"")).unwrap_or_else(|| panic!("no {name}")) + name.len() + 2;
+        let text = &loaded.dom[at..at + loaded.dom[at..].find('"').unwrap()];
+        serde_json::from_str(&text.replace("&quot;", "\"")).unwrap()
+    };
+    let expected: Vec<Vec<f64>> = angles
+        .iter()
+        .flat_map(|a| silrig::recording::foxglove::surface_poses(*a))
+        .map(|(c, q)| c.into_iter().chain(q).collect())
+        .collect();
+    let poses = attribute("data-poses");
+    assert_eq!(poses.len(), expected.len());
+    for (js, rust) in poses.iter().zip(&expected) {
+        assert!(js.iter().zip(rust).all(|(a, b)| (a - b).abs() < 1e-12), "script {js:?}, Rust {rust:?}");
+    }
+    // The matrix's columns are the body's axes in the world: x the nose, z the top.
+    let [x, y, z, w] = quaternion;
+    let nose = [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)];
+    let m = attribute("data-matrix");
+    for r in 0..3 {
+        assert!((m[r][0] - nose[r]).abs() < 1e-12, "{m:?} {nose:?}");
     }
     if !keep {
         std::fs::remove_dir_all(&dir).unwrap();
