@@ -4,8 +4,8 @@
 //!
 //! - `silrig-model` ([`plant`], [`control`], [`actuator`], [`integrator`], [`units`], [`rng`], [`vehicle`],
 //!   [`f16_outputs`]): the math, no I/O.
-//! - `silrig-flight` ([`scenario`], [`fault`], [`role`], [`dispersion`], [`sim`], [`trace`], [`summary`],
-//!   [`f_true`], [`criteria`], [`judge`], [`files`]): a flight as data and as one deterministic process.
+//! - `silrig-flight` ([`scenario`], [`setpoints`], [`fault`], [`role`], [`dispersion`], [`sim`], [`trace`],
+//!   [`summary`], [`f_true`], [`criteria`], [`judge`], [`files`]): a flight as data and as one deterministic process.
 //! - `silrig-wire` ([`wire`], [`topology`], [`ipc`], [`clock`], [`timing`]): the contract and the transport.
 //! - `silrig-recording` ([`recording`]): what the logger writes (CSV, MCAP) and replay reads.
 //! - `silrig-plot` ([`plot`]): every figure.
@@ -24,7 +24,8 @@ pub use silrig_bridge as bridge;
 
 pub use silrig_adapters as adapters;
 pub use silrig_flight::{
-    criteria, dispersion, f_true, f16_signals, fault, files, judge, role, scenario, signals, sim, summary, trace,
+    criteria, dispersion, f_true, f16_signals, fault, files, judge, role, scenario, setpoints, signals, sim, summary,
+    trace,
 };
 pub use silrig_launch as launch;
 pub use silrig_model::{actuator, control, f16_outputs, integrator, plant, quad, rng, units, vehicle};

@@ -93,6 +93,32 @@ fn flies_lockstep_to_the_set_points(test: &str, controller_cmd: &str) {
     r.finish();
 }
 
+#[test]
+fn the_client_library_reads_the_set_point_in_force_at_each_sample() {
+    // robust.toml (theta 10 deg) with a step of theta to 4 deg at 1 s; the reader logs what it reads each sample.
+    let dir = common::temp_dir("clients", "setpoint-steps-files");
+    let scenario = dir.join("steps.toml");
+    let text = std::fs::read_to_string(robust()).unwrap() + "\n[[setpoint_steps]]\nat_s = 1.0\ntheta_deg = 4.0\n";
+    std::fs::write(&scenario, text).unwrap();
+    client_lib();
+    let reader = format!("python3 {ROOT}/tests/clients/setpoint_reader.py");
+    let r = run(
+        "setpoint-steps",
+        &["--mode", "lockstep", "--duration-s", "2", "--controller-cmd", &reader, scenario.to_str().unwrap()],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    let (header, rows) = r.trace();
+    let column = |name: &str| Run::column(&header, name);
+    let (t, now, start) = (column("t_s"), column("sp_theta_now_deg"), column("sp_theta_start_deg"));
+    assert_eq!(rows.len(), 201);
+    for row in &rows {
+        let expected = if row[t] < 1.0 - 1e-9 { 10.0 } else { 4.0 };
+        assert_eq!((row[now], row[start]), (expected, 10.0), "at {} s", row[t]);
+    }
+    r.finish();
+}
+
 /// A 2 s realtime flight: it completes, and the report covers the user's controller as ours (its compute time and
 /// IPC latency at the controller, sense-to-actuate at the plant).
 fn flies_realtime(test: &str, controller_cmd: &str) {

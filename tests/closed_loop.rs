@@ -102,9 +102,11 @@ fn actuator_limit_hits(s: &Scenario) -> Vec<[silrig::actuator::LimitHits; 3]> {
     let mut plant = PlantRunner::new(s).unwrap();
     let mut controller = silrig::sim::attitude_controller(s, s.plant.model().tables());
     let throttle = plant.initial_command().throttle;
+    let attitude = s.attitude_setpoints();
     (0..=s.timing.ticks())
         .map(|k| {
-            let (surfaces, _) = controller.step(&measurement(&plant.snapshot()), &setpoint_rad(s), s.timing.dt_s);
+            let snap = plant.snapshot();
+            let (surfaces, _) = controller.step(&measurement(&snap), &setpoint_rad(&attitude, snap.t_s), s.timing.dt_s);
             let command = ActuatorCommand { surfaces, throttle };
             let hits = if k < s.timing.ticks() { plant.step(&command).unwrap() } else { plant.actuate(&command) };
             [hits[0], hits[1], hits[2]]
@@ -158,7 +160,9 @@ fn f_true_is_what_the_switching_term_carries_and_its_rms_error_is_in_the_summary
     let f_true = silrig::f_true::from_trace(&trace, &s).unwrap();
     let (t, dt) = (trace.column("t_s").unwrap(), s.timing.dt_s);
     let mask = s.disturbance.channel_mask();
-    let setpoint = silrig::sim::setpoint_rad(&s);
+    // paper-ideal's set points stay as they start: no steps.
+    assert!(s.setpoint_steps.is_empty());
+    let setpoint = silrig::sim::setpoint_rad(&s.attitude_setpoints(), 0.0);
     for (c, ch) in ["phi", "theta", "psi"].iter().enumerate() {
         let (sv, fhat) = (trace.column(&format!("s_{ch}")).unwrap(), trace.column(&format!("fhat_{ch}")).unwrap());
         let x1: Vec<f64> = trace.column(&format!("{ch}_deg")).unwrap().iter().map(|d| d.to_radians()).collect();

@@ -29,8 +29,9 @@ const PLACEHOLDERS: [(&str, &str); 5] = [
     ("<variable>", "pitch_cmd"),
     ("<key>", "initial.alpha_deg"),
 ];
-/// Keys that hold a list of tables (`[[faults]]`, `[[cases]]`): a row's key below one sets it in the first entry.
-const TABLE_LISTS: [&str; 2] = ["faults", "cases"];
+/// Keys that hold a list of tables (`[[faults]]`, `[[cases]]`, `[[setpoint_steps]]`): a row's key below one sets it
+/// in the first entry.
+const TABLE_LISTS: [&str; 3] = ["faults", "cases", "setpoint_steps"];
 /// The minimal suite every suite row starts from.
 const MINIMAL_SUITE: &str = "name = \"docs\"\n[[cases]]\nname = \"c\"\n[cases.criteria]\n";
 
@@ -533,10 +534,11 @@ fn fields(file: &str, name: &str) -> Vec<String> {
 
 /// The structs (and the one enum) scenario and suite files are read into, with the files that declare them and
 /// the key prefix each has on each page.
-const STRUCTS: [(&str, &str, &[&str], &[&str]); 21] = [
+const STRUCTS: [(&str, &str, &[&str], &[&str]); 22] = [
     ("src/flight/scenario.rs", "Scenario", &[""], &[]),
     ("src/model/vehicle.rs", "InitialCondition", &["initial"], &[]),
-    ("src/flight/scenario.rs", "Setpoint", &["setpoint"], &[]),
+    ("src/flight/setpoints.rs", "Setpoint", &["setpoint"], &[]),
+    ("src/flight/setpoints.rs", "SetpointStep", &["setpoint_steps"], &[]),
     ("src/flight/scenario.rs", "Disturbance", &["disturbance"], &[]),
     ("src/flight/scenario.rs", "PlantOptions", &["plant"], &[]),
     ("src/flight/scenario.rs", "AeroScale", &["plant.aero_scale"], &[]),

@@ -184,7 +184,7 @@ fn a_sensor_bias_shifts_the_reported_roll_and_the_loop_holds_the_measured_roll()
     let mut runner = PlantRunner::new(&s).unwrap();
     let model = F16Model::new(s.plant.xcg);
     let mut controller = sim::attitude_controller(&s, model.tables());
-    let setpoint = sim::setpoint_rad(&s);
+    let attitude = s.attitude_setpoints();
     let mut previous = runner.initial_command();
     let (mut measured_sum, mut true_sum, mut n) = (0.0, 0.0, 0.0);
     assert_eq!(phi.len() as u64, s.timing.ticks() + 1);
@@ -198,7 +198,8 @@ fn a_sensor_bias_shifts_the_reported_roll_and_the_loop_holds_the_measured_roll()
         if k >= 700 {
             (measured_sum, true_sum, n) = (measured_sum + phi_k, true_sum + truth, n + 1.0);
         }
-        let (surfaces, _) = controller.step(&measurement(&snap), &setpoint, s.timing.dt_s);
+        let (surfaces, _) =
+            controller.step(&measurement(&snap), &sim::setpoint_rad(&attitude, snap.t_s), s.timing.dt_s);
         let command = ActuatorCommand { surfaces, throttle: previous.throttle };
         runner.step(&previous).unwrap(); // robust.toml is next-tick
         previous = command;

@@ -13,6 +13,7 @@ use silrig::plot::{
     Envelope, FigureAxes, Histogram, PlotError, TimelineEvent, plot_closed_loop, plot_envelope, plot_histograms,
     plot_latency_histograms, plot_overlay, plot_percentile_distributions, plot_response, plot_signals, plot_timeline,
 };
+use silrig::setpoints::SetpointTrack;
 use silrig::signals::{InputSignal, OutputSignal, PlantSignals};
 use silrig::trace::{OUTPUTS_HELD_COLUMN, Trace, columns};
 
@@ -109,8 +110,9 @@ fn f16() -> PlantSignals {
 }
 
 /// The F-16 scenario's set points: the attitude, wings level at 5 deg of pitch.
-fn f16_setpoint(name: &str) -> Option<f64> {
-    [("phi_deg", 0.0), ("theta_deg", 5.0), ("psi_deg", 0.0)].iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
+fn f16_setpoint(name: &str) -> Option<SetpointTrack> {
+    let angles = [("phi_deg", 0.0), ("theta_deg", 5.0), ("psi_deg", 0.0)];
+    angles.iter().find(|(n, _)| *n == name).map(|(_, v)| SetpointTrack::constant(*v))
 }
 
 /// A foreign three-axis vehicle as tests/fmu/attitude announces itself: inputs named with their unit, no output
@@ -178,7 +180,9 @@ fn faults_and_signals_of_a_plant_that_is_not_the_f16() {
     let dir = OutDir::new("foreign");
     let plant = attitude();
     let trace = attitude_trace(&plant);
-    let setpoint = |name: &str| [("phi_deg", 10.0), ("theta_deg", 5.0)].iter().find(|(n, _)| *n == name).map(|p| p.1);
+    let setpoint = |name: &str| {
+        [("phi_deg", 10.0), ("theta_deg", 5.0)].iter().find(|(n, _)| *n == name).map(|p| SetpointTrack::constant(p.1))
+    };
     let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into(), end_s: Some(3.5) }];
     let faults = plot_timeline(&trace, &plant, &setpoint, &events, &dir.path, "faults", "attitude: faults").unwrap();
     let signals =
@@ -532,7 +536,7 @@ fn axes_fit_their_data(fig: &FigureAxes) {
 
 /// A trace of `plant`'s columns over 10 s at 100 Hz: each output with a set point rising to it, every other column
 /// a sine of its own amplitude (a command leads its position by a little).
-fn signal_trace(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<f64>) -> Trace {
+fn signal_trace(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<SetpointTrack>) -> Trace {
     let names = plant.trace_columns(&[]);
     let mut trace = Trace::new(names.clone());
     trace.rows = (0..=1000)
@@ -543,7 +547,7 @@ fn signal_trace(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<f64>) ->
                 .enumerate()
                 .map(|(c, name)| match (name.as_str(), setpoint(name)) {
                     ("t_s", _) => t,
-                    (_, Some(sp)) => sp * (1.0 - (-2.0 * t).exp()),
+                    (_, Some(sp)) => sp.at(t) * (1.0 - (-2.0 * t).exp()),
                     (n, None) if n.ends_with("_cmd_deg") || n.ends_with("_cmd") => (c as f64) * (t + 0.1).sin(),
                     _ => (c as f64) * t.sin(),
                 })
@@ -555,7 +559,7 @@ fn signal_trace(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<f64>) ->
 
 /// The plant's figures drawn, each held to its data; every output with a set point has its panel in the response
 /// figure with the set point over it and its unit as the y label; the fault window is drawn from start to end.
-fn check_plant_figures(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<f64>, dir: &Path) {
+fn check_plant_figures(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<SetpointTrack>, dir: &Path) {
     let trace = signal_trace(plant, setpoint);
     let response = plot_response(&trace, Some(plant), setpoint, dir, "response", &plant.plant).unwrap();
     let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into(), end_s: Some(3.5) }];
@@ -581,13 +585,13 @@ fn check_plant_figures(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<f
 fn every_figure_s_axes_fit_its_data_for_the_f16_a_plant_of_your_own_and_the_quadrotor() {
     let dir = OutDir::new("axes");
     check_plant_figures(&f16(), &f16_setpoint, &dir.path.join("f16"));
-    let attitude_setpoint = |n: &str| (n == "phi_deg").then_some(10.0);
+    let attitude_setpoint = |n: &str| (n == "phi_deg").then(|| SetpointTrack::constant(10.0));
     check_plant_figures(&attitude(), &attitude_setpoint, &dir.path.join("attitude"));
     // The quadrotor as configs/quad-steps.toml flies it: its announcement and its set points.
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/quad-steps.toml");
     let scenario = silrig::scenario::Scenario::load(&path).unwrap();
     let quad = silrig_flight::quad::builtin_signals(&scenario).unwrap();
-    let quad_setpoint = |n: &str| scenario.setpoint.get(n);
+    let quad_setpoint = |n: &str| scenario.setpoint_track(n);
     check_plant_figures(&quad, &quad_setpoint, &dir.path.join("quad"));
 
     // The F-16's states: set points on the attitude panel, every panel fitting its data.
@@ -661,7 +665,7 @@ fn sweep_figures_name_every_panel_s_unit_and_fit_their_titles() {
         unit: "deg".into(),
         band: (0..100).map(|k| (k as f64 * 0.1, -1.0, 1.0)).collect(),
         failed: vec![],
-        setpoint: 0.0,
+        setpoint: SetpointTrack::constant(0.0),
     };
     let title = "sweep-robust: 1000 cases, the default scenario with sensor errors and 21 dispersions: envelope";
     let drawn = plot_envelope(&[envelope], &dir.path, "envelope", title).unwrap();

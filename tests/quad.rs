@@ -96,6 +96,39 @@ fn lockstep_flies_sims_trace_and_realtime_completes_at_1_khz() {
 }
 
 #[test]
+fn a_roll_step_late_in_the_run_is_flown_from_its_time_alike_in_sim_and_lockstep() {
+    let dir = common::temp_dir("quad", "late-step-sim");
+    let out = sim(&dir, "quad-roll-step");
+    let csv = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let header: Vec<String> = csv.lines().next().unwrap().split(',').map(String::from).collect();
+    let rows: Vec<Vec<f64>> =
+        csv.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap_or(f64::NAN)).collect()).collect();
+    let (t, phi) = (Run::column(&header, "t_s"), Run::column(&header, "phi_deg"));
+    let phi_over = |from_s: f64, to_s: f64| {
+        let values = rows.iter().filter(|r| r[t] >= from_s && r[t] < to_s).map(|r| r[phi]);
+        values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    };
+    // Level until the step at 2 s (nothing moves it before), near 10 deg once it has settled, level again after 4 s.
+    let before = phi_over(0.0, 2.0);
+    assert!(before.0 > -0.1 && before.1 < 0.1, "roll before the step: {before:?}");
+    let during = phi_over(3.0, 4.0);
+    assert!(during.0 > 9.5 && during.1 < 10.5, "roll after the step to 10 deg: {during:?}");
+    let after = phi_over(5.0, 6.1);
+    assert!(after.0 > -0.5 && after.1 < 0.5, "roll after the step back: {after:?}");
+    // The summary describes the last step (back to 0 at 4 s), measured from the roll it started at.
+    let flown = summary(&out);
+    let row = setpoint(&flown, "phi_deg");
+    assert_eq!(row["setpoint"].as_f64(), Some(0.0), "{row}");
+    assert!(row["initial"].as_f64().unwrap() > 9.5, "{row}");
+    // The lockstep rig flies the same schedule: the same trace, byte for byte.
+    let lockstep = Run::start(SILRIG, "quad", "q", "late-step", &[&config("quad-roll-step"), "--mode", "lockstep"]);
+    assert_eq!(lockstep.code, Some(0), "{}{}", lockstep.stdout, lockstep.stderr);
+    assert!(std::fs::read_to_string(lockstep.out.join("trace.csv")).unwrap() == csv, "lockstep's trace is not sim's");
+    lockstep.finish();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn the_quadrotor_suite_passes_in_lockstep_and_realtime() {
     let dir = common::temp_dir("quad", "check");
     let out = dir.join("out");

@@ -51,14 +51,22 @@ fields = [{{ type = "f32", to = ["aileron", "elevator", "rudder"] }}]
 
 /// A 2 s lockstep flight of the F-16 with the fake device in `mode` as its controller.
 fn fly(test: &str, mode: &str, layout_text: impl FnOnce(u16, u16) -> String) -> Run {
+    let _ = mode;
+    fly_scenario(test, "", layout_text)
+}
+
+/// [`fly`] with `extra` at the top of the scenario (set points and their steps).
+fn fly_scenario(test: &str, extra: &str, layout_text: impl FnOnce(u16, u16) -> String) -> Run {
     let dir = common::temp_dir(SUITE, &format!("{test}-files"));
     let (device_port, rig_port) = free_ports();
     std::fs::write(dir.join("device.toml"), layout_text(device_port, rig_port)).unwrap();
-    let _ = mode;
     let scenario = dir.join("scenario.toml");
     std::fs::write(
         &scenario,
-        "name = \"udp-fake\"\n[controller]\ndevice = \"device.toml\"\n[timing]\ndt_s = 0.01\nduration_s = 2.0\ncommand_timing = \"same-tick\"\n",
+        format!(
+            "name = \"udp-fake\"\n{extra}\n[controller]\ndevice = \"device.toml\"\n[timing]\ndt_s = 0.01\n\
+             duration_s = 2.0\ncommand_timing = \"same-tick\"\n"
+        ),
     )
     .unwrap();
     let run = Run::start(SILRIG, SUITE, "ud", test, &[scenario.to_str().unwrap(), "--mode", "lockstep"]);
@@ -99,6 +107,19 @@ fn the_device_commands_the_plant_and_its_round_trip_is_reported() {
     assert_eq!(run.counter("controller", "device_replies_missing"), 0);
     // The printed report shows the link beside iceoryx2's figures.
     assert!(run.stdout.contains("controller.device_round_trip"), "{}", run.stdout);
+    run.finish();
+}
+
+#[test]
+fn a_set_point_the_device_is_sent_takes_each_step_at_its_tick() {
+    // The device echoes the pitch set point it is sent as its elevator command: -1.5 until the step at 1 s, then 2.
+    let extra = "[setpoint]\ntheta_deg = -1.5\n[[setpoint_steps]]\nat_s = 1.0\ntheta_deg = 2.0\n";
+    let run = fly_scenario("steps", extra, |d, r| layout(d, r, "echo", "f64", "setpoint.theta_deg"));
+    assert_eq!(run.code, Some(0), "{}\n{}", run.stdout, run.stderr);
+    let elevator = elevator_commands(&run);
+    assert_eq!(elevator.len(), 201);
+    assert!(elevator[..100].iter().all(|e| *e == -1.5), "{elevator:?}");
+    assert!(elevator[100..].iter().all(|e| *e == 2.0), "{elevator:?}");
     run.finish();
 }
 

@@ -37,7 +37,6 @@ int main(void) {
         return fail("opening the session", rc);
     }
     double setpoint_deg[3];
-    silrig_session_setpoint_deg(session, setpoint_deg);
     const double dt_s = silrig_session_dt_s(session);
 
     size_t angle[3], rate[3], surface[3], input[3];
@@ -86,6 +85,8 @@ int main(void) {
         double inputs[SILRIG_MAX_INPUTS], errors[3];
         silrig_session_held_command(session, inputs, plant.inputs_len);
         for (int c = 0; c < 3; c++) {
+            /* The set point in force at this sample (a scenario's [[setpoint_steps]] change it during the run). */
+            silrig_session_setpoint_at(session, ANGLE[c], sample.t_sim_s, &setpoint_deg[c]);
             errors[c] = setpoint_deg[c] - sample.outputs[angle[c]];
             double rate_term = KD[c] * sample.outputs[rate[c]];
             double next = integral[c] - KI[c] * errors[c] * dt_s;

@@ -88,13 +88,21 @@ int silrig_session_send_command(silrig_session *session, const double *inputs, s
 /* The controller's step, s (the scenario's dt). */
 double silrig_session_dt_s(silrig_session *session);
 
-/* The scenario's attitude set point, deg: roll (phi), pitch (theta), yaw (psi). */
+/* The scenario's attitude set point at the start, deg: roll (phi), pitch (theta), yaw (psi). A scenario whose
+ * [[setpoint_steps]] change them later: read silrig_session_setpoint_at each sample instead. */
 int silrig_session_setpoint_deg(silrig_session *session, double setpoint_deg_out[3]);
 
-/* The scenario's set point of output `name` ([setpoint] alt_ft = 4000.0), in that output's unit: SILRIG_OK with
- * *value_out set, SILRIG_NOT_GIVEN when the scenario gives none (phi_deg, theta_deg and psi_deg are always given,
- * 0 by default). */
+/* The scenario's set point of output `name` ([setpoint] alt_ft = 4000.0) at the start, in that output's unit:
+ * SILRIG_OK with *value_out set, SILRIG_NOT_GIVEN when the scenario gives none (phi_deg, theta_deg and psi_deg are
+ * always given, 0 by default). The same as silrig_session_setpoint_at at t_s = 0. */
 int silrig_session_setpoint(silrig_session *session, const char *name, double *value_out);
+
+/* The set point of output `name` in force at `t_s`, s: pass each sample's t_sim_s. A scenario's [[setpoint_steps]]
+ * change set points during the run ({ at_s = 2.0, phi_deg = 10.0 }: from the first tick at or after 2 s); this is
+ * the last step at or before t_s that changes `name`, else [setpoint]'s value. Same statuses as
+ * silrig_session_setpoint; SILRIG_ERR_USAGE for a NaN t_s. A controller that reads its set points once, at the
+ * start, flies a scenario with steps as if it had none. */
+int silrig_session_setpoint_at(silrig_session *session, const char *name, double t_s, double *value_out);
 
 /* Checkpoints, so a restarted controller resumes instead of starting cold (copper's Freezable): after a send,
  * when silrig_session_checkpoint_due returns 1, save your state as text with silrig_session_save_checkpoint. A

@@ -100,6 +100,7 @@ def _load():
         "silrig_session_dt_s": ([session_p], ctypes.c_double),
         "silrig_session_setpoint_deg": ([session_p, c_double_p], ctypes.c_int),
         "silrig_session_setpoint": ([session_p, ctypes.c_char_p, c_double_p], ctypes.c_int),
+        "silrig_session_setpoint_at": ([session_p, ctypes.c_char_p, ctypes.c_double, c_double_p], ctypes.c_int),
         "silrig_session_restored_checkpoint": ([session_p], ctypes.c_char_p),
         "silrig_session_checkpoint_due": ([session_p], ctypes.c_int),
         "silrig_session_checkpoint_used": ([session_p, ctypes.c_int, ctypes.c_char_p], ctypes.c_int),
@@ -203,16 +204,22 @@ class Session:
 
     @property
     def setpoint_deg(self):
-        """The scenario's attitude set point, deg: (roll, pitch, yaw)."""
+        """The scenario's attitude set point at the start, deg: (roll, pitch, yaw); `setpoint(name, t_s=...)` reads
+        one in force later."""
         out = (ctypes.c_double * 3)()
         _check(self._lib.silrig_session_setpoint_deg(self._handle, out))
         return tuple(out)
 
-    def setpoint(self, name, default=None):
+    def setpoint(self, name, default=None, t_s=None):
         """The scenario's set point of output `name` (`[setpoint] alt_ft = 4000.0`), in its unit; `default` when the
-        scenario gives none."""
-        value = ctypes.c_double()
-        if _check(self._lib.silrig_session_setpoint(self._handle, name.encode(), ctypes.byref(value))) == NOT_GIVEN:
+        scenario gives none. At the start, or with `t_s` (a sample's `t_s`) the value in force then: the last of
+        the scenario's `[[setpoint_steps]]` at or before it that changes `name`, else `[setpoint]`'s."""
+        value, encoded = ctypes.c_double(), name.encode()
+        if t_s is None:
+            status = self._lib.silrig_session_setpoint(self._handle, encoded, ctypes.byref(value))
+        else:
+            status = self._lib.silrig_session_setpoint_at(self._handle, encoded, float(t_s), ctypes.byref(value))
+        if _check(status) == NOT_GIVEN:
             return default
         return value.value
 

@@ -4,6 +4,7 @@
 //! The loop runs here, in Rust: per tick it calls the controller's `step` once and nothing else in Python.
 
 use crate::{session_error, silrig_error, text_of};
+use pyo3::exceptions::PyValueError;
 use pyo3::intern;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyTuple};
@@ -241,7 +242,7 @@ impl ControllerSession {
         Ok(self.live(py)?.dt_s())
     }
 
-    /// The scenario's attitude set point, deg: (roll, pitch, yaw).
+    /// The scenario's attitude set point at the start, deg: (roll, pitch, yaw).
     #[getter]
     fn setpoint_deg(&mut self, py: Python<'_>) -> PyResult<(f64, f64, f64)> {
         let sp = &self.live(py)?.scenario().setpoint;
@@ -249,10 +250,20 @@ impl ControllerSession {
     }
 
     /// The scenario's set point of output `name` (`[setpoint] alt_ft = 4000.0`) in its unit; `default` when the
-    /// scenario gives none.
-    #[pyo3(signature = (name, default = None))]
-    fn setpoint(&mut self, py: Python<'_>, name: &str, default: Option<f64>) -> PyResult<Option<f64>> {
-        Ok(self.live(py)?.scenario().setpoint.get(name).or(default))
+    /// scenario gives none. At the start, or with `t_s` (a sample's `t_s`) the value in force then: the last of
+    /// `[[setpoint_steps]]` at or before it that changes `name`, else `[setpoint]`'s.
+    #[pyo3(signature = (name, default = None, t_s = None))]
+    fn setpoint(
+        &mut self,
+        py: Python<'_>,
+        name: &str,
+        default: Option<f64>,
+        t_s: Option<f64>,
+    ) -> PyResult<Option<f64>> {
+        if t_s.is_some_and(f64::is_nan) {
+            return Err(PyValueError::new_err("t_s is NaN: pass the sample's t_s"));
+        }
+        Ok(self.live(py)?.scenario().setpoint_at(name, t_s.unwrap_or(0.0)).or(default))
     }
 
     /// The plant's announcement (a `Plant`), waiting for it if it has not come yet.

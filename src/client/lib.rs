@@ -270,7 +270,7 @@ pub unsafe extern "C" fn silrig_session_dt_s(session: *mut SilrigSession) -> f64
     unsafe { session_mut(session) }.map_or(f64::NAN, |s| s.session.dt_s())
 }
 
-/// The scenario's attitude set point, deg: roll (phi), pitch (theta), yaw (psi).
+/// The scenario's attitude set point at the start, deg: roll (phi), pitch (theta), yaw (psi).
 ///
 /// # Safety
 /// `session` comes from `silrig_session_open`; `setpoint_deg_out` points to 3 writable doubles.
@@ -289,7 +289,7 @@ pub unsafe extern "C" fn silrig_session_setpoint_deg(session: *mut SilrigSession
     })
 }
 
-/// The scenario's set point of output `name`, in that output's unit; see the header.
+/// The scenario's set point of output `name` at the start (`[setpoint]`'s), in that output's unit; see the header.
 ///
 /// # Safety
 /// `session` comes from `silrig_session_open`; `name` is a NUL-terminated string; `value_out` points to one
@@ -300,6 +300,23 @@ pub unsafe extern "C" fn silrig_session_setpoint(
     name: *const c_char,
     value_out: *mut f64,
 ) -> c_int {
+    // SAFETY: the caller's contract, passed on.
+    unsafe { silrig_session_setpoint_at(session, name, 0.0, value_out) }
+}
+
+/// The scenario's set point of output `name` in force at `t_s` (a sample's `t_sim_s`: `[setpoint]`'s, or the
+/// last of `[[setpoint_steps]]` at or before it), in that output's unit; see the header.
+///
+/// # Safety
+/// `session` comes from `silrig_session_open`; `name` is a NUL-terminated string; `value_out` points to one
+/// writable double.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn silrig_session_setpoint_at(
+    session: *mut SilrigSession,
+    name: *const c_char,
+    t_s: f64,
+    value_out: *mut f64,
+) -> c_int {
     boundary(|| {
         // SAFETY: the caller's contract.
         let s = unsafe { session_mut(session) }?;
@@ -308,7 +325,10 @@ pub unsafe extern "C" fn silrig_session_setpoint(
         if value_out.is_null() {
             return Err(usage("value_out is NULL"));
         }
-        let Some(value) = s.session.scenario().setpoint.get(name) else { return Ok(Status::NotGiven) };
+        if t_s.is_nan() {
+            return Err(usage("t_s is NaN: pass the sample's t_sim_s"));
+        }
+        let Some(value) = s.session.scenario().setpoint_at(name, t_s) else { return Ok(Status::NotGiven) };
         // SAFETY: checked non-NULL.
         unsafe { value_out.write(value) };
         Ok(Status::Ok)

@@ -4,7 +4,9 @@
 
 use crate::criteria::{AbsMax, BodyRateLimit, Criteria, Judgement, OutputCriteria, Settled, SettledBand};
 use crate::scenario::Scenario;
-use crate::summary::{Summary, settle_time};
+use crate::setpoints::Segment;
+use crate::summary::Summary;
+use crate::summary::measures::{StepSettled, largest_overshoot, slowest_settle};
 use crate::trace::Trace;
 
 /// A judgement of `criterion`: what was measured against what limit, failed when `failure` says why.
@@ -81,7 +83,8 @@ pub fn judge_flight(
 /// lacks fails every one of them, naming the trace's columns.
 fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Option<&Trace>) -> Vec<Judgement> {
     let setpoint = scenario.setpoint.get(name).unwrap_or(f64::NAN);
-    let asked = asked_of_output(c, setpoint, scenario);
+    let segments = segments_of(scenario, name);
+    let asked = asked_of_output(c, setpoint, segments.len() > 1, scenario);
     let label = |key: &str| format!("outputs.{name}.{key}");
     let (t, x) = match trace.map(|tr| (tr.column("t_s"), tr.column(name), tr)) {
         Some((Some(t), Some(x), _)) => (t, x),
@@ -96,7 +99,7 @@ fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Opti
                 .collect();
         }
     };
-    let output = OutputSeries { name, setpoint, t: &t, x: &x };
+    let output = OutputSeries { name, segments: &segments, t: &t, x: &x };
     asked
         .into_iter()
         .map(|(key, limit)| {
@@ -118,16 +121,20 @@ fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Opti
 }
 
 /// The criteria asked of one output, in their fixed order, each with its limit in words.
-fn asked_of_output(c: &OutputCriteria, setpoint: f64, scenario: &Scenario) -> Vec<(&'static str, String)> {
+fn asked_of_output(c: &OutputCriteria, setpoint: f64, steps: bool, scenario: &Scenario) -> Vec<(&'static str, String)> {
     let mut asked: Vec<(&str, String)> = Vec::new();
+    // A set point that steps is judged against each value from its step on.
+    let then = if steps { " and each of its steps" } else { "" };
     if let Some(s) = c.settled {
-        asked.push(("settled", format!("within {} of {setpoint} from {} s", s.band, s.within_s)));
+        let after = if steps { "s after each step" } else { " s" };
+        asked.push(("settled", format!("within {} of {setpoint}{then} from {}{after}", s.band, s.within_s)));
     }
     if let Some(o) = c.overshoot_max {
-        asked.push(("overshoot_max", format!("{o} past {setpoint}")));
+        asked.push(("overshoot_max", format!("{o} past {setpoint}{then}")));
     }
     if let Some(e) = c.final_error_max {
-        asked.push(("final_error_max", format!("{e} from {setpoint}")));
+        let at_end = if steps { " (the value in force at the end)" } else { "" };
+        asked.push(("final_error_max", format!("{e} from {setpoint}{at_end}")));
     }
     if let Some(m) = c.max {
         asked.push(("max", format!("at most {m}")));
@@ -148,45 +155,39 @@ fn asked_of_output(c: &OutputCriteria, setpoint: f64, scenario: &Scenario) -> Ve
 /// One criterion measured on an output: the measurement in words, why it failed (if it did) and its value.
 type Measured = (String, Option<String>, f64);
 
-/// One output of the trace over time, with its set point: what each of its criteria measures.
+/// One output of the trace over time, with its set point's history: what each of its criteria measures.
 struct OutputSeries<'a> {
     name: &'a str,
-    setpoint: f64,
+    segments: &'a [Segment],
     t: &'a [f64],
     x: &'a [f64],
 }
 
 impl OutputSeries<'_> {
     fn settled(&self, s: SettledBand) -> Measured {
-        let (name, setpoint) = (self.name, self.setpoint);
-        let at = crate::summary::settle_time(self.t, self.x, setpoint, s.band);
-        let failure = match at {
-            Some(a) if a <= s.within_s => None,
-            Some(a) => Some(format!(
-                "{name} only stayed within {} of its set point {setpoint} from {a:.2} s on, later than the {} s \
-                 allowed",
-                s.band, s.within_s
-            )),
-            None => Some(format!(
-                "{name} was still more than {} from its set point {setpoint} at the end of the run",
-                s.band
-            )),
-        };
-        let measured = at.map_or("never settled".to_string(), |a| format!("settled at {a:.2} s"));
-        (measured, failure, at.unwrap_or(f64::INFINITY))
+        let settled = slowest_settle(self.t, self.x, self.segments, s.band);
+        let of = format!("its set point {}", settled.segment.value);
+        let failure = settle_failure(self.name, &s.band.to_string(), &of, &settled, s.within_s);
+        (settled_words(&settled), failure, settled.after_step_s())
     }
 
     fn overshoot(&self, max: f64) -> Measured {
-        let (name, setpoint) = (self.name, self.setpoint);
-        let over = crate::summary::overshoot(self.x, setpoint);
+        let name = self.name;
+        let (over, segment) = largest_overshoot(self.t, self.x, self.segments);
         let failure = (over > max).then(|| {
-            format!("{name} went {} past its set point {setpoint}, more than the {max} allowed", figure(over))
+            format!(
+                "{name} went {} past its set point {}{}, more than the {max} allowed",
+                figure(over),
+                segment.value,
+                step_at(&segment)
+            )
         });
         (figure(over), failure, over)
     }
 
     fn final_error(&self, max: f64) -> Measured {
-        let (name, setpoint) = (self.name, self.setpoint);
+        let name = self.name;
+        let setpoint = in_force_at_end(self.t, self.segments);
         let e = self.x.last().map_or(f64::INFINITY, |v| (v - setpoint).abs());
         let e = if e.is_nan() { f64::INFINITY } else { e };
         let failure = (e > max)
@@ -255,37 +256,73 @@ fn settled(scenario: &Scenario, trace: Option<&Trace>, s: Settled) -> Judgement 
     let limit = format!("within {} deg from {} s", s.band_deg, s.within_s);
     let Some(trace) = trace else { return no_evidence("settled", limit, "no trace was logged") };
     let t = trace.column("t_s").unwrap_or_default();
-    let sp = &scenario.setpoint;
-    let settle_times: Vec<(&str, Option<f64>)> = [("phi", sp.phi_deg), ("theta", sp.theta_deg), ("psi", sp.psi_deg)]
+    let settled = angles(scenario, trace)
         .into_iter()
-        .map(|(name, setpoint)| {
-            (name, settle_time(&t, &trace.column(&format!("{name}_deg")).unwrap_or_default(), setpoint, s.band_deg))
-        })
-        .collect();
-    // The axis that settled last, or one that never did.
-    let (axis, at) = settle_times
-        .iter()
-        .copied()
-        .max_by(|a, b| a.1.unwrap_or(f64::INFINITY).total_cmp(&b.1.unwrap_or(f64::INFINITY)))
-        .expect("three axes");
-    let measured = match at {
-        Some(a) => format!("{axis} settled at {a:.2} s"),
-        None => format!("{axis} never settled"),
+        .map(|(name, segments, x)| (name, slowest_settle(&t, &x, &segments, s.band_deg)));
+    // The axis that settled last after its step, or one that never did.
+    let (axis, settled) = settled.max_by(|a, b| a.1.after_step_s().total_cmp(&b.1.after_step_s())).expect("three axes");
+    let measured = format!("{axis} {}", settled_words(&settled));
+    let of = if settled.segment.from_s > 0.0 {
+        format!("its set point {} deg", settled.segment.value)
+    } else {
+        "its set point".into()
     };
-    let failure = match at {
-        Some(a) if a <= s.within_s => None,
-        Some(a) => Some(format!(
-            "{axis} only stayed within {} deg of its set point from {a:.2} s on, later than the {} s allowed; \
-             fig1_states.png in the run folder shows the response",
-            s.band_deg, s.within_s
-        )),
-        None => Some(format!(
-            "{axis} was still more than {} deg from its set point at the end of the run; fig1_states.png in the run \
-             folder shows the response",
-            s.band_deg
-        )),
-    };
-    judgement("settled", measured, limit, failure).with_value(at.unwrap_or(f64::INFINITY))
+    let failure = settle_failure(axis, &format!("{} deg", s.band_deg), &of, &settled, s.within_s)
+        .map(|why| why + "; fig1_states.png in the run folder shows the response");
+    judgement("settled", measured, limit, failure).with_value(settled.after_step_s())
+}
+
+/// A set point's history by name, or a NaN set point from 0 when the scenario gives none (judged as never met).
+fn segments_of(scenario: &Scenario, name: &str) -> Vec<Segment> {
+    let nan = || crate::setpoints::SetpointTrack::constant(f64::NAN);
+    scenario.setpoint_track(name).unwrap_or_else(nan).segments().to_vec()
+}
+
+/// The set point in force at the trace's last time.
+fn in_force_at_end(t: &[f64], segments: &[Segment]) -> f64 {
+    let end_s = t.last().copied().unwrap_or(0.0);
+    segments.iter().take_while(|s| s.from_s <= end_s).last().unwrap_or(&segments[0]).value
+}
+
+/// " (its step at 2 s)" for a segment a step started, nothing for `[setpoint]`'s own.
+fn step_at(segment: &Segment) -> String {
+    if segment.from_s > 0.0 { format!(" (its step at {} s)", segment.from_s) } else { String::new() }
+}
+
+/// What was measured of a settling: "settled at 3.10 s", with how long after its step when a step started it.
+fn settled_words(s: &StepSettled) -> String {
+    match (s.at_s, s.segment.from_s > 0.0) {
+        (Some(a), false) => format!("settled at {a:.2} s"),
+        (Some(a), true) => {
+            format!("settled at {a:.2} s, {:.2} s after its step at {} s", s.after_step_s(), s.segment.from_s)
+        }
+        (None, false) => "never settled".into(),
+        (None, true) => format!("never settled after its step at {} s", s.segment.from_s),
+    }
+}
+
+/// Why `who` failed to settle within `band` (with its unit) of `of` (its set point, in words) by `within_s` after
+/// its step (after 0 for `[setpoint]`'s own); `None` when it did.
+fn settle_failure(who: &str, band: &str, of: &str, s: &StepSettled, within_s: f64) -> Option<String> {
+    if s.after_step_s() <= within_s {
+        return None;
+    }
+    let from = s.segment.from_s;
+    Some(match (s.at_s, from > 0.0) {
+        (Some(a), false) => {
+            format!("{who} only stayed within {band} of {of} from {a:.2} s on, later than the {within_s} s allowed")
+        }
+        (Some(a), true) => format!(
+            "{who} only stayed within {band} of {of} from {a:.2} s on, {:.2} s after its step at {from} s, later than \
+             the {within_s} s allowed",
+            s.after_step_s()
+        ),
+        (None, false) => format!("{who} was still more than {band} from {of} at the end of the run"),
+        (None, true) => format!(
+            "{who} never stayed within {band} of {of} after its step at {from} s (until its next step or the end of \
+             the run)"
+        ),
+    })
 }
 
 /// `setpoints_held`: every set point of the scenario that names a column of the trace (an output of whatever plant
@@ -296,13 +333,13 @@ fn setpoints_held(scenario: &Scenario, trace: Option<&Trace>, s: SettledBand) ->
     let Some(trace) = trace else { return no_evidence("setpoints_held", limit, "no trace was logged") };
     let t = trace.column("t_s").unwrap_or_default();
     let all = scenario.setpoint.all();
-    let held: Vec<(&str, f64, Option<f64>)> = all
+    let held: Vec<(&str, StepSettled)> = all
         .iter()
-        .filter_map(|&(name, setpoint)| Some((name, setpoint, settle_time(&t, &trace.column(name)?, setpoint, s.band))))
+        .filter_map(|&(name, _)| {
+            Some((name, slowest_settle(&t, &trace.column(name)?, &segments_of(scenario, name), s.band)))
+        })
         .collect();
-    let Some(&(name, setpoint, at)) =
-        held.iter().max_by(|a, b| a.2.unwrap_or(f64::INFINITY).total_cmp(&b.2.unwrap_or(f64::INFINITY)))
-    else {
+    let Some(&(name, settled)) = held.iter().max_by(|a, b| a.1.after_step_s().total_cmp(&b.1.after_step_s())) else {
         let names: Vec<&str> = all.iter().map(|(n, _)| *n).collect();
         let why = format!(
             "the scenario's set points ({}) name no output of this plant (the trace's columns: {}); fly a suite whose \
@@ -313,24 +350,14 @@ fn setpoints_held(scenario: &Scenario, trace: Option<&Trace>, s: SettledBand) ->
         return judgement("setpoints_held", "no set point".into(), limit, Some(why));
     };
     let of = format!("{} set point{}", held.len(), if held.len() == 1 { "" } else { "s" });
-    let measured = match at {
-        Some(a) => format!("{name} settled at {a:.2} s (last of {of})"),
-        None => format!("{name} never settled (of {of})"),
+    let measured = match settled.at_s {
+        Some(_) => format!("{name} {} (last of {of})", settled_words(&settled)),
+        None => format!("{name} {} (of {of})", settled_words(&settled)),
     };
-    let failure = match at {
-        Some(a) if a <= s.within_s => None,
-        Some(a) => Some(format!(
-            "{name} only stayed within {} of its set point {setpoint} from {a:.2} s on, later than the {} s allowed; \
-             signals.png in the run folder shows the response",
-            s.band, s.within_s
-        )),
-        None => Some(format!(
-            "{name} was still more than {} from its set point {setpoint} at the end of the run; signals.png in the run \
-             folder shows the response",
-            s.band
-        )),
-    };
-    judgement("setpoints_held", measured, limit, failure).with_value(at.unwrap_or(f64::INFINITY))
+    let its = format!("its set point {}", settled.segment.value);
+    let failure = settle_failure(name, &s.band.to_string(), &its, &settled, s.within_s)
+        .map(|why| why + "; signals.png in the run folder shows the response");
+    judgement("setpoints_held", measured, limit, failure).with_value(settled.after_step_s())
 }
 
 /// Largest |column| over rows with t >= from_s (NaN-free), with the time it happened.
@@ -344,12 +371,14 @@ fn peak_abs(trace: &Trace, column: &str, from_s: f64) -> Option<(f64, f64)> {
         .max_by(|a, b| a.0.total_cmp(&b.0))
 }
 
-/// (axis, set point, values) of phi, theta, psi.
-fn angles(scenario: &Scenario, trace: &Trace) -> Vec<(&'static str, f64, Vec<f64>)> {
-    let sp = &scenario.setpoint;
-    [("phi", sp.phi_deg), ("theta", sp.theta_deg), ("psi", sp.psi_deg)]
+/// (axis, its set point's history, values) of phi, theta, psi.
+fn angles(scenario: &Scenario, trace: &Trace) -> Vec<(&'static str, Vec<Segment>, Vec<f64>)> {
+    ["phi", "theta", "psi"]
         .into_iter()
-        .map(|(name, setpoint)| (name, setpoint, trace.column(&format!("{name}_deg")).unwrap_or_default()))
+        .map(|name| {
+            let column = format!("{name}_deg");
+            (name, segments_of(scenario, &column), trace.column(&column).unwrap_or_default())
+        })
         .collect()
 }
 
@@ -358,10 +387,13 @@ fn overshoot_max(scenario: &Scenario, trace: Option<&Trace>, max: f64) -> Judgem
     let Some(trace) = trace else { return no_evidence("overshoot_max_deg", limit, "no trace was logged") };
     // Past the set point in the direction of the step; an axis already at its set point has no step to overshoot.
     // An axis already at its set point has no step to overshoot: left out.
+    let t = trace.column("t_s").unwrap_or_default();
     let worst = angles(scenario, trace)
         .into_iter()
-        .filter(|(_, setpoint, x)| x.first().is_some_and(|first| setpoint - first != 0.0))
-        .map(|(name, setpoint, x)| (name, crate::summary::overshoot(&x, setpoint)))
+        .filter(|(_, segments, x)| {
+            segments.len() > 1 || x.first().is_some_and(|first| segments[0].value - first != 0.0)
+        })
+        .map(|(name, segments, x)| (name, largest_overshoot(&t, &x, &segments).0))
         .max_by(|a, b| a.1.total_cmp(&b.1));
     let (axis, over) = worst.unwrap_or(("-", 0.0));
     let failure = (over > max).then(|| {
@@ -373,9 +405,11 @@ fn overshoot_max(scenario: &Scenario, trace: Option<&Trace>, max: f64) -> Judgem
 fn final_error_max(scenario: &Scenario, trace: Option<&Trace>, max: f64) -> Judgement {
     let limit = format!("{max} deg");
     let Some(trace) = trace else { return no_evidence("final_error_max_deg", limit, "no trace was logged") };
+    let t = trace.column("t_s").unwrap_or_default();
     let (axis, error) = angles(scenario, trace)
         .into_iter()
-        .map(|(name, setpoint, x)| {
+        .map(|(name, segments, x)| {
+            let setpoint = in_force_at_end(&t, &segments);
             let e = x.last().map_or(f64::INFINITY, |v| (v - setpoint).abs());
             (name, if e.is_nan() { f64::INFINITY } else { e })
         })
@@ -631,5 +665,65 @@ mod tests {
             !j.passed
                 && j.why_failed.unwrap().contains("name no output of this plant (the trace's columns: t_s, speed_mps)")
         );
+    }
+
+    #[test]
+    fn a_set_point_that_steps_is_judged_from_each_step_on_against_its_value() {
+        // alt_ft held at 4000, then a step to 4100 at 0.05 s: up to 4120 and settled at 4101 from 0.08 s on.
+        let (mut s, t) =
+            altitude(&[4000.0, 4000.0, 4000.0, 4000.0, 4000.0, 4000.0, 4060.0, 4120.0, 4101.0, 4101.0, 4101.0]);
+        s.setpoint_steps =
+            vec![crate::setpoints::SetpointStep { at_s: 0.05, values: [("alt_ft".to_string(), 4100.0)].into() }];
+        let c = criteria(
+            "settled = { within_s = 0.03, band = 5.0 }
+overshoot_max = 15.0
+final_error_max = 1.0",
+        );
+        let j = judge_flight(&c, &s, Some(&t), None);
+        let by = |key: &str| j.iter().find(|j| j.criterion == format!("outputs.alt_ft.{key}")).unwrap();
+        // Settled 0.03 s after the step, not at 0.08 s from t = 0: within the 0.03 s allowed.
+        let settled = by("settled");
+        assert!(settled.passed, "{settled:?}");
+        assert_eq!(settled.measured, "settled at 0.08 s, 0.03 s after its step at 0.05 s");
+        assert!(settled.limit.contains("and each of its steps"), "{}", settled.limit);
+        // 20 past the new value 4100, measured from 4000 at the step: more than the 15 allowed.
+        let over = by("overshoot_max");
+        assert!(!over.passed && over.value.unwrap() == 20.0, "{over:?}");
+        assert!(over.why_failed.as_ref().unwrap().contains("past its set point 4100 (its step at 0.05 s)"), "{over:?}");
+        assert!(by("final_error_max").passed, "1 from the 4100 in force at the end: {:?}", by("final_error_max"));
+        // 0.02 s allowed after the step: too slow, said with the step.
+        let strict = criteria("settled = { within_s = 0.02, band = 5.0 }");
+        let j = judge_flight(&strict, &s, Some(&t), None);
+        let why = j[0].why_failed.clone().unwrap();
+        assert!(
+            why.contains("from 0.08 s on, 0.03 s after its step at 0.05 s, later than the 0.02 s allowed"),
+            "{why}"
+        );
+        // The same criteria held over the whole schedule: setpoints_held names the step too.
+        let held: Criteria = toml::from_str("setpoints_held = { within_s = 0.03, band = 5.0 }").unwrap();
+        let j = judge_flight(&held, &s, Some(&t), None);
+        assert!(j[0].measured.starts_with("alt_ft settled at 0.08 s, 0.03 s after its step at 0.05 s"), "{:?}", j[0]);
+    }
+
+    #[test]
+    fn an_attitude_step_is_judged_from_its_time_by_settled_overshoot_and_final_error() {
+        // theta held at 0, a step to 10 deg at 0.03 s reached at 0.05 s, past it to 11 on the way.
+        let rows: Vec<[f64; 3]> = [0.0, 0.0, 0.0, 5.0, 11.0, 10.0, 10.0, 10.0].map(|th| [0.0, th, 0.0]).into();
+        let mut s = Scenario::embedded_default();
+        s.setpoint.theta_deg = 0.0;
+        s.setpoint_steps =
+            vec![crate::setpoints::SetpointStep { at_s: 0.03, values: [("theta_deg".to_string(), 10.0)].into() }];
+        let c: Criteria = toml::from_str(
+            "overshoot_max_deg = 0.5
+final_error_max_deg = 0.1
+settled = { within_s = 0.03, band_deg = 0.5 }",
+        )
+        .unwrap();
+        let j = judge_flight(&c, &s, Some(&trace(&rows)), None);
+        let by = |key: &str| j.iter().find(|j| j.criterion == key).unwrap();
+        assert_eq!(by("settled").measured, "theta settled at 0.05 s, 0.02 s after its step at 0.03 s");
+        assert!(by("settled").passed);
+        assert_eq!((by("overshoot_max_deg").value, by("overshoot_max_deg").passed), (Some(1.0), false));
+        assert!(by("final_error_max_deg").passed, "{:?}", by("final_error_max_deg"));
     }
 }

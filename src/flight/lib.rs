@@ -2,8 +2,8 @@
 //! how it went and whether that was good enough. Files yes, IPC and clocks no.
 //!
 //! - [`scenario`]: TOML scenarios (initial condition, set points, disturbance, plant and controller options,
-//!   actuator limits, [`timing`]) with `validate`; [`fault`]: the fault plan as data, targeting a [`role`] (a rig
-//!   process); [`dispersion`]: seeded per-key distributions for sweeps; [`controller_map`]: `[controller.map]`'s
+//!   actuator limits, [`timing`]) with `validate`; [`setpoints`]: `[setpoint]` and the steps that change it during
+//!   a run, the value in force at a time; [`fault`]: the fault plan as data, targeting a [`role`] (a rig process); [`dispersion`]: seeded per-key distributions for sweeps; [`controller_map`]: `[controller.map]`'s
 //!   values (a plant signal or a constant).
 //! - [`sim`]: the single-process loop (plant, actuators, controller in lockstep), whose pieces the rig's processes
 //!   reuse so both give the same trace; [`trace`]: the trace rows and `trace.csv`.
@@ -28,6 +28,7 @@ pub mod judge;
 pub mod quad;
 pub mod role;
 pub mod scenario;
+pub mod setpoints;
 pub mod signal_chain;
 pub mod signals;
 pub mod sim;

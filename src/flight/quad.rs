@@ -4,6 +4,7 @@
 //! only the quadrotor can check: every key of the F-16's refused, saying what to use instead.
 
 use crate::scenario::{BuiltinVehicle, PlantOptions, Scenario};
+use crate::setpoints::SetpointTrack;
 use crate::signal_chain::SignalChain;
 use crate::signals::{InputSignal, OutputSignal, PlantSignals};
 use silrig_model::control::quad::QuadSetpoint;
@@ -84,15 +85,32 @@ pub fn builtin_signals(s: &Scenario) -> Result<PlantSignals, KeyError> {
     quad_params(s).map(|params| quad_signals(&params))
 }
 
-/// The set points our controller flies: roll, pitch and heading (`phi_deg`, `theta_deg`, `psi_deg`) and the height
-/// `alt_m` (the start height when the scenario gives none).
-pub fn quad_setpoint(s: &Scenario) -> Result<QuadSetpoint, KeyError> {
-    let sp = &s.setpoint;
-    let alt_m = match sp.get("alt_m") {
+/// The set points our controller flies over the run: roll, pitch and heading (`phi_deg`, `theta_deg`, `psi_deg`)
+/// and the height `alt_m` (the start height when the scenario gives none), each `[setpoint]`'s then its steps'.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QuadSetpoints {
+    attitude_deg: [SetpointTrack; 3],
+    alt_m: SetpointTrack,
+}
+
+impl QuadSetpoints {
+    /// The set points in force at `t_s`.
+    pub fn at(&self, t_s: f64) -> QuadSetpoint {
+        QuadSetpoint {
+            euler_rad: self.attitude_deg.each_ref().map(|a| a.at(t_s).to_radians()),
+            alt_m: self.alt_m.at(t_s),
+        }
+    }
+}
+
+/// The scenario's [`QuadSetpoints`]; an error names the key when there is no set point of the height and no start
+/// height either.
+pub fn quad_setpoints(s: &Scenario) -> Result<QuadSetpoints, KeyError> {
+    let alt_m = match s.setpoint_track("alt_m") {
         Some(alt) => alt,
-        None => start_value(s, "start_alt_m")?,
+        None => SetpointTrack::constant(start_value(s, "start_alt_m")?),
     };
-    Ok(QuadSetpoint { euler_rad: [sp.phi_deg, sp.theta_deg, sp.psi_deg].map(f64::to_radians), alt_m })
+    Ok(QuadSetpoints { attitude_deg: s.attitude_setpoints(), alt_m })
 }
 
 /// The first key of `actual`'s table whose value differs from `default`'s, if any.
@@ -204,7 +222,7 @@ mod tests {
         let v = quad_vehicle(&s).unwrap();
         assert!(!v.on_ground && v.state.position_ned_m()[2] == -2.5 && v.params.mass_kg == 0.8);
         assert!((v.state.attitude().euler_angles().2.to_degrees() - 30.0).abs() < 1e-9);
-        let sp = quad_setpoint(&s).unwrap();
+        let sp = quad_setpoints(&s).unwrap().at(0.5);
         assert_eq!(sp.alt_m, 2.5, "no alt_m set point: the start height is held");
         let signals = quad_signals(&v.params);
         assert_eq!(signals.inputs.len(), 4);

@@ -35,6 +35,9 @@ pub struct Scenario {
     /// Set points: the F-16 controller's attitude, and any other output by name.
     #[serde(default)]
     pub setpoint: Setpoint,
+    /// Set points that change during the run (`[[setpoint_steps]]`), in time order; none: `[setpoint]` throughout.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub setpoint_steps: Vec<SetpointStep>,
     /// Disturbance on the Euler-angle accelerations.
     #[serde(default)]
     pub disturbance: Disturbance,
@@ -65,44 +68,7 @@ pub struct Scenario {
 /// How the run starts, and its mode: the vehicle's own ([`silrig_model::vehicle`]), kept here under their old names.
 pub use silrig_model::vehicle::{InitialCondition, InitialMode};
 
-/// Constant set points: the attitude our controller flies (`phi_deg`, `theta_deg`, `psi_deg`, 0 when not given),
-/// and any other plant output by its name, in that output's unit (`alt_ft = 4000.0`), which a controller of your
-/// own reads by name and the criteria judge against.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct Setpoint {
-    /// Roll, deg.
-    #[serde(default)]
-    pub phi_deg: f64,
-    /// Pitch, deg.
-    #[serde(default)]
-    pub theta_deg: f64,
-    /// Heading, deg.
-    #[serde(default)]
-    pub psi_deg: f64,
-    /// Set points of other outputs, by output name.
-    #[serde(flatten)]
-    pub outputs: BTreeMap<String, f64>,
-}
-
-impl Setpoint {
-    /// The set point of output `name`, if the scenario gives one (the three angles always).
-    pub fn get(&self, name: &str) -> Option<f64> {
-        match name {
-            "phi_deg" => Some(self.phi_deg),
-            "theta_deg" => Some(self.theta_deg),
-            "psi_deg" => Some(self.psi_deg),
-            _ => self.outputs.get(name).copied(),
-        }
-    }
-
-    /// Every set point, the three angles first.
-    pub fn all(&self) -> Vec<(&str, f64)> {
-        [("phi_deg", self.phi_deg), ("theta_deg", self.theta_deg), ("psi_deg", self.psi_deg)]
-            .into_iter()
-            .chain(self.outputs.iter().map(|(k, v)| (k.as_str(), *v)))
-            .collect()
-    }
-}
+pub use crate::setpoints::{Setpoint, SetpointStep, SetpointTrack};
 
 /// d(t) = amplitude * sin(frequency * t) on the chosen Euler-angle accelerations.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -519,6 +485,23 @@ impl Scenario {
             .expect("the embedded any-plant scenario is valid")
     }
 
+    /// The set point `name` in force at `t_s`: the last of `[[setpoint_steps]]` at or before `t_s` that changes it,
+    /// else `[setpoint]`'s; `None` when the scenario gives no set point `name`. Without steps it is `[setpoint]`'s
+    /// value itself, the same number at every time.
+    pub fn setpoint_at(&self, name: &str, t_s: f64) -> Option<f64> {
+        crate::setpoints::value_at(&self.setpoint, &self.setpoint_steps, name, t_s)
+    }
+
+    /// The history of set point `name` over the run, for a reader that keeps it (`None`: no set point `name`).
+    pub fn setpoint_track(&self, name: &str) -> Option<SetpointTrack> {
+        SetpointTrack::of(&self.setpoint, &self.setpoint_steps, name)
+    }
+
+    /// phi, theta and psi's set points over the run, deg: the attitude our controllers fly.
+    pub fn attitude_setpoints(&self) -> [SetpointTrack; 3] {
+        ["phi_deg", "theta_deg", "psi_deg"].map(|n| self.setpoint_track(n).expect("the three angles always have one"))
+    }
+
     /// The scenario as TOML (what a run records next to its outputs).
     pub fn to_toml(&self) -> String {
         toml::to_string(self).expect("a scenario serialises")
@@ -531,11 +514,12 @@ impl Scenario {
             return refuse("name", format!("must be non-empty letters, digits, '-' or '_', got {:?}", self.name));
         }
         self.validate_initial()?;
-        self.validate_setpoint()?;
+        self.setpoint.validate().map_err(|(key, problem)| (format!("setpoint.{key}"), problem))?;
         self.validate_plant()?;
         self.validate_named_values()?;
         let t = &self.timing;
         t.validate()?;
+        crate::setpoints::validate_steps(&self.setpoint, &self.setpoint_steps, t.duration_s)?;
         for (i, f) in self.faults.iter().enumerate() {
             f.validate(t.duration_s).map_err(|(key, problem)| (format!("faults[{i}].{key}"), problem))?;
             // The same fault twice would be injected twice; a plan that means it twice gives two times.
@@ -587,33 +571,6 @@ impl Scenario {
             && !(0.0..=1.0).contains(&t)
         {
             return refuse("initial.throttle", format!("must be within 0..1, got {t}"));
-        }
-        Ok(())
-    }
-
-    /// `[setpoint]`: named outputs' set points and the F-16's attitude set points.
-    fn validate_setpoint(&self) -> Result<(), (String, String)> {
-        for (name, v) in &self.setpoint.outputs {
-            if !crate::signals::valid_name(name) {
-                return refuse(
-                    &format!("setpoint.{name}"),
-                    format!(
-                        "is not an output name: use 1..={} of ASCII letters, digits and '_'",
-                        crate::signals::MAX_NAME_LEN
-                    ),
-                );
-            }
-            finite(&format!("setpoint.{name}"), *v)?;
-        }
-        for (key, v, limit) in [
-            ("setpoint.phi_deg", self.setpoint.phi_deg, 90.0),
-            ("setpoint.theta_deg", self.setpoint.theta_deg, 60.0),
-            ("setpoint.psi_deg", self.setpoint.psi_deg, 180.0),
-        ] {
-            finite(key, v)?;
-            if v.abs() > limit {
-                return refuse(key, format!("must be within -{limit}..{limit} deg, got {v}"));
-            }
         }
         Ok(())
     }

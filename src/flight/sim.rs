@@ -22,6 +22,7 @@
 
 use crate::fault::{Fault, FaultAction, SENSOR_CHANNELS, SURFACES};
 use crate::scenario::Scenario;
+use crate::setpoints::SetpointTrack;
 use crate::trace::{self, Trace};
 use silrig_model::actuator::ActuatorFault;
 use silrig_model::control::{AttitudeController, ControllerDiagnostics, Measurement, SurfaceCommand};
@@ -506,9 +507,9 @@ pub fn attitude_controller(s: &Scenario, tables: &F16Tables) -> AttitudeControll
     AttitudeController::new(s.controller.gains.clone(), tables).with_travel(travel_deg)
 }
 
-/// The set points in rad.
-pub fn setpoint_rad(s: &Scenario) -> [f64; 3] {
-    [deg_to_rad(s.setpoint.phi_deg), deg_to_rad(s.setpoint.theta_deg), deg_to_rad(s.setpoint.psi_deg)]
+/// The attitude set points in force at `t_s`, rad. Without steps, the same numbers at every tick.
+pub fn setpoint_rad(attitude: &[SetpointTrack; 3], t_s: f64) -> [f64; 3] {
+    [0, 1, 2].map(|c| deg_to_rad(attitude[c].at(t_s)))
 }
 
 /// Run a scenario's closed loop as far as it flies: its trace, and how it left the model's envelope if it did
@@ -536,7 +537,7 @@ pub fn run(s: &Scenario) -> Result<Trace, SimError> {
     }
     let mut plant = PlantRunner::new(s)?;
     let mut controller = attitude_controller(s, plant.vehicle.model().tables());
-    let setpoint = setpoint_rad(s);
+    let attitude = s.attitude_setpoints();
     let dt = s.timing.dt_s;
     let steps = s.timing.ticks();
     let mut trace = Trace::new(trace::columns(s.controller.rbf.nodes()));
@@ -548,7 +549,7 @@ pub fn run(s: &Scenario) -> Result<Trace, SimError> {
     let mut diagnostics = vec![0.0; trace.columns.len() - trace::LOOP_COLUMNS.len()];
     for tick in 0..=steps {
         let snap = plant.snapshot();
-        let (surfaces, diag) = controller.step(&measurement(&snap), &setpoint, dt);
+        let (surfaces, diag) = controller.step(&measurement(&snap), &setpoint_rad(&attitude, snap.t_s), dt);
         // Limited to what the plant accepts, as the rig's controller limits them (`AttitudeLaw`).
         let limit = silrig_model::actuator::SURFACE_CMD_LIMIT_DEG;
         let surfaces = surfaces.limited([(-limit, limit); 3]);

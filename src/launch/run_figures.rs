@@ -39,7 +39,7 @@ fn trace_figures<'a>(
     trace: &'a Trace,
     plant: Option<&'a PlantSignals>,
 ) -> Vec<Drawing<'a>> {
-    let setpoint = |name: &str| scenario.setpoint.get(name);
+    let setpoint = |name: &str| scenario.setpoint_track(name);
     let mut figures: Vec<Drawing> = vec![
         Box::new(move || {
             // Rows without a command (a lost controller) have NaN command columns, which the plots skip.

@@ -8,7 +8,7 @@ use super::PlotError;
 use super::columns::{Columns, zip};
 use super::drawn::Drawn;
 use super::figure::{Figure, Panel, Series, palette};
-use super::plant_series::time_span;
+use super::plant_series::{SetpointOf, time_span};
 use super::render::write_figure;
 use super::smc_rbf;
 use silrig_flight::trace::Trace;
@@ -17,7 +17,7 @@ const STATES: &str = "fig1_states";
 
 /// Draw the closed-loop figures of `trace` into `out_dir` (created if missing), each as PNG and SVG:
 /// `fig1_states` (alpha; Euler angles; body rates; surfaces and their commands; each state over its set point,
-/// dashed in its colour, where `setpoint` gives one by column name) always, its columns required;
+/// dashed in its colour (as steps where it steps), where `setpoint` gives one by column name) always, its columns required;
 /// `fig2_sliding` (sliding surfaces `s_<channel>` and RBF estimates `fhat_<channel>`, each over `f_true` of its
 /// channel when given, 3x2) if the trace has any of those columns, and `fig3_weights` (the RBF weights
 /// `w_<channel>_<k>` of each channel) if it has any weight column;
@@ -26,7 +26,7 @@ const STATES: &str = "fig1_states";
 pub fn plot_closed_loop(
     trace: &Trace,
     f_true: Option<&[Vec<f64>; 3]>,
-    setpoint: &dyn Fn(&str) -> Option<f64>,
+    setpoint: &SetpointOf,
     out_dir: &Path,
     title: &str,
 ) -> Result<Drawn, PlotError> {
@@ -41,12 +41,7 @@ pub fn plot_closed_loop(
     Ok(written)
 }
 
-fn states(
-    trace: &Trace,
-    setpoint: &dyn Fn(&str) -> Option<f64>,
-    out_dir: &Path,
-    title: &str,
-) -> Result<Figure, PlotError> {
+fn states(trace: &Trace, setpoint: &SetpointOf, out_dir: &Path, title: &str) -> Result<Figure, PlotError> {
     let file = out_dir.join(format!("{STATES}.png"));
     let data = Columns::new(trace, &file, "the trace")?;
     let t = data.get("t_s")?;
@@ -56,7 +51,7 @@ fn states(
         for (k, (column, label)) in specs.iter().enumerate() {
             series.push(Series::solid(label, zip(&t, &data.get(column)?), palette(k)));
             if let Some(sp) = setpoint(column) {
-                series.push(Series::level(&format!("{label} set point"), sp, span, palette(k)));
+                series.push(Series::level(&format!("{label} set point"), &sp, span, palette(k)));
             }
         }
         let with_setpoints = specs.iter().any(|(column, _)| setpoint(column).is_some());

@@ -2,6 +2,7 @@
 //! built by the figure families and read by layout and rendering. Also the data ranges a panel's axes start from.
 
 use plotters::prelude::*;
+use silrig_flight::setpoints::SetpointTrack;
 
 /// Colours of matplotlib's "tab10" cycle: distinct, print and colour-blind friendly enough.
 const PALETTE: [RGBColor; 10] = [
@@ -78,9 +79,10 @@ impl Series {
         Self::new(label, points, Stroke { color, width: 1, dash: Dash::Dashed })
     }
 
-    /// A set point: a dashed level line at `value` over `span` (the trace's time span).
-    pub(super) fn level(label: &str, value: f64, span: (f64, f64), color: RGBColor) -> Self {
-        Self::command(label, vec![(span.0, value), (span.1, value)], color)
+    /// A set point over `span` (the trace's time span), dashed: a level line, or steps where
+    /// `[[setpoint_steps]]` change it.
+    pub(super) fn level(label: &str, setpoint: &SetpointTrack, span: (f64, f64), color: RGBColor) -> Self {
+        Self::command(label, super::plant_series::setpoint_line(setpoint, [span.0, span.1]), color)
     }
 
     pub(super) fn cycled(label: &str, points: Vec<(f64, f64)>, k: usize) -> Self {

@@ -39,6 +39,7 @@ pub use closed_loop::plot_closed_loop;
 pub use drawn::{AxisRange, Drawn, FigureAxes, PanelAxes};
 pub use latency::{plot_latency_histograms, plot_percentile_distributions};
 pub use overlay::plot_overlay;
+pub use plant_series::SetpointOf;
 pub use response::plot_response;
 pub use signals::plot_signals;
 pub use sweep::{Envelope, Histogram, Scatter, plot_envelope, plot_histograms, plot_scatter};

@@ -3,8 +3,30 @@
 //! plant reports one), the outputs that are measurements rather than positions, and the time spans of the rows
 //! whose outputs the plant held (the trace's `outputs_held`), which the figures shade.
 
+use silrig_flight::setpoints::SetpointTrack;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::{OUTPUTS_HELD_COLUMN, Trace};
+
+/// A set point's history by an output's name, `None` for an output without one (what the figures draw dashed).
+pub type SetpointOf<'a> = dyn Fn(&str) -> Option<SetpointTrack> + 'a;
+
+/// A set point's line over `span` (the trace's first and last time): flat, or a staircase rising or falling at each
+/// step inside the span (two points at a step's time, the value before and after).
+pub(super) fn setpoint_line(track: &SetpointTrack, span: [f64; 2]) -> Vec<(f64, f64)> {
+    let mut points = vec![(span[0], track.at(span[0]))];
+    for s in track.segments().iter().filter(|s| s.from_s > span[0] && s.from_s <= span[1]) {
+        let before = points.last().expect("starts with one").1;
+        points.extend([(s.from_s, before), (s.from_s, s.value)]);
+    }
+    points.push((span[1], track.at(span[1])));
+    points
+}
+
+/// A set point as a panel's caption says it: `4` held, `0, 10 from 2 s` with its steps.
+pub(super) fn setpoint_words(track: &SetpointTrack) -> String {
+    let steps = track.segments()[1..].iter().map(|s| format!(", {} from {} s", s.value, s.from_s));
+    std::iter::once(track.segments()[0].value.to_string()).chain(steps).collect()
+}
 
 /// The y axis label of `unit`: blank for a dimensionless one (`1`, or none), the unit otherwise.
 pub(super) fn unit_label(unit: &str) -> &str {
@@ -76,7 +98,23 @@ pub(super) fn shading_note(spans: &[(f64, f64)]) -> &'static str {
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
+    use silrig_flight::scenario::Scenario;
     use silrig_flight::signals::{InputSignal, OutputSignal};
+
+    #[test]
+    fn a_set_point_is_drawn_flat_or_as_steps_inside_the_span_and_captioned_with_them() {
+        assert_eq!(setpoint_line(&SetpointTrack::constant(4.0), [0.0, 6.0]), [(0.0, 4.0), (6.0, 4.0)]);
+        let text = "name = \"s\"\n[setpoint]\nx_m = 1.0\n[[setpoint_steps]]\nat_s = 2.0\nx_m = 3.0\n\
+                    [[setpoint_steps]]\nat_s = 5.0\nx_m = -1.0\n[timing]\ndt_s = 0.01\nduration_s = 8.0\n\
+                    command_timing = \"next-tick\"\n";
+        let track = Scenario::from_toml(text, "test").unwrap().setpoint_track("x_m").unwrap();
+        let line = setpoint_line(&track, [0.0, 6.0]);
+        assert_eq!(line, [(0.0, 1.0), (2.0, 1.0), (2.0, 3.0), (5.0, 3.0), (5.0, -1.0), (6.0, -1.0)]);
+        // A span the first step does not reach (a run cut short) draws what was in force.
+        assert_eq!(setpoint_line(&track, [0.0, 1.5]), [(0.0, 1.0), (1.5, 1.0)]);
+        assert_eq!(setpoint_words(&track), "1, 3 from 2 s, -1 from 5 s");
+        assert_eq!(setpoint_words(&SetpointTrack::constant(4.0)), "4");
+    }
 
     /// A plant that is not the F-16: a cart with a steered, reported wheel and an unreported dimensionless throttle.
     pub(crate) fn cart() -> PlantSignals {

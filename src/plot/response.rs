@@ -9,8 +9,11 @@ use super::PlotError;
 use super::columns::{Columns, zip};
 use super::drawn::Drawn;
 use super::figure::{Figure, FigureLegend, Panel, Series, palette};
-use super::plant_series::{held_spans, measured_outputs, shading_note, time_span, unit_label};
+use super::plant_series::{
+    SetpointOf, held_spans, measured_outputs, setpoint_words, shading_note, time_span, unit_label,
+};
 use super::render::write_figure;
+use silrig_flight::setpoints::SetpointTrack;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
 
@@ -23,11 +26,7 @@ const FRAME_HEIGHT_PX: u32 = 70;
 
 /// The outputs with a set point, (name, unit), in the announced order; without the announcement (a run with no
 /// recording), the trace's columns with a set point, unit-less.
-fn with_setpoints(
-    trace: &Trace,
-    plant: Option<&PlantSignals>,
-    setpoint: &dyn Fn(&str) -> Option<f64>,
-) -> Vec<(String, String)> {
+fn with_setpoints(trace: &Trace, plant: Option<&PlantSignals>, setpoint: &SetpointOf) -> Vec<(String, String)> {
     let all = match plant {
         Some(p) => measured_outputs(p),
         None => trace.columns.iter().map(|c| (c.clone(), String::new())).collect(),
@@ -41,7 +40,7 @@ fn with_setpoints(
 pub fn plot_response(
     trace: &Trace,
     plant: Option<&PlantSignals>,
-    setpoint: &dyn Fn(&str) -> Option<f64>,
+    setpoint: &SetpointOf,
     out_dir: &Path,
     stem: &str,
     title: &str,
@@ -59,12 +58,13 @@ pub fn plot_response(
     let held = held_spans(trace);
     let mut cells = Vec::with_capacity(outputs.len());
     for (name, unit) in &outputs {
-        let sp = setpoint(name).unwrap_or(f64::NAN);
+        let sp = setpoint(name).unwrap_or_else(|| SetpointTrack::constant(f64::NAN));
         let series = vec![
             Series::solid(name, zip(&t, &data.get(name)?), palette(0)),
-            Series::level("set point", sp, span, palette(3)),
+            Series::level("set point", &sp, span, palette(3)),
         ];
-        let mut panel = Panel::new(&format!("{name}: set point {sp} (dashed)"), unit_label(unit), series);
+        let caption = format!("{name}: set point {} (dashed)", setpoint_words(&sp));
+        let mut panel = Panel::new(&caption, unit_label(unit), series);
         panel.legend = false;
         panel.shaded = held.clone();
         panel.x_span = Some(span);
@@ -94,10 +94,10 @@ mod tests {
         trace.rows = (0..100).map(|k| vec![k as f64 * 0.01, 0.02 * k as f64, 1.0, 0.0, 0.5, 0.0]).collect();
         let dir = std::env::temp_dir().join(format!("silrig-plot-response-{}", std::process::id()));
         let setpoint = |n: &str| match n {
-            "x_m" => Some(2.0),
-            "v_mps" => Some(1.0),
+            "x_m" => Some(SetpointTrack::constant(2.0)),
+            "v_mps" => Some(SetpointTrack::constant(1.0)),
             // A position is not a response: the steering wheel's set point is ignored.
-            "steer_deg" => Some(3.0),
+            "steer_deg" => Some(SetpointTrack::constant(3.0)),
             _ => None,
         };
         let drawn = plot_response(&trace, Some(&p), &setpoint, &dir, "response", "cart").unwrap();

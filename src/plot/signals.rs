@@ -10,8 +10,10 @@ use super::PlotError;
 use super::columns::{Columns, zip};
 use super::drawn::Drawn;
 use super::figure::{Figure, FigureLegend, Panel, Series, palette};
-use super::plant_series::{held_spans, input_lines, measured_outputs, shading_note, time_span, unit_label};
+use super::plant_series::{SetpointOf, held_spans, input_lines, measured_outputs, setpoint_words};
+use super::plant_series::{shading_note, time_span, unit_label};
 use super::render::write_figure;
+use silrig_flight::setpoints::SetpointTrack;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::{OUTPUTS_HELD_COLUMN, Trace};
 
@@ -35,13 +37,13 @@ struct Signal {
     caption: String,
     unit: String,
     lines: Vec<Line>,
-    setpoint: Option<f64>,
+    setpoint: Option<SetpointTrack>,
 }
 
 /// What to draw: with the plant's announcement, its measured outputs then its inputs (position and command
 /// together); without it (a run with no recording), every trace column but time, the flight segment and the held
 /// flag, unit-less.
-fn signals(trace: &Trace, plant: Option<&PlantSignals>, setpoint: &dyn Fn(&str) -> Option<f64>) -> Vec<Signal> {
+fn signals(trace: &Trace, plant: Option<&PlantSignals>, setpoint: &SetpointOf) -> Vec<Signal> {
     let line = |column: &str, label: &str, command| Line { column: column.into(), label: label.into(), command };
     let Some(p) = plant else {
         return trace
@@ -75,11 +77,12 @@ fn signals(trace: &Trace, plant: Option<&PlantSignals>, setpoint: &dyn Fn(&str) 
 }
 
 /// Draw `<stem>.{png,svg}` in `out_dir`: a grid of panels, one per signal (see [`signals`]), time on every x axis.
-/// `setpoint` gives an output's set point by name. Returns the files written.
+/// `setpoint` gives an output's set point by name, drawn as steps where the scenario's `[[setpoint_steps]]` change
+/// it. Returns the files written.
 pub fn plot_signals(
     trace: &Trace,
     plant: Option<&PlantSignals>,
-    setpoint: &dyn Fn(&str) -> Option<f64>,
+    setpoint: &SetpointOf,
     out_dir: &Path,
     stem: &str,
     title: &str,
@@ -102,11 +105,11 @@ pub fn plot_signals(
                 false => Series::solid(&l.label, points, palette(0)),
             });
         }
-        if let Some(sp) = s.setpoint {
+        if let Some(sp) = &s.setpoint {
             series.push(Series::level("set point", sp, time_span(&t).unwrap_or((0.0, 0.0)), palette(3)));
         }
-        let caption = match s.setpoint {
-            Some(sp) => format!("{} (set point {sp}, dashed)", s.caption),
+        let caption = match &s.setpoint {
+            Some(sp) => format!("{} (set point {}, dashed)", s.caption, setpoint_words(sp)),
             None => s.caption.clone(),
         };
         let mut panel = Panel::new(&caption, &s.unit, series);
@@ -133,12 +136,15 @@ mod tests {
     #[test]
     fn a_panel_per_measured_output_and_per_input_with_its_position_set_points_and_blank_dimensionless_units() {
         let p = cart();
-        let setpoint = |name: &str| (name == "x_m").then_some(4.0);
+        let setpoint = |name: &str| (name == "x_m").then(|| SetpointTrack::constant(4.0));
         let trace = Trace::new(vec![]);
         let s = signals(&trace, Some(&p), &setpoint);
         let columns: Vec<Vec<&str>> = s.iter().map(|s| s.lines.iter().map(|l| l.column.as_str()).collect()).collect();
         assert_eq!(columns, [vec!["x_m"], vec!["v_mps"], vec!["steer_deg", "steer_cmd_deg"], vec!["throttle_cmd"]]);
-        assert_eq!((s[0].setpoint, s[0].unit.as_str(), s[1].setpoint), (Some(4.0), "m", None));
+        assert_eq!(
+            (s[0].setpoint.clone(), s[0].unit.as_str(), s[1].setpoint.clone()),
+            (Some(SetpointTrack::constant(4.0)), "m", None)
+        );
         assert_eq!((s[2].unit.as_str(), s[3].unit.as_str()), ("deg", ""), "a dimensionless unit is left blank");
         assert!(!s[2].lines[0].command && s[2].lines[1].command && s[3].lines[0].command);
         assert_eq!(s[2].caption, "steer: position, command dashed");
@@ -173,8 +179,15 @@ mod tests {
             })
             .collect();
         let dir = std::env::temp_dir().join(format!("silrig-plot-signals-{}", std::process::id()));
-        let files =
-            plot_signals(&trace, Some(&p), &|n: &str| (n == "x_m").then_some(4.0), &dir, "signals", "t").unwrap();
+        let files = plot_signals(
+            &trace,
+            Some(&p),
+            &|n: &str| (n == "x_m").then(|| SetpointTrack::constant(4.0)),
+            &dir,
+            "signals",
+            "t",
+        )
+        .unwrap();
         assert_eq!(files.len(), 2);
         let png = std::fs::read(&files[0]).unwrap();
         assert!(png.starts_with(b"\x89PNG") && png.len() > 10_000, "{} bytes", png.len());

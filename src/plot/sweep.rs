@@ -8,6 +8,7 @@ use super::PlotError;
 use super::drawn::Drawn;
 use super::figure::{Figure, FigureLegend, LegendEntry, Panel, Series, palette};
 use super::render::write_figure;
+use silrig_flight::setpoints::SetpointTrack;
 
 const PASS: usize = 0;
 const FAIL: usize = 3;
@@ -49,8 +50,8 @@ pub struct Envelope {
     pub band: Vec<(f64, f64, f64)>,
     /// The failed cases drawn one by one (at most a few dozen).
     pub failed: Vec<Vec<(f64, f64)>>,
-    /// The set point.
-    pub setpoint: f64,
+    /// The set point, drawn as steps where it has them.
+    pub setpoint: SetpointTrack,
 }
 
 fn grid_for(n: usize) -> (usize, usize) {
@@ -166,7 +167,7 @@ pub fn plot_envelope(panels: &[Envelope], out_dir: &Path, stem: &str, title: &st
                 .collect();
             // The band last, so the failures do not hide it.
             let t_end = e.band.last().map_or(0.0, |b| b.0);
-            series.push(Series::level("set point", e.setpoint, (0.0, t_end), palette(PASS)));
+            series.push(Series::level("set point", &e.setpoint, (0.0, t_end), palette(PASS)));
             for (label, pick) in [("passed: lowest", 0), ("passed: highest", 1)] {
                 let line = e.band.iter().map(|(t, lo, hi)| (*t, if pick == 0 { *lo } else { *hi })).collect();
                 let mut s = Series::solid(label, line, palette(BAND));

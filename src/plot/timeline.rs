@@ -8,7 +8,8 @@ use std::path::Path;
 use super::columns::{Columns, zip};
 use super::drawn::Drawn;
 use super::figure::{Figure, Panel, Series, palette};
-use super::plant_series::{InputLines, held_spans, input_lines, measured_outputs, shading_note, time_span, unit_label};
+use super::plant_series::{InputLines, SetpointOf, held_spans, input_lines, measured_outputs};
+use super::plant_series::{shading_note, time_span, unit_label};
 use super::render::write_figure;
 use super::{PlotError, TimelineEvent};
 use silrig_flight::signals::PlantSignals;
@@ -25,7 +26,7 @@ const PANEL_HEIGHT_PX: u32 = 260;
 pub fn plot_timeline(
     trace: &Trace,
     plant: &PlantSignals,
-    setpoint: &dyn Fn(&str) -> Option<f64>,
+    setpoint: &SetpointOf,
     events: &[TimelineEvent],
     out_dir: &Path,
     stem: &str,
@@ -64,7 +65,7 @@ fn output_panels(
     data: &Columns,
     t: &[f64],
     plant: &PlantSignals,
-    setpoint: &dyn Fn(&str) -> Option<f64>,
+    setpoint: &SetpointOf,
 ) -> Result<Vec<Panel>, PlotError> {
     let measured = measured_outputs(plant);
     let with_setpoint: Vec<_> = measured.iter().filter(|(name, _)| setpoint(name).is_some()).cloned().collect();
@@ -77,7 +78,7 @@ fn output_panels(
     for (k, (name, unit)) in shown.iter().enumerate() {
         let mut series = vec![Series::solid(name, zip(t, &data.get(name)?), palette(k))];
         if let Some(sp) = setpoint(name) {
-            series.push(Series::level(&format!("{name} set point"), sp, span, palette(k)));
+            series.push(Series::level(&format!("{name} set point"), &sp, span, palette(k)));
         }
         add_to_unit_panel(&mut panels, unit_label(unit), caption, series);
     }
@@ -128,6 +129,7 @@ fn add_to_unit_panel(panels: &mut Vec<(String, Panel)>, unit: &str, caption: &st
 mod tests {
     use super::*;
     use crate::plant_series::tests::cart;
+    use silrig_flight::setpoints::SetpointTrack;
     use silrig_flight::trace::OUTPUTS_HELD_COLUMN;
 
     fn cart_trace() -> Trace {
@@ -149,7 +151,8 @@ mod tests {
         let (p, trace) = (cart(), cart_trace());
         let data = Columns::new(&trace, Path::new("/nonexistent/f.png"), "the trace").unwrap();
         let t = data.get("t_s").unwrap();
-        let outputs = output_panels(&data, &t, &p, &|n: &str| (n == "x_m").then_some(2.0)).unwrap();
+        let outputs =
+            output_panels(&data, &t, &p, &|n: &str| (n == "x_m").then(|| SetpointTrack::constant(2.0))).unwrap();
         assert_eq!(outputs.len(), 1, "only the output with a set point");
         let labels: Vec<&str> = outputs[0].series.iter().map(|s| s.label.as_str()).collect();
         assert_eq!(labels, ["x_m", "x_m set point"]);
@@ -168,9 +171,16 @@ mod tests {
     fn the_timeline_of_a_plant_that_is_not_the_f16_is_drawn_with_its_events_and_held_rows() {
         let dir = std::env::temp_dir().join(format!("silrig-plot-timeline-{}", std::process::id()));
         let events = [TimelineEvent { t_s: 1.0, label: "controller kill".into(), end_s: Some(1.4) }];
-        let files =
-            plot_timeline(&cart_trace(), &cart(), &|n: &str| (n == "x_m").then_some(2.0), &events, &dir, "faults", "t")
-                .unwrap();
+        let files = plot_timeline(
+            &cart_trace(),
+            &cart(),
+            &|n: &str| (n == "x_m").then(|| SetpointTrack::constant(2.0)),
+            &events,
+            &dir,
+            "faults",
+            "t",
+        )
+        .unwrap();
         let svg = std::fs::read_to_string(&files[1]).unwrap();
         for needle in ["controller kill", "x_m set point", "steer cmd", "throttle cmd", "shaded: outputs held"] {
             assert!(svg.contains(needle), "faults.svg lacks {needle:?}");

@@ -32,7 +32,7 @@ pub fn write_run(
     std::fs::write(&scenario_path, scenario.to_toml())
         .with_context(|| format!("writing {}", scenario_path.display()))?;
     let mut files = vec![trace_path, summary_path, scenario_path];
-    let setpoint = |name: &str| scenario.setpoint.get(name);
+    let setpoint = |name: &str| scenario.setpoint_track(name);
     if silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) {
         let f_true = silrig_flight::f_true::from_trace(trace, scenario);
         let title = plot_title(scenario);

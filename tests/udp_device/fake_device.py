@@ -7,6 +7,7 @@ says:
   short       every 10th reply is 8 bytes instead of 12
   silent      never replies
   die-after   exits after N=50 replies (the rig's supervision starts it again)
+  echo        every reply's elevator is the packet's third f64 (what the layout sends there: a set point)
 
 Usage: fake_device.py PORT_IN REPLY_PORT MODE ELEVATOR
 """
@@ -21,10 +22,12 @@ rx.bind(("127.0.0.1", port_in))
 tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
 n = 0
 while True:
-    rx.recv(65536)
+    packet = rx.recv(65536)
     n += 1
     if mode == "silent":
         continue
+    if mode == "echo":
+        elevator = struct.unpack_from("<d", packet, 16)[0]
     reply = struct.pack("<3f", 0.0, elevator, 0.0)
     if mode == "nan" and n % 10 == 0:
         reply = struct.pack("<3f", 0.0, float("nan"), 0.0)

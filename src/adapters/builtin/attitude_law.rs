@@ -6,6 +6,7 @@
 use silrig_flight::f16_signals::F16Outputs;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
+use silrig_flight::setpoints::SetpointTrack;
 use silrig_flight::sim::{measurement, setpoint_rad, write_attitude_diagnostics};
 use silrig_model::control::AttitudeController;
 use silrig_rig::controller::Controller;
@@ -16,7 +17,8 @@ use silrig_wire::wire::PlantSample;
 /// leaving any other input (the throttle) where it is.
 pub struct AttitudeLaw {
     controller: AttitudeController,
-    setpoint: [f64; 3],
+    /// phi, theta and psi's set points over the run, deg: read at each sample's time.
+    attitude: [SetpointTrack; 3],
     outputs: Option<F16Outputs>,
     surfaces: [usize; 3],
     /// The plant's accepted range of each of `surfaces`, deg.
@@ -29,7 +31,7 @@ impl AttitudeLaw {
         let tables = silrig_model::plant::F16Model::new(scenario.plant.xcg).tables();
         Self {
             controller: silrig_flight::sim::attitude_controller(scenario, tables),
-            setpoint: setpoint_rad(scenario),
+            attitude: scenario.attitude_setpoints(),
             outputs: None,
             surfaces: [0, 1, 2],
             ranges: [(f64::NEG_INFINITY, f64::INFINITY); 3],
@@ -52,7 +54,7 @@ impl Controller for AttitudeLaw {
     fn step(&mut self, sample: &PlantSample, dt_s: f64, command: &mut [f64], diagnostics: &mut [f64]) {
         let outputs = self.outputs.as_ref().expect("connect comes before the first step");
         let snap = outputs.snapshot(sample.header.tick, sample.t_sim_s, sample.outputs());
-        let (surfaces, diag) = self.controller.step(&measurement(&snap), &self.setpoint, dt_s);
+        let (surfaces, diag) = self.controller.step(&measurement(&snap), &setpoint_rad(&self.attitude, snap.t_s), dt_s);
         write_attitude_diagnostics(diagnostics, &diag, &self.controller);
         // Limited to the range the plant accepts, as a flight computer limits its commands: a surface stuck
         // hard-over drives the sliding surface, and with it the demand, past any travel (the soak's elevator

@@ -4,10 +4,10 @@
 //! Hummingbird whatever `[plant.parameters]` says, as a flight computer knows its vehicle only nominally: a sweep
 //! over the parameters tests it against vehicles it was not tuned for.
 
-use silrig_flight::quad::quad_setpoint;
+use silrig_flight::quad::{QuadSetpoints, quad_setpoints};
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
-use silrig_model::control::quad::{QuadController, QuadGains, QuadMeasurement, QuadSetpoint};
+use silrig_model::control::quad::{QuadController, QuadGains, QuadMeasurement};
 use silrig_model::quad::params::QuadParams;
 use silrig_model::quad::rotors::ROTORS;
 use silrig_rig::controller::Controller;
@@ -22,18 +22,19 @@ const MOTORS: [&str; ROTORS] = ["motor1", "motor2", "motor3", "motor4"];
 /// Our quadrotor controller with the scenario's set points.
 pub struct QuadLaw {
     controller: QuadController,
-    setpoint: QuadSetpoint,
+    /// The set points over the run, read at each sample's time.
+    setpoints: QuadSetpoints,
     reads: [usize; READS.len()],
     motors: [usize; ROTORS],
 }
 
 impl QuadLaw {
-    /// The controller for the scenario's set points (`phi_deg`, `theta_deg`, `psi_deg`, `alt_m`), with empty
-    /// integrators; an error names the key that gives no set point.
+    /// The controller for the scenario's set points (`phi_deg`, `theta_deg`, `psi_deg`, `alt_m`, with their
+    /// steps), with empty integrators; an error names the key that gives no set point.
     pub fn new(scenario: &Scenario) -> Result<Self, String> {
-        let setpoint = quad_setpoint(scenario).map_err(|(key, problem)| format!("`{key}`: {problem}"))?;
+        let setpoints = quad_setpoints(scenario).map_err(|(key, problem)| format!("`{key}`: {problem}"))?;
         let controller = QuadController::new(QuadGains::default(), QuadParams::default());
-        Ok(Self { controller, setpoint, reads: [0; READS.len()], motors: [0; ROTORS] })
+        Ok(Self { controller, setpoints, reads: [0; READS.len()], motors: [0; ROTORS] })
     }
 
     fn measure(&self, outputs: &[f64]) -> QuadMeasurement {
@@ -64,7 +65,7 @@ impl Controller for QuadLaw {
 
     fn step(&mut self, sample: &PlantSample, dt_s: f64, command: &mut [f64], _diagnostics: &mut [f64]) {
         let m = self.measure(sample.outputs());
-        let motors = self.controller.step(&m, &self.setpoint, dt_s);
+        let motors = self.controller.step(&m, &self.setpoints.at(sample.t_sim_s), dt_s);
         for (&input, value) in self.motors.iter().zip(motors) {
             command[input] = value;
         }

@@ -7,8 +7,8 @@
 //! - its inputs and outputs are its numeric variables (Real/Float64, Integer/Int32, Boolean, as doubles); the others
 //!   are left out, and refused by name when `[controller.map]` names one;
 //! - each input of the FMU takes, every tick, the plant output of its name; an input named `<output>_sp` takes
-//!   instead the scenario's set point of that output (`[setpoint]`, in the output's unit); an input that is neither
-//!   stays unconnected at its start value;
+//!   instead the scenario's set point of that output in force at the sample's time (`[setpoint]`, then any step of
+//!   `[[setpoint_steps]]`, in the output's unit); an input that is neither stays unconnected at its start value;
 //! - each output of the FMU named like a plant input is that input's command; inputs no output names stay where
 //!   their actuators are (the throttle under an attitude controller);
 //! - every output is also one of the controller's diagnostics, under the variable's signal name (so the trace
@@ -28,7 +28,8 @@
 
 use super::variables::{can_checkpoint, from_hex, parameters, set_parameters, signal_name, signal_variables, to_hex};
 use silrig_flight::controller_map::MapTarget;
-use silrig_flight::scenario::{ControllerOptions, Scenario, Setpoint};
+use silrig_flight::scenario::{ControllerOptions, Scenario, Setpoint, SetpointStep};
+use silrig_flight::setpoints::SetpointTrack;
 use silrig_flight::signals::{PlantSignals, valid_name};
 use silrig_fmi::description::{Causality, ModelDescription, ValueKind, Variable};
 use silrig_fmi::numbers::Numbers;
@@ -79,17 +80,31 @@ pub struct ControllerMap {
     pub parameters: Vec<super::variables::Parameter>,
 }
 
+/// A set point's history by its name, `None` when the scenario gives none.
+pub type SetpointOf<'a> = dyn Fn(&str) -> Option<SetpointTrack> + 'a;
+
 /// Where an FMU input's value comes from each tick.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Source {
     /// The plant output at this index of the sample.
     Output(usize),
-    /// A set point (constant over the run).
-    Setpoint(f64),
+    /// A set point, its value in force at the sample's time (`[[setpoint_steps]]` change it).
+    Setpoint(SetpointTrack),
     /// The constant `[controller.map]` gives.
     Constant(f64),
     /// Unconnected: the input's start value.
     Start(f64),
+}
+
+impl Source {
+    /// The input's value for a sample of `outputs` at `t_s`.
+    pub fn value(&self, outputs: &[f64], t_s: f64) -> f64 {
+        match self {
+            Source::Output(k) => outputs[*k],
+            Source::Setpoint(track) => track.at(t_s),
+            Source::Constant(v) | Source::Start(v) => *v,
+        }
+    }
 }
 
 /// The FMU bound to the plant: where each input comes from and which outputs command which inputs.
@@ -204,9 +219,9 @@ impl ControllerMap {
     }
 
     /// Bind the FMU to the plant's signals: each input to a plant output, a set point, a constant or its start
-    /// value, the outputs named like the plant's inputs to their commands. Errors name the file, the variable and
-    /// the plant's signals.
-    pub fn bind(&self, plant: &PlantSignals, setpoint: &Setpoint) -> Result<Binding, String> {
+    /// value, the outputs named like the plant's inputs to their commands; `setpoint` gives a set point's history by
+    /// name ([`Scenario::setpoint_track`]). Errors name the file, the variable and the plant's signals.
+    pub fn bind(&self, plant: &PlantSignals, setpoint: &SetpointOf) -> Result<Binding, String> {
         let bad = |problem: String| format!("FMU {}: {problem}", self.file);
         let inputs = || list(plant.inputs.iter().map(|i| i.name.as_str()));
         let output_index = |name: &str| plant.outputs.iter().position(|o| o.name == name);
@@ -255,7 +270,7 @@ fn as_given(v: &MappedVariable) -> String {
 
 /// Where input `v` takes its value each tick: a constant of the map, the plant output of its name, the set point
 /// `<output>_sp`, or, when it names nothing of the plant and the map does not name it, its start value.
-fn source(v: &MappedVariable, plant: &PlantSignals, setpoint: &Setpoint) -> Result<Source, String> {
+fn source(v: &MappedVariable, plant: &PlantSignals, setpoint: &SetpointOf) -> Result<Source, String> {
     let output_index = |name: &str| plant.outputs.iter().position(|o| o.name == name);
     if let Some(value) = v.constant {
         return Ok(Source::Constant(value));
@@ -264,8 +279,8 @@ fn source(v: &MappedVariable, plant: &PlantSignals, setpoint: &Setpoint) -> Resu
         return Ok(Source::Output(k));
     }
     if let Some(of) = v.signal.strip_suffix(SETPOINT_SUFFIX).filter(|of| output_index(of).is_some()) {
-        return match setpoint.get(of) {
-            Some(value) => Ok(Source::Setpoint(value)),
+        return match setpoint(of) {
+            Some(track) => Ok(Source::Setpoint(track)),
             None => Err(format!(
                 "input {} takes the set point of `{of}`, and the scenario gives none: add `{of} = ...` to its \
                  [setpoint]",
@@ -317,7 +332,9 @@ pub struct FmuController {
     fmu: Arc<Fmu>,
     /// Its variables and how they meet `[controller]`.
     pub map: ControllerMap,
+    /// The scenario's set points and their steps, which the `_sp` inputs are bound to.
     setpoint: Setpoint,
+    setpoint_steps: Vec<SetpointStep>,
     /// The plant's period, s: a sample's tick at this period is its time (the controller's own step may be longer,
     /// `timing.controller_every_ticks`).
     plant_dt_s: f64,
@@ -359,6 +376,7 @@ impl FmuController {
             fmu,
             map,
             setpoint: scenario.setpoint.clone(),
+            setpoint_steps: scenario.setpoint_steps.clone(),
             plant_dt_s: scenario.timing.dt_s,
             binding: None,
             last_tick: 0,
@@ -375,7 +393,7 @@ impl FmuController {
         let map =
             ControllerMap::describe(fmu.file(), &fmu.description, &scenario.controller).map_err(anyhow::Error::msg)?;
         if let Some(plant) = plant {
-            map.bind(plant, &scenario.setpoint).map_err(anyhow::Error::msg)?;
+            map.bind(plant, &|name| scenario.setpoint_track(name)).map_err(anyhow::Error::msg)?;
         }
         Ok(map)
     }
@@ -403,10 +421,7 @@ impl FmuController {
         let binding = self.binding.as_ref().expect("connect comes before the first step");
         let outputs = sample.outputs();
         for (value, source) in self.input_values.iter_mut().zip(&binding.sources) {
-            *value = match *source {
-                Source::Output(k) => outputs[k],
-                Source::Setpoint(v) | Source::Constant(v) | Source::Start(v) => v,
-            };
+            *value = source.value(outputs, sample.t_sim_s);
         }
         let instance = self.instance.get_mut();
         if !self.inputs.is_empty() {
@@ -433,7 +448,7 @@ impl Controller for FmuController {
     }
 
     fn connect(&mut self, plant: &PlantSignals) -> Result<(), String> {
-        let binding = self.map.bind(plant, &self.setpoint)?;
+        let binding = self.map.bind(plant, &|name| SetpointTrack::of(&self.setpoint, &self.setpoint_steps, name))?;
         let unconnected = self.map.unconnected(&binding);
         if let (Some(events), false) = (&self.events, unconnected.is_empty()) {
             let detail = format!(
@@ -554,15 +569,15 @@ mod tests {
     #[test]
     fn inputs_take_a_constant_or_stay_unconnected_at_their_start_value() {
         let map = map_of("a = 0.25\nb = 1").unwrap();
-        let binding = map.bind(&plant(&["y"], &["u"]), &Setpoint::default()).unwrap();
+        let binding = map.bind(&plant(&["y"], &["u"]), &|_| None).unwrap();
         assert_eq!(binding.sources, [Source::Constant(0.25), Source::Start(4.0), Source::Constant(1.0)]);
         assert_eq!(binding.commands, [(0, 0)]);
         assert_eq!(map.unconnected(&binding), ["n"]);
         // Named like a plant output, an input reads it; a Boolean without a start value must be connected.
         let map = map_of("a = 0.25").unwrap();
-        let binding = map.bind(&plant(&["b", "n"], &["u"]), &Setpoint::default()).unwrap();
+        let binding = map.bind(&plant(&["b", "n"], &["u"]), &|_| None).unwrap();
         assert_eq!(binding.sources, [Source::Constant(0.25), Source::Output(1), Source::Output(0)]);
-        let e = map.bind(&plant(&["y"], &["u"]), &Setpoint::default()).unwrap_err();
+        let e = map.bind(&plant(&["y"], &["u"]), &|_| None).unwrap_err();
         assert!(
             e.contains("input \"b\" is neither an output of plant p") && e.contains("declares no start value"),
             "{e}"
@@ -574,15 +589,29 @@ mod tests {
         let e = map_of("u = 0.0").unwrap_err();
         assert!(e.contains("`controller.map.u` = 0: variable \"u\" is an output"), "{e}");
         let map = map_of("a = \"alpha\"").unwrap();
-        let e = map.bind(&plant(&["y", "n", "b"], &["u"]), &Setpoint::default()).unwrap_err();
+        let e = map.bind(&plant(&["y", "n", "b"], &["u"]), &|_| None).unwrap_err();
         assert!(e.contains("input \"a\" (mapped to `alpha` by `controller.map`) is `alpha`, neither"), "{e}");
     }
 
     #[test]
     fn a_plant_without_inputs_is_watched_and_one_with_inputs_must_be_commanded() {
         let map = map_of("").unwrap();
-        assert!(map.bind(&plant(&["b"], &[]), &Setpoint::default()).unwrap().commands.is_empty());
-        let e = map.bind(&plant(&["b"], &["elevator"]), &Setpoint::default()).unwrap_err();
+        assert!(map.bind(&plant(&["b"], &[]), &|_| None).unwrap().commands.is_empty());
+        let e = map.bind(&plant(&["b"], &["elevator"]), &|_| None).unwrap_err();
         assert!(e.contains("none of its outputs (u, on) is named like an input of plant p (elevator)"), "{e}");
+    }
+
+    #[test]
+    fn an_input_named_for_a_set_point_takes_the_value_in_force_at_each_sample() {
+        let map = map_of("a = \"y_sp\"").unwrap();
+        let setpoint = Setpoint { outputs: [("y".to_string(), 1.0)].into(), ..Default::default() };
+        let steps = [SetpointStep { at_s: 2.0, values: [("y".to_string(), 3.0)].into() }];
+        let binding = map.bind(&plant(&["y", "n", "b"], &["u"]), &|n| SetpointTrack::of(&setpoint, &steps, n)).unwrap();
+        let source = &binding.sources[0];
+        let values: Vec<f64> = [0.0, 1.99, 2.0, 5.0].map(|t| source.value(&[7.0, 0.0, 0.0], t)).into();
+        assert_eq!(values, [1.0, 1.0, 3.0, 3.0]);
+        assert_eq!(binding.sources[1].value(&[7.0, 8.0, 9.0], 5.0), 8.0);
+        let e = map.bind(&plant(&["y", "n", "b"], &["u"]), &|_| None).unwrap_err();
+        assert!(e.contains("takes the set point of `y`, and the scenario gives none"), "{e}");
     }
 }

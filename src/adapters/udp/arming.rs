@@ -37,9 +37,9 @@ pub struct Arming {
     options: ArmingOptions,
     device: String,
     watch: StatusWatch,
-    /// (index into the bound set points, the scenario's value) of the switch, then of each held set point.
-    switch: (usize, f64),
-    held: Vec<(usize, f64)>,
+    /// The index into the bound set points of the switch, then of each held set point.
+    switch: usize,
+    held: Vec<usize>,
     started_ns: Option<u64>,
     raised: bool,
     /// Its receiver is set up: it has said `RX_FAILSAFE` (no RC yet) or that it is armed, since it (re)started.
@@ -76,7 +76,7 @@ impl Arming {
             options: options.clone(),
             device: device.to_string(),
             watch: StatusWatch::start(SocketAddr::new(address, options.msp_port)),
-            switch: (0, 0.0),
+            switch: 0,
             held: Vec::new(),
             started_ns: None,
             raised: false,
@@ -88,12 +88,10 @@ impl Arming {
         })
     }
 
-    /// Find the set points among those the layout was bound against (the scenario's `names` and `values`).
-    pub fn bind(&mut self, names: &[String], values: &[f64]) -> Result<(), String> {
+    /// Find the set points among those the layout was bound against (the scenario's `names`).
+    pub fn bind(&mut self, names: &[String]) -> Result<(), String> {
         let find = |name: &String| {
-            let k =
-                names.iter().position(|n| n == name).ok_or_else(|| format!("[arming] set point `{name}` not found"));
-            k.map(|k| (k, values[k]))
+            names.iter().position(|n| n == name).ok_or_else(|| format!("[arming] set point `{name}` not found"))
         };
         self.switch = find(&self.options.switch)?;
         self.held = self.options.low_until_armed.iter().map(find).collect::<Result<_, _>>()?;
@@ -109,12 +107,16 @@ impl Arming {
         self.receiver_up
     }
 
-    /// Hold the switch and the held set points low while they must be, else at the scenario's values.
+    /// Hold the switch and the held set points low while they must be; else they keep the values in force (the
+    /// scenario's at this tick, `[[setpoint_steps]]` included).
     pub fn hold(&self, setpoints: &mut [f64]) {
-        let (index, value) = self.switch;
-        setpoints[index] = if self.raised { value } else { 0.0 };
-        for &(index, value) in &self.held {
-            setpoints[index] = if self.armed { value } else { 0.0 };
+        if !self.raised {
+            setpoints[self.switch] = 0.0;
+        }
+        if !self.armed {
+            for &index in &self.held {
+                setpoints[index] = 0.0;
+            }
         }
     }
 

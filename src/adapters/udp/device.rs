@@ -18,6 +18,7 @@ use super::layout::{BoundLayout, DeviceLayout, SignalNames};
 use super::link::Link;
 use super::supervise::Supervisor;
 use silrig_flight::scenario::Scenario;
+use silrig_flight::setpoints::SetpointTrack;
 use silrig_flight::signals::PlantSignals;
 use silrig_rig::ProcessArgs;
 use silrig_rig::controller::{Controller, ControllerFigures, serve};
@@ -49,8 +50,10 @@ pub struct DeviceController {
     layout: DeviceLayout,
     link: Link,
     bound: Option<BoundLayout>,
-    /// The scenario's set points by name, in the order the layout was bound against.
+    /// The scenario's set points by name, in the order the layout was bound against: their histories over the run,
+    /// and the values sent this tick.
     setpoint_names: Vec<String>,
+    setpoint_tracks: Vec<SetpointTrack>,
     setpoints: Vec<f64>,
     budget_ns: u64,
     silent_after_ns: u64,
@@ -108,7 +111,10 @@ impl DeviceController {
         let supervisor = supervisor.transpose()?;
         let arming =
             layout.arming.as_ref().map(|a| Arming::new(a, &layout.name, layout.address, scenario)).transpose()?;
-        let (setpoint_names, setpoints) = scenario.setpoint.all().into_iter().map(|(n, v)| (n.to_string(), v)).unzip();
+        let (setpoint_names, setpoints): (Vec<String>, Vec<f64>) =
+            scenario.setpoint.all().into_iter().map(|(n, v)| (n.to_string(), v)).unzip();
+        let setpoint_tracks =
+            setpoint_names.iter().map(|n| scenario.setpoint_track(n).expect("a name of [setpoint]")).collect();
         let events = EventLog::new(run_dir, silrig_flight::role::Role::Controller.label());
         let state = arming.as_ref().map(|_| StateLog::new(&layout.name, events.clone()));
         let packets: Vec<&str> = layout.to_device.iter().map(|p| p.name.as_str()).collect();
@@ -119,6 +125,7 @@ impl DeviceController {
             link,
             bound: None,
             setpoint_names,
+            setpoint_tracks,
             setpoints,
             budget_ns: (budget_ms * 1e6) as u64,
             command: Vec::new(),
@@ -144,6 +151,10 @@ impl DeviceController {
     /// Send this tick's packets; the time the first went out, if any did.
     fn send(&mut self, sample: &PlantSample) -> Option<u64> {
         let bound = self.bound.as_ref().expect("connect comes before the first step");
+        // The values in force at the sample's time, then the arming's hold over them.
+        for (value, track) in self.setpoints.iter_mut().zip(&self.setpoint_tracks) {
+            *value = track.at(sample.t_sim_s);
+        }
         if let Some(arming) = &self.arming {
             if !arming.ready() {
                 // Still starting: its silence is counted from when it is ready.
@@ -306,7 +317,7 @@ impl Controller for DeviceController {
         self.command = plant.inputs.iter().map(|i| i.hold).collect();
         self.next_due = vec![0; bound.to_device.len()];
         if let Some(arming) = &mut self.arming {
-            arming.bind(&self.setpoint_names, &self.setpoints)?;
+            arming.bind(&self.setpoint_names)?;
         }
         self.bound = Some(bound);
         Ok(())

@@ -1,6 +1,7 @@
 //! Measures on one signal of a trace: settling time into a band, overshoot past a set point, RMS, and the
 //! oscillation left at the end of a flight. What the summary's rows and the criteria of [`crate::judge`] share.
 
+use crate::setpoints::Segment;
 use serde::{Deserialize, Serialize};
 
 /// The time after which `x` stays within `band` of `target`; `None` if it is outside at the end.
@@ -35,6 +36,51 @@ pub fn overshoot(x: &[f64], setpoint: f64) -> f64 {
     // f64::signum gives 1 for 0: the step's direction is taken explicitly.
     let direction = if step > 0.0 { 1.0 } else { -1.0 };
     x.iter().map(|v| (v - setpoint) * direction).fold(0.0_f64, |m, v| if v.is_nan() { f64::INFINITY } else { m.max(v) })
+}
+
+/// The rows of `t` (ascending) each segment of a set point's history covers: from its `from_s` to the next's.
+pub fn segment_rows(t: &[f64], segments: &[Segment]) -> Vec<std::ops::Range<usize>> {
+    let start = |s: &Segment| t.partition_point(|v| *v < s.from_s);
+    let starts: Vec<usize> = segments.iter().map(start).collect();
+    starts.iter().enumerate().map(|(k, &a)| a..starts.get(k + 1).copied().unwrap_or(t.len())).collect()
+}
+
+/// A set point that steps, met or not: the segment, and when `x` came within the band of its value and stayed
+/// there until the segment ended (`None`: it did not).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepSettled {
+    /// The segment: its step's time and value.
+    pub segment: Segment,
+    /// When `x` settled, s of the run.
+    pub at_s: Option<f64>,
+}
+
+impl StepSettled {
+    /// How long after its step it settled, s (infinite: never).
+    pub fn after_step_s(&self) -> f64 {
+        self.at_s.map_or(f64::INFINITY, |a| a - self.segment.from_s)
+    }
+}
+
+/// The segment `x` took longest to settle into after its step ([`settle_time`] per segment, each judged on its own
+/// rows; a step after the trace's end is left out); with one segment, [`settle_time`] over the run.
+pub fn slowest_settle(t: &[f64], x: &[f64], segments: &[Segment], band: f64) -> StepSettled {
+    let rows = segment_rows(t, segments);
+    let flown = rows.into_iter().zip(segments).filter(|(rows, _)| !rows.is_empty());
+    let per_segment = flown.map(|(rows, segment)| StepSettled {
+        segment: *segment,
+        at_s: settle_time(&t[rows.clone()], &x[rows], segment.value, band),
+    });
+    let slowest = per_segment.max_by(|a, b| a.after_step_s().total_cmp(&b.after_step_s()));
+    slowest.unwrap_or(StepSettled { segment: segments[0], at_s: None })
+}
+
+/// The largest [`overshoot`] of `x` past any segment's value, each measured from the value `x` had at its step,
+/// and that segment (the first when none overshoots).
+pub fn largest_overshoot(t: &[f64], x: &[f64], segments: &[Segment]) -> (f64, Segment) {
+    let rows = segment_rows(t, segments);
+    let each = rows.into_iter().zip(segments).map(|(rows, s)| (overshoot(&x[rows], s.value), *s));
+    each.fold((0.0, segments[0]), |worst, c| if c.0 > worst.0 { c } else { worst })
 }
 
 /// The first row of `t` inside the last `window_s` of the trace (the late window).

@@ -50,16 +50,18 @@ pub struct Settled {
     pub at_s: Option<f64>,
 }
 
-/// One output with a set point, in that output's unit.
+/// One output with a set point, in that output's unit. A set point that `[[setpoint_steps]]` change is described
+/// by its last step: the set point then, the value at the step, the response from there; `max_error` against the
+/// value in force at each row.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SetpointFigures {
     /// The output's name (a trace column).
     pub name: String,
     /// Its unit, as the plant announces it.
     pub unit: String,
-    /// Set point.
+    /// Set point (the last step's, for one that steps).
     pub setpoint: f64,
-    /// Value at t = 0.
+    /// Value at t = 0 (at the last step, for a set point that steps).
     pub initial: f64,
     /// Value at the end.
     pub final_value: f64,
@@ -217,28 +219,36 @@ fn setpoint_rows(trace: &Trace, scenario: &Scenario, plant: &PlantSignals, t: &[
         .setpoint
         .all()
         .into_iter()
-        .filter_map(|(name, setpoint)| {
+        .filter_map(|(name, _)| {
             let unit = plant.outputs.iter().find(|o| o.name == name)?.unit.clone();
-            let x = trace.column(name)?;
+            let all = trace.column(name)?;
+            let track = scenario.setpoint_track(name)?;
+            let all_t = t;
+            // The last step the trace reaches, and the rows from it on (all of them without steps).
+            let rows = measures::segment_rows(t, track.segments());
+            let last = rows.iter().rposition(|r| !r.is_empty()).unwrap_or(0);
+            let (setpoint, from) = (track.segments()[last].value, rows[last].start);
+            let (t, x) = (&t[from..], &all[from..]);
             let initial = x.first().copied().unwrap_or(f64::NAN);
             let step = setpoint - initial;
             let response = if step.abs() <= 1e-9 * setpoint.abs().max(1.0) {
                 Response::Held
             } else {
                 Response::Stepped {
-                    settle_within_2pct_s: settle_time(t, &x, setpoint, 0.02 * step.abs()),
-                    overshoot: overshoot(&x, setpoint),
+                    settle_within_2pct_s: settle_time(t, x, setpoint, 0.02 * step.abs()),
+                    overshoot: overshoot(x, setpoint),
                 }
             };
-            let error = |v: &f64| if v.is_nan() { f64::INFINITY } else { (v - setpoint).abs() };
+            let in_force = all_t.iter().map(|ti| track.at(*ti));
+            let error = |(v, sp): (&f64, f64)| if v.is_nan() { f64::INFINITY } else { (v - sp).abs() };
             Some(SetpointFigures {
                 name: name.to_string(),
-                settle_within_0p5deg: (unit == "deg").then(|| Settled { at_s: settle_time(t, &x, setpoint, 0.5) }),
+                settle_within_0p5deg: (unit == "deg").then(|| Settled { at_s: settle_time(t, x, setpoint, 0.5) }),
                 unit,
                 setpoint,
                 initial,
                 final_value: x.last().copied().unwrap_or(f64::NAN),
-                max_error: x.iter().map(error).fold(0.0, f64::max),
+                max_error: all.iter().zip(in_force).map(error).fold(0.0, f64::max),
                 response,
             })
         })

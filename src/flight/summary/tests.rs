@@ -98,6 +98,20 @@ fn a_stepped_set_point_is_judged_by_its_settling_and_a_held_one_by_its_largest_e
 }
 
 #[test]
+fn a_set_point_that_steps_is_described_by_its_last_step_and_its_error_against_the_value_in_force() {
+    // x_m's set point steps from 10 to 12 at 1.5 s; the rover (x towards 10) never gets there.
+    let s = summarize(&flown(), &scenario("[[setpoint_steps]]\nat_s = 1.5\nx_m = 12.0"), Some(&rover()));
+    let x = &s.setpoints[1];
+    let at_step = 10.0 * (1.0 - (-3.0 * 150.0 * 0.01_f64).exp());
+    assert_eq!((x.name.as_str(), x.setpoint, x.initial), ("x_m", 12.0, at_step));
+    assert_eq!(x.response, Response::Stepped { settle_within_2pct_s: None, overshoot: 0.0 });
+    // 10 m at t = 0 against 10; after the step about 2.1 m against 12.
+    assert_eq!(x.max_error, 10.0);
+    let late = 12.0 - 10.0 * (1.0 - (-3.0 * 2.0_f64).exp());
+    assert!((x.final_value - (12.0 - late)).abs() < 1e-12, "{x:?}");
+}
+
+#[test]
 fn every_input_under_its_actuator_gets_rate_and_position_limit_fractions_and_saturated_time() {
     let s = summarize(&flown(), &scenario(""), Some(&rover()));
     assert_eq!(s.actuators.len(), 2);

@@ -9,6 +9,7 @@ use silrig_flight::criteria::{Criteria, Judgement};
 use silrig_flight::dispersion;
 use silrig_flight::judge::judge_flight;
 use silrig_flight::scenario::Scenario;
+use silrig_flight::setpoints::SetpointTrack;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::summary::{Summary, summarize};
 use silrig_flight::trace::Trace;
@@ -96,8 +97,8 @@ pub const ENVELOPE_STEP: usize = 5;
 pub struct EnvelopeSignal {
     /// The output (`theta_deg`, `alt_m`).
     pub name: String,
-    /// Its set point in the scenario.
-    pub setpoint: f64,
+    /// Its set point in the scenario, with any steps.
+    pub setpoint: SetpointTrack,
     /// Its unit.
     pub unit: String,
 }
@@ -114,8 +115,9 @@ pub fn envelope_signals(scenario: &Scenario, plant: Option<&PlantSignals>) -> Ve
             &f16
         }
     };
-    let signal = |(name, setpoint): (&str, f64)| {
+    let signal = |(name, _): (&str, f64)| {
         let output = plant.outputs.iter().find(|o| o.name == name && o.in_trace)?;
+        let setpoint = scenario.setpoint_track(name)?;
         Some(EnvelopeSignal { name: name.to_string(), setpoint, unit: output.unit.clone() })
     };
     scenario.setpoint.all().into_iter().filter_map(signal).collect()

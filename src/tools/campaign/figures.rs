@@ -169,7 +169,7 @@ impl Figures {
                     .iter()
                     .map(|rows| rows.iter().filter_map(|r| Some((r[0] as f64, *r.get(a + 1)? as f64))).collect())
                     .collect(),
-                setpoint: s.setpoint,
+                setpoint: s.setpoint.clone(),
             })
             .collect();
         let envelope_title = format!(

@@ -7,6 +7,7 @@
 //!
 //!     cargo build --release && silrig run --controller-cmd target/release/pid_controller
 
+use silrig_flight::setpoints::SetpointTrack;
 use silrig_flight::signals::PlantSignals;
 use silrig_rig::ProcessArgs;
 use silrig_rig::controller::{Controller, serve};
@@ -24,7 +25,8 @@ const RATES: [&str; 3] = ["p_dps", "q_dps", "r_dps"];
 const INPUTS: [&str; 3] = ["aileron", "elevator", "rudder"];
 
 struct Pid {
-    setpoint_deg: [f64; 3],
+    /// phi, theta and psi's set points over the run, deg (a scenario's `[[setpoint_steps]]` change them).
+    setpoint_deg: [SetpointTrack; 3],
     /// Where the plant's angles, rates and surfaces are in its sample and command, found by name at connect.
     angles: [usize; 3],
     rates: [usize; 3],
@@ -52,7 +54,7 @@ impl Controller for Pid {
         let held = self.inputs.map(|k| command[k]);
         let integral_deg = self.integral_deg.get_or_insert(held);
         for c in 0..3 {
-            let error_deg = self.setpoint_deg[c] - outputs[self.angles[c]];
+            let error_deg = self.setpoint_deg[c].at(sample.t_sim_s) - outputs[self.angles[c]];
             let rate_dps = outputs[self.rates[c]];
             let integral = integral_deg[c] - KI[c] * error_deg * dt_s;
             let surface = integral - KP[c] * error_deg + KD[c] * rate_dps;
@@ -77,7 +79,7 @@ fn main() -> ExitCode {
         }
     };
     let run = args.scenario().and_then(|scenario| {
-        let setpoint_deg = ANGLES.map(|name| scenario.setpoint.get(name).unwrap_or(0.0));
+        let setpoint_deg = scenario.attitude_setpoints();
         let pid = Pid { setpoint_deg, angles: [0; 3], rates: [0; 3], inputs: [0; 3], integral_deg: None };
         serve(&args, scenario, Box::new(pid))
     });
