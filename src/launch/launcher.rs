@@ -149,7 +149,8 @@ fn finish_baseline(
     let source = if floor == FloorSource::Cyclictest { "cyclictest" } else { "the timer baseline" };
     let missing = match (&report, ended_early) {
         (_, Some(status)) => Some(format!(
-            "the OS floor ({source}, pid {}) ended before the run did, {}: no signal of the launcher's, so              something else ended it",
+            "the OS floor ({source}, pid {}) ended before the run did, {}: no signal of the launcher's, so \
+             something else ended it",
             baseline.pid(),
             crate::child::describe(status)
         )),
