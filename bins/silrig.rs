@@ -16,7 +16,11 @@ use std::process::ExitCode;
     version,
     about = "Software-in-the-loop rig for flight control: your plant and your controller (Python, C, Rust, FMUs, \
              JSBSim) as real-time processes over shared memory, with faults, recordings and verdicts; the Stevens & \
-             Lewis F-16 and an adaptive sliding-mode controller are its reference pair"
+             Lewis F-16 and an adaptive sliding-mode controller are its reference pair",
+    after_help = "Exit status, every command: 0 yes; 1 done, and the answer is no (a failed run, a failing verdict, a \
+                  divergence); 2 not done as asked (bad input or flag, a file that cannot be used; nothing started); \
+                  3 (silrig check only) inconclusive: the machine, not the controller; 130 and 143 stopped by Ctrl-C \
+                  or SIGTERM, keeping what was done. Each command's: docs/src/reference/exit-status.md"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -71,7 +75,9 @@ enum Command {
         plant_cmd: Option<String>,
     },
     /// Monte Carlo: fly N dispersed cases of a scenario ([dispersions]) in parallel, judge each by its [criteria],
-    /// and write cases.csv, sweep.json and the pass rate with the worst cases.
+    /// and write cases.csv, sweep.json and the pass rate with the worst cases. Exit status 0 whatever the pass rate
+    /// (gate on it with a sweep case in silrig check); 2: a bad scenario, dispersion or plan; 130, 143: stopped,
+    /// the cases flown kept.
     Sweep(silrig::campaign::SweepCommand),
     /// Run several scenarios and print their summaries side by side, with an overlay plot.
     Compare {
@@ -83,6 +89,9 @@ enum Command {
         out: Option<PathBuf>,
     },
     /// Run the three-process rig (plant, controller, logger over iceoryx2) and report control quality and timing.
+    /// Exit status 0: every process flew and logged the whole scenario; 1: a process failed, the plant was killed
+    /// for good, the state left the model's envelope or a file could not be written; 2: a bad scenario, flag or
+    /// fault plan, or the output folder or run id is taken; 130, 143: stopped by Ctrl-C or SIGTERM.
     Run(silrig::launch::launcher::LaunchOptions),
     /// Watch a running rig of this machine: each process's tick, counters and p99s so far, refreshed every second
     /// until the run ends. Read-only: it changes nothing the rig does.
@@ -96,28 +105,35 @@ enum Command {
     /// Fly a suite of cases with one controller and give a verdict a CI pipeline can gate on: a table,
     /// check.json and check.junit.xml. Exit status 0: every case passed; 1: a case failed; 2: nothing could be
     /// judged (a malformed suite, a controller command that cannot run); 3: inconclusive (nothing failed, but the
-    /// machine disturbed a timing figure in every flight of a case: retry on a quieter machine).
+    /// machine disturbed a timing figure in every flight of a case: retry on a quieter machine); 130:
+    /// interrupted by Ctrl-C or SIGTERM (the cases flown are in check.json).
     Check(silrig::check::CheckOptions),
     /// Fly a controller against a recorded flight: the recorded plant samples, tick by tick in lockstep, to our
     /// controller or yours (--controller-cmd), and compare its commands with the recorded ones. Exit status 0: every
     /// compared value within --tolerance (default: bit-identical); 1: a divergence (the first is printed, with a
     /// table of the largest difference per field); 2: the recording or the controller could not be used.
     Replay(silrig::replay::ReplayOptions),
-    /// Print the wire contract a peer of the rig must match, or write it as a C header or a Python ctypes module.
+    /// Print the wire contract a peer of the rig must match (every rule it must keep), or write it as a C header or
+    /// a Python ctypes module; --c-dir writes every header a C peer includes.
     Contract {
         /// Write the C header (C11 or C++11) to this file.
         #[arg(long)]
         c_header: Option<PathBuf>,
+        /// Write every header a C peer includes into this folder (created if missing): silrig_contract.h (the
+        /// wire types) and silrig_client.h (libsilrig_client.so's functions, which include the former).
+        #[arg(long)]
+        c_dir: Option<PathBuf>,
         /// Write the Python ctypes module to this file.
         #[arg(long)]
         python: Option<PathBuf>,
     },
-    /// Write the built-in F-16 (its actuators, trim and parameters) as an FMI 2.0 co-simulation FMU, for
-    /// `--plant-fmu` or any FMI importer; with a scenario, the parameters' start values come from it.
+    /// Write the built-in plant a scenario flies (the F-16 with its actuators, trim and parameters, or the
+    /// quadrotor of `[plant] model = "quad"`) as an FMI 2.0 co-simulation FMU, for `--plant-fmu` or any FMI
+    /// importer; the parameters' start values come from the scenario.
     ExportFmu {
-        /// Scenario file (TOML); without it, the book's aircraft at the model's default initial condition.
+        /// Scenario file (TOML); without it, the book's F-16 at the model's default initial condition.
         config: Option<PathBuf>,
-        /// The FMU to write (`f16.fmu`).
+        /// The FMU to write (`f16.fmu`, `quad.fmu`).
         #[arg(long)]
         out: PathBuf,
     },
@@ -197,7 +213,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Top { run_id, count } => top(&run_id, count),
         Command::Check(opts) => check(&opts),
         Command::Replay(opts) => replay(&opts),
-        Command::Contract { c_header, python } => contract(c_header, python),
+        Command::Contract { c_header, c_dir, python } => contract(c_header, c_dir, python),
         Command::ExportFmu { config, out } => export_fmu(config.as_deref(), &out),
         Command::New { kind, lang, dir, silrig_path } => {
             let written = silrig::new_project::write(kind, lang, &dir, silrig_path.as_deref())?;
@@ -396,16 +412,21 @@ fn replay(opts: &silrig::replay::ReplayOptions) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn contract(c_header: Option<PathBuf>, python: Option<PathBuf>) -> anyhow::Result<ExitCode> {
-    let files = [(c_header, silrig::contract::c_header as fn() -> String), (python, silrig::contract::python_module)];
-    if files.iter().all(|(path, _)| path.is_none()) {
+fn contract(c_header: Option<PathBuf>, c_dir: Option<PathBuf>, python: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+    let mut files: Vec<(PathBuf, String)> = Vec::new();
+    files.extend(c_header.map(|path| (path, silrig::contract::c_header())));
+    files.extend(python.map(|path| (path, silrig::contract::python_module())));
+    if let Some(dir) = c_dir {
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("--c-dir: cannot create the folder {}", dir.display()))?;
+        files.extend(silrig::contract::c_headers().into_iter().map(|(name, text)| (dir.join(name), text)));
+    }
+    if files.is_empty() {
         print!("{}", silrig::contract::text());
     }
-    for (path, render) in files {
-        if let Some(path) = path {
-            std::fs::write(&path, render()).with_context(|| format!("writing {}", path.display()))?;
-            println!("wrote {}", path.display());
-        }
+    for (path, text) in files {
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
     }
     Ok(ExitCode::SUCCESS)
 }

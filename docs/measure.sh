@@ -1,20 +1,21 @@
 #!/usr/bin/env bash
 # Measures again the benchmark figures the book quotes, with the commands the book names, and prints each with the
-# date, the machine's load and the command: `bash docs/measure.sh` runs all of them (about an hour: run it on a
+# date, the machine's load and the command (the book's Measurements chapter, docs/src/measurements/, holds them):
+# `bash docs/measure.sh` runs all of them (about an hour: run it on a
 # quiet machine), `bash docs/measure.sh sweep ipc` the ones named. Paste what it prints beside the table it
 # refreshes; the tables' own "command" columns are these commands.
 #
-#   model       silrig bench (plant derivative, RK4 step, closed-loop tick)         explanations/timing.md
-#   timer       silrig timer-baseline (the OS floor)                                explanations/timing.md
-#   ipc         silrig bench ipc (ping-pong ceilings, lockstep against them)        explanations/timing.md
-#   realtime    silrig run --duration-s 30, 3 runs (wake-up lateness vs the floor)  explanations/timing.md
-#   lockstep    20,000-tick lockstep runs, 3 runs: cycles/s, CPU per tick           explanations/timing.md
-#   controllers lockstep 300 s: ours, the C and the Python PID, paired              guides/controller.md
-#   sweep       1,000-case sweep, --jobs 2 against --jobs 1, 7 pairs               guides/sweep.md
-#   rigsweep    40 cases of the Python PID through the rig, --jobs 1 and 2         guides/sweep.md
-#   fmu         silrig bench fmu on the exported F-16                             guides/fmu.md
-#   sizes       the default run's files and report.html                          guides/recordings.md
-#   check       silrig check --repeat 20 (the flake benchmark; about 20 minutes)  guides/check.md
+#   model       silrig bench (plant derivative, RK4 step, closed-loop tick)         measurements/plants-controllers.md
+#   timer       silrig timer-baseline (the OS floor)                                measurements/timing.md
+#   ipc         silrig bench ipc (ping-pong ceilings, lockstep against them)        measurements/timing.md
+#   realtime    silrig run --duration-s 30, 3 runs (wake-up lateness vs the floor)  measurements/timing.md
+#   lockstep    20,000-tick lockstep runs, 3 runs: cycles/s, CPU per tick           measurements/recording.md
+#   controllers lockstep 300 s: ours, the C and the Python PID, paired              measurements/plants-controllers.md
+#   sweep       1,000-case sweep, --jobs 2 against --jobs 1, 7 pairs               measurements/campaigns.md
+#   rigsweep    40 cases of the Python PID through the rig, --jobs 1 and 2         measurements/campaigns.md
+#   fmu         silrig bench fmu on the exported F-16                             measurements/plants-controllers.md
+#   sizes       the default run's files and report.html                          measurements/recording.md
+#   check       silrig check --repeat 20 (the flake benchmark; about 20 minutes)  measurements/campaigns.md
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q

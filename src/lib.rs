@@ -27,7 +27,7 @@ pub use silrig_flight::{
     criteria, dispersion, f_true, f16_signals, fault, files, judge, role, scenario, signals, sim, summary, trace,
 };
 pub use silrig_launch as launch;
-pub use silrig_model::{actuator, control, f16_outputs, integrator, plant, rng, units, vehicle};
+pub use silrig_model::{actuator, control, f16_outputs, integrator, plant, quad, rng, units, vehicle};
 pub use silrig_plot as plot;
 pub use silrig_recording as recording;
 pub use silrig_rig as rig;

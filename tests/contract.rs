@@ -46,6 +46,39 @@ fn checked_in_copies_are_what_silrig_contract_generates() {
 }
 
 #[test]
+fn c_dir_writes_every_header_the_c_examples_include() {
+    let dir = temp_dir("c-dir");
+    let include = dir.join("include");
+    let printed = run(Command::new(env!("CARGO_BIN_EXE_silrig")).args(["contract", "--c-dir"]).arg(&include));
+    let mut written: Vec<String> =
+        std::fs::read_dir(&include).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    written.sort();
+    assert_eq!(written, ["silrig_client.h", "silrig_contract.h"], "{printed}");
+    for name in &written {
+        let ours = std::fs::read_to_string(include.join(name)).unwrap();
+        let checked_in = std::fs::read_to_string(root().join("examples/c").join(name)).unwrap();
+        assert!(ours == checked_in, "{name}: `silrig contract --c-dir` writes another text than examples/c has");
+        assert!(printed.contains(&format!("wrote {}", include.join(name).display())), "{printed}");
+    }
+    // The examples compile against what the command wrote and nothing else (a copy outside examples/c).
+    for example in ["pid_attitude.c", "toy_plant.c"] {
+        let source = dir.join(example);
+        std::fs::copy(root().join("examples/c").join(example), &source).unwrap();
+        run(Command::new("cc")
+            .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-fsyntax-only", "-I"])
+            .arg(&include)
+            .arg(&source));
+    }
+    // The obligations of a raw peer are in the header's comments, not only in the text.
+    let header = std::fs::read_to_string(include.join("silrig_contract.h")).unwrap();
+    for rule in contract::PEER_RULES.iter().chain(&contract::SIGNAL_RULES) {
+        assert!(header.contains(rule), "silrig_contract.h lacks the rule: {rule}");
+    }
+    assert!(header.contains("[setpoint]") && header.contains("input_hold"), "set points, uncommanded inputs");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn the_header_compiles_as_c_and_cpp_with_every_assertion_holding() {
     let dir = temp_dir("cc");
     let src = dir.join("use.c");

@@ -16,38 +16,14 @@ use silrig::scenario::Scenario;
 use silrig::sim::{ActuatorCommand, PlantRunner};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::OnceLock;
 
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 const SCRIPT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fmu/fly_fmu.py");
 const SCENARIO: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenarios/fmu_trim.toml");
 
-/// `libsilrig_fmu_f16.so` beside `silrig`, built once (a test binary does not build the workspace's cdylibs).
-fn fmu_library() -> &'static Path {
-    static LIB: OnceLock<PathBuf> = OnceLock::new();
-    LIB.get_or_init(|| {
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let o = Command::new(cargo)
-            .args(["build", "--release", "-p", "silrig-fmu-f16"])
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "building libsilrig_fmu_f16.so: {}", String::from_utf8_lossy(&o.stderr));
-        let lib = Path::new(SILRIG).parent().unwrap().join("libsilrig_fmu_f16.so");
-        assert!(lib.exists(), "{} was not built", lib.display());
-        lib
-    })
-}
-
 /// `silrig export-fmu --out DIR/NAME [SCENARIO]`; the FMU's path and what it printed.
 fn export(dir: &Path, name: &str, scenario: Option<&str>) -> (PathBuf, String) {
-    fmu_library();
-    let out = dir.join(name);
-    let o = Command::new(SILRIG).arg("export-fmu").arg("--out").arg(&out).args(scenario).output().unwrap();
-    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-    assert!(o.status.success(), "export-fmu failed: {stdout}{stderr}");
-    assert!(out.is_file(), "{} not written", out.display());
-    (out, format!("{stdout}{stderr}"))
+    common::fmu::export_builtin(SILRIG, dir, name, scenario)
 }
 
 /// `fly_fmu.py ARGS` under the test venv's Python with FMPy; its stdout.

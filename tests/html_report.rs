@@ -67,7 +67,14 @@ fn browse(browser: &str, page: &Path, scratch: &Path, args: &[&str]) -> Browsed 
     let profile = scratch.join("chromium-profile");
     let (stdout, stderr) = (scratch.join("chromium.stdout"), scratch.join("chromium.stderr"));
     let mut child = Command::new(browser)
-        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--hide-scrollbars"])
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--enable-unsafe-swiftshader",
+            "--no-first-run",
+            "--hide-scrollbars",
+        ])
         .arg(format!("--user-data-dir={}", profile.display()))
         .args(args)
         .arg(format!("file://{}", page.display()))
@@ -213,7 +220,7 @@ fn a_runs_page_shows_its_summary_timing_faults_figures_and_events() {
         esc("'controller:kill@1s,restart_after=0.3s'"),
         out.display()
     );
-    assert_eq!(html.matches(&command).count(), 5, "{command} in every section but the files");
+    assert_eq!(html.matches(&command).count(), 6, "{command} in every section but the files");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     for latency in report["processes"].as_array().unwrap().iter().flat_map(|p| p["latencies"].as_array().unwrap()) {
@@ -331,6 +338,122 @@ fn a_sweeps_page_gives_the_pass_rate_the_worst_cases_and_the_figures() {
             let reproduce = case["reproduce"].as_str().unwrap();
             assert!(html.contains(&format!("<code>{reproduce}</code>")), "no {reproduce}");
         }
+    }
+    if !keep {
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+/// `<div id="view3d" ...>`'s attribute `name`, as the view's script set it.
+fn view_attribute(dom: &str, name: &str) -> Option<u64> {
+    let div = &dom[dom.find("<div id=\"view3d\"")?..];
+    let div = &div[..div.find('>')?];
+    let at = div.find(&format!("{name}=\""))? + name.len() + 2;
+    div[at..at + div[at..].find('"')?].parse().ok()
+}
+
+/// Load `page` with the address `#view3d-test` (the view then reads its pixels back at the first and last frame).
+fn load_view(browser: &str, page: &Path, scratch: &Path) -> Loaded {
+    let o = browse(
+        browser,
+        Path::new(&format!("{}#view3d-test", page.display())),
+        scratch,
+        &["--enable-logging=stderr", "--v=0", "--dump-dom"],
+    );
+    assert!(o.success, "chromium --dump-dom {}: {}", page.display(), o.stderr);
+    // The browser's notice that reading pixels back stalled its GPU is what the test asked for: any other message
+    // fails the test.
+    let console = o.stderr.lines().filter(|l| l.contains(":CONSOLE") && !l.contains("GPU stall due to ReadPixels"));
+    Loaded { console: console.map(str::to_string).collect(), dom: o.stdout }
+}
+
+/// The 3-D view's bytes in `html`: its data and its script.
+fn view_bytes(html: &str) -> usize {
+    let start = html.find("<div id=\"view3d\"").expect("a 3-D view");
+    let data = start + html[start..].find("id=\"view3d-data\"").unwrap();
+    data + html[data..].find("</div>").unwrap() - start
+}
+
+#[test]
+fn the_flight_is_drawn_in_3d_and_moves_for_the_f16_and_the_quadrotor() {
+    let Some(browser) = chromium() else { return };
+    let (dir, keep) = scratch("view3d");
+    for (name, config, kind) in
+        [("f16", None, "\"kind\":\"aircraft\""), ("quad", Some("configs/quad-steps.toml"), "\"kind\":\"quadrotor\"")]
+    {
+        let id = format!("html{}-{name}", std::process::id());
+        let out = dir.join(name);
+        let mut args = vec!["run", "--duration-s", "10", "--mode", "lockstep", "--quiet", "--run-id", &id];
+        let out_arg = out.to_str().unwrap();
+        args.extend(["--out", out_arg]);
+        args.extend(config);
+        let o = silrig(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let page = out.join("report.html");
+        let html = std::fs::read_to_string(&page).unwrap();
+        assert!(html.contains(kind), "{name}: the view draws the wrong vehicle");
+        // A 10 s run's view (its data and our script) stays small: the page's size is the figures'.
+        let bytes = view_bytes(&html);
+        assert!(bytes < 80_000, "{name}: the 3-D view takes {bytes} bytes of the page");
+        let loaded = load_view(browser, &page, &dir);
+        assert!(loaded.console.is_empty(), "{name}: console messages: {:#?}", loaded.console);
+        assert_eq!(loaded.body_number("data-errors"), 0, "{name}: script errors");
+        assert_eq!(view_attribute(&loaded.dom, "data-view3d-frames"), Some(501), "{name}: 50 frames a second of 10 s");
+        let (first, last) =
+            (view_attribute(&loaded.dom, "data-view3d-first"), view_attribute(&loaded.dom, "data-view3d-last"));
+        assert!(first.is_some() && first != last, "{name}: the first and last frames draw alike: {first:?} {last:?}");
+        let colours = view_attribute(&loaded.dom, "data-view3d-colours").unwrap();
+        assert!(colours > 20, "{name}: {colours} colours: the vehicle, grid and path were not drawn");
+        common::no_shared_memory_left(&id);
+    }
+    if !keep {
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[test]
+fn the_views_surfaces_turn_as_foxgloves_and_its_rotation_is_the_quaternions() {
+    let Some(browser) = chromium() else { return };
+    let (dir, keep) = scratch("view3d-math");
+    let angles = [[0.0, 0.0, 0.0], [0.2, -0.3, 0.1], [-0.35, 0.4, -0.25]];
+    let quaternion = silrig::recording::foxglove::enu_flu_quaternion(0.3, -0.2, 1.1);
+    let page = dir.join("math.html");
+    std::fs::write(
+        &page,
+        format!(
+            "<!DOCTYPE html><html><body><script>{}</script><script>\
+             var model={},out=[];{angles:?}.forEach(function(a){{model.surfaces.forEach(function(s){{\
+             var p=silrigView3d.surfacePose(s,a);out.push(p.center.concat(p.q));}});}});\
+             document.body.setAttribute('data-poses',JSON.stringify(out));\
+             document.body.setAttribute('data-matrix',JSON.stringify(silrigView3d.quatMatrix({quaternion:?})));\
+             </script></body></html>",
+            silrig::html::view3d::SCRIPT,
+            silrig::recording::foxglove::aircraft_model(),
+        ),
+    )
+    .unwrap();
+    let loaded = load_view(browser, &page, &dir);
+    let attribute = |name: &str| -> Vec<Vec<f64>> {
+        let at = loaded.dom.find(&format!("{name}=\"")).unwrap_or_else(|| panic!("no {name}")) + name.len() + 2;
+        let text = &loaded.dom[at..at + loaded.dom[at..].find('"').unwrap()];
+        serde_json::from_str(&text.replace("&quot;", "\"")).unwrap()
+    };
+    let expected: Vec<Vec<f64>> = angles
+        .iter()
+        .flat_map(|a| silrig::recording::foxglove::surface_poses(*a))
+        .map(|(c, q)| c.into_iter().chain(q).collect())
+        .collect();
+    let poses = attribute("data-poses");
+    assert_eq!(poses.len(), expected.len());
+    for (js, rust) in poses.iter().zip(&expected) {
+        assert!(js.iter().zip(rust).all(|(a, b)| (a - b).abs() < 1e-12), "script {js:?}, Rust {rust:?}");
+    }
+    // The matrix's columns are the body's axes in the world: x the nose, z the top.
+    let [x, y, z, w] = quaternion;
+    let nose = [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)];
+    let m = attribute("data-matrix");
+    for r in 0..3 {
+        assert!((m[r][0] - nose[r]).abs() < 1e-12, "{m:?} {nose:?}");
     }
     if !keep {
         std::fs::remove_dir_all(&dir).unwrap();

@@ -12,6 +12,21 @@ Header rules:
   - after each send, notify the stream's event service with EVENT_SAMPLE_SENT; never send NaN or infinity
   - a plant sample carries every output the plant announced (outputs_len = PlantInfo.outputs_len), in its order
   - a command carries one value per input the plant announced (inputs_len = PlantInfo.inputs_len), in its order, each within the input's min..max, or it is refused
+
+What each peer does:
+  - a plant announces PlantInfo, then publishes one PlantSample per tick (0, 1, ...) once a command publisher exists; after its last tick it sends that tick again with FLAG_END_OF_RUN, notifies EVENT_FINISHED on stream plant and exits with status 0 (a --plant-cmd plant without a report: that exit is the end of its flight)
+  - a controller opens plant, plant-info, controller-info and command; it announces ControllerInfo (its diagnostics' names, possibly none) before it creates its command publisher, which is what the plant starts on, and again with its first command
+  - a controller takes its set points from the scenario the run flies (the TOML file SILRIG_SCENARIO names): its [setpoint] table gives outputs by name in their unit, and phi_deg, theta_deg and psi_deg are 0 when not given (libsilrig_client reads them for you: silrig_session_setpoint)
+  - a command carries a value for every input, also those the controller does not command: for each, where its actuator is in the sample being answered (the output PlantInfo.input_held_output names), or PlantInfo.input_hold when it names none (NO_OUTPUT); libsilrig_client fills them in: silrig_session_held_command
+  - a controller answers each plant sample it takes with one CommandSample whose answers_tick and header tick are the sample's tick; it need not answer every sample (a miss is held and counted by the plant), and never answers the FLAG_END_OF_RUN sample
+  - a controller leaves when the run ends (the FLAG_END_OF_RUN sample, or EVENT_FINISHED on stream plant): it drops its ports and its node; the launcher removes the run's shared memory once no node of the run is alive
+  - reports: the rig's processes and anything on libsilrig_client write <out>/<role>.report.json; a controller started outside the launcher (--controller external) or a --plant-cmd plant that speaks the contract itself need not, and the run's report then says whose measurements stand in for it
+
+Signals:
+  - the plant announces PlantInfo on stream plant-info once per epoch, before its first sample; a reader that joins later gets it from the stream's history (history 1: the plant calls update_connections every tick)
+  - names: ASCII letters, digits and '_', unique among the outputs and among the inputs; units: printable ASCII without comma or quote
+  - a controller reads PlantInfo before answering a sample and finds the outputs it reads and the inputs it commands by name, never by position; a restarted plant must announce the same signals
+  - trace.csv's columns: t_s, the traced outputs that are no input's position, the traced commands (<input>_cmd_<unit>, or <input>_cmd when the unit is not a word), the traced positions, flight_segment, the controller's diagnostics
 """
 
 import ctypes

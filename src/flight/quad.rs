@@ -11,17 +11,7 @@ use silrig_model::quad::QuadVehicle;
 use silrig_model::quad::outputs::{INPUT_RANGE, INPUTS, OUTPUTS, PLANT_NAME};
 use silrig_model::quad::params::{PARAMS, QuadParams};
 
-/// The start values `[plant.parameters]` takes beside the vehicle's parameters: (name, unit, min, max, what).
-pub const START_VALUES: [(&str, &str, f64, f64, &str); 2] = [
-    (
-        "start_alt_m",
-        "m",
-        0.0,
-        1000.0,
-        "height above the ground at t = 0: 0 rests on the ground with the rotors stopped, above it hovers",
-    ),
-    ("start_psi_deg", "deg", -180.0, 180.0, "heading at t = 0"),
-];
+pub use silrig_model::quad::params::START_VALUES;
 
 /// An error as the scenario's other checks give it: (dotted key, problem).
 type KeyError = (String, String);
@@ -33,9 +23,10 @@ pub fn is_quad(s: &Scenario) -> bool {
 
 /// A start value of `[plant.parameters]`, its default when not given, range-checked.
 fn start_value(s: &Scenario, name: &str) -> Result<f64, KeyError> {
-    let (_, unit, min, max, _) = START_VALUES.iter().find(|v| v.0 == name).expect("a start value's name");
+    let info = START_VALUES.iter().find(|v| v.name == name).expect("a start value's name");
+    let (unit, min, max) = (info.unit, info.min, info.max);
     let Some(&value) = s.plant.parameters.get(name) else { return Ok(0.0) };
-    if !(value >= *min && value <= *max) {
+    if !(value >= min && value <= max) {
         return Err((format!("plant.parameters.{name}"), format!("must be within {min}..={max} {unit}, got {value}")));
     }
     Ok(value)
@@ -45,11 +36,11 @@ fn start_value(s: &Scenario, name: &str) -> Result<f64, KeyError> {
 pub fn quad_params(s: &Scenario) -> Result<QuadParams, KeyError> {
     let mut params = QuadParams::default();
     for (name, value) in &s.plant.parameters {
-        if START_VALUES.iter().any(|v| v.0 == name) {
+        if START_VALUES.iter().any(|v| v.name == name) {
             continue;
         }
         params.set(name, *value).map_err(|e| {
-            let starts: Vec<&str> = START_VALUES.iter().map(|v| v.0).collect();
+            let starts: Vec<&str> = START_VALUES.iter().map(|v| v.name).collect();
             let also = if PARAMS.iter().any(|p| p.name == name) { String::new() } else { starts.join(", ") };
             let also = if also.is_empty() { also } else { format!("; its start values: {also}") };
             (format!("plant.parameters.{name}"), format!("{e}{also}"))
@@ -64,12 +55,7 @@ pub fn quad_vehicle(s: &Scenario) -> Result<QuadVehicle, KeyError> {
     let params = quad_params(s)?;
     let alt_m = start_value(s, "start_alt_m")?;
     let psi_rad = start_value(s, "start_psi_deg")?.to_radians();
-    let vehicle = if alt_m > 0.0 {
-        QuadVehicle::hovering(params, alt_m, psi_rad)
-    } else {
-        QuadVehicle::on_ground(params, psi_rad)
-    };
-    vehicle.map_err(|e| ("plant.parameters".to_string(), e.to_string()))
+    QuadVehicle::at_start(params, alt_m, psi_rad).map_err(|e| ("plant.parameters".to_string(), e.to_string()))
 }
 
 /// The quadrotor's announcement: the model's outputs and its four motor commands (0..1), whose failsafe holds the

@@ -1,12 +1,15 @@
 //! The FMI 2.0 C functions (`fmi2Functions.h`), every one exported since importers resolve them all: the
-//! co-simulation ones over [`crate::instance::Instance`], the model-exchange ones refusing with a logged message.
+//! co-simulation ones over [`crate::instance::FmuInstance`] (the F-16's or the quadrotor's, as the start file in the
+//! FMU's resources says), the model-exchange ones refusing with a logged message.
 //! This is the crate's only unsafe code: pointers from the importer are checked for null and read as the standard
 //! defines them, and no panic crosses the boundary (each call runs under `catch_unwind`; a panic is logged and
 //! answered with fmi2Fatal). Errors go to the importer's fmi2CallbackLogger.
 
 use crate::description::{Experiment, START_FILE, guid, read_start_file};
-use crate::instance::Instance;
+use crate::instance::{FmuInstance, Instance};
+use crate::models::{F16, Quad};
 use crate::variables::Parameters;
+use silrig_fmu_f16_description::quad::{quad_guid, read_quad_start_file};
 use std::ffi::{CStr, CString, c_char, c_double, c_int, c_uint, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
@@ -44,7 +47,7 @@ pub struct CallbackFunctions {
 
 /// What an fmi2Component points to: the instance and how to talk to its importer.
 struct Component {
-    instance: Instance,
+    instance: Box<dyn FmuInstance>,
     log: Log,
 }
 
@@ -157,17 +160,40 @@ fn uri_path(uri: &str) -> Option<String> {
     String::from_utf8(out).ok()
 }
 
-/// The start values and experiment the FMU carries in `resources/` (the book's defaults when there is none).
-fn starts(resource_location: Option<&str>) -> Result<(Parameters, Experiment), String> {
-    let Some(dir) = resource_location.and_then(uri_path) else {
-        return Ok((Parameters::default(), Experiment::default()));
-    };
+/// The start file the FMU carries in `resources/`, if any.
+fn start_text(resource_location: Option<&str>) -> Result<Option<String>, String> {
+    let Some(dir) = resource_location.and_then(uri_path) else { return Ok(None) };
     let file = std::path::Path::new(&dir).join(START_FILE);
     match std::fs::read_to_string(&file) {
-        Ok(text) => read_start_file(&text).map_err(|e| format!("{}: {e}", file.display())),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok((Parameters::default(), Experiment::default())),
+        Ok(text) => Ok(Some(text)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
         Err(e) => Err(format!("{}: {e}", file.display())),
     }
+}
+
+/// A new instance of the vehicle and start values the FMU carries in `resources/` (the quadrotor's start file
+/// says so on its first line; without one, the book's F-16), refused under a GUID other than theirs.
+fn new_instance(resource_location: Option<&str>, given_guid: &str) -> Result<Box<dyn FmuInstance>, String> {
+    let text = start_text(resource_location)?;
+    let wrong = |expected: &str| format!("wrong GUID {given_guid}: this FMU (with its resources) is {expected}");
+    let named = |e: String| format!("{START_FILE}: {e}");
+    if let Some(quad) = text.as_deref().and_then(read_quad_start_file) {
+        let (starts, experiment) = quad.map_err(named)?;
+        let expected = quad_guid(&starts, &experiment)?;
+        if given_guid != expected {
+            return Err(wrong(&expected));
+        }
+        return Ok(Box::new(Instance::<Quad>::new(&expected, starts)?));
+    }
+    let (parameters, experiment) = match text {
+        Some(text) => read_start_file(&text).map_err(named)?,
+        None => (Parameters::default(), Experiment::default()),
+    };
+    let expected = guid(&parameters, &experiment)?;
+    if given_guid != expected {
+        return Err(wrong(&expected));
+    }
+    Ok(Box::new(Instance::<F16>::new(&expected, parameters)?))
 }
 
 /// "default": the standard's types.
@@ -182,7 +208,7 @@ pub extern "C" fn fmi2GetVersion() -> *const c_char {
     c"2.0".as_ptr()
 }
 
-/// A new co-simulation instance at the start values the FMU carries; null (with a logged reason) for another
+/// A new co-simulation instance of the vehicle at the start values the FMU carries; null (with a logged reason) for another
 /// type, a GUID other than the one those start values give ("wrong GUID ..."), or start values that give no
 /// flight.
 ///
@@ -209,17 +235,11 @@ pub unsafe extern "C" fn fmi2Instantiate(
         name: CString::new(name.unwrap_or("")).unwrap_or_default(),
         debug: logging_on != 0,
     };
-    let made = catch_unwind(AssertUnwindSafe(|| -> Result<Instance, String> {
+    let made = catch_unwind(AssertUnwindSafe(|| -> Result<Box<dyn FmuInstance>, String> {
         if fmu_type != CO_SIMULATION {
             return Err("this FMU is for co-simulation only: model exchange is not implemented".into());
         }
-        let (parameters, experiment) = starts(resources)?;
-        let expected = guid(&parameters, &experiment)?;
-        let given = given_guid.unwrap_or("");
-        if given != expected {
-            return Err(format!("wrong GUID {given}: this FMU (with its resources) is {expected}"));
-        }
-        Instance::new(&expected, parameters)
+        new_instance(resources, given_guid.unwrap_or(""))
     }));
     match made {
         Ok(Ok(instance)) => Box::into_raw(Box::new(Component { instance, log })).cast(),
@@ -403,10 +423,10 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: *mut c_void, state: *mut *mut c_void
         // SAFETY: a valid pointer to an fmi2FMUstate, per the caller's contract.
         let slot = unsafe { &mut *state };
         if slot.is_null() {
-            *slot = Box::into_raw(Box::new(c.instance.clone())).cast();
+            *slot = Box::into_raw(Box::new(c.instance.boxed())).cast();
         } else {
-            // SAFETY: a state this FMU made (Box<Instance>::into_raw), per the caller's contract.
-            unsafe { *slot.cast::<Instance>() = c.instance.clone() };
+            // SAFETY: a state this FMU made (Box<Box<dyn FmuInstance>>::into_raw), per the caller's contract.
+            unsafe { *slot.cast::<Box<dyn FmuInstance>>() = c.instance.boxed() };
         }
         Ok(())
     })
@@ -419,9 +439,9 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: *mut c_void, state: *mut *mut c_void
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, state: *mut c_void) -> Status {
     with(c, "fmi2SetFMUstate", |c| {
-        // SAFETY: null or a live Box<Instance> this FMU made, per the caller's contract.
-        let saved = unsafe { state.cast::<Instance>().as_ref() }.ok_or("null FMU state")?;
-        c.instance = saved.clone();
+        // SAFETY: null or a live Box<Box<dyn FmuInstance>> this FMU made, per the caller's contract.
+        let saved = unsafe { state.cast::<Box<dyn FmuInstance>>().as_ref() }.ok_or("null FMU state")?;
+        c.instance = saved.boxed();
         Ok(())
     })
 }
@@ -439,8 +459,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, state: *mut *mut c_voi
         // SAFETY: a valid pointer to an fmi2FMUstate, per the caller's contract.
         let slot = unsafe { &mut *state };
         if !slot.is_null() {
-            // SAFETY: a Box<Instance> this FMU made, freed once.
-            drop(unsafe { Box::from_raw(slot.cast::<Instance>()) });
+            // SAFETY: a Box<Box<dyn FmuInstance>> this FMU made, freed once.
+            drop(unsafe { Box::from_raw(slot.cast::<Box<dyn FmuInstance>>()) });
             *slot = std::ptr::null_mut();
         }
         Ok(())
@@ -454,8 +474,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, state: *mut *mut c_voi
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SerializedFMUstateSize(c: *mut c_void, state: *mut c_void, size: *mut usize) -> Status {
     with(c, "fmi2SerializedFMUstateSize", |_| {
-        // SAFETY: null or a live Box<Instance>, per the caller's contract.
-        let saved = unsafe { state.cast::<Instance>().as_ref() }.ok_or("null FMU state")?;
+        // SAFETY: null or a live Box<Box<dyn FmuInstance>>, per the caller's contract.
+        let saved = unsafe { state.cast::<Box<dyn FmuInstance>>().as_ref() }.ok_or("null FMU state")?;
         // SAFETY: null or writable, per the caller's contract.
         let size = unsafe { size.as_mut() }.ok_or("null size")?;
         *size = saved.serialize().len();
@@ -475,8 +495,8 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     size: usize,
 ) -> Status {
     with(c, "fmi2SerializeFMUstate", |_| {
-        // SAFETY: null or a live Box<Instance>, per the caller's contract.
-        let saved = unsafe { state.cast::<Instance>().as_ref() }.ok_or("null FMU state")?;
+        // SAFETY: null or a live Box<Box<dyn FmuInstance>>, per the caller's contract.
+        let saved = unsafe { state.cast::<Box<dyn FmuInstance>>().as_ref() }.ok_or("null FMU state")?;
         let data = saved.serialize();
         if size < data.len() {
             return Err(format!("{size} bytes given, the state needs {}", data.len()));
@@ -503,8 +523,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     with(c, "fmi2DeSerializeFMUstate", |c| {
         // SAFETY: `size` bytes, per the caller's contract.
         let data = unsafe { slice(bytes.cast::<u8>(), size) }.ok_or("null bytes")?;
-        let guid = c.instance.guid().to_string();
-        let read = Instance::deserialize(&guid, data)?;
+        let read = c.instance.deserialize_same(data)?;
         if state.is_null() {
             return Err("null FMU state pointer".into());
         }
@@ -514,7 +533,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
             *slot = Box::into_raw(Box::new(read)).cast();
         } else {
             // SAFETY: a state this FMU made, per the caller's contract.
-            unsafe { *slot.cast::<Instance>() = read };
+            unsafe { *slot.cast::<Box<dyn FmuInstance>>() = read };
         }
         Ok(())
     })

@@ -54,11 +54,17 @@ const STEP_KEY: &str = "default_step_s";
 
 /// The text of [`START_FILE`]: the parameters' start values ([`Parameters::to_text`]) and the default experiment.
 pub fn start_file(p: &Parameters, e: &Experiment) -> String {
-    format!("{}{STOP_TIME_KEY} = {:?}\n{STEP_KEY} = {:?}\n", p.to_text(), e.stop_time_s, e.step_s)
+    format!("{}{}", p.to_text(), experiment_text(e))
 }
 
 /// Read [`start_file`]'s text back, bit for bit; the error names the line or the key.
 pub fn read_start_file(text: &str) -> Result<(Parameters, Experiment), String> {
+    let (rest, experiment) = split_experiment(text)?;
+    Ok((Parameters::from_text(&rest)?, experiment))
+}
+
+/// The default experiment of a start file's text, and the rest of its lines (the parameters).
+pub(crate) fn split_experiment(text: &str) -> Result<(String, Experiment), String> {
     let mut experiment = [None, None];
     let mut rest = String::new();
     for line in text.lines() {
@@ -85,35 +91,75 @@ pub fn read_start_file(text: &str) -> Result<(Parameters, Experiment), String> {
     let [Some(stop_time_s), Some(step_s)] = experiment else {
         return Err(format!("{STOP_TIME_KEY} and {STEP_KEY} must both be given"));
     };
-    Ok((Parameters::from_text(&rest)?, Experiment { stop_time_s, step_s }))
+    Ok((rest, Experiment { stop_time_s, step_s }))
+}
+
+/// The default experiment's lines of a start file.
+pub(crate) fn experiment_text(e: &Experiment) -> String {
+    format!("{STOP_TIME_KEY} = {:?}\n{STEP_KEY} = {:?}\n", e.stop_time_s, e.step_s)
 }
 
 /// Text for an XML attribute value.
-fn escape(text: &str) -> String {
+pub(crate) fn escape(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
+/// What an FMU of a built-in vehicle says about itself in `modelDescription.xml` besides its variables.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Header {
+    /// `modelName`.
+    pub model_name: &'static str,
+    /// `description` (plain text: escaped here).
+    pub description: &'static str,
+    /// `modelIdentifier`: the binary's file name.
+    pub model_identifier: &'static str,
+    /// The plant name silrig announces it under (its vendor annotation).
+    pub plant: &'static str,
+}
+
+/// The F-16's header.
+const F16_HEADER: Header = Header {
+    model_name: "silrig_f16",
+    description: "The Stevens & Lewis F-16 of silrig with its actuators, trimmed as silrig trims it: the built-in plant of `silrig run`, one doStep one tick",
+    model_identifier: MODEL_IDENTIFIER,
+    plant: PLANT_NAME,
+};
+
 /// The description with `guid` in its place.
 fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid: &str) -> String {
-    let (variables, mut units) = model_variables(p, input_starts);
+    let (variables, units) = model_variables(p, input_starts);
+    render_xml(&F16_HEADER, &variables, units, outputs().len(), experiment, guid)
+}
+
+/// A `modelDescription.xml` of a built-in vehicle: its `<ScalarVariable>`s (the first `outputs` of them its
+/// outputs) and the units they use, with `guid` in its place. Every such FMU is a fixed-step co-simulation FMU
+/// whose state can be saved and serialised.
+pub(crate) fn render_xml(
+    h: &Header,
+    variables: &str,
+    mut units: Vec<&str>,
+    outputs: usize,
+    experiment: &Experiment,
+    guid: &str,
+) -> String {
     units.sort_unstable();
     units.dedup();
     let unit_definitions: String = units.iter().map(|u| format!("    <Unit name=\"{}\"/>\n", escape(u))).collect();
     // ModelStructure indices are 1-based positions in ModelVariables; the outputs come first.
-    let unknowns: String = (1..=outputs().len()).map(|i| format!("      <Unknown index=\"{i}\"/>\n")).collect();
+    let unknowns: String = (1..=outputs).map(|i| format!("      <Unknown index=\"{i}\"/>\n")).collect();
     let Experiment { stop_time_s, step_s } = experiment;
     format!(
         r#"<?xml version="1.0" encoding="UTF-8"?>
 <fmiModelDescription
   fmiVersion="2.0"
-  modelName="silrig_f16"
+  modelName="{model_name}"
   guid="{guid}"
-  description="The Stevens &amp; Lewis F-16 of silrig with its actuators, trimmed as silrig trims it: the built-in plant of `silrig run`, one doStep one tick"
+  description="{description}"
   generationTool="silrig-fmu-f16 {version}"
   variableNamingConvention="flat"
   numberOfEventIndicators="0">
   <CoSimulation
-    modelIdentifier="{MODEL_IDENTIFIER}"
+    modelIdentifier="{model_identifier}"
     canHandleVariableCommunicationStepSize="false"
     canGetAndSetFMUstate="true"
     canSerializeFMUstate="true"
@@ -123,7 +169,7 @@ fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid
 {unit_definitions}  </UnitDefinitions>
   <DefaultExperiment startTime="0.0" stopTime="{stop_time_s:?}" stepSize="{step_s:?}"/>
   <VendorAnnotations>
-    <Tool name="silrig"><Plant name="{PLANT_NAME}"/></Tool>
+    <Tool name="silrig"><Plant name="{plant}"/></Tool>
   </VendorAnnotations>
   <ModelVariables>
 {variables}  </ModelVariables>
@@ -135,7 +181,27 @@ fn render(p: &Parameters, experiment: &Experiment, input_starts: &[f64; 4], guid
   </ModelStructure>
 </fmiModelDescription>
 "#,
+        model_name = escape(h.model_name),
+        description = escape(h.description),
+        model_identifier = escape(h.model_identifier),
+        plant = escape(h.plant),
         version = env!("CARGO_PKG_VERSION"),
+    )
+}
+
+/// One `<ScalarVariable>` with its type's `element`, as `render_xml` lists them.
+pub(crate) fn scalar_variable(
+    name: &str,
+    vr: u32,
+    causality: &str,
+    variability: &str,
+    description: &str,
+    element: &str,
+) -> String {
+    format!(
+        "    <ScalarVariable name=\"{}\" valueReference=\"{vr}\" causality=\"{causality}\" variability=\"{variability}\" description=\"{}\">\n      {element}\n    </ScalarVariable>\n",
+        escape(name),
+        escape(description)
     )
 }
 
@@ -145,11 +211,7 @@ fn model_variables(p: &Parameters, input_starts: &[f64; 4]) -> (String, Vec<&'st
     let mut units: Vec<&str> = Vec::new();
     let mut variables = String::new();
     let mut add = |name: &str, vr: u32, causality: &str, variability: &str, description: &str, element: String| {
-        variables.push_str(&format!(
-            "    <ScalarVariable name=\"{}\" valueReference=\"{vr}\" causality=\"{causality}\" variability=\"{variability}\" description=\"{}\">\n      {element}\n    </ScalarVariable>\n",
-            escape(name),
-            escape(description)
-        ));
+        variables.push_str(&scalar_variable(name, vr, causality, variability, description, &element));
     };
     // How the rig announces this plant beyond what FMI says (`f16_signals` in silrig-flight), as a silrig
     // annotation on each variable an importer would otherwise announce differently: outputs `trace.csv` does not
@@ -210,9 +272,13 @@ fn fnv1a_128(bytes: &[u8]) -> u128 {
 /// The GUID of the description of these parameters' start values and experiment: the hash of its text with the
 /// GUID left empty, as `{8-4-4-4-12}` hex.
 pub fn guid(p: &Parameters, experiment: &Experiment) -> Result<String, String> {
-    let h = fnv1a_128(render(p, experiment, &input_starts(p)?, "").as_bytes());
-    let hex = format!("{h:032x}");
-    Ok(format!("{{{}-{}-{}-{}-{}}}", &hex[..8], &hex[8..12], &hex[12..16], &hex[16..20], &hex[20..]))
+    Ok(guid_of(&render(p, experiment, &input_starts(p)?, "")))
+}
+
+/// A description's GUID from its text with the GUID left empty.
+pub(crate) fn guid_of(text: &str) -> String {
+    let hex = format!("{:032x}", fnv1a_128(text.as_bytes()));
+    format!("{{{}-{}-{}-{}-{}}}", &hex[..8], &hex[8..12], &hex[12..16], &hex[16..20], &hex[20..])
 }
 
 /// `modelDescription.xml` for these parameters' start values and experiment; the error says why the parameters

@@ -254,52 +254,67 @@ impl Parameters {
     /// The start-values text the exported FMU carries (`name = value` a line, Reals then Booleans), which
     /// [`Parameters::from_text`] reads back bit for bit.
     pub fn to_text(&self) -> String {
-        let mut text = String::new();
-        for (p, v) in REAL_PARAMETERS.iter().zip(self.reals) {
-            // `{:?}` is the shortest text that reads back as the same f64.
-            text.push_str(&format!("{} = {v:?}\n", p.name));
-        }
-        for ((name, _), v) in BOOLEAN_PARAMETERS.iter().zip(self.booleans) {
-            text.push_str(&format!("{name} = {v}\n"));
-        }
-        text
+        values_text(&REAL_PARAMETERS, &self.reals, &BOOLEAN_PARAMETERS, &self.booleans)
     }
 
     /// Parameters from [`Parameters::to_text`]'s text: every parameter exactly once, each within its range; the
     /// error names the line.
     pub fn from_text(text: &str) -> Result<Self, String> {
-        let mut reals = [None; REAL_PARAMETERS.len()];
-        let mut booleans = [None; BOOLEAN_PARAMETERS.len()];
-        for (n, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-            let bad = |why: &str| format!("line {}: {why}: {line:?}", n + 1);
-            let (name, value) = line.split_once('=').ok_or_else(|| bad("not `name = value`"))?;
-            let (name, value) = (name.trim(), value.trim());
-            if let Some(k) = REAL_PARAMETERS.iter().position(|p| p.name == name) {
-                let v: f64 = value.parse().map_err(|_| bad("not a number"))?;
-                check_real(&REAL_PARAMETERS[k], v).map_err(|e| bad(&e))?;
-                if reals[k].replace(v).is_some() {
-                    return Err(bad("given twice"));
-                }
-            } else if let Some(k) = BOOLEAN_PARAMETERS.iter().position(|(b, _)| *b == name) {
-                let v: bool = value.parse().map_err(|_| bad("not true or false"))?;
-                if booleans[k].replace(v).is_some() {
-                    return Err(bad("given twice"));
-                }
-            } else {
-                return Err(bad("no such parameter"));
-            }
-        }
-        let missing = |name: &str| format!("parameter {name} not given");
-        let mut p = Parameters { reals: [0.0; REAL_PARAMETERS.len()], booleans: [false; BOOLEAN_PARAMETERS.len()] };
-        for (k, v) in reals.iter().enumerate() {
-            p.reals[k] = v.ok_or_else(|| missing(REAL_PARAMETERS[k].name))?;
-        }
-        for (k, v) in booleans.iter().enumerate() {
-            p.booleans[k] = v.ok_or_else(|| missing(BOOLEAN_PARAMETERS[k].0))?;
-        }
+        let (reals, booleans) = read_values(text, &REAL_PARAMETERS, &BOOLEAN_PARAMETERS)?;
+        let p = Parameters {
+            reals: reals.try_into().map_err(|_| "the F-16's Real parameters")?,
+            booleans: booleans.try_into().map_err(|_| "the F-16's Boolean parameters")?,
+        };
         p.check()?;
         Ok(p)
     }
+}
+
+/// Parameters' values as start-values text: `name = value` a line, Reals then Booleans.
+pub fn values_text(reals: &[RealParameter], real_values: &[f64], booleans: &[(&str, &str)], flags: &[bool]) -> String {
+    let mut text = String::new();
+    for (p, v) in reals.iter().zip(real_values) {
+        // `{:?}` is the shortest text that reads back as the same f64.
+        text.push_str(&format!("{} = {v:?}\n", p.name));
+    }
+    for ((name, _), v) in booleans.iter().zip(flags) {
+        text.push_str(&format!("{name} = {v}\n"));
+    }
+    text
+}
+
+/// The values of [`values_text`]'s text, in the tables' orders: every parameter exactly once, each Real within
+/// its range; the error names the line or the parameter missing.
+pub fn read_values(
+    text: &str,
+    real_table: &[RealParameter],
+    boolean_table: &[(&str, &str)],
+) -> Result<(Vec<f64>, Vec<bool>), String> {
+    let mut reals = vec![None; real_table.len()];
+    let mut booleans = vec![None; boolean_table.len()];
+    for (n, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let bad = |why: &str| format!("line {}: {why}: {line:?}", n + 1);
+        let (name, value) = line.split_once('=').ok_or_else(|| bad("not `name = value`"))?;
+        let (name, value) = (name.trim(), value.trim());
+        if let Some(k) = real_table.iter().position(|p| p.name == name) {
+            let v: f64 = value.parse().map_err(|_| bad("not a number"))?;
+            check_real(&real_table[k], v).map_err(|e| bad(&e))?;
+            if reals[k].replace(v).is_some() {
+                return Err(bad("given twice"));
+            }
+        } else if let Some(k) = boolean_table.iter().position(|(b, _)| *b == name) {
+            let v: bool = value.parse().map_err(|_| bad("not true or false"))?;
+            if booleans[k].replace(v).is_some() {
+                return Err(bad("given twice"));
+            }
+        } else {
+            return Err(bad("no such parameter"));
+        }
+    }
+    let missing = |name: &str| format!("parameter {name} not given");
+    let reals = reals.iter().zip(real_table).map(|(v, p)| v.ok_or_else(|| missing(p.name)));
+    let booleans = booleans.iter().zip(boolean_table).map(|(v, (name, _))| v.ok_or_else(|| missing(name)));
+    Ok((reals.collect::<Result<_, _>>()?, booleans.collect::<Result<_, _>>()?))
 }
 
 /// `v` as a value of `p`: finite and within its range.

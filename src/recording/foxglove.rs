@@ -295,6 +295,52 @@ fn aircraft() -> SceneEntity {
     }
 }
 
+/// The aircraft as the run page's 3-D view draws it (src/tools/html/view3d.js), the same parts as [`aircraft`]:
+/// cylinders along the body's x (centre, length, diameter, top scale: 0 a cone), the fixed boxes and the moving
+/// surfaces with their hinges (axis 0 is the body's y, 1 its z), m in `body`, colours r, g, b.
+pub fn aircraft_model() -> serde_json::Value {
+    use serde_json::json;
+    let rgb = |c: [f64; 4]| [c[0], c[1], c[2]];
+    let entity = aircraft();
+    let cylinders: Vec<_> = entity
+        .cylinders
+        .iter()
+        .map(|c| {
+            let (pose, size) = (c.pose.as_ref().and_then(|p| p.position.as_ref()), c.size.as_ref());
+            json!({
+                "x": pose.map_or(0.0, |p| p.x),
+                "length": size.map_or(0.0, |s| s.z),
+                "diameter": size.map_or(0.0, |s| s.x),
+                "top": c.top_scale,
+                "color": rgb(AIRFRAME),
+            })
+        })
+        .collect();
+    let boxes: Vec<_> =
+        BLOCKS.iter().map(|b| json!({"center": b.center_m, "size": b.size_m, "color": rgb(b.color)})).collect();
+    let surfaces: Vec<_> = SURFACES
+        .iter()
+        .map(|s| {
+            json!({
+                "surface": s.surface,
+                "sign": s.sign,
+                "axis": match s.axis { Hinge::Y => 0, Hinge::Z => 1 },
+                "hinge": s.hinge_m,
+                "aft": s.center_aft_m,
+                "size": s.size_m,
+                "color": rgb(SURFACE),
+            })
+        })
+        .collect();
+    json!({"kind": "aircraft", "length_m": 15.0, "cylinders": cylinders, "boxes": boxes, "surfaces": surfaces})
+}
+
+/// Each moving surface's box centre (m) and orientation (x, y, z, w) in `body` with the surfaces at `surfaces_rad`
+/// (aileron, elevator, rudder): what the 3-D view's script must compute alike (tests/html_report.rs).
+pub fn surface_poses(surfaces_rad: [f64; 3]) -> Vec<([f64; 3], [f64; 4])> {
+    SURFACES.iter().map(|s| s.pose(surfaces_rad)).collect()
+}
+
 /// A `foxglove.SceneUpdate` at `wall_ns` into `buffer`: the aircraft, its surfaces at `surfaces_rad` (aileron,
 /// elevator, rudder).
 pub fn aircraft_scene(buffer: &mut ProtoBuffer, wall_ns: u64, surfaces_rad: [f64; 3]) {

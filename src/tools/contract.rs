@@ -2,8 +2,9 @@
 //! written in another language must match (the sample layouts with every field's offset, size, type and unit, the
 //! layout version, the header rules, the streams with their service names, type names, settings and event ids).
 //! Three renderings: text for people (`silrig contract`), a C header with `_Static_assert`s on every offset and
-//! size (`--c-header`), and a Python `ctypes` module (`--python`). Offsets come from `core::mem::offset_of!` on the
-//! types themselves ([`silrig_wire::wire::WireType::FIELDS`]).
+//! size (`--c-header`), and a Python `ctypes` module (`--python`); each carries every rule a raw peer must keep.
+//! Offsets come from `core::mem::offset_of!` on the types themselves ([`silrig_wire::wire::WireType::FIELDS`]).
+//! It also owns the set of headers a C peer includes (`--c-dir`): the generated one and the client library's.
 
 use silrig_rig::ProcessArgs;
 use silrig_rig::session::Status;
@@ -97,13 +98,19 @@ pub const HEADER_RULES: [&str; 9] = [
 ];
 
 /// What each peer must do besides sending well-formed samples, for people (the text rendering carries it).
-pub const PEER_RULES: [&str; 5] = [
+pub const PEER_RULES: [&str; 7] = [
     "a plant announces PlantInfo, then publishes one PlantSample per tick (0, 1, ...) once a command publisher exists; \
      after its last tick it sends that tick again with FLAG_END_OF_RUN, notifies EVENT_FINISHED on stream plant and \
      exits with status 0 (a --plant-cmd plant without a report: that exit is the end of its flight)",
     "a controller opens plant, plant-info, controller-info and command; it announces ControllerInfo (its diagnostics' \
      names, possibly none) before it creates its command publisher, which is what the plant starts on, and again with \
      its first command",
+    "a controller takes its set points from the scenario the run flies (the TOML file SILRIG_SCENARIO names): its \
+     [setpoint] table gives outputs by name in their unit, and phi_deg, theta_deg and psi_deg are 0 when not given \
+     (libsilrig_client reads them for you: silrig_session_setpoint)",
+    "a command carries a value for every input, also those the controller does not command: for each, where its \
+     actuator is in the sample being answered (the output PlantInfo.input_held_output names), or PlantInfo.input_hold \
+     when it names none (NO_OUTPUT); libsilrig_client fills them in: silrig_session_held_command",
     "a controller answers each plant sample it takes with one CommandSample whose answers_tick and header tick are the \
      sample's tick; it need not answer every sample (a miss is held and counted by the plant), and never answers the \
      FLAG_END_OF_RUN sample",
@@ -126,6 +133,20 @@ pub const SIGNAL_RULES: [&str; 4] = [
      (<input>_cmd_<unit>, or <input>_cmd when the unit is not a word), the traced positions, flight_segment, the \
      controller's diagnostics",
 ];
+
+/// The rules every rendering carries, by section: (title, rules).
+fn rule_sections() -> [(&'static str, &'static [&'static str]); 3] {
+    [("Header rules", &HEADER_RULES), ("What each peer does", &PEER_RULES), ("Signals", &SIGNAL_RULES)]
+}
+
+/// The headers a C peer includes, by file name: the generated contract and `libsilrig_client.so`'s functions
+/// (hand-written, it includes the contract by that name).
+pub fn c_headers() -> [(&'static str, String); 2] {
+    [("silrig_contract.h", c_header()), ("silrig_client.h", C_CLIENT_HEADER.to_string())]
+}
+
+/// `libsilrig_client.so`'s header, as checked in beside the examples (`silrig new` writes it too).
+pub const C_CLIENT_HEADER: &str = include_str!("../../examples/c/silrig_client.h");
 
 /// The contract as text for people.
 pub fn text() -> String {
@@ -159,17 +180,12 @@ pub fn text() -> String {
         q.max_subscribers,
         StreamEvent::PublisherDead.id()
     );
-    out += "Namespace of run <id>: iceoryx2 root dir /tmp/silrig_<id>/, file prefix sr_<id>_.\n\nHeader rules:\n";
-    for rule in HEADER_RULES {
-        let _ = writeln!(out, "  - {rule}");
-    }
-    out += "\nWhat each peer does:\n";
-    for rule in PEER_RULES {
-        let _ = writeln!(out, "  - {rule}");
-    }
-    out += "\nSignals:\n";
-    for rule in SIGNAL_RULES {
-        let _ = writeln!(out, "  - {rule}");
+    out += "Namespace of run <id>: iceoryx2 root dir /tmp/silrig_<id>/, file prefix sr_<id>_.\n";
+    for (title, rules) in rule_sections() {
+        let _ = writeln!(out, "\n{title}:");
+        for rule in rules {
+            let _ = writeln!(out, "  - {rule}");
+        }
     }
     out += "\nConstants:\n";
     for (name, value, meaning) in constants() {
@@ -275,11 +291,14 @@ pub fn c_header() -> String {
          static_assert(c, m)\n#define SILRIG_ALIGNOF(t) alignof(t)\n#else\n#define SILRIG_STATIC_ASSERT(c, m) \
          _Static_assert(c, m)\n#define SILRIG_ALIGNOF(t) _Alignof(t)\n#endif\n\n"
     );
-    out += "/* Header rules:\n";
-    for rule in HEADER_RULES {
-        let _ = writeln!(out, " *  - {rule}");
+    for (title, rules) in rule_sections() {
+        let _ = writeln!(out, "/* {title}:");
+        for rule in rules {
+            let _ = writeln!(out, " *  - {rule}");
+        }
+        out += " */\n";
     }
-    out += " */\n\n";
+    out += "\n";
     for (name, value, meaning) in constants() {
         let _ = writeln!(out, "/* {meaning} */\n#define SILRIG_{name} {value}u");
     }
@@ -326,10 +345,13 @@ pub fn c_header() -> String {
 pub fn python_module() -> String {
     let mut out = format!(
         "\"\"\"silrig wire contract, layout version {WIRE_LAYOUT_VERSION}.\n\nGenerated by `silrig contract --python`: \
-         do not edit; regenerate after a layout change.\n\nHeader rules:\n"
+         do not edit; regenerate after a layout change.\n"
     );
-    for rule in HEADER_RULES {
-        let _ = writeln!(out, "  - {rule}");
+    for (title, rules) in rule_sections() {
+        let _ = writeln!(out, "\n{title}:");
+        for rule in rules {
+            let _ = writeln!(out, "  - {rule}");
+        }
     }
     out += "\"\"\"\n\nimport ctypes\n\n";
     for (name, value, meaning) in constants() {

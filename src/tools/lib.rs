@@ -7,7 +7,7 @@
 //! - [`contract`]: the wire contract rendered as text, a C header and a Python module.
 //! - [`outputs`]: `silrig sim` and `silrig compare` and the files they write; [`derivative_csv`]:
 //!   `silrig plant derivative`.
-//! - [`export_fmu`]: `silrig export-fmu`, the built-in F-16 as an FMI 2.0 co-simulation FMU.
+//! - [`export_fmu`]: `silrig export-fmu`, the built-in F-16 or quadrotor as an FMI 2.0 co-simulation FMU.
 //! - [`html`]: `report.html`, one self-contained page per run, check and sweep.
 //! - [`new_project`]: `silrig new`, a controller or plant of the user's own started from the examples.
 //! - [`soak`]: `silrig soak`, a long realtime run under faults drawn from a seed, and its figures.

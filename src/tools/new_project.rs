@@ -31,7 +31,6 @@ type File = (&'static str, String);
 const PYTHON_CLIENT: &str = include_str!("../../examples/python/silrig_client.py");
 const PYTHON_CONTRACT: &str = include_str!("../../examples/python/silrig_contract.py");
 const PYTHON_PID: &str = include_str!("../../examples/python/pid_attitude.py");
-const C_CLIENT: &str = include_str!("../../examples/c/silrig_client.h");
 const C_CONTRACT: &str = include_str!("../../examples/c/silrig_contract.h");
 /// silrig's own lock file: a Rust starting point builds with the versions silrig was tested with.
 const CARGO_LOCK: &str = include_str!("../../Cargo.lock");
@@ -71,7 +70,7 @@ pub fn files(kind: Kind, lang: Lang, lib_dir: &Path, silrig_path: &Path) -> Vec<
                 Kind::Plant => (include_str!("../../examples/c/toy_plant.c"), "plant"),
             };
             files.push((if name == "plant" { "plant.c" } else { "controller.c" }, source.to_string()));
-            files.push(("silrig_client.h", C_CLIENT.to_string()));
+            files.push(("silrig_client.h", crate::contract::C_CLIENT_HEADER.to_string()));
             files.push(("silrig_contract.h", C_CONTRACT.to_string()));
             files.push(("build.sh", c_build_script(name, lib_dir)));
         }

@@ -109,3 +109,32 @@ pub fn cached_fmu(suite: &str, name: &str) -> String {
     }
     path.display().to_string()
 }
+
+/// `libsilrig_fmu_f16.so` beside `silrig`, built once (a test binary does not build the workspace's cdylibs): the
+/// binary `silrig export-fmu` packs for either built-in vehicle.
+pub fn export_library(silrig: &str) -> &'static Path {
+    static LIB: OnceLock<PathBuf> = OnceLock::new();
+    LIB.get_or_init(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let o = Command::new(cargo)
+            .args(["build", "--release", "-p", "silrig-fmu-f16"])
+            .current_dir(ROOT)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "building libsilrig_fmu_f16.so: {}", String::from_utf8_lossy(&o.stderr));
+        let lib = Path::new(silrig).parent().unwrap().join("libsilrig_fmu_f16.so");
+        assert!(lib.exists(), "{} was not built", lib.display());
+        lib
+    })
+}
+
+/// `silrig export-fmu --out DIR/NAME [SCENARIO]` of a built-in vehicle; the FMU's path and what it printed.
+pub fn export_builtin(silrig: &str, dir: &Path, name: &str, scenario: Option<&str>) -> (PathBuf, String) {
+    export_library(silrig);
+    let out = dir.join(name);
+    let o = Command::new(silrig).arg("export-fmu").arg("--out").arg(&out).args(scenario).output().unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "export-fmu failed: {stdout}{stderr}");
+    assert!(out.is_file(), "{} not written", out.display());
+    (out, format!("{stdout}{stderr}"))
+}

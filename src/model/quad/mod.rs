@@ -148,6 +148,12 @@ impl QuadVehicle {
         Ok(Self { params, state, on_ground: altitude_m <= 0.0, motor_commands, touchdown_speed_mps: 0.0 })
     }
 
+    /// Where a scenario starts it: hovering at `altitude_m` above 0, else at rest on the ground with the rotors
+    /// stopped; heading `psi_rad`.
+    pub fn at_start(params: QuadParams, altitude_m: f64, psi_rad: f64) -> Result<Self, params::ParamError> {
+        if altitude_m > 0.0 { Self::hovering(params, altitude_m, psi_rad) } else { Self::on_ground(params, psi_rad) }
+    }
+
     /// Sets the motor commands held over the next steps (0..1; beyond is clamped, NaN is 0, as an ESC would).
     pub fn command(&mut self, motor_commands: [f64; ROTORS]) {
         self.motor_commands = motor_commands;

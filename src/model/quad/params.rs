@@ -96,6 +96,19 @@ pub const PARAMS: [ParamInfo; 12] = [
     ParamInfo { name: "ground_altitude_m", unit: "m", min: -500.0, max: 9000.0, description: "ground above MSL" },
 ];
 
+/// The start values a scenario's `[plant.parameters]` (and the quadrotor's FMU) take beside the vehicle's
+/// parameters: where the vehicle is at t = 0 ([`super::QuadVehicle::at_start`]).
+pub const START_VALUES: [ParamInfo; 2] = [
+    ParamInfo {
+        name: "start_alt_m",
+        unit: "m",
+        min: 0.0,
+        max: 1000.0,
+        description: "height above the ground at t = 0: 0 rests on the ground with the rotors stopped, above it hovers",
+    },
+    ParamInfo { name: "start_psi_deg", unit: "deg", min: -180.0, max: 180.0, description: "heading at t = 0" },
+];
+
 /// A parameter set that cannot fly: which name, and why.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ParamError {

@@ -11,6 +11,7 @@
 pub mod check;
 pub mod run;
 pub mod sweep;
+pub mod view3d;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -365,6 +366,9 @@ figure.zoomed svg{cursor:zoom-out}
 figcaption{font-size:13px;color:var(--muted);margin-top:4px}
 .hint{font-size:12px}
 input.filter{width:360px;max-width:100%;padding:4px 8px;font-size:13px}
+#view3d canvas{width:100%;max-width:960px;height:auto;display:block;border:1px solid var(--line);cursor:grab}
+.view3d-controls{margin:6px 0;font-size:13px}.view3d-controls input[type=range]{width:420px;max-width:60%;vertical-align:middle}
+.view3d-status{color:var(--muted);font-variant-numeric:tabular-nums}
 @media print{header{position:static}.scroll{max-height:none}.hint,input.filter{display:none}}
 ";
 

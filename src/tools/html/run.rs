@@ -59,6 +59,7 @@ pub fn page(report: &RigReport, command: &str) -> Page {
     };
     let others = left_out(report) + &others;
     page.section("figures", "Figures", command, others);
+    page.section("view3d-section", "The flight in 3-D", command, super::view3d::section(out));
     page.section("events", "Events", command, super::events(out));
     page.section_with("files", "Files", Vec::new(), super::files(out, out));
     page
