@@ -652,6 +652,11 @@ fn an_os_floor_killed_from_outside_is_a_line_of_the_report_and_the_comparison_sa
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert!(report["timer_baseline"].is_null());
     assert_eq!(report["timer_baseline_missing"], said.as_str());
+    let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        page.contains("No OS floor to read the plant's wake-up lateness against: the OS floor (the timer baseline"),
+        "report.html"
+    );
     // The flight itself is whole: the run passes, saying what it could not measure.
     assert_eq!(o.status.code(), Some(0), "{stdout}");
     no_shared_memory_left(&id);

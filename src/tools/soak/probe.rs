@@ -265,22 +265,22 @@ mod tests {
         let line = lineage(me);
         assert!(line.contains(&me) && line.contains(&1), "up to init: {line:?}");
         assert!(line.contains(&stat(me).unwrap().1), "the parent: {line:?}");
-        // A process that names the run id and is no ancestor is one; this test's own parent names it too.
+        // A process that names the run id and is not of the soak's lineage is one.
         let run_id = format!("leftover-test-{me}");
-        let mut stray = std::process::Command::new("sleep").args(["30", &run_id]).spawn().unwrap();
+        let mut stray =
+            std::process::Command::new("python3").args(["-c", "import time; time.sleep(30)", &run_id]).spawn().unwrap();
         // Until it has exec'd, the child's command line is this test's.
-        while !std::fs::read(format!("/proc/{}/cmdline", stray.id()))
-            .unwrap()
-            .split(|b| *b == 0)
-            .any(|a| a == run_id.as_bytes())
-        {
+        let named = || std::fs::read(format!("/proc/{}/cmdline", stray.id())).unwrap_or_default();
+        let start = std::time::Instant::now();
+        while !named().split(|b| *b == 0).any(|a| a == run_id.as_bytes()) {
+            assert!(start.elapsed() < std::time::Duration::from_secs(10), "the stray process never started");
             std::thread::sleep(std::time::Duration::from_millis(2));
         }
         let out = std::env::temp_dir();
         let left = Leftovers::find(&run_id, &out, &BTreeSet::new());
         stray.kill().unwrap();
         stray.wait().unwrap();
-        assert_eq!(left.processes, [format!("{} (sleep)", stray.id())]);
+        assert_eq!(left.processes, [format!("{} (python3)", stray.id())]);
         let said = left.describe();
         assert!(said.starts_with("processes of the run still alive: ") && !said.contains('{'), "{said}");
         assert_eq!(Leftovers::default().describe(), "");
