@@ -3,7 +3,9 @@
 //! virtual environment `.ci/run` creates) and every transform is compared with `trace.csv` (attitude, altitude) and
 //! the plant's samples (the north/east position the trace does not show): one a tick, in order, the rotation built
 //! here independently from the direction cosine matrix of the Euler angles. The scene's moving surfaces must turn
-//! by the surfaces' positions. The layout must name only panels it places and topics and fields the recording has.
+//! by the surfaces' positions. A quadrotor's scene is an X quadrotor, its rotors in Betaflight's motor order. The
+//! layout each run writes beside its recording (`foxglove-layout.json`, generated from the plant's signals) must
+//! name only panels it places and topics and fields the recording has.
 
 mod common;
 
@@ -175,14 +177,41 @@ fn the_recording_carries_the_aircraft_in_3d_as_the_trace_flew_it() {
     }
     assert!(deflected > 0, "the elevator moved during the flight");
 
-    check_layout(&file, &header);
+    check_layout(&run.out, &file, &header, 32.0);
     run.finish();
 }
 
-/// The layout places every panel it configures, follows `body`, and names only topics and trace fields the
-/// recording has.
-fn check_layout(recording: &Value, trace_columns: &[String]) {
-    let path = Path::new(ROOT).join("configs/foxglove/silrig-layout.json");
+#[test]
+fn a_quadrotor_is_drawn_with_its_rotors_in_betaflights_order_and_gets_a_layout_of_its_own() {
+    let config = format!("{ROOT}/configs/quad-hover.toml");
+    let args = ["--mode", "lockstep", "--duration-s", "1", &config];
+    let run = Run::start(SILRIG, "foxglove", "fq", "quad", &args);
+    assert_eq!(run.code, Some(0), "{}\n{}", run.stdout, run.stderr);
+    let file = read_3d(&run.out.join("recording.mcap"));
+    let scenes = file["scenes"].as_array().unwrap();
+    assert!(!scenes.is_empty(), "no /aircraft scene");
+    // Quad X, props in, seen from above: 1 rear right, 2 front right, 3 rear left, 4 front left; body x forward,
+    // y left (forward-left-up), the arm's 0.17 m at 45 degrees.
+    let a = 0.17 / std::f64::consts::SQRT_2;
+    let expected = [[-a, -a], [a, -a], [-a, a], [a, a]];
+    for s in scenes {
+        let e = &s["entities"][0];
+        assert_eq!(e["cubes"].as_array().unwrap().len(), 4, "a hub, a nose and two arms: {e}");
+        let rotors = e["cylinder_positions"].as_array().unwrap();
+        assert_eq!(rotors.len(), 4, "four rotors: {e}");
+        for (k, (r, want)) in rotors.iter().zip(expected).enumerate() {
+            assert!((f(&r[0]) - want[0]).abs() < 1e-9 && (f(&r[1]) - want[1]).abs() < 1e-9, "rotor {}: {r}", k + 1);
+        }
+    }
+    let (header, _) = run.trace();
+    check_layout(&run.out, &file, &header, 2.0);
+    run.finish();
+}
+
+/// The run's layout places every panel it configures, follows `body` from `distance_m`, and names only topics and
+/// trace fields the recording has.
+fn check_layout(run_dir: &Path, recording: &Value, trace_columns: &[String], distance_m: f64) {
+    let path = run_dir.join("foxglove-layout.json");
     let layout: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).expect("the layout is JSON");
     fn placed(node: &Value, into: &mut Vec<String>) {
         match node {
@@ -203,6 +232,7 @@ fn check_layout(recording: &Value, trace_columns: &[String]) {
     assert_eq!(panels.iter().collect::<Vec<_>>(), configured, "every panel placed is configured and no other");
     let three_d = &configs["3D!silrig"];
     assert_eq!(three_d["followTf"], "body");
+    assert_eq!(three_d["cameraState"]["distance"], distance_m);
     let has_topic = |topic: &str| recording["topics"].get(topic).is_some();
     for topic in three_d["topics"].as_object().unwrap().keys() {
         assert!(has_topic(topic), "the 3D panel's {topic}");

@@ -1,7 +1,9 @@
 //! `silrig run --live foxglove=ADDR` (feature `live`): the logger serves the recording's channels over the Foxglove
-//! WebSocket protocol while the run flies. Three clients written in Python (`foxglove/live_client.py`, PyPI
+//! WebSocket protocol while the run flies. Four clients written in Python (`foxglove/live_client.py`, PyPI
 //! `websockets`, in the virtual environment `.ci/run` creates) connect to a realtime run: one that reads
-//! everything, one too slow to keep up, one that leaves mid-run. The first must have been advertised every channel
+//! everything, one too slow to keep up, one that leaves mid-run, one that joins late (it must still get the plant's
+//! announcement, `/plant_info`, sent once when the plant started: it connects once the first client has a `/trace`
+//! message). The first must have been advertised every channel
 //! of the recording, with the recording's encodings and schemas, and must receive each channel's messages exactly as
 //! the recording holds them from its first message on: same bytes, same log times, in order, none missing (for
 //! `/trace` one a tick, by the trace's time). Whatever the clients do, the run must succeed and keep every row:
@@ -119,12 +121,15 @@ fn clients_receive_every_channel_in_order_and_the_run_loses_nothing() {
     let full = client(&python, &addr, &full_out, &[]);
     let slow = client(&python, &addr, &slow_out, &["--slow-ms", "20"]);
     let leaver = client(&python, &addr, &leaver_out, &["--disconnect-after-s", "2.5"]);
+    let late_out = clients_dir.join("late.jsonl");
+    let late = client(&python, &addr, &late_out, &["--connect-after-trace-in", full_out.to_str().unwrap()]);
     // A fault mid-run puts events on /events while the clients listen.
     let live = format!("foxglove={addr}");
     let run_args = ["--duration-s", "4", "--quiet", "--live", &live, "--fault", "controller:delay@2s,delay=1ms"];
     let run = Run::start(SILRIG, "foxglove_live", "fl", "all", &run_args);
     let (full, slow, leaver) =
         (received(full, &full_out, "full"), received(slow, &slow_out, "slow"), received(leaver, &leaver_out, "leaver"));
+    let late = received(late, &late_out, "late");
     assert_eq!(run.code, Some(0), "{}\n{}\n{}", run.stdout, run.stderr, run.failures());
     assert!(run.stderr.contains(&format!("ws://{addr}")), "the launcher does not say where: {}", run.stderr);
     assert!(run.event("logger", "live-serving").is_some(), "no live-serving event");
@@ -148,13 +153,10 @@ fn clients_receive_every_channel_in_order_and_the_run_loses_nothing() {
             (Some(encoding.as_str()), Some(schema.as_str()))
         );
     }
-    // Each channel's messages, as recorded, from the first received on; /plant_info is sent once, when the plant
-    // announces itself, which may come before the client subscribes.
+    // Each channel's messages, as recorded, from the first received on; /plant_info, published once when the plant
+    // announces itself, is sent again to a client that subscribes after it.
     for (topic, file) in &messages {
         let live = full.messages.get(topic).map(Vec::as_slice).unwrap_or_default();
-        if topic == "/plant_info" && live.is_empty() {
-            continue;
-        }
         assert!(!live.is_empty(), "full: no {topic} message received ({} recorded)", file.len());
         contiguous(topic, live, file, "full");
         assert!(live.windows(2).all(|w| w[0].0 <= w[1].0), "full: {topic} log times go back");
@@ -178,6 +180,13 @@ fn clients_receive_every_channel_in_order_and_the_run_loses_nothing() {
         let live = r.messages.get("/trace").unwrap_or_else(|| panic!("{who}: no /trace message"));
         contiguous("/trace", live, &messages["/trace"], who);
     }
+    // The client that joined once the run was flying got the plant's announcement, as recorded, before anything else of it.
+    let announced =
+        late.messages.get("/plant_info").unwrap_or_else(|| panic!("late: no /plant_info: {:?}", late.messages.keys()));
+    assert_eq!(announced[0], *messages["/plant_info"].last().unwrap(), "late: /plant_info is not the recording's");
+    let late_trace = late.messages.get("/trace").expect("late: no /trace");
+    let first_trace = contiguous("/trace", late_trace, &messages["/trace"], "late");
+    assert!(first_trace > 0, "the late client was not late: it got /trace from the first row");
     let left_at = leaver.messages["/trace"].len();
     assert!(left_at < full.messages["/trace"].len(), "the leaver did not leave early: {left_at} /trace messages");
     let _ = std::fs::remove_dir_all(&clients_dir);

@@ -3,7 +3,9 @@
 //! page; headless Chromium (Debian's `chromium`) loads each, the test fails on any console message (the pages log
 //! none) and on a script error, checks that every figure the folder holds is in the page and rendered with a size,
 //! and takes a screenshot that must be a PNG. The page's own script marks on `<body>` how many figures there are,
-//! how many rendered and how many errors happened; `--dump-dom` gives the test the document after loading.
+//! how many rendered and how many errors happened; `--dump-dom` gives the test the document after loading. A run's
+//! page answers first: verdict, response, faults, timing, then the details folded, and its first screen (1400x900)
+//! shows the response figure whole.
 //!
 //! `SILRIG_HTML_KEEP=dir` keeps the pages' folders and screenshots there for a look.
 
@@ -122,6 +124,14 @@ fn load(browser: &str, page: &Path, scratch: &Path, name: &str) -> Loaded {
     loaded
 }
 
+/// Where the page's first figure ends in a 1400x900 window (the first screen of a laptop, what a reader sees before
+/// scrolling), px from the top, as the page's script measured it.
+fn load_first_figure_bottom(browser: &str, page: &Path, scratch: &Path) -> usize {
+    let o = browse(browser, page, scratch, &["--dump-dom", "--window-size=1400,900"]);
+    assert!(o.success, "chromium --dump-dom {}: {}", page.display(), o.stderr);
+    Loaded { dom: o.stdout, console: Vec::new() }.body_number("data-first-figure-bottom")
+}
+
 /// `text` as the pages write it.
 fn esc(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;").replace('\'', "&#39;")
@@ -184,7 +194,7 @@ fn silrig(args: &[&str]) -> std::process::Output {
 }
 
 #[test]
-fn a_runs_page_shows_its_summary_timing_faults_figures_and_events() {
+fn a_runs_page_answers_first_then_gives_timing_figures_and_the_details_folded() {
     let Some(browser) = chromium() else { return };
     let (dir, keep) = scratch("run");
     let id = format!("html{}-run", std::process::id());
@@ -206,21 +216,47 @@ fn a_runs_page_shows_its_summary_timing_faults_figures_and_events() {
     let page = out.join("report.html");
     assert!(stdout.contains(&format!("page: {}", page.display())), "{stdout}");
     let figures = svgs(&out, &out);
-    for expected in ["faults", "fig1_states", "latency", "latency_histogram", "signals"] {
+    for expected in ["faults", "fig1_states", "latency", "latency_histogram", "response", "signals"] {
         assert!(figures.iter().any(|f| f == expected), "the run drew no {expected}: {figures:?}");
     }
     let figures: Vec<&str> = figures.iter().map(String::as_str).collect();
     let html = check_page(browser, &page, &dir, "run", &figures);
-    for section in ["summary", "timing", "faults", "figures", "events", "files"] {
-        assert!(html.contains(&format!("<section id=\"{section}\">")), "no {section} section");
+    // Answer first: the verdict, the response, the faults, timing, the figures; the details folded below.
+    let sections = ["verdict", "response", "faults", "timing", "figures", "view3d-section", "run", "events", "files"];
+    let at: Vec<usize> = sections
+        .iter()
+        .map(|s| html.find(&format!("<section id=\"{s}\">")).unwrap_or_else(|| panic!("no {s} section")))
+        .collect();
+    assert!(at.windows(2).all(|w| w[0] < w[1]), "the sections are not in the order {sections:?}");
+    for folded in ["run", "events", "files"] {
+        let body = &html[html.find(&format!("<section id=\"{folded}\">")).unwrap()..];
+        let body = &body[..body.find("</section>").unwrap()];
+        assert!(body.contains("<details><summary>"), "the {folded} section is not folded");
     }
+    let first = &html[at[0]..at[1]];
+    assert!(
+        first.contains(
+            "<span class=\"tag pass\">survived</span>controller kill at 1 s, restart after 0.3 s: injected at"
+        ),
+        "the verdict does not say the rig survived the fault: {first}"
+    );
+    let response = &html[at[1]..at[2]];
+    assert!(response.find("<figure data-figure=\"response\">").is_some(), "the response figure is not in its section");
+    for header in ["<th>output</th>", "<th>set point</th>", "<th>actuator</th>"] {
+        assert!(response.contains(header), "the control quality has no table with {header}");
+    }
+    assert!(!response.contains("<pre>"), "the control quality is a monospace dump");
+    assert_eq!(html.matches("<span class=\"look\">").count(), figures.len(), "a figure without what to look for");
+    // The first screen (1400x900) shows the verdict and the response figure whole: it is the page's first figure.
+    let bottom = load_first_figure_bottom(browser, &page, &dir);
+    assert!(bottom > 0 && bottom <= 900, "the response figure ends {bottom} px down, below the first screen");
     // Each section names the command that flies the run again, as a shell reads it.
     let command = format!(
         "<code>silrig run --duration-s 3 --quiet --fault {} --run-id {id} --out {}</code>",
         esc("'controller:kill@1s,restart_after=0.3s'"),
         out.display()
     );
-    assert_eq!(html.matches(&command).count(), 6, "{command} in every section but the files");
+    assert_eq!(html.matches(&command).count(), 8, "{command} in every section but the files");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     for latency in report["processes"].as_array().unwrap().iter().flat_map(|p| p["latencies"].as_array().unwrap()) {

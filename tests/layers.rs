@@ -15,7 +15,7 @@ const LAYERS: [(&str, &[&str]); 10] = [
     ("flight", &["model"]),
     ("wire", &["model", "flight"]),
     // What the logger writes (CSV, MCAP) and replay reads: the wire's samples in files.
-    ("recording", &["flight", "wire"]),
+    ("recording", &["model", "flight", "wire"]),
     ("plot", &["flight"]),
     // The process bodies and sessions: they fly whatever plant model or controller they are handed.
     ("rig", &["model", "flight", "wire", "recording"]),

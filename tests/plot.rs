@@ -10,8 +10,8 @@ use std::time::Instant;
 
 use silrig::f16_signals::f16_signals;
 use silrig::plot::{
-    PlotError, TimelineEvent, plot_closed_loop, plot_overlay, plot_percentile_distributions, plot_signals,
-    plot_timeline,
+    Envelope, FigureAxes, Histogram, PlotError, TimelineEvent, plot_closed_loop, plot_envelope, plot_histograms,
+    plot_latency_histograms, plot_overlay, plot_percentile_distributions, plot_response, plot_signals, plot_timeline,
 };
 use silrig::signals::{InputSignal, OutputSignal, PlantSignals};
 use silrig::trace::{OUTPUTS_HELD_COLUMN, Trace, columns};
@@ -179,12 +179,12 @@ fn faults_and_signals_of_a_plant_that_is_not_the_f16() {
     let plant = attitude();
     let trace = attitude_trace(&plant);
     let setpoint = |name: &str| [("phi_deg", 10.0), ("theta_deg", 5.0)].iter().find(|(n, _)| *n == name).map(|p| p.1);
-    let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into() }];
+    let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into(), end_s: Some(3.5) }];
     let faults = plot_timeline(&trace, &plant, &setpoint, &events, &dir.path, "faults", "attitude: faults").unwrap();
     let signals =
         plot_signals(&trace, Some(&plant), &setpoint, &dir.path, "signals", "attitude: every signal").unwrap();
     check_files(
-        &[faults, signals].concat(),
+        &[faults.files, signals.files].concat(),
         &["faults", "signals"],
         &[
             &["controller kill at 3 s", "phi_deg set point", "theta_deg set point", "aileron_deg cmd", "throttle cmd"],
@@ -201,7 +201,7 @@ fn faults_and_signals_of_a_plant_that_is_not_the_f16() {
         );
     }
     // The paper's states figure needs the F-16's columns: the run leaves it out with this reason.
-    let missing = plot_closed_loop(&trace, None, &dir.path, "x").unwrap_err();
+    let missing = plot_closed_loop(&trace, None, &f16_setpoint, &dir.path, "x").unwrap_err();
     assert!(matches!(missing, PlotError::MissingColumn { .. }), "{missing}");
 }
 
@@ -238,9 +238,10 @@ fn closed_loop_figures_are_written_with_their_legends() {
     // The true f the figure sets beside each RBF estimate (crate::f_true computes it from a flight).
     let t = trace.column("t_s").unwrap();
     let f_true = [0.3, -1.0, 2.0].map(|a| t.iter().map(|t| a * (2.0 * t).cos()).collect::<Vec<f64>>());
-    let paths =
-        timed("closed loop, 3 figures", || plot_closed_loop(&trace, Some(&f_true), &dir.path, "synthetic 10 s run"))
-            .expect("closed-loop figures");
+    let paths = timed("closed loop, 3 figures", || {
+        plot_closed_loop(&trace, Some(&f_true), &f16_setpoint, &dir.path, "synthetic 10 s run")
+    })
+    .expect("closed-loop figures");
     check_files(
         &paths,
         &["fig1_states", "fig2_sliding", "fig3_weights"],
@@ -263,7 +264,7 @@ fn weight_legend_follows_the_number_of_weight_columns() {
             .rows
             .push(names.iter().enumerate().map(|(i, _)| if i == 0 { t } else { (t * i as f64 * 0.1).sin() }).collect());
     }
-    let paths = plot_closed_loop(&trace, None, &dir.path, "12 nodes").expect("figures");
+    let paths = plot_closed_loop(&trace, None, &f16_setpoint, &dir.path, "12 nodes").expect("figures");
     let svg = std::fs::read_to_string(&paths[5]).unwrap();
     assert!(svg.contains("\nW12\n"), "no W12 in the legend");
     assert!(!svg.contains("\nW13\n"));
@@ -315,11 +316,11 @@ fn timeline_marks_events() {
     let dir = OutDir::new("timeline");
     let trace = synthetic(1000, 0.0);
     let events = vec![
-        TimelineEvent { t_s: 2.0, label: "aileron stuck".into() },
-        TimelineEvent { t_s: 2.2, label: "sensor dropout".into() },
-        TimelineEvent { t_s: 7.5, label: "elevator 50 % effective".into() },
-        TimelineEvent { t_s: 9.8, label: "controller restarted".into() },
-        TimelineEvent { t_s: 42.0, label: "after the end".into() },
+        TimelineEvent { t_s: 2.0, label: "aileron stuck".into(), end_s: Some(f64::INFINITY) },
+        TimelineEvent { t_s: 2.2, label: "sensor dropout".into(), end_s: None },
+        TimelineEvent { t_s: 7.5, label: "elevator 50 % effective".into(), end_s: None },
+        TimelineEvent { t_s: 9.8, label: "controller restarted".into(), end_s: None },
+        TimelineEvent { t_s: 42.0, label: "after the end".into(), end_s: None },
     ];
     let paths = timed("timeline", || {
         plot_timeline(&trace, &f16(), &f16_setpoint, &events, &dir.path, "faults", "Fault injection")
@@ -342,7 +343,7 @@ fn timeline_marks_events() {
     assert!(!svg.contains("after the end"), "an event outside the trace was drawn");
 }
 
-fn expect_missing(result: Result<Vec<PathBuf>, PlotError>, column: &str, file: &str) -> String {
+fn expect_missing(result: Result<silrig::plot::Drawn, PlotError>, column: &str, file: &str) -> String {
     let err = result.expect_err("a missing column must be an error");
     let message = err.to_string();
     assert!(matches!(&err, PlotError::MissingColumn { column: c, .. } if c == column), "{message}");
@@ -361,8 +362,16 @@ fn a_missing_column_is_an_error_naming_it() {
         t.rows = full.rows.iter().map(|r| [&r[..i], &r[i + 1..]].concat()).collect();
         t
     };
-    expect_missing(plot_closed_loop(&without("alpha_deg"), None, &dir.path, "x"), "alpha_deg", "fig1_states.png");
-    expect_missing(plot_closed_loop(&without("fhat_theta"), None, &dir.path, "x"), "fhat_theta", "fig2_sliding.png");
+    expect_missing(
+        plot_closed_loop(&without("alpha_deg"), None, &f16_setpoint, &dir.path, "x"),
+        "alpha_deg",
+        "fig1_states.png",
+    );
+    expect_missing(
+        plot_closed_loop(&without("fhat_theta"), None, &f16_setpoint, &dir.path, "x"),
+        "fhat_theta",
+        "fig2_sliding.png",
+    );
     assert!(!dir.path.join("fig1_states.png").exists(), "a figure was written before the missing column was found");
     // Without any weight column there is no weights figure to draw, and nothing is missing.
     let mut no_weights = full.clone();
@@ -370,7 +379,8 @@ fn a_missing_column_is_an_error_naming_it() {
     no_weights.columns.truncate(first_weight);
     no_weights.rows.iter_mut().for_each(|r| r.truncate(first_weight));
     let no_weights_dir = dir.path.join("no_weights");
-    let paths = plot_closed_loop(&no_weights, None, &no_weights_dir, "x").expect("a trace without weights");
+    let paths =
+        plot_closed_loop(&no_weights, None, &f16_setpoint, &no_weights_dir, "x").expect("a trace without weights");
     check_files(&paths, &["fig1_states", "fig2_sliding"], &[&["α"], &["S (rad/s)", "RBF estimate f_hat, ψ channel"]]);
     assert!(!no_weights_dir.join("fig3_weights.png").exists() && !no_weights_dir.join("fig3_weights.svg").exists());
     let message = expect_missing(
@@ -383,7 +393,10 @@ fn a_missing_column_is_an_error_naming_it() {
 
     // Nothing to draw is an error too, not a panic or an empty picture.
     assert!(matches!(plot_overlay(&[], &dir.path, "none"), Err(PlotError::NoData { .. })));
-    assert!(matches!(plot_closed_loop(&Trace::new(columns(2)), None, &dir.path, "x"), Err(PlotError::NoData { .. })));
+    assert!(matches!(
+        plot_closed_loop(&Trace::new(columns(2)), None, &f16_setpoint, &dir.path, "x"),
+        Err(PlotError::NoData { .. })
+    ));
 }
 
 /// `trace` with only the columns `keep` accepts.
@@ -403,7 +416,8 @@ fn a_trace_of_another_controller_gets_the_states_figure_only() {
     let dir = OutDir::new("states_only");
     let full = synthetic(300, 0.0);
     let states = only(&full, |c| !is_controller_column(c));
-    let paths = plot_closed_loop(&states, None, &dir.path, "another controller").expect("the states figure");
+    let paths =
+        plot_closed_loop(&states, None, &f16_setpoint, &dir.path, "another controller").expect("the states figure");
     check_files(&paths, &["fig1_states"], &[&["another controller", "α", "φ roll", "rudder cmd", "t (s)"]]);
     let mut written: Vec<_> = std::fs::read_dir(&dir.path).unwrap().map(|e| e.unwrap().file_name()).collect();
     written.sort();
@@ -411,7 +425,8 @@ fn a_trace_of_another_controller_gets_the_states_figure_only() {
 
     // The states figure does not depend on the controller's columns.
     let with_controller = dir.path.join("with_controller");
-    let all = plot_closed_loop(&full, None, &with_controller, "another controller").expect("all figures");
+    let all =
+        plot_closed_loop(&full, None, &f16_setpoint, &with_controller, "another controller").expect("all figures");
     assert_eq!(all.len(), 6);
     for (a, b) in paths.iter().zip(&all) {
         assert!(std::fs::read(a).unwrap() == std::fs::read(b).unwrap(), "{} and {} differ", a.display(), b.display());
@@ -423,11 +438,19 @@ fn a_partly_present_controller_figure_is_an_error_naming_the_missing_column() {
     let dir = OutDir::new("partly");
     let full = synthetic(50, 0.0);
     let no_psi_weights = only(&full, |c| !c.starts_with("w_psi_"));
-    expect_missing(plot_closed_loop(&no_psi_weights, None, &dir.path, "x"), "w_psi_1", "fig3_weights.png");
+    expect_missing(
+        plot_closed_loop(&no_psi_weights, None, &f16_setpoint, &dir.path, "x"),
+        "w_psi_1",
+        "fig3_weights.png",
+    );
     let one_surface = only(&full, |c| !is_controller_column(c) || c == "s_phi");
-    expect_missing(plot_closed_loop(&one_surface, None, &dir.path, "x"), "fhat_phi", "fig2_sliding.png");
+    expect_missing(plot_closed_loop(&one_surface, None, &f16_setpoint, &dir.path, "x"), "fhat_phi", "fig2_sliding.png");
     let no_fhat_theta = only(&full, |c| !c.starts_with("w_") && c != "fhat_theta");
-    expect_missing(plot_closed_loop(&no_fhat_theta, None, &dir.path, "x"), "fhat_theta", "fig2_sliding.png");
+    expect_missing(
+        plot_closed_loop(&no_fhat_theta, None, &f16_setpoint, &dir.path, "x"),
+        "fhat_theta",
+        "fig2_sliding.png",
+    );
     assert!(!dir.path.exists(), "a figure was written before the missing column was found");
 }
 
@@ -442,10 +465,10 @@ fn extreme_and_non_finite_values_do_not_panic() {
         row[theta] = f64::NAN;
         row[p] = if k == 3 { f64::INFINITY } else { 1e-300 * k as f64 };
     }
-    let paths = plot_closed_loop(&trace, None, &dir.path, "extreme").expect("figures");
+    let paths = plot_closed_loop(&trace, None, &f16_setpoint, &dir.path, "extreme").expect("figures");
     assert!(paths.iter().all(|p| p.exists()));
     let one_row = synthetic(1, 0.0);
-    let start = [TimelineEvent { t_s: 0.0, label: "start".into() }];
+    let start = [TimelineEvent { t_s: 0.0, label: "start".into(), end_s: None }];
     plot_timeline(&one_row, &f16(), &f16_setpoint, &start, &dir.path, "one", "one row").expect("a one-row trace");
     plot_percentile_distributions(&[("empty".into(), Vec::new())], &dir.path, "empty", "no points").expect("empty");
 }
@@ -466,10 +489,181 @@ fn a_60_s_trace_plots_in_well_under_a_second_per_figure() {
     let dir = OutDir::new("long");
     let trace = synthetic(6000, 0.3);
     let start = Instant::now();
-    let paths = plot_closed_loop(&trace, None, &dir.path, "60 s").unwrap();
+    let paths = plot_closed_loop(&trace, None, &f16_setpoint, &dir.path, "60 s").unwrap();
     let per_figure = start.elapsed().as_secs_f64() / 3.0;
     eprintln!("60 s trace: {:.0} ms per figure (PNG + SVG)", per_figure * 1e3);
     assert!(Path::new(&paths[0]).exists());
     // Generous for a loaded 2-core CI machine; the measured figure is printed above.
     assert!(per_figure < 3.0, "{per_figure} s per figure");
+}
+
+/// A figure's axes against its data, as the layout decided them: the title fits the width; some panel names the x
+/// axis; every panel has tick labels on both axes, a y label that is never "1" (a dimensionless unit is blank),
+/// an x axis that covers its data and ends where the data end, and a y axis that covers the data setting it.
+fn axes_fit_their_data(fig: &FigureAxes) {
+    let name = &fig.stem;
+    assert!(
+        fig.title_width_px <= fig.width_px,
+        "{name}: the title is {} px in {} px",
+        fig.title_width_px,
+        fig.width_px
+    );
+    assert!(fig.panels.iter().any(|p| p.x_label.as_deref().is_some_and(|l| !l.is_empty())), "{name}: no x label");
+    for p in &fig.panels {
+        let what = format!("{name}, panel {:?}", p.caption);
+        assert!(p.x.ticks.len() >= 2 && !p.y.ticks.is_empty(), "{what}: ticks {:?} {:?}", p.x.ticks, p.y.ticks);
+        assert!(p.x.ticks.iter().chain(&p.y.ticks).all(|t| !t.is_empty()), "{what}: an empty tick label");
+        assert_ne!(p.y_label, "1", "{what}: a dimensionless unit is left blank");
+        if let Some((lo, hi)) = p.x_data {
+            let tol = 1e-9 * (hi - lo).abs().max(1.0);
+            assert!(
+                p.x.lo <= lo + tol && (p.x.hi - hi).abs() <= tol,
+                "{what}: x {}..{} for data {lo}..{hi}",
+                p.x.lo,
+                p.x.hi
+            );
+        }
+        if let Some((lo, hi)) = p.y_data {
+            let tol = 1e-9 * hi.abs().max(lo.abs()).max(1e-12);
+            assert!(p.y.lo <= lo + tol && p.y.hi >= hi - tol, "{what}: y {}..{} for data {lo}..{hi}", p.y.lo, p.y.hi);
+        }
+    }
+}
+
+/// A trace of `plant`'s columns over 10 s at 100 Hz: each output with a set point rising to it, every other column
+/// a sine of its own amplitude (a command leads its position by a little).
+fn signal_trace(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<f64>) -> Trace {
+    let names = plant.trace_columns(&[]);
+    let mut trace = Trace::new(names.clone());
+    trace.rows = (0..=1000)
+        .map(|k| {
+            let t = k as f64 * 0.01;
+            names
+                .iter()
+                .enumerate()
+                .map(|(c, name)| match (name.as_str(), setpoint(name)) {
+                    ("t_s", _) => t,
+                    (_, Some(sp)) => sp * (1.0 - (-2.0 * t).exp()),
+                    (n, None) if n.ends_with("_cmd_deg") || n.ends_with("_cmd") => (c as f64) * (t + 0.1).sin(),
+                    _ => (c as f64) * t.sin(),
+                })
+                .collect()
+        })
+        .collect();
+    trace
+}
+
+/// The plant's figures drawn, each held to its data; every output with a set point has its panel in the response
+/// figure with the set point over it and its unit as the y label; the fault window is drawn from start to end.
+fn check_plant_figures(plant: &PlantSignals, setpoint: &dyn Fn(&str) -> Option<f64>, dir: &Path) {
+    let trace = signal_trace(plant, setpoint);
+    let response = plot_response(&trace, Some(plant), setpoint, dir, "response", &plant.plant).unwrap();
+    let events = [TimelineEvent { t_s: 3.0, label: "controller kill at 3 s".into(), end_s: Some(3.5) }];
+    let faults = plot_timeline(&trace, plant, setpoint, &events, dir, "faults", &plant.plant).unwrap();
+    let signals = plot_signals(&trace, Some(plant), setpoint, dir, "signals", &plant.plant).unwrap();
+    for drawn in [&response, &faults, &signals] {
+        drawn.figures.iter().for_each(axes_fit_their_data);
+    }
+    let with_setpoint: Vec<&OutputSignal> = plant.outputs.iter().filter(|o| setpoint(&o.name).is_some()).collect();
+    let panels = &response.figure("response").unwrap().panels;
+    assert_eq!(panels.len(), with_setpoint.len(), "{}: one response panel per set point", plant.plant);
+    for (panel, output) in panels.iter().zip(&with_setpoint) {
+        assert_eq!(panel.series, [output.name.as_str(), "set point"], "{}", plant.plant);
+        let unit = if output.unit == "1" { "" } else { output.unit.as_str() };
+        assert_eq!(panel.y_label, unit, "{}: {}'s unit", plant.plant, output.name);
+    }
+    for panel in &faults.figure("faults").unwrap().panels {
+        assert_eq!(panel.windows, [(3.0, 3.5)], "{}: the fault's window, start to end", plant.plant);
+    }
+}
+
+#[test]
+fn every_figure_s_axes_fit_its_data_for_the_f16_a_plant_of_your_own_and_the_quadrotor() {
+    let dir = OutDir::new("axes");
+    check_plant_figures(&f16(), &f16_setpoint, &dir.path.join("f16"));
+    let attitude_setpoint = |n: &str| (n == "phi_deg").then_some(10.0);
+    check_plant_figures(&attitude(), &attitude_setpoint, &dir.path.join("attitude"));
+    // The quadrotor as configs/quad-steps.toml flies it: its announcement and its set points.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/quad-steps.toml");
+    let scenario = silrig::scenario::Scenario::load(&path).unwrap();
+    let quad = silrig_flight::quad::builtin_signals(&scenario).unwrap();
+    let quad_setpoint = |n: &str| scenario.setpoint.get(n);
+    check_plant_figures(&quad, &quad_setpoint, &dir.path.join("quad"));
+
+    // The F-16's states: set points on the attitude panel, every panel fitting its data.
+    let states =
+        plot_closed_loop(&synthetic(1000, 0.0), None, &f16_setpoint, &dir.path, "long title ".repeat(20).trim())
+            .unwrap();
+    states.figures.iter().for_each(axes_fit_their_data);
+    let fig1 = states.figure("fig1_states").unwrap();
+    assert_eq!(
+        fig1.panels[1].series,
+        ["φ roll", "φ roll set point", "θ pitch", "θ pitch set point", "ψ yaw", "ψ yaw set point"]
+    );
+}
+
+#[test]
+fn latency_figures_show_the_bulk_and_the_worst_tick() {
+    let dir = OutDir::new("latency-axes");
+    // 301 samples: the bulk at tens of µs, one logger wake-up at 47 ms.
+    let mut values: Vec<f64> = (0..300).map(|k| 20.0 + (k % 40) as f64).collect();
+    values.push(47_000.0);
+    values.sort_by(f64::total_cmp);
+    let points = |v: &[f64]| -> Vec<(f64, f64)> {
+        v.iter().enumerate().map(|(k, x)| (100.0 * k as f64 / v.len() as f64, *x)).collect()
+    };
+    let series = vec![
+        ("logger.ipc_plant_to_logger".to_string(), points(&values)),
+        ("plant".to_string(), points(&values[..300])),
+    ];
+    let drawn = plot_percentile_distributions(&series, &dir.path, "latency", "latency").unwrap();
+    let fig = drawn.figure("latency").unwrap();
+    axes_fit_their_data(fig);
+    let p = &fig.panels[0];
+    assert!(p.y_log && p.y.hi >= 47_000.0 && p.y.lo <= 20.0, "log y {}..{}", p.y.lo, p.y.hi);
+    assert!(p.y.ticks.contains(&"10,000".to_string()) && p.y.ticks.contains(&"100".to_string()), "{:?}", p.y.ticks);
+    let highest = (1.0f64 / (1.0 - 300.0 / 301.0)).log10();
+    assert!((p.x.hi - highest).abs() < 1e-9, "the percentile axis ends at the data: {} vs {highest}", p.x.hi);
+    assert!(p.caption.contains("47000 µs, logger.ipc_plant_to_logger"), "{}", p.caption);
+
+    let per_tick = vec![("plant.wake_lateness".to_string(), values.clone())];
+    let drawn = plot_latency_histograms(&per_tick, 5.0, &dir.path, "latency_histogram", "histogram").unwrap();
+    let fig = drawn.figure("latency_histogram").unwrap();
+    axes_fit_their_data(fig);
+    let p = &fig.panels[0];
+    assert!(p.x.hi <= 100.0, "the x axis ends at the 99.9th percentile's bucket, not at 47,000 µs: {}", p.x.hi);
+    assert!(p.caption.starts_with("1 tick beyond") && p.caption.contains("highest 47000 µs"), "{}", p.caption);
+    assert_eq!(p.y_label, "ticks per bucket");
+    assert!(p.y_log && p.y.ticks.iter().all(|t| ["1", "10", "100"].contains(&t.as_str())), "{:?}", p.y.ticks);
+}
+
+#[test]
+fn sweep_figures_name_every_panel_s_unit_and_fit_their_titles() {
+    let dir = OutDir::new("sweep-axes");
+    let histogram = |caption: &str, unit: &str| Histogram {
+        caption: caption.into(),
+        unit: unit.into(),
+        values: (0..50).map(|k| k as f64 * 0.1).collect(),
+        limit: Some(4.0),
+    };
+    let panels: Vec<Histogram> =
+        [("alpha", "deg"), ("settle", "s"), ("rate", "deg/s"), ("overshoot", "deg"), ("error", "m")]
+            .iter()
+            .map(|(c, u)| histogram(c, u))
+            .collect();
+    let drawn = plot_histograms(&panels, &dir.path, "histograms", "histograms").unwrap();
+    let fig = drawn.figure("histograms").unwrap();
+    axes_fit_their_data(fig);
+    let labels: Vec<Option<&str>> = fig.panels.iter().map(|p| p.x_label.as_deref()).collect();
+    assert_eq!(labels, [Some("deg"), Some("s"), Some("deg/s"), Some("deg"), Some("m")], "every histogram's unit");
+    let envelope = Envelope {
+        caption: "phi_deg".into(),
+        unit: "deg".into(),
+        band: (0..100).map(|k| (k as f64 * 0.1, -1.0, 1.0)).collect(),
+        failed: vec![],
+        setpoint: 0.0,
+    };
+    let title = "sweep-robust: 1000 cases, the default scenario with sensor errors and 21 dispersions: envelope";
+    let drawn = plot_envelope(&[envelope], &dir.path, "envelope", title).unwrap();
+    axes_fit_their_data(drawn.figure("envelope").unwrap());
 }

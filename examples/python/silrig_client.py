@@ -159,7 +159,12 @@ class Sample:
         self._index = index
 
     def __getitem__(self, name):
-        return self.raw.outputs[self._index[name]]
+        try:
+            k = self._index[name]
+        except KeyError:
+            # The plant's names beside the one asked for, as the package and the C ABI say it.
+            raise KeyError(f"the plant has no output `{name}`; its outputs: {', '.join(self._index)}") from None
+        return self.raw.outputs[k]
 
     @property
     def tick(self):

@@ -3,20 +3,27 @@ sweeps, from Python. Natively: the rig's own sessions and tools, compiled in (`p
 checkout); no ctypes, no library path to set.
 
 Your controller: a `Controller` with one method, `step(sample, dt_s)`, handed to `serve()`. Read an output by name
-(`sample["theta_deg"]`), command inputs with a dict; an input you leave out stays where its actuator is:
+(`sample["theta_deg"]`), command inputs with a dict; an input you leave out stays where its actuator is. For the
+F-16 (Stevens & Lewis), a positive elevator pitches the nose down:
 
     import silrig
 
     class Hold(silrig.Controller):
+        def start(self, session):
+            self.theta_deg = session.setpoint("theta_deg")
+
         def step(self, sample, dt_s):
-            return {"elevator": -2.0 - 0.5 * sample["q_dps"]}
+            error_deg = sample["theta_deg"] - self.theta_deg
+            return {"elevator": -2.0 + 2.0 * error_deg + 1.0 * sample["q_dps"]}
 
-    raise SystemExit(silrig.serve(Hold()))
+    if __name__ == "__main__":
+        raise SystemExit(silrig.serve(Hold()))
 
-flown with `silrig run --controller-cmd "python3 my_controller.py"`. Your plant: a `PlantModel` handed to
-`serve_plant()`, flown with `silrig run --plant-cmd "python3 my_plant.py"`. In a notebook: `silrig.sim()` flies a
-scenario's closed loop in this process and returns its trace as columns; `silrig.sweep(scenario, runs=...)` flies a
-Monte Carlo campaign and returns its case table.
+flown with `silrig run --controller-cmd "python3 my_controller.py"`, or in this process with
+`silrig.sim(scenario, controller=Hold())`. Your plant: a `PlantModel` handed to `serve_plant()`, flown with
+`silrig run --plant-cmd "python3 my_plant.py"`. In a notebook: `silrig.sim()` flies a scenario's closed loop in this
+process and returns its trace as columns; `silrig.sweep(scenario, runs=...)` flies a Monte Carlo campaign and
+returns its case table.
 
 The API is that of the ctypes module examples/python/silrig_client.py (for those who cannot build this package): a
 controller or model written for one runs with the other by changing its import.
@@ -42,6 +49,7 @@ from ._native import (
     STOPPED,
     WIRE_LAYOUT_VERSION,
     ControllerSession,
+    InProcessSession,
     Plant,
     PlantSession,
     Sample,
@@ -59,6 +67,7 @@ Session = ControllerSession
 __all__ = [
     "Controller",
     "ControllerSession",
+    "InProcessSession",
     "Plant",
     "PlantModel",
     "PlantSession",
@@ -99,7 +108,8 @@ class Controller:
 
     def start(self, session: ControllerSession) -> None:
         """Called once the session is open (read `session.setpoint(name)`, `session.dt_s`, `session.plant` here;
-        `session.output(name)` fails early, naming the plant's outputs, when a signal you need is missing)."""
+        `session.output(name)` fails early, naming the plant's outputs, when a signal you need is missing). The
+        session is a `ControllerSession` under the rig, an `InProcessSession` under `sim` and `sweep`."""
 
     def step(self, sample: Sample, dt_s: float) -> Union[Commands, Tuple[Commands, Sequence[float]]]:
         """One plant sample in (read it by name: `sample["theta_deg"]`); out, a dict of commands by input name

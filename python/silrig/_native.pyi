@@ -79,6 +79,20 @@ class ControllerSession:
     def __enter__(self) -> "ControllerSession": ...
     def __exit__(self, kind: Any = None, value: Any = None, traceback: Any = None) -> bool: ...
 
+class InProcessSession:
+    """What a controller's `start` is handed when `sim` or `sweep` flies it in this process."""
+
+    @property
+    def dt_s(self) -> float: ...
+    @property
+    def setpoint_deg(self) -> Tuple[float, float, float]: ...
+    def setpoint(self, name: str, default: Optional[float] = None) -> Optional[float]: ...
+    @property
+    def plant(self) -> Plant: ...
+    def output(self, name: str) -> int: ...
+    def input(self, name: str) -> int: ...
+    def held_command(self) -> List[float]: ...
+
 def serve(controller: Any) -> int:
     """Fly `controller` until the run ends or SIGTERM; 0 at the end, 2 when the session could not open."""
 
@@ -126,8 +140,9 @@ class SweepResult(TypedDict):
     fly_s: float
     jobs: int
 
-def sim(scenario: Scenario = None, *, numpy: bool = False) -> SimResult:
-    """Fly a scenario's closed loop in this process, as `silrig sim` does; trace and summary."""
+def sim(scenario: Scenario = None, *, controller: Any = None, numpy: bool = False) -> SimResult:
+    """Fly a scenario's closed loop in this process, as `silrig sim` does (with `controller`, that controller in
+    place of the scenario's, as the lockstep rig flies it); trace and summary."""
 
 def sweep(
     scenario: Scenario,
@@ -135,6 +150,8 @@ def sweep(
     *,
     seed: Optional[int] = None,
     jobs: Optional[int] = None,
+    controller: Any = None,
     numpy: bool = False,
 ) -> SweepResult:
-    """Fly a Monte Carlo campaign in this process, as `silrig sweep` does; case table and summary."""
+    """Fly a Monte Carlo campaign in this process, as `silrig sweep` does (with `controller`, a copy of it per
+    case); case table and summary."""

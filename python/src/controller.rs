@@ -53,7 +53,7 @@ impl Plant {
 }
 
 impl Plant {
-    fn new(py: Python<'_>, signals: &silrig_flight::signals::PlantSignals) -> PyResult<Self> {
+    pub(crate) fn new(py: Python<'_>, signals: &silrig_flight::signals::PlantSignals) -> PyResult<Self> {
         let outputs: Vec<(String, String)> = signals.outputs.iter().map(|o| (o.name.clone(), o.unit.clone())).collect();
         let inputs: Vec<_> =
             signals.inputs.iter().map(|i| (i.name.clone(), i.unit.clone(), i.min, i.max, i.hold)).collect();
@@ -73,6 +73,16 @@ impl Plant {
             input_index: input_index.unbind(),
         })
     }
+
+    /// `{output name: index}`, the dict itself (each sample reads its outputs by name through it).
+    pub(crate) fn output_index_dict(&self, py: Python<'_>) -> Py<PyDict> {
+        self.output_index.clone_ref(py)
+    }
+
+    /// `{input name: index}`, the dict itself.
+    pub(crate) fn input_index_dict(&self, py: Python<'_>) -> Py<PyDict> {
+        self.input_index.clone_ref(py)
+    }
 }
 
 /// One plant sample: read an output by name (`sample["theta_deg"]`) or by index (`sample[3]`); `tick`, `t_s` and
@@ -89,6 +99,13 @@ pub struct Sample {
     #[pyo3(get)]
     outputs: Vec<f64>,
     index: Py<PyDict>,
+}
+
+impl Sample {
+    /// The sample of `tick` at `t_s`, its outputs read by name through `index` (the plant's `{output: index}`).
+    pub(crate) fn new(tick: u64, t_s: f64, outputs: Vec<f64>, index: Py<PyDict>) -> Self {
+        Self { tick, t_s, outputs, index }
+    }
 }
 
 #[pymethods]
@@ -400,38 +417,10 @@ fn fly(py: Python<'_>, controller: &Bound<'_, PyAny>, session: &Bound<'_, Contro
     loop {
         let Some(sample) = session.borrow_mut().next(py)? else { return Ok(()) };
         let out = step.call1((sample, dt_s))?;
-        let (commands, diagnostics) = match out.cast::<PyTuple>() {
-            Ok(pair) if pair.len() == 2 => (pair.get_item(0)?, Some(pair.get_item(1)?)),
-            _ => (out, None),
-        };
         let mut s = session.borrow_mut();
         let mut inputs = s.live(py)?.held_command();
-        let mut set = |name: &Bound<'_, PyAny>, value: &Bound<'_, PyAny>| -> PyResult<()> {
-            let k = match input_index.get_item(name)? {
-                Some(k) => k.extract::<usize>()?,
-                // An unknown name: the session's error names the plant's inputs.
-                None => s.input(py, &name.extract::<String>()?)?,
-            };
-            inputs[k] = value.extract()?;
-            Ok(())
-        };
-        match commands.cast::<PyDict>() {
-            Ok(dict) => {
-                for (name, value) in dict.iter() {
-                    set(&name, &value)?;
-                }
-            }
-            Err(_) => {
-                for item in commands.call_method0(intern!(py, "items"))?.try_iter()? {
-                    let (name, value): (Bound<'_, PyAny>, Bound<'_, PyAny>) = item?.extract()?;
-                    set(&name, &value)?;
-                }
-            }
-        }
-        let diagnostics: Vec<f64> = match diagnostics {
-            Some(d) => d.extract()?,
-            None => Vec::new(),
-        };
+        let signals = s.live(py)?.plant().map_err(|e| session_error(py, &e))?;
+        let diagnostics = read_answer(py, out, input_index, signals, &mut inputs)?;
         // False when refused: the run's events say why and the plant holds; the next sample may do better.
         s.send_command(py, &inputs, &diagnostics)?;
         let due = s.live(py)?.checkpoint_due();
@@ -443,6 +432,51 @@ fn fly(py: Python<'_>, controller: &Bound<'_, PyAny>, session: &Bound<'_, Contro
                 session.borrow_mut().live(py)?.save_checkpoint(&text);
             }
         }
+    }
+}
+
+/// What a controller's `step` returned (`commands`, or `(commands, diagnostics)`; commands a dict, or anything with
+/// `items()`, of input names and values) written into `inputs` (each input left out keeps its value there), with
+/// `input_index` the plant's `{input: index}`; returns the diagnostics (none when not given). An unknown input name
+/// raises `SilrigError` (`ERR_PLANT`) naming the plant's inputs. `serve()` and the in-process flight read it alike.
+pub(crate) fn read_answer(
+    py: Python<'_>,
+    out: Bound<'_, PyAny>,
+    input_index: &Bound<'_, PyDict>,
+    plant: &silrig_flight::signals::PlantSignals,
+    inputs: &mut [f64],
+) -> PyResult<Vec<f64>> {
+    let (commands, diagnostics) = match out.cast::<PyTuple>() {
+        Ok(pair) if pair.len() == 2 => (pair.get_item(0)?, Some(pair.get_item(1)?)),
+        _ => (out, None),
+    };
+    let mut set = |name: &Bound<'_, PyAny>, value: &Bound<'_, PyAny>| -> PyResult<()> {
+        let k = match input_index.get_item(name)? {
+            Some(k) => k.extract::<usize>()?,
+            None => {
+                let name: String = name.extract()?;
+                return Err(silrig_error(py, Status::ErrPlant, plant.input(&name).err().unwrap_or_default()));
+            }
+        };
+        inputs[k] = value.extract()?;
+        Ok(())
+    };
+    match commands.cast::<PyDict>() {
+        Ok(dict) => {
+            for (name, value) in dict.iter() {
+                set(&name, &value)?;
+            }
+        }
+        Err(_) => {
+            for item in commands.call_method0(intern!(py, "items"))?.try_iter()? {
+                let (name, value): (Bound<'_, PyAny>, Bound<'_, PyAny>) = item?.extract()?;
+                set(&name, &value)?;
+            }
+        }
+    }
+    match diagnostics {
+        Some(d) => d.extract(),
+        None => Ok(Vec::new()),
     }
 }
 

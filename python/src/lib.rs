@@ -1,7 +1,8 @@
 //! `silrig._native`, the Rust half of the `silrig` Python package (python/silrig/ holds the Python half, the base
 //! classes `Controller` and `PlantModel`): the rig's controller session ([`controller`]) and plant session
 //! ([`plant`]) as Python classes, with the loops that fly a user's controller or model (`serve`, `serve_plant`),
-//! and the in-process tools `sim` and `sweep` ([`tools`]). The sessions are the ones `silrig-controller`, the C ABI
+//! and the in-process tools `sim` and `sweep` ([`tools`]), which fly a Python controller in process too
+//! ([`in_process`]). The sessions are the ones `silrig-controller`, the C ABI
 //! of `libsilrig_client.so` and the rig's own plant use: this is a fourth way in, not a reimplementation, so a
 //! Python controller flies here exactly as through the ctypes module `examples/python/silrig_client.py`.
 //!
@@ -13,6 +14,7 @@ use pyo3::prelude::*;
 use silrig_rig::session::{SessionError, Status};
 
 mod controller;
+mod in_process;
 mod plant;
 mod tools;
 
@@ -55,6 +57,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<controller::Plant>()?;
     m.add_class::<controller::Sample>()?;
     m.add_class::<controller::ControllerSession>()?;
+    m.add_class::<in_process::InProcessSession>()?;
     m.add_function(wrap_pyfunction!(controller::serve, m)?)?;
     m.add_class::<plant::PlantSession>()?;
     m.add_function(wrap_pyfunction!(plant::plant_parameter, m)?)?;

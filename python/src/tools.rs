@@ -1,13 +1,16 @@
 //! The in-process tools: [`sim`] flies a scenario's closed loop as `silrig sim` does
 //! ([`silrig_tools::outputs::fly_one_process`], the same trace and summary, no files written) and [`sweep`] flies a
 //! Monte Carlo campaign as `silrig sweep` does ([`silrig_tools::campaign::Campaign`], the same case table and
-//! summary). Both run with the interpreter's lock released, and hand back columns: lists of floats, or NumPy arrays
-//! when asked (`numpy=True`, NumPy imported then, never required otherwise).
+//! summary). Both fly the scenario's controller, or a Python controller handed to them (`controller=`, flown by
+//! [`crate::in_process`] in the rig's in-process loop). Both run with the interpreter's lock released (a Python
+//! controller takes it for its calls), and hand back columns: lists of floats, or NumPy arrays when asked
+//! (`numpy=True`, NumPy imported then, never required otherwise).
 
+use crate::in_process::{self, RaisedSlot};
 use crate::silrig_error;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList, PyString};
-use silrig_adapters::in_process::{FmuFlags, Models};
+use silrig_adapters::in_process::{FmuFlags, MakeController, Models};
 use silrig_flight::scenario::Scenario;
 use silrig_rig::session::Status;
 use silrig_tools::campaign::{self, Campaign, report};
@@ -85,13 +88,16 @@ struct Simulated {
     refusals: Vec<String>,
 }
 
-fn simulate(source: Source) -> Result<Simulated, String> {
+fn simulate(source: Source, controller: Option<MakeController>) -> Result<Simulated, String> {
     let scenario = match source {
         Source::Default => Scenario::embedded_default(),
         Source::File(path) => Scenario::load(&path).map_err(|e| e.to_string())?,
         Source::Text(text) => Scenario::from_toml(&text, TEXT_ORIGIN).map_err(|e| e.to_string())?,
     };
-    let models = Models::open(&scenario).map_err(|e| format!("{e:#}"))?;
+    let mut models = Models::open(&scenario).map_err(|e| format!("{e:#}"))?;
+    if let Some(make) = controller {
+        models.fly_controller(make);
+    }
     let flight = silrig_tools::outputs::fly_one_process(&models, &scenario)?;
     let summary = silrig_flight::summary::summarize(&flight.trace, &scenario, flight.plant.as_ref());
     let summary_json = serde_json::to_string(&summary).map_err(|e| e.to_string())?;
@@ -106,20 +112,46 @@ fn simulate(source: Source) -> Result<Simulated, String> {
     })
 }
 
+/// A Python controller's maker and where its exception goes, when one was given.
+fn given_controller(
+    py: Python<'_>,
+    controller: Option<&Bound<'_, PyAny>>,
+    copy_per_flight: bool,
+) -> PyResult<(Option<MakeController>, RaisedSlot)> {
+    let raised = RaisedSlot::default();
+    let make = controller
+        .filter(|c| !c.is_none())
+        .map(|c| in_process::maker(py, c, copy_per_flight, raised.clone()))
+        .transpose()?;
+    Ok((make, raised))
+}
+
 /// Fly a scenario's closed loop in this process, as `silrig sim` does (deterministic; no files written).
 ///
 /// `scenario`: a scenario file (str or path), TOML text (a str holding a newline or `=`), or None for the embedded
-/// default. Returns a dict: `trace` (`{column: values}` in trace.csv's order and with its values), `summary` (what
+/// default. `controller`: a `silrig.Controller` (what `serve()` flies) to fly in place of the scenario's, in the
+/// lockstep rig's loop, so the trace is the one `silrig run --mode lockstep --controller-cmd` gives for it; its
+/// `start` is handed a `silrig.InProcessSession`, and an exception it raises is raised here. Returns a dict: `trace` (`{column: values}` in trace.csv's order and with its values), `summary` (what
 /// summary.json holds), `ended_early` (None, or `{"t_s": ..., "reason": ...}` when the flight ended before the
 /// scenario's end; the trace holds it up to there) and `refusals` (what the rig refused on the way, as sentences).
 /// With `numpy=True` each column is a NumPy float64 array instead of a list. A scenario that does not load raises
 /// `SilrigError` (`ERR_SETUP`) naming the file, key and problem.
 #[pyfunction]
-#[pyo3(signature = (scenario = None, *, numpy = false))]
-pub fn sim<'py>(py: Python<'py>, scenario: Option<&Bound<'py, PyAny>>, numpy: bool) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (scenario = None, *, controller = None, numpy = false))]
+pub fn sim<'py>(
+    py: Python<'py>,
+    scenario: Option<&Bound<'py, PyAny>>,
+    controller: Option<&Bound<'py, PyAny>>,
+    numpy: bool,
+) -> PyResult<Bound<'py, PyDict>> {
     let np = import_numpy(py, numpy)?;
     let source = source(scenario)?;
-    let flown = py.detach(move || simulate(source)).map_err(|e| silrig_error(py, Status::ErrSetup, e))?;
+    let (make, raised) = given_controller(py, controller, false)?;
+    let flown = py.detach(move || simulate(source, make));
+    if let Some(err) = in_process::raised(&raised) {
+        return Err(err);
+    }
+    let flown = flown.map_err(|e| silrig_error(py, Status::ErrSetup, e))?;
     let out = PyDict::new(py);
     out.set_item("trace", columns(py, &flown.columns, flown.values, np.as_ref())?)?;
     out.set_item("summary", json_to_python(py, &flown.summary_json)?)?;
@@ -142,7 +174,13 @@ struct Swept {
     jobs: usize,
 }
 
-fn fly_sweep(source: Source, runs: u64, seed: Option<u64>, jobs: Option<usize>) -> Result<Swept, String> {
+fn fly_sweep(
+    source: Source,
+    runs: u64,
+    seed: Option<u64>,
+    jobs: Option<usize>,
+    controller: Option<MakeController>,
+) -> Result<Swept, String> {
     let error = |e: anyhow::Error| format!("{e:#}");
     if !(1..=campaign::MAX_RUNS).contains(&runs) {
         return Err(format!("runs must be within 1..={}, got {runs}", campaign::MAX_RUNS));
@@ -153,6 +191,10 @@ fn fly_sweep(source: Source, runs: u64, seed: Option<u64>, jobs: Option<usize>) 
         Source::Text(text) => Campaign::from_text(&text, TEXT_ORIGIN),
     }
     .map_err(error)?;
+    let mut campaign = campaign;
+    if let Some(make) = controller {
+        campaign.models.fly_controller(make);
+    }
     let seed = seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(campaign::jobs(jobs).map_err(error)?);
     let started = std::time::Instant::now();
@@ -197,26 +239,33 @@ fn csv_cells(line: &str) -> Vec<String> {
 /// Fly a Monte Carlo campaign in this process, as `silrig sweep SCENARIO --runs N` does (no files written).
 ///
 /// `scenario`: a scenario file with `[dispersions]` and `[criteria]` (str or path), or TOML text. `runs` cases,
-/// dispersed with `seed` (default: the scenario's), on `jobs` threads (default: one per core). Returns a dict:
+/// dispersed with `seed` (default: the scenario's), on `jobs` threads (default: one per core). `controller`: a
+/// `silrig.Controller` flown in place of the scenario's, a `copy.deepcopy` of it per case (as `sim` flies it; its
+/// calls take the interpreter's lock, so its cases gain little from more threads). Returns a dict:
 /// `cases`, the case table (`{column: values}`, the columns of cases.csv: `index` ints, `outcome` and `reason`
 /// strings, the rest floats, NaN where cases.csv has an empty cell; NumPy arrays for the floats with `numpy=True`),
 /// `summary` (what sweep.json holds: pass rate, worst cases, ...), `fly_s` (wall time of the flights, s) and
 /// `jobs` (threads used). Progress goes to stderr as `silrig sweep` prints it. A scenario that cannot be swept raises
 /// `SilrigError` (`ERR_SETUP`) saying why.
 #[pyfunction]
-#[pyo3(signature = (scenario, runs, *, seed = None, jobs = None, numpy = false))]
+#[pyo3(signature = (scenario, runs, *, seed = None, jobs = None, controller = None, numpy = false))]
 pub fn sweep<'py>(
     py: Python<'py>,
     scenario: Option<&Bound<'py, PyAny>>,
     runs: u64,
     seed: Option<u64>,
     jobs: Option<usize>,
+    controller: Option<&Bound<'py, PyAny>>,
     numpy: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let np = import_numpy(py, numpy)?;
     let source = source(scenario)?;
-    let swept =
-        py.detach(move || fly_sweep(source, runs, seed, jobs)).map_err(|e| silrig_error(py, Status::ErrSetup, e))?;
+    let (make, raised) = given_controller(py, controller, true)?;
+    let swept = py.detach(move || fly_sweep(source, runs, seed, jobs, make));
+    if let Some(err) = in_process::raised(&raised) {
+        return Err(err);
+    }
+    let swept = swept.map_err(|e| silrig_error(py, Status::ErrSetup, e))?;
     let mut lines = swept.cases_csv.lines();
     let names = csv_cells(lines.next().unwrap_or_default());
     let mut cells: Vec<Vec<String>> = vec![Vec::new(); names.len()];

@@ -3,6 +3,7 @@ tests/python_package.rs passes it; otherwise target/release/silrig), and a run-i
 (SILRIG_TEST_RUN_PREFIX) so that the Rust test can check each run left no shared memory behind."""
 
 import json
+import math
 import os
 import pathlib
 import subprocess
@@ -41,3 +42,16 @@ def read_csv_columns(path):
         for name, cell in zip(header, line.split(",")):
             columns[name].append(float(cell) if cell else float("nan"))
     return columns
+
+
+def same(a, b):
+    return a == b or (math.isnan(a) and math.isnan(b))
+
+
+def assert_same_columns(ours, theirs):
+    """Two traces as {column: values}: the same columns in the same order, equal value for value (NaN with NaN)."""
+    assert list(ours) == list(theirs)
+    for name in theirs:
+        assert len(ours[name]) == len(theirs[name]), name
+        bad = [k for k, (x, y) in enumerate(zip(ours[name], theirs[name])) if not same(float(x), y)]
+        assert not bad, f"column {name} differs first at row {bad[0]}: {ours[name][bad[0]]} != {theirs[name][bad[0]]}"

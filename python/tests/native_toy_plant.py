@@ -1,5 +1,6 @@
 """tests/clients/toy_plant.py's model, written against the ctypes module, flown through the package's
-`serve_plant`: the plant role natively, and the proof that a model moves between the two by its import alone.
+`serve_plant`, in the modes that break the rules on purpose (the template that flies is
+examples/python/toy_plant_native.py).
 
     python3 native_toy_plant.py [MODE]     MODE as toy_plant.py's: ok, nan, twice, none
 """

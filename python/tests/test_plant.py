@@ -5,14 +5,16 @@ import sys
 
 from conftest import ROOT, counter, process, read_csv_columns, silrig_run
 
-TOY = f"{sys.executable} {ROOT}/python/tests/native_toy_plant.py"
+# The template (examples/) flies; the test's own toy breaks the rules on purpose.
+TOY = f"{sys.executable} {ROOT}/examples/python/toy_plant_native.py"
+BROKEN_TOY = f"{sys.executable} {ROOT}/python/tests/native_toy_plant.py"
 PID = f"{sys.executable} {ROOT}/examples/python/pid_attitude_native.py"
 SCENARIO = str(ROOT / "tests" / "scenarios" / "toy.toml")
 
 
 def test_a_toy_plant_flies_lockstep_through_the_package(tmp_path):
     out = tmp_path / "run"
-    r, report = silrig_run("toy", out, ["--mode", "lockstep", "--plant-cmd", TOY + " ok", "--controller-cmd", PID,
+    r, report = silrig_run("toy", out, ["--mode", "lockstep", "--plant-cmd", TOY, "--controller-cmd", PID,
                                         SCENARIO])
     assert r.returncode == 0, r.stdout + r.stderr
     assert counter(report, "plant", "ticks") == 1001
@@ -32,6 +34,6 @@ def test_a_toy_plant_flies_lockstep_through_the_package(tmp_path):
 def test_a_broken_announcement_is_refused_naming_the_rule(tmp_path):
     out = tmp_path / "run"
     r, report = silrig_run("twice", out, ["--duration-s", "1", "--startup-timeout-s", "2", "--plant-cmd",
-                                          TOY + " twice", SCENARIO])
+                                          BROKEN_TOY + " twice", SCENARIO])
     assert r.returncode == 1, r.stdout + r.stderr
     assert "plant toy: output `phi_deg` named twice" in str(report["failures"])

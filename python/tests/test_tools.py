@@ -10,19 +10,7 @@ import subprocess
 import pytest
 import silrig
 
-from conftest import ROOT, SILRIG, read_csv_columns
-
-
-def same(a, b):
-    return a == b or (math.isnan(a) and math.isnan(b))
-
-
-def assert_same_columns(ours, theirs):
-    assert list(ours) == list(theirs)
-    for name in theirs:
-        assert len(ours[name]) == len(theirs[name]), name
-        bad = [k for k, (x, y) in enumerate(zip(ours[name], theirs[name])) if not same(float(x), y)]
-        assert not bad, f"column {name} differs first at row {bad[0]}: {ours[name][bad[0]]} != {theirs[name][bad[0]]}"
+from conftest import ROOT, SILRIG, assert_same_columns, read_csv_columns, same
 
 
 def cli_sim(out, *args):

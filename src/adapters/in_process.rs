@@ -14,7 +14,8 @@
 //! [`Models`] opens a scenario's FMUs once (unpacking is the slow part) and flies any number of flights of it, each
 //! with fresh instances, from any number of threads unless an FMU says its binary allows one instance per process.
 //! What it opens and flies is a match on the scenario's [`PlantKind`] and [`ControllerKind`], one arm per adapter,
-//! as in [`crate::process`].
+//! as in [`crate::process`]; or, in place of the scenario's controller, one the caller brings
+//! ([`Models::fly_controller`]: the Python package's `silrig.sim(..., controller=...)`), made anew for each flight.
 
 use crate::builtin::attitude_law::AttitudeLaw;
 use crate::builtin::f16_plant::F16Plant;
@@ -266,12 +267,18 @@ enum OpenedPlant {
     Fmu(Arc<Fmu>),
 }
 
-/// A controller of each [`ControllerKind`], opened: what [`Models::fly`] makes each flight's controller from.
+/// A controller of each [`ControllerKind`], opened, or the caller's: what [`Models::fly`] makes each flight's
+/// controller from.
 enum OpenedController {
     AttitudeLaw,
     QuadLaw,
     Fmu(Arc<Fmu>),
+    Given(MakeController),
 }
+
+/// Makes a flight's controller for that flight's scenario (a sweep's case: its dispersed set points and step); an
+/// error says why it could not (the case is then infeasible). Called from the thread that flies it.
+pub type MakeController = Arc<dyn Fn(&Scenario) -> Result<Box<dyn Controller>, String> + Send + Sync>;
 
 impl OpenedPlant {
     fn fmu(&self) -> Option<&Arc<Fmu>> {
@@ -286,7 +293,7 @@ impl OpenedController {
     fn fmu(&self) -> Option<&Arc<Fmu>> {
         match self {
             Self::Fmu(fmu) => Some(fmu),
-            Self::AttitudeLaw | Self::QuadLaw => None,
+            Self::AttitudeLaw | Self::QuadLaw | Self::Given(_) => None,
         }
     }
 }
@@ -319,6 +326,12 @@ impl Models {
             ),
         };
         Ok(Self { plant, controller })
+    }
+
+    /// Fly the controllers `make` makes, one per flight, in place of the scenario's (its `[controller]` table is
+    /// then not read, but for the step: `timing.controller_every_ticks`).
+    pub fn fly_controller(&mut self, make: MakeController) {
+        self.controller = OpenedController::Given(make);
     }
 
     /// Whether the scenario flies an FMU.
@@ -399,6 +412,7 @@ impl Models {
             OpenedController::AttitudeLaw => Box::new(AttitudeLaw::new(scenario)),
             OpenedController::QuadLaw => Box::new(QuadLaw::new(scenario).map_err(|e| setup(anyhow::anyhow!(e)))?),
             OpenedController::Fmu(fmu) => Box::new(FmuController::new(fmu.clone(), scenario).map_err(setup)?),
+            OpenedController::Given(make) => make(scenario).map_err(|e| setup(anyhow::anyhow!(e)))?,
         };
         let connect = |e: String| setup(anyhow::anyhow!(e));
         match &self.plant {
@@ -425,11 +439,16 @@ impl Models {
 mod tests {
     use super::*;
     use silrig_flight::fault::parse_fault_flag;
+    use std::sync::atomic::{AtomicUsize, Ordering};
 
     /// The generic loop flying the F-16 against our controller is the reference loop, bit for bit.
     fn same_as_sim(scenario: &Scenario) {
+        same_as_sim_with(&Models::open(scenario).unwrap(), scenario);
+    }
+
+    fn same_as_sim_with(models: &Models, scenario: &Scenario) {
         let reference = silrig_flight::sim::run(scenario).expect("the scenario flies");
-        let flown = Models::open(scenario).unwrap().fly(scenario).unwrap();
+        let flown = models.fly(scenario).unwrap();
         assert!(flown.ended_early.is_none(), "{:?}", flown.ended_early);
         assert_eq!(flown.trace.columns, reference.columns);
         assert_eq!(flown.trace.rows.len(), reference.rows.len());
@@ -457,5 +476,33 @@ mod tests {
         }
         s.validate().unwrap();
         same_as_sim(&s);
+    }
+
+    #[test]
+    fn a_controller_the_caller_brings_flies_in_place_of_the_scenarios_one_per_flight() {
+        let scenario = Scenario::embedded_default();
+        let mut models = Models::open(&scenario).unwrap();
+        let made = Arc::new(AtomicUsize::new(0));
+        let counted = made.clone();
+        models.fly_controller(Arc::new(move |s: &Scenario| -> Result<Box<dyn Controller>, String> {
+            counted.fetch_add(1, Ordering::Relaxed);
+            Ok(Box::new(AttitudeLaw::new(s)))
+        }));
+        // Never the reference loop: the caller's controller flies in the generic one.
+        assert!(!models.flies_reference_loop(&scenario));
+        same_as_sim_with(&models, &scenario);
+        same_as_sim_with(&models, &scenario);
+        assert_eq!(made.load(Ordering::Relaxed), 2);
+    }
+
+    #[test]
+    fn a_controller_that_cannot_be_made_is_a_setup_error_saying_why() {
+        let scenario = Scenario::embedded_default();
+        let mut models = Models::open(&scenario).unwrap();
+        models.fly_controller(Arc::new(|_: &Scenario| -> Result<Box<dyn Controller>, String> {
+            Err("copying the controller failed: no".into())
+        }));
+        let err = models.fly(&scenario).expect_err("refused");
+        assert_eq!(err.to_string(), "copying the controller failed: no");
     }
 }

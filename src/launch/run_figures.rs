@@ -1,10 +1,12 @@
 //! The figures of one `silrig run`, each drawn from the plant's announced signals (which the recording keeps): the
-//! paper's fig1 to fig3 where the trace has their columns, `signals` and, with faults, `faults` for any plant, and
-//! the timing distributions. A figure the run's data cannot give is left out with its reason, said once in
+//! paper's fig1 to fig3 where the trace has their columns, `response` (the outputs with a set point), `signals` and,
+//! with faults, `faults` for any plant, and the timing distributions. A figure the run's data cannot give is left out with its reason, said once in
 //! `report.json` and `report.html` ([`FigureLeftOut`]): it never fails the flight. Only a file that cannot be
 //! written (a full disk) is an error.
 
+use super::fault_report::FaultRecord;
 use super::run_report::{FigureLeftOut, RigReport, per_tick_values_us};
+use silrig_flight::fault::Fault;
 use silrig_flight::scenario::Scenario;
 use silrig_flight::signals::PlantSignals;
 use silrig_flight::trace::Trace;
@@ -42,9 +44,18 @@ fn trace_figures<'a>(
         Box::new(move || {
             // Rows without a command (a lost controller) have NaN command columns, which the plots skip.
             let f_true = silrig_flight::f_true::from_trace(trace, scenario);
-            match silrig_plot::plot_closed_loop(trace, f_true.as_ref(), out, &silrig_plot::plot_title(scenario)) {
+            let title = silrig_plot::plot_title(scenario);
+            match silrig_plot::plot_closed_loop(trace, f_true.as_ref(), &setpoint, out, &title) {
                 Ok(_) => Ok(None),
                 Err(e) => left_out(e, PAPER_FIGURES).map(Some),
+            }
+        }),
+        Box::new(move || {
+            let plant_name = plant.map_or(String::new(), |p| format!(", plant {}", p.plant));
+            let title = format!("{}{plant_name}: the response to the set points", scenario.name);
+            match silrig_plot::plot_response(trace, plant, &setpoint, out, "response", &title) {
+                Ok(_) => Ok(None),
+                Err(e) => left_out(e, "").map(Some),
             }
         }),
         Box::new(move || {
@@ -63,7 +74,7 @@ fn trace_figures<'a>(
                 return Ok(Some(FigureLeftOut { figure: "faults.png".into(), reason: reason.into() }));
             };
             let title = format!("{} ({}, run {}): faults", report.scenario, report.mode, report.run_id);
-            let marks = fault_marks(report);
+            let marks = fault_marks(report, &scenario.faults);
             match silrig_plot::plot_timeline(trace, plant, &setpoint, &marks, out, "faults", &title) {
                 Ok(_) => Ok(None),
                 Err(e) => left_out(e, "").map(Some),
@@ -73,20 +84,38 @@ fn trace_figures<'a>(
     figures
 }
 
-/// Every fault's injection, failsafe and recovery, and every flight discontinuity, as marks on the timeline.
-fn fault_marks(report: &RigReport) -> Vec<silrig_plot::TimelineEvent> {
+/// Where a fault's window ends: at its recovery; without one, where its planned window ends (a sensor bias for
+/// 1 s); a process left down (a kill without a restart) at the trace's end (infinity); a one-off (a single
+/// delay) has no window.
+fn window_end(f: &FaultRecord, injected_s: f64, plan: &[Fault]) -> Option<f64> {
+    if let Some(t) = f.recovered_at_s {
+        return Some(t);
+    }
+    let planned = plan.iter().find(|p| p.describe() == f.fault)?;
+    match planned.duration_s {
+        Some(d) => Some(injected_s + d),
+        None => planned.action().is_process_fault().then_some(f64::INFINITY),
+    }
+}
+
+/// Every fault's injection, failsafe and recovery, and every flight discontinuity, as marks on the timeline; a
+/// fault's injection opens its window ([`window_end`]).
+fn fault_marks(report: &RigReport, plan: &[Fault]) -> Vec<silrig_plot::TimelineEvent> {
+    use silrig_plot::TimelineEvent;
     let mut marks = Vec::new();
     for f in &report.faults {
         let short = f.fault.split(',').next().unwrap_or(&f.fault).to_string();
-        let times = [(f.injected_at_s, short.as_str()), (f.failsafe_at_s, "failsafe"), (f.recovered_at_s, "recovered")];
-        for (t, label) in times {
+        if let Some(t_s) = f.injected_at_s {
+            marks.push(TimelineEvent { t_s, label: short, end_s: window_end(f, t_s, plan) });
+        }
+        for (t, label) in [(f.failsafe_at_s, "failsafe"), (f.recovered_at_s, "recovered")] {
             if let Some(t_s) = t {
-                marks.push(silrig_plot::TimelineEvent { t_s, label: label.to_string() });
+                marks.push(TimelineEvent { t_s, label: label.to_string(), end_s: None });
             }
         }
     }
     for d in &report.discontinuities {
-        marks.push(silrig_plot::TimelineEvent { t_s: d.at_s, label: "discontinuity".into() });
+        marks.push(TimelineEvent { t_s: d.at_s, label: "discontinuity".into(), end_s: None });
     }
     marks
 }
@@ -185,5 +214,34 @@ mod tests {
         assert_eq!(left_out(empty, "").unwrap().reason, "the trace has no rows");
         let full = PlotError::Write { file, cause: std::io::Error::other("No space left on device") };
         assert!(left_out(full, "").is_err());
+    }
+
+    #[test]
+    fn a_fault_window_ends_at_its_recovery_else_at_its_planned_end_and_a_one_off_has_none() {
+        let plan: Vec<Fault> = [
+            "plant:sensor-bias@8s,for=1s,channel=phi_rad,bias=0.02",
+            "controller:kill@3s",
+            "plant:delay@5s,delay=15ms",
+        ]
+        .iter()
+        .map(|text| silrig_flight::fault::parse_fault_flag(text).unwrap())
+        .collect();
+        let record = |k: usize, recovered_at_s| FaultRecord {
+            fault: plan[k].describe(),
+            injected_at_s: Some(plan[k].at_s),
+            injected_at_wall_s: None,
+            detected_at_s: None,
+            detected_by: None,
+            failsafe_at_s: None,
+            recovered_at_s,
+            plant_samples_lost: 0,
+            command_samples_lost: 0,
+            discontinuity: None,
+            rejoin: None,
+        };
+        assert_eq!(window_end(&record(0, None), 8.0, &plan), Some(9.0), "the planned window");
+        assert_eq!(window_end(&record(1, Some(3.6)), 3.0, &plan), Some(3.6), "its recovery");
+        assert_eq!(window_end(&record(1, None), 3.0, &plan), Some(f64::INFINITY), "down to the end");
+        assert_eq!(window_end(&record(2, None), 5.0, &plan), None, "a one-off");
     }
 }

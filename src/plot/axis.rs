@@ -69,10 +69,61 @@ impl Axis {
         Self { lo: 0.0, hi, ticks, labels }
     }
 
+    /// A log axis over decades `lo..hi` (log10 of the values): a tick at each whole power of ten, labelled with the
+    /// value itself (1, 10, 100, 1,000), never with its logarithm; where the range holds fewer than two powers of
+    /// ten, also at 2 and 5 times them.
+    pub(super) fn decades(lo: f64, hi: f64) -> Self {
+        let whole = (lo.ceil() as i64..=hi.floor() as i64).map(|n| n as f64);
+        let mut ticks: Vec<f64> = whole.clone().collect();
+        if ticks.len() < 2 {
+            let between = (lo.floor() as i64..=hi.floor() as i64)
+                .flat_map(|n| [2.0f64, 5.0].map(|m| n as f64 + m.log10()))
+                .filter(|t| (lo..=hi).contains(t));
+            ticks.extend(between);
+            ticks.sort_by(f64::total_cmp);
+        }
+        let labels = ticks.iter().map(|&t| count_text(10f64.powf(t))).collect();
+        Self { lo, hi, ticks, labels }
+    }
+
+    /// The same axis without ticks below `value` (a decade axis of counts has no tick at 0.1 of a tick).
+    pub(super) fn without_ticks_below(self, value: f64) -> Self {
+        let (ticks, labels) = self
+            .ticks
+            .iter()
+            .zip(self.labels)
+            .filter(|(t, _)| 10f64.powf(**t) >= value * (1.0 - 1e-9))
+            .map(|(t, l)| (*t, l))
+            .unzip();
+        Self { ticks, labels, ..self }
+    }
+
+    /// The tick labels, in order.
+    pub(super) fn tick_labels(&self) -> &[String] {
+        &self.labels
+    }
+
     pub(super) fn label(&self, v: f64) -> String {
         let tol = 1e-9 * (self.hi / 2.0 - self.lo / 2.0).abs();
         self.ticks.iter().position(|t| (t - v).abs() <= tol).map_or_else(String::new, |i| self.labels[i].clone())
     }
+}
+
+/// A power of ten (or 2 or 5 times one) as a person writes it: 0.01, 0.5, 20, 1,000, 100,000.
+fn count_text(v: f64) -> String {
+    if v < 1.0 {
+        let decimals = (-v.log10().floor()).max(0.0) as usize;
+        return format!("{v:.decimals$}");
+    }
+    let digits = format!("{:.0}", v);
+    let mut out = String::new();
+    for (k, c) in digits.chars().enumerate() {
+        if k > 0 && (digits.len() - k).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
 }
 
 impl Ranged for Axis {
@@ -118,6 +169,17 @@ mod tests {
         assert!(a.labels.contains(&"0.0".to_string()), "{:?}", a.labels);
         let a = Axis::linear(0.0, 3e-5, 3);
         assert!(a.labels.iter().all(|l| l == "0" || l.contains('e')), "{:?}", a.labels);
+    }
+
+    #[test]
+    fn decade_axes_label_the_values_not_their_logarithms() {
+        let a = Axis::decades(-1.0, 4.2);
+        assert_eq!(a.labels, ["0.1", "1", "10", "100", "1,000", "10,000"]);
+        // Less than two decades: 2 and 5 times the powers of ten too.
+        let a = Axis::decades(0.9, 1.9);
+        assert_eq!(a.labels, ["10", "20", "50"]);
+        assert_eq!(count_text(1_000_000.0), "1,000,000");
+        assert_eq!(Axis::decades(-1.0, 2.5).without_ticks_below(1.0).labels, ["1", "10", "100"]);
     }
 
     #[test]

@@ -2,11 +2,13 @@
 //! surfaces with their commands), whatever controller flew, and the figures of our adaptive SMC/RBF controller where
 //! the trace has their columns.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::PlotError;
 use super::columns::{Columns, zip};
+use super::drawn::Drawn;
 use super::figure::{Figure, Panel, Series, palette};
+use super::plant_series::time_span;
 use super::render::write_figure;
 use super::smc_rbf;
 use silrig_flight::trace::Trace;
@@ -14,7 +16,8 @@ use silrig_flight::trace::Trace;
 const STATES: &str = "fig1_states";
 
 /// Draw the closed-loop figures of `trace` into `out_dir` (created if missing), each as PNG and SVG:
-/// `fig1_states` (alpha; Euler angles; body rates; surfaces and their commands) always, its columns required;
+/// `fig1_states` (alpha; Euler angles; body rates; surfaces and their commands; each state over its set point,
+/// dashed in its colour, where `setpoint` gives one by column name) always, its columns required;
 /// `fig2_sliding` (sliding surfaces `s_<channel>` and RBF estimates `fhat_<channel>`, each over `f_true` of its
 /// channel when given, 3x2) if the trace has any of those columns, and `fig3_weights` (the RBF weights
 /// `w_<channel>_<k>` of each channel) if it has any weight column;
@@ -23,30 +26,42 @@ const STATES: &str = "fig1_states";
 pub fn plot_closed_loop(
     trace: &Trace,
     f_true: Option<&[Vec<f64>; 3]>,
+    setpoint: &dyn Fn(&str) -> Option<f64>,
     out_dir: &Path,
     title: &str,
-) -> Result<Vec<PathBuf>, PlotError> {
-    let mut figures = vec![(states(trace, out_dir, title)?, STATES)];
+) -> Result<Drawn, PlotError> {
+    let mut figures = vec![(states(trace, setpoint, out_dir, title)?, STATES)];
     figures.extend(smc_rbf::figures(trace, f_true, out_dir, title)?);
     // All figures are built, and so all columns checked, before the first file is written: a trace that fails leaves
     // no partial set of figures behind.
-    let mut written = Vec::new();
+    let mut written = Drawn::default();
     for (fig, stem) in &figures {
         written.extend(write_figure(fig, out_dir, stem)?);
     }
     Ok(written)
 }
 
-fn states(trace: &Trace, out_dir: &Path, title: &str) -> Result<Figure, PlotError> {
+fn states(
+    trace: &Trace,
+    setpoint: &dyn Fn(&str) -> Option<f64>,
+    out_dir: &Path,
+    title: &str,
+) -> Result<Figure, PlotError> {
     let file = out_dir.join(format!("{STATES}.png"));
     let data = Columns::new(trace, &file, "the trace")?;
     let t = data.get("t_s")?;
+    let span = time_span(&t).unwrap_or((0.0, 0.0));
     let panel = |caption: &str, y_desc: &str, specs: &[(&str, &str)]| -> Result<Panel, PlotError> {
         let mut series = Vec::new();
         for (k, (column, label)) in specs.iter().enumerate() {
             series.push(Series::solid(label, zip(&t, &data.get(column)?), palette(k)));
+            if let Some(sp) = setpoint(column) {
+                series.push(Series::level(&format!("{label} set point"), sp, span, palette(k)));
+            }
         }
-        Ok(Panel::new(caption, y_desc, series))
+        let with_setpoints = specs.iter().any(|(column, _)| setpoint(column).is_some());
+        let caption = if with_setpoints { format!("{caption} (set points dashed)") } else { caption.to_string() };
+        Ok(Panel::new(&caption, y_desc, series))
     };
     let mut surfaces = Vec::new();
     for (k, name) in ["aileron", "elevator", "rudder"].into_iter().enumerate() {
@@ -96,7 +111,7 @@ mod tests {
                     .collect(),
             );
         }
-        let fig = states(&trace, Path::new("/nonexistent"), "t").unwrap();
+        let fig = states(&trace, &|_: &str| None, Path::new("/nonexistent"), "t").unwrap();
         let surfaces = fig.cells[3].as_ref().unwrap();
         let (lo, hi) = surfaces.y_range();
         assert!(hi < 35.0 && lo > -35.0, "the surface panel spans {lo}..{hi}");

@@ -60,6 +60,8 @@ pub(super) struct Series {
     /// Whether its values set the panel's y range; a series that does not is drawn cut at the range's edges
     /// ([`clip_to_y`]), so one far-off series cannot flatten the others.
     pub(super) sets_y_range: bool,
+    /// Drawn as bars this wide (x units), each point its left edge and its height, rather than as a line.
+    pub(super) bar_width: Option<f64>,
 }
 
 impl Series {
@@ -76,12 +78,22 @@ impl Series {
         Self::new(label, points, Stroke { color, width: 1, dash: Dash::Dashed })
     }
 
+    /// A set point: a dashed level line at `value` over `span` (the trace's time span).
+    pub(super) fn level(label: &str, value: f64, span: (f64, f64), color: RGBColor) -> Self {
+        Self::command(label, vec![(span.0, value), (span.1, value)], color)
+    }
+
     pub(super) fn cycled(label: &str, points: Vec<(f64, f64)>, k: usize) -> Self {
         Self::new(label, points, Stroke::cycled(k))
     }
 
+    /// Bars `width` wide: each point is a bar's left edge and height.
+    pub(super) fn bars(label: &str, points: Vec<(f64, f64)>, width: f64, k: usize) -> Self {
+        Self { bar_width: Some(width), ..Self::cycled(label, points, k) }
+    }
+
     fn new(label: &str, points: Vec<(f64, f64)>, stroke: Stroke) -> Self {
-        Self { label: label.to_string(), points, stroke, sets_y_range: true }
+        Self { label: label.to_string(), points, stroke, sets_y_range: true, bar_width: None }
     }
 
     /// The same series, drawn within the y range the panel's other series set and cut at its edges.
@@ -136,6 +148,11 @@ pub(super) struct Panel {
     pub(super) shaded: Vec<(f64, f64)>,
     /// The x range to show whatever the data spans (the whole flight for a command that stops coming early).
     pub(super) x_span: Option<(f64, f64)>,
+    /// A logarithmic y axis (decades), for values spanning several orders of magnitude (latencies, counts): values
+    /// at or below zero sit on the axis' bottom edge.
+    pub(super) y_log: bool,
+    /// Time windows shaded in the event colour behind the data (a fault from its injection to its end).
+    pub(super) windows: Vec<(f64, f64)>,
 }
 
 impl Panel {
@@ -152,6 +169,8 @@ impl Panel {
             event_labels: false,
             shaded: Vec::new(),
             x_span: None,
+            y_log: false,
+            windows: Vec::new(),
         }
     }
 
@@ -185,11 +204,17 @@ impl Panel {
                 (Some(lo), Some(hi)) => symmetric(0.5 * (lo + hi)),
                 _ => (0.0, 1.0),
             },
-            XScale::Nines => (0.0, hi.map_or(4.0, |hi| hi.ceil().max(4.0))),
+            // Ending where the data end: a few hundred samples reach 99.7 %, and an axis to 99.99 % would leave
+            // most of the plot empty.
+            XScale::Nines => (0.0, hi.filter(|hi| *hi > 0.0).unwrap_or(1.0)),
         }
     }
 
+    /// The y range in the axis' own space: data units, or decades (log10 of them) on a log axis.
     pub(super) fn y_range(&self) -> (f64, f64) {
+        if self.y_log {
+            return log_range(self.finite_ranging().map(|p| p.1));
+        }
         let (lo, hi) = min_max(self.finite_ranging().map(|p| p.1));
         let (Some(lo), Some(hi)) = (lo, hi) else { return (-1.0, 1.0) };
         if self.y_from_zero && lo >= 0.0 && hi > 0.0 {
@@ -197,6 +222,25 @@ impl Panel {
         }
         padded(lo, hi)
     }
+}
+
+/// A value on this panel's y axis: log10 of it on a log axis (at most `floor` below, so zero and negative values sit
+/// on the bottom edge), the value itself otherwise.
+pub(super) fn y_axis_value(y_log: bool, v: f64, floor: f64) -> f64 {
+    if !y_log || !v.is_finite() {
+        return v;
+    }
+    if v > 0.0 { v.log10().max(floor) } else { floor }
+}
+
+/// The decades a log axis spans: from the whole decade below the smallest positive value (at least 0.3 decade
+/// below it, so the smallest bar of a count histogram, 1, stands a decade tall) to 5 % of the span above the largest.
+fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = min_max(values.filter(|v| *v > 0.0).map(f64::log10));
+    let (Some(lo), Some(hi)) = (lo, hi) else { return (0.0, 1.0) };
+    let lo = (lo - 0.3).floor();
+    let hi = if hi - lo < 1.0 { lo + 1.0 } else { hi };
+    (lo, hi + 0.05 * (hi - lo))
 }
 
 fn min_max(values: impl Iterator<Item = f64>) -> (Option<f64>, Option<f64>) {

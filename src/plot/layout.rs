@@ -79,6 +79,8 @@ impl LegendGrid {
 
 /// Pixel sizes of every part of a figure, computed once and used by both backends.
 pub(super) struct Layout {
+    /// The title's font size: [`TITLE_SIZE`], or smaller so that the title fits the figure's width.
+    pub(super) title_size: f64,
     pub(super) title_h: u32,
     pub(super) top_legend: LegendGrid,
     pub(super) top_legend_h: u32,
@@ -101,9 +103,23 @@ pub(super) fn show_x_desc(fig: &Figure, r: usize, c: usize) -> bool {
     if fig.shared_x {
         return show_x_ticks(fig, r, c);
     }
-    // In a grid: only on the lowest row that has panels.
+    // In a grid: on the lowest row that has panels, and on any panel whose x axis is not the one under it (each
+    // criterion of a sweep's histograms has its own unit).
     let last = (0..fig.rows).rev().find(|&row| (0..fig.cols).any(|col| fig.cell(row, col).is_some()));
-    Some(r) == last || (r + 1..fig.rows).all(|below| fig.cell(below, c).is_none())
+    let own = fig.cell(r, c).map(|p| p.x_desc.as_str());
+    let below = (r + 1..fig.rows).find_map(|row| fig.cell(row, c)).map(|p| p.x_desc.as_str());
+    Some(r) == last || below.is_none() || below != own
+}
+
+/// The largest font size, at most [`TITLE_SIZE`] and at least 12 pt, at which `title` fits `width` pixels less the
+/// margins: a long scenario description shrinks the title rather than running past the figure's edges.
+pub(super) fn title_size(title: &str, width: u32) -> f64 {
+    let room = width.saturating_sub(4 * PAD);
+    let mut size = TITLE_SIZE;
+    while size > 12.0 && text_size(title, size).0 > room {
+        size -= 1.0;
+    }
+    size
 }
 
 /// Where an event label goes above the plot: a flag on its marker line, starting at the line, or ending there
@@ -144,6 +160,7 @@ pub(super) fn in_range(events: &[(f64, String)], x: &Axis) -> Vec<(f64, String)>
 
 pub(super) fn layout(fig: &Figure) -> Layout {
     let (w, h) = fig.size;
+    let title_size = title_size(&fig.title, w);
     let title_h = text_size(&fig.title, TITLE_SIZE).1 + 2 * PAD;
     let (top_legend, top_legend_h) = match &fig.legend {
         FigureLegend::Top(entries) => {
@@ -167,13 +184,29 @@ pub(super) fn layout(fig: &Figure) -> Layout {
         .map(|p| {
             p.as_ref().map(|p| {
                 let (lo, hi) = p.y_range();
-                Axis::linear(lo, hi, y_target)
+                match (p.y_log, p.series.iter().any(|s| s.bar_width.is_some())) {
+                    // Bars on a log axis count things: no tick at a fraction of one.
+                    (true, true) => Axis::decades(lo, hi).without_ticks_below(1.0),
+                    (true, false) => Axis::decades(lo, hi),
+                    (false, _) => Axis::linear(lo, hi, y_target),
+                }
             })
         })
         .collect();
     let (col_left, col_legend) = column_bands(fig, &y_axes, row_plot_h);
     let axes = cell_axes(fig, &x_ranges, y_axes, cell_w, &col_left, &col_legend);
-    Layout { title_h, top_legend, top_legend_h, row_top, row_bottom, row_plot_h, col_left, col_legend, axes }
+    Layout {
+        title_size,
+        title_h,
+        top_legend,
+        top_legend_h,
+        row_top,
+        row_bottom,
+        row_plot_h,
+        col_left,
+        col_legend,
+        axes,
+    }
 }
 
 /// Per row, the bands above the plots (captions, event labels) and below them (x ticks, x axis name): the most any

@@ -22,20 +22,24 @@ use std::path::PathBuf;
 mod axis;
 mod closed_loop;
 mod columns;
+mod drawn;
 mod figure;
 mod latency;
 mod layout;
 mod overlay;
 mod plant_series;
 mod render;
+mod response;
 mod signals;
 mod smc_rbf;
 mod sweep;
 mod timeline;
 
 pub use closed_loop::plot_closed_loop;
+pub use drawn::{AxisRange, Drawn, FigureAxes, PanelAxes};
 pub use latency::{plot_latency_histograms, plot_percentile_distributions};
 pub use overlay::plot_overlay;
+pub use response::plot_response;
 pub use signals::plot_signals;
 pub use sweep::{Envelope, Histogram, Scatter, plot_envelope, plot_histograms, plot_scatter};
 pub use timeline::plot_timeline;
@@ -102,11 +106,15 @@ pub enum PlotError {
     },
 }
 
-/// A marked instant on a timeline (an injected fault, a mode change).
+/// A marked instant on a timeline (an injected fault, a mode change), or the start of a window (a fault from its
+/// injection to its end).
 #[derive(Debug, Clone)]
 pub struct TimelineEvent {
     /// When, in the trace's time `t_s` (seconds).
     pub t_s: f64,
     /// The text written at the top of the figure next to the marker.
     pub label: String,
+    /// Where the window this event opens ends (a fault's recovery, or the trace's end for one that never
+    /// recovered), in `t_s`: the timeline shades the window from `t_s` to here. None: an instant.
+    pub end_s: Option<f64>,
 }

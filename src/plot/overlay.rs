@@ -1,9 +1,10 @@
 //! The overlay figure: several runs compared, panel by panel, one colour per run.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::PlotError;
 use super::columns::{Columns, zip};
+use super::drawn::Drawn;
 use super::figure::{Figure, FigureLegend, LegendEntry, Panel, Series};
 use super::render::write_figure;
 use silrig_flight::trace::Trace;
@@ -11,7 +12,7 @@ use silrig_flight::trace::Trace;
 /// Draw one figure `<stem>.{png,svg}` in `out_dir` comparing several runs (name, trace): panels for theta, phi,
 /// psi, alpha, elevator, aileron and rudder (deg) against `t_s`, in a 4x2 grid, one colour per run, the legend of run
 /// names in the eighth cell. Returns the files written.
-pub fn plot_overlay(runs: &[(String, Trace)], out_dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
+pub fn plot_overlay(runs: &[(String, Trace)], out_dir: &Path, stem: &str) -> Result<Drawn, PlotError> {
     let file = out_dir.join(format!("{stem}.png"));
     if runs.is_empty() {
         return Err(PlotError::NoData { file, problem: "no runs to compare".into() });

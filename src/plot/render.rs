@@ -1,7 +1,7 @@
 //! Rendering: draws a laid-out figure with one backend-generic routine on the bitmap and the SVG backend, registers
 //! the embedded font, and writes the PNG and SVG files.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::OnceLock;
 
 use plotters::coord::Shift;
@@ -12,17 +12,20 @@ use plotters::style::{FontStyle, register_font};
 
 use super::PlotError;
 use super::axis::Axis;
-use super::figure::{Dash, Figure, FigureLegend, LegendEntry, Panel, clip_to_y, segments};
+use super::drawn::{Drawn, describe};
+use super::figure::{Dash, Figure, FigureLegend, LegendEntry, Panel, clip_to_y, segments, y_axis_value};
 use super::layout::{
     CAPTION_SIZE, DESC_SIZE, EVENT_ROW, EVENT_SIZE, FLAG_GAP, LEGEND_ROW, LEGEND_SAMPLE, LEGEND_SIZE, Layout,
-    LegendGrid, PAD, TICK_MARK, TICK_SIZE, TITLE_SIZE, font, in_range, layout, place_event_labels, show_x_desc,
-    show_x_ticks, text_size,
+    LegendGrid, PAD, TICK_MARK, TICK_SIZE, font, in_range, layout, place_event_labels, show_x_desc, show_x_ticks,
+    text_size,
 };
 
 /// Event markers and their labels.
 const EVENT_COLOR: RGBColor = RGBColor(190, 30, 30);
 /// Shaded spans: a light warm grey that every palette colour stays readable on.
 const SHADE_COLOR: RGBColor = RGBColor(236, 226, 214);
+/// Event windows (a fault from start to end): the event colour, light enough to read every line over it.
+const WINDOW_COLOR: RGBColor = RGBColor(250, 218, 218);
 
 type DrawResult<DB> = Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
 
@@ -34,7 +37,7 @@ type PlotRect = (i32, i32, i32, i32);
 fn draw_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure, lay: &Layout) -> DrawResult<DB> {
     root.fill(&WHITE)?;
     let (w, _) = root.dim_in_pixel();
-    let title_style = font(TITLE_SIZE).color(&BLACK).pos(Pos::new(HPos::Center, VPos::Top));
+    let title_style = font(lay.title_size).color(&BLACK).pos(Pos::new(HPos::Center, VPos::Top));
     root.draw_text(&fig.title, &title_style, (w as i32 / 2, PAD as i32))?;
     let (_, body) = root.split_vertically(lay.title_h);
     let body = if let FigureLegend::Top(entries) = &fig.legend {
@@ -167,8 +170,14 @@ fn draw_data<DB: DrawingBackend>(
             chart.draw_series(std::iter::once(Rectangle::new([(from, y.lo), (to, y.hi)], SHADE_COLOR.filled())))?;
         }
     }
-    // Zero line, when zero is inside a range that is not all positive.
-    if y.lo < 0.0 && y.hi > 0.0 {
+    for (from, to) in &panel.windows {
+        let (from, to) = (from.max(x.lo), to.min(x.hi));
+        if from < to {
+            chart.draw_series(std::iter::once(Rectangle::new([(from, y.lo), (to, y.hi)], WINDOW_COLOR.filled())))?;
+        }
+    }
+    // Zero line, when zero is inside a range that is not all positive (a log axis has no zero).
+    if !panel.y_log && y.lo < 0.0 && y.hi > 0.0 {
         chart.draw_series(std::iter::once(PathElement::new(vec![(x.lo, 0.0), (x.hi, 0.0)], BLACK.mix(0.35))))?;
     }
 
@@ -178,14 +187,16 @@ fn draw_data<DB: DrawingBackend>(
 
     for series in &panel.series {
         let style = series.stroke.style();
-        let clipped;
-        let points = if series.sets_y_range {
-            &series.points
-        } else {
-            clipped = clip_to_y(&series.points, y.lo, y.hi);
-            &clipped
-        };
-        for seg in segments(points) {
+        let on_axis: Vec<(f64, f64)> =
+            series.points.iter().map(|&(px, py)| (px, y_axis_value(panel.y_log, py, y.lo))).collect();
+        if let Some(width) = series.bar_width {
+            // From the axis' bottom on a log axis (no zero there), from zero on a linear one.
+            let base = if panel.y_log { y.lo } else { 0.0f64.clamp(y.lo, y.hi) };
+            draw_bars(chart, &on_axis, width, series.stroke.color, base)?;
+            continue;
+        }
+        let points = if series.sets_y_range { on_axis } else { clip_to_y(&on_axis, y.lo, y.hi) };
+        for seg in segments(&points) {
             if let [point] = seg {
                 // A lone point (one row, or between NaNs) has no line: mark it.
                 chart.draw_series(std::iter::once(Circle::new(*point, 2, series.stroke.color.filled())))?;
@@ -201,6 +212,21 @@ fn draw_data<DB: DrawingBackend>(
             }
         }
     }
+    Ok(())
+}
+
+/// Bars from `base` to each point's height, `width` wide from its x, filled half-transparent so that the bars of
+/// several series over the same x stay visible, outlined in their colour.
+fn draw_bars<DB: DrawingBackend>(
+    chart: &mut Chart<DB>,
+    points: &[(f64, f64)],
+    width: f64,
+    color: RGBColor,
+    base: f64,
+) -> DrawResult<DB> {
+    let bars = points.iter().filter(|(x, y)| x.is_finite() && y.is_finite()).map(|&(x, y)| [(x, base), (x + width, y)]);
+    chart.draw_series(bars.clone().map(|corners| Rectangle::new(corners, color.mix(0.45).filled())))?;
+    chart.draw_series(bars.map(|corners| Rectangle::new(corners, color.stroke_width(1))))?;
     Ok(())
 }
 
@@ -275,8 +301,8 @@ fn write_png(file: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), PlotErro
     })
 }
 
-/// Draw `fig` as `<stem>.png` and `<stem>.svg` in `out_dir`; returns both paths.
-pub(super) fn write_figure(fig: &Figure, out_dir: &Path, stem: &str) -> Result<Vec<PathBuf>, PlotError> {
+/// Draw `fig` as `<stem>.png` and `<stem>.svg` in `out_dir`; returns both paths and what the figure was drawn as.
+pub(super) fn write_figure(fig: &Figure, out_dir: &Path, stem: &str) -> Result<Drawn, PlotError> {
     let png = out_dir.join(format!("{stem}.png"));
     let svg = out_dir.join(format!("{stem}.svg"));
     ensure_font(&png)?;
@@ -300,5 +326,5 @@ pub(super) fn write_figure(fig: &Figure, out_dir: &Path, stem: &str) -> Result<V
         root.present().map_err(|e| draw_error(&svg, e.to_string()))?;
     }
     std::fs::write(&svg, text).map_err(|cause| PlotError::Write { file: svg.clone(), cause })?;
-    Ok(vec![png, svg])
+    Ok(describe(fig, &lay, stem, vec![png, svg]))
 }

@@ -4,10 +4,11 @@
 //! shaded. The closed-loop figures show the F-16's states; this one shows whatever a plant of your own calls its
 //! signals.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::PlotError;
 use super::columns::{Columns, zip};
+use super::drawn::Drawn;
 use super::figure::{Figure, FigureLegend, Panel, Series, palette};
 use super::plant_series::{held_spans, input_lines, measured_outputs, shading_note, time_span, unit_label};
 use super::render::write_figure;
@@ -82,7 +83,7 @@ pub fn plot_signals(
     out_dir: &Path,
     stem: &str,
     title: &str,
-) -> Result<Vec<PathBuf>, PlotError> {
+) -> Result<Drawn, PlotError> {
     let file = out_dir.join(format!("{stem}.png"));
     let data = Columns::new(trace, &file, "the trace")?;
     let t = data.get("t_s")?;
@@ -102,8 +103,7 @@ pub fn plot_signals(
             });
         }
         if let Some(sp) = s.setpoint {
-            let span = [t.first().copied().unwrap_or(0.0), t.last().copied().unwrap_or(0.0)];
-            series.push(Series::command("set point", span.iter().map(|ti| (*ti, sp)).collect(), palette(3)));
+            series.push(Series::level("set point", sp, time_span(&t).unwrap_or((0.0, 0.0)), palette(3)));
         }
         let caption = match s.setpoint {
             Some(sp) => format!("{} (set point {sp}, dashed)", s.caption),

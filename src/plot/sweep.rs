@@ -2,9 +2,10 @@
 //! dispersed parameters against a criterion, and the envelope of each output with a set point over all cases with the failures
 //! drawn one by one. Plain data in (the campaign module computes it), figures out.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::PlotError;
+use super::drawn::Drawn;
 use super::figure::{Figure, FigureLegend, LegendEntry, Panel, Series, palette};
 use super::render::write_figure;
 
@@ -90,12 +91,7 @@ fn dots(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
 }
 
 /// `<stem>.{png,svg}`: one histogram per criterion, the limit marked.
-pub fn plot_histograms(
-    panels: &[Histogram],
-    out_dir: &Path,
-    stem: &str,
-    title: &str,
-) -> Result<Vec<PathBuf>, PlotError> {
+pub fn plot_histograms(panels: &[Histogram], out_dir: &Path, stem: &str, title: &str) -> Result<Drawn, PlotError> {
     if panels.is_empty() {
         return Err(PlotError::NoData { file: out_dir.join(format!("{stem}.png")), problem: "no criteria".into() });
     }
@@ -121,7 +117,7 @@ pub fn plot_histograms(
 }
 
 /// `<stem>.{png,svg}`: one scatter panel per parameter, passed and failed cases in two colours.
-pub fn plot_scatter(panels: &[Scatter], out_dir: &Path, stem: &str, title: &str) -> Result<Vec<PathBuf>, PlotError> {
+pub fn plot_scatter(panels: &[Scatter], out_dir: &Path, stem: &str, title: &str) -> Result<Drawn, PlotError> {
     if panels.is_empty() {
         return Err(PlotError::NoData { file: out_dir.join(format!("{stem}.png")), problem: "no parameters".into() });
     }
@@ -155,7 +151,7 @@ pub fn plot_scatter(panels: &[Scatter], out_dir: &Path, stem: &str, title: &str)
 }
 
 /// `<stem>.{png,svg}`: per output with a set point, the band the passed cases stay in, the set point, and each failed case.
-pub fn plot_envelope(panels: &[Envelope], out_dir: &Path, stem: &str, title: &str) -> Result<Vec<PathBuf>, PlotError> {
+pub fn plot_envelope(panels: &[Envelope], out_dir: &Path, stem: &str, title: &str) -> Result<Drawn, PlotError> {
     let panels: Vec<Panel> = panels
         .iter()
         .map(|e| {
@@ -170,7 +166,7 @@ pub fn plot_envelope(panels: &[Envelope], out_dir: &Path, stem: &str, title: &st
                 .collect();
             // The band last, so the failures do not hide it.
             let t_end = e.band.last().map_or(0.0, |b| b.0);
-            series.push(Series::command("set point", vec![(0.0, e.setpoint), (t_end, e.setpoint)], palette(PASS)));
+            series.push(Series::level("set point", e.setpoint, (0.0, t_end), palette(PASS)));
             for (label, pick) in [("passed: lowest", 0), ("passed: highest", 1)] {
                 let line = e.band.iter().map(|(t, lo, hi)| (*t, if pick == 0 { *lo } else { *hi })).collect();
                 let mut s = Series::solid(label, line, palette(BAND));

@@ -1,10 +1,12 @@
 //! The fault timeline of any plant: the outputs the scenario sets a point for (each over its set point, dashed),
 //! then the inputs (each command dashed over the position it moves, where the plant reports one), one panel per
-//! unit, against time, with a marker and a label at every event and the rows whose outputs the plant held shaded.
+//! unit, against time, with a marker and a label at every event, each fault's window from its start to its end
+//! shaded red, and the rows whose outputs the plant held shaded grey.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::columns::{Columns, zip};
+use super::drawn::Drawn;
 use super::figure::{Figure, Panel, Series, palette};
 use super::plant_series::{InputLines, held_spans, input_lines, measured_outputs, shading_note, time_span, unit_label};
 use super::render::write_figure;
@@ -28,7 +30,7 @@ pub fn plot_timeline(
     out_dir: &Path,
     stem: &str,
     title: &str,
-) -> Result<Vec<PathBuf>, PlotError> {
+) -> Result<Drawn, PlotError> {
     let file = out_dir.join(format!("{stem}.png"));
     let data = Columns::new(trace, &file, "the trace")?;
     let t = data.get("t_s")?;
@@ -37,17 +39,22 @@ pub fn plot_timeline(
     if panels.is_empty() {
         return Err(PlotError::NoData { file, problem: format!("plant {} has no traced signal", plant.plant) });
     }
-    let events: Vec<(f64, String)> =
-        events.iter().filter(|e| e.t_s.is_finite()).map(|e| (e.t_s, e.label.clone())).collect();
+    let finite: Vec<&TimelineEvent> = events.iter().filter(|e| e.t_s.is_finite()).collect();
+    let marks: Vec<(f64, String)> = finite.iter().map(|e| (e.t_s, e.label.clone())).collect();
+    let t_end = t.last().copied().unwrap_or(0.0);
+    let windows: Vec<(f64, f64)> =
+        finite.iter().filter_map(|e| e.end_s.map(|end| (e.t_s, if end.is_finite() { end } else { t_end }))).collect();
     let held = held_spans(trace);
     for panel in &mut panels {
-        panel.events = events.clone();
+        panel.events = marks.clone();
+        panel.windows = windows.clone();
         panel.shaded = held.clone();
         panel.x_span = time_span(&t);
     }
     panels[0].event_labels = true;
     let size = (1200, FRAME_HEIGHT_PX + PANEL_HEIGHT_PX * panels.len() as u32);
-    let fig = Figure::stacked(&format!("{title}{}", shading_note(&held)), size, panels);
+    let windows_note = if windows.is_empty() { "" } else { "; red bands: each fault from start to end" };
+    let fig = Figure::stacked(&format!("{title}{windows_note}{}", shading_note(&held)), size, panels);
     write_figure(&fig, out_dir, stem)
 }
 
@@ -65,12 +72,12 @@ fn output_panels(
         true => (measured, "outputs"),
         false => (with_setpoint, "outputs (solid) and their set points (dashed)"),
     };
-    let span = [t.first().copied().unwrap_or(0.0), t.last().copied().unwrap_or(0.0)];
+    let span = time_span(t).unwrap_or((0.0, 0.0));
     let mut panels: Vec<(String, Panel)> = Vec::new();
     for (k, (name, unit)) in shown.iter().enumerate() {
         let mut series = vec![Series::solid(name, zip(t, &data.get(name)?), palette(k))];
         if let Some(sp) = setpoint(name) {
-            series.push(Series::command(&format!("{name} set point"), span.map(|ti| (ti, sp)).to_vec(), palette(k)));
+            series.push(Series::level(&format!("{name} set point"), sp, span, palette(k)));
         }
         add_to_unit_panel(&mut panels, unit_label(unit), caption, series);
     }
@@ -160,7 +167,7 @@ mod tests {
     #[test]
     fn the_timeline_of_a_plant_that_is_not_the_f16_is_drawn_with_its_events_and_held_rows() {
         let dir = std::env::temp_dir().join(format!("silrig-plot-timeline-{}", std::process::id()));
-        let events = [TimelineEvent { t_s: 1.0, label: "controller kill".into() }];
+        let events = [TimelineEvent { t_s: 1.0, label: "controller kill".into(), end_s: Some(1.4) }];
         let files =
             plot_timeline(&cart_trace(), &cart(), &|n: &str| (n == "x_m").then_some(2.0), &events, &dir, "faults", "t")
                 .unwrap();

@@ -24,6 +24,7 @@ use foxglove::schemas::{
     Vector3,
 };
 use silrig_flight::signals::PlantSignals;
+use silrig_model::quad::rotors::{ROTOR_POSITION, ROTORS};
 
 /// MCAP schema encoding of the 3-D channels.
 pub const SCHEMA_ENCODING: &str = "protobuf";
@@ -51,6 +52,8 @@ pub struct BodySignals {
     attitude: [(usize, f64); 3],
     /// aileron, elevator, rudder, when announced: (output index, rad per unit).
     surfaces: [Option<(usize, f64)>; 3],
+    /// Whether the plant announces four rotor speeds (`omega1_radps` .. `omega4_radps`): drawn as an X quadrotor.
+    rotorcraft: bool,
 }
 
 /// The first of `stem` with one of `units` (name suffix, factor) that `plant` announces.
@@ -66,7 +69,13 @@ impl BodySignals {
         let position = [find(plant, "north", &length)?, find(plant, "east", &length)?, find(plant, "alt", &length)?];
         let attitude = [find(plant, "phi", &angle)?, find(plant, "theta", &angle)?, find(plant, "psi", &angle)?];
         let surfaces = ["aileron", "elevator", "rudder"].map(|s| find(plant, s, &angle));
-        Some(Self { position, attitude, surfaces })
+        let rotorcraft = (1..=ROTORS).all(|k| plant.output(&format!("omega{k}_radps")).is_ok());
+        Some(Self { position, attitude, surfaces, rotorcraft })
+    }
+
+    /// Whether the plant is drawn as an X quadrotor (it announces four rotor speeds) rather than the aircraft.
+    pub fn rotorcraft(&self) -> bool {
+        self.rotorcraft
     }
 
     /// The body's position in `world` (east, north, up), m, from a sample's outputs.
@@ -122,6 +131,11 @@ impl Default for ProtoBuffer {
 }
 
 impl ProtoBuffer {
+    /// Draw an X quadrotor of arm `arm_m` (centre to rotor axis, m) from now on, or the aircraft again (`None`).
+    pub fn draw(&mut self, rotorcraft_arm_m: Option<f64>) {
+        self.scene.entities[0] = rotorcraft_arm_m.map_or_else(aircraft, quadrotor);
+    }
+
     /// The message last encoded.
     pub fn bytes(&self) -> &[u8] {
         &self.bytes
@@ -341,12 +355,88 @@ pub fn surface_poses(surfaces_rad: [f64; 3]) -> Vec<([f64; 3], [f64; 4])> {
     SURFACES.iter().map(|s| s.pose(surfaces_rad)).collect()
 }
 
+/// The quadrotor's colours: its frame, its nose, its rotor discs.
+const FRAME: [f64; 4] = [0.35, 0.37, 0.4, 1.0];
+const NOSE: [f64; 4] = [0.8, 0.1, 0.1, 1.0];
+const ROTOR: [f64; 4] = [1.0, 0.45, 0.05, 0.8];
+
+/// An X quadrotor in `body`, `arm_m` from its centre to each rotor's axis: a hub, a red block at the nose, two arms
+/// across, and a disc for each rotor in motor order (Betaflight's Quad X, as the built-in quadrotor's), each 0.9
+/// arm across.
+fn quadrotor(arm_m: f64) -> SceneEntity {
+    let along = arm_m / std::f64::consts::SQRT_2;
+    let yaw = |deg: f64| [0.0, 0.0, (deg.to_radians() / 2.0).sin(), (deg.to_radians() / 2.0).cos()];
+    let cube = |center: [f64; 3], q: [f64; 4], size: [f64; 3], c: [f64; 4]| CubePrimitive {
+        pose: pose(center.map(|v| v * arm_m), q),
+        size: v3(size.map(|v| v * arm_m)),
+        color: color(c),
+    };
+    let cubes = vec![
+        cube([0.0, 0.0, 0.0], yaw(0.0), [0.45, 0.35, 0.15], FRAME),
+        cube([0.3, 0.0, 0.05], yaw(0.0), [0.2, 0.12, 0.1], NOSE),
+        cube([0.0, 0.0, 0.0], yaw(45.0), [2.0, 0.08, 0.05], FRAME),
+        cube([0.0, 0.0, 0.0], yaw(-45.0), [2.0, 0.08, 0.05], FRAME),
+    ];
+    // Motor order's (forward, right) to forward-left; a disc's axis is its frame's z, the body's up.
+    let cylinders = ROTOR_POSITION
+        .iter()
+        .map(|[x, y]| CylinderPrimitive {
+            pose: pose([x * along, -y * along, 0.03 * arm_m], [0.0, 0.0, 0.0, 1.0]),
+            size: v3([0.9 * arm_m, 0.9 * arm_m, 0.02 * arm_m]),
+            bottom_scale: 1.0,
+            top_scale: 1.0,
+            color: color(ROTOR),
+        })
+        .collect();
+    SceneEntity {
+        frame_id: BODY_FRAME.into(),
+        id: ENTITY_ID.into(),
+        frame_locked: true,
+        cubes,
+        cylinders,
+        ..Default::default()
+    }
+}
+
+/// The arm a quadrotor is drawn with, m: the scenario's `[plant.parameters] arm_m` (TOML), else the built-in
+/// quadrotor's.
+pub fn rotor_arm_m(scenario_toml: &str) -> f64 {
+    silrig_flight::scenario::Scenario::from_toml(scenario_toml, "the recording's scenario")
+        .ok()
+        .and_then(|s| s.plant.parameters.get("arm_m").copied())
+        .unwrap_or(silrig_model::quad::params::QuadParams::default().arm_m)
+}
+
+/// The quadrotor as the run page's 3-D view draws it, the same parts as Foxglove's ([`quadrotor`]): boxes (centre,
+/// orientation, size) and rotor discs (centre, diameter) in motor order, m in `body`, colours r, g, b.
+pub fn quadrotor_model(arm_m: f64) -> serde_json::Value {
+    use serde_json::json;
+    let entity = quadrotor(arm_m);
+    let position =
+        |p: &Option<Pose>| p.as_ref().and_then(|p| p.position.as_ref()).map_or([0.0; 3], |v| [v.x, v.y, v.z]);
+    let orientation = |p: &Option<Pose>| {
+        p.as_ref().and_then(|p| p.orientation.as_ref()).map_or([0.0, 0.0, 0.0, 1.0], |q| [q.x, q.y, q.z, q.w])
+    };
+    let size = |s: &Option<Vector3>| s.as_ref().map_or([0.0; 3], |s| [s.x, s.y, s.z]);
+    let rgb = |c: &Option<Color>| c.as_ref().map_or([0.0; 3], |c| [c.r, c.g, c.b]);
+    let boxes: Vec<_> = entity
+        .cubes
+        .iter()
+        .map(|c| json!({"center": position(&c.pose), "q": orientation(&c.pose), "size": size(&c.size), "color": rgb(&c.color)}))
+        .collect();
+    let rotors: Vec<_> =
+        entity.cylinders.iter().map(|c| json!({"center": position(&c.pose), "diameter": size(&c.size)[0]})).collect();
+    json!({"kind": "quadrotor", "length_m": 2.6 * arm_m, "boxes": boxes, "rotors": rotors})
+}
+
 /// A `foxglove.SceneUpdate` at `wall_ns` into `buffer`: the aircraft, its surfaces at `surfaces_rad` (aileron,
 /// elevator, rudder).
 pub fn aircraft_scene(buffer: &mut ProtoBuffer, wall_ns: u64, surfaces_rad: [f64; 3]) {
     let entity = &mut buffer.scene.entities[0];
     entity.timestamp = timestamp(wall_ns);
-    for (cube, s) in entity.cubes[BLOCKS.len()..].iter_mut().zip(&SURFACES) {
+    // The quadrotor has no surfaces: its cubes stay where they are.
+    let surfaces = if entity.cylinders.len() == ROTORS { &[][..] } else { &SURFACES[..] };
+    for (cube, s) in entity.cubes[BLOCKS.len()..].iter_mut().zip(surfaces) {
         let (center, orientation) = s.pose(surfaces_rad);
         cube.pose = pose(center, orientation);
     }

@@ -19,6 +19,7 @@
 pub mod cdr;
 pub mod csv;
 pub mod foxglove;
+pub mod foxglove_layout;
 pub mod json;
 pub mod mcap_file;
 pub mod mcap_writer;

@@ -65,6 +65,8 @@ pub struct McapSink {
     body_signals: Option<BodySignals>,
     /// The 3-D messages being written, reused.
     proto: ProtoBuffer,
+    /// The arm a quadrotor is drawn with, m (the scenario's `arm_m`).
+    rotor_arm_m: f64,
     /// The surfaces (rad) and simulated time (s) of the last `/aircraft` scene written; `None`: none yet for the
     /// current plant life.
     last_scene: Option<([f64; 3], f64)>,
@@ -225,6 +227,7 @@ impl McapSink {
             buffer: CdrBuffer::default(),
             body_signals: None,
             proto: ProtoBuffer::default(),
+            rotor_arm_m: fox::rotor_arm_m(&meta.scenario_toml),
             last_scene: None,
             events_read: 0,
             wall_minus_monotonic_ns: wall_ns as i128 - i128::from(silrig_wire::clock::monotonic_ns()),
@@ -336,6 +339,15 @@ impl RowSink for McapSink {
     fn plant(&mut self, info: &PlantInfo) -> std::io::Result<()> {
         // Each plant life announces itself: the 3-D follows what the current one has.
         self.body_signals = info.signals().ok().and_then(|signals| BodySignals::resolve(&signals));
+        self.proto.draw(self.body_signals.as_ref().is_some_and(BodySignals::rotorcraft).then_some(self.rotor_arm_m));
+        // The layout that fits this plant's recording, beside it; the recording goes on without it.
+        if let Ok(signals) = info.signals() {
+            let layout = serde_json::to_string_pretty(&crate::foxglove_layout::layout(&signals)).unwrap_or_default();
+            let path = self.events_path.with_file_name(crate::foxglove_layout::FILE);
+            if let Err(e) = silrig_flight::files::write_atomically(&path, &layout) {
+                eprintln!("logger: the Foxglove layout {} could not be written: {e}", path.display());
+            }
+        }
         self.last_scene = None;
         if self.body_signals.is_some() && self.channels.body.is_none() {
             self.channels.body = Some(self.add_body_channels());

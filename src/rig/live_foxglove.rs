@@ -5,6 +5,10 @@
 //! queue of [`BACKLOG_MESSAGES`]: a client that falls behind loses its oldest queued messages, and neither the
 //! logger's loop nor the recording waits for it. The plant and the controller never see the server.
 //!
+//! The plant's announcement (`/plant_info`) is published once, when the plant starts: the server keeps the last
+//! one and sends it to each client that subscribes after it, so a client that joins late still knows the signals'
+//! names and units.
+//!
 //! Without the feature the module still builds: [`AVAILABLE`] is false and [`serve`] refuses with the build
 //! command, so `silrig run --live` can say what to do before anything starts.
 
@@ -29,14 +33,16 @@ pub const DRAIN_MS: u64 = 300;
 #[cfg(feature = "live")]
 pub fn serve(addr: SocketAddr, run_id: &str) -> anyhow::Result<Box<dyn RecordingTap>> {
     let context = foxglove::Context::new();
+    let latched = std::sync::Arc::new(server::Latched::default());
     let server = foxglove::WebSocketServer::new()
         .name(format!("silrig run {run_id}"))
         .bind(addr.ip().to_string(), addr.port())
         .message_backlog_size(BACKLOG_MESSAGES)
         .context(&context)
+        .listener(latched.clone())
         .start_blocking()
         .map_err(|e| anyhow::anyhow!("--live foxglove={addr}: starting the Foxglove WebSocket server: {e}"))?;
-    Ok(Box::new(server::FoxgloveTap { context, server: Some(server), channels: Vec::new() }))
+    Ok(Box::new(server::FoxgloveTap { context, server: Some(server), channels: Vec::new(), latched }))
 }
 
 /// Refuse: this build has no server ([`NOT_BUILT`]).
@@ -47,15 +53,39 @@ pub fn serve(addr: SocketAddr, _run_id: &str) -> anyhow::Result<Box<dyn Recordin
 
 #[cfg(feature = "live")]
 mod server {
-    use silrig_recording::{RecordingTap, TapChannel};
-    use std::sync::Arc;
+    use silrig_recording::{RecordingTap, TapChannel, topics};
+    use std::collections::HashMap;
+    use std::sync::{Arc, Mutex};
     use std::time::Duration;
+
+    /// Channels published once, whose last message a client that subscribes later is sent at once.
+    const LATCHED_TOPICS: [&str; 1] = [topics::PLANT_INFO];
+
+    /// The last message of each latched channel (by the server's channel id), with its log time.
+    #[derive(Default)]
+    pub(super) struct Latched {
+        last: Mutex<HashMap<foxglove::ChannelId, (Arc<foxglove::RawChannel>, Option<(Vec<u8>, u64)>)>>,
+    }
+
+    impl foxglove::websocket::ServerListener for Latched {
+        fn on_subscribe(&self, client: foxglove::websocket::Client, channel: foxglove::websocket::ChannelView) {
+            let last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some((ch, Some((data, log_time_ns)))) = last.get(&channel.id()) {
+                ch.log_with_meta_to_sink(
+                    data,
+                    foxglove::PartialMetadata::with_log_time(*log_time_ns),
+                    client.sink_id(),
+                );
+            }
+        }
+    }
 
     /// The server and its channels, by the recording's channel id.
     pub(super) struct FoxgloveTap {
         pub(super) context: Arc<foxglove::Context>,
         pub(super) server: Option<foxglove::WebSocketServerHandle>,
         pub(super) channels: Vec<Option<Arc<foxglove::RawChannel>>>,
+        pub(super) latched: Arc<Latched>,
     }
 
     impl RecordingTap for FoxgloveTap {
@@ -72,7 +102,13 @@ mod server {
                 self.channels.resize(id + 1, None);
             }
             match built {
-                Ok(channel) => self.channels[id] = Some(channel),
+                Ok(channel) => {
+                    if LATCHED_TOPICS.contains(&c.topic) {
+                        let mut last = self.latched.last.lock().unwrap_or_else(|e| e.into_inner());
+                        last.insert(channel.id(), (channel.clone(), None));
+                    }
+                    self.channels[id] = Some(channel)
+                }
                 // The recording has the channel whatever the server makes of it.
                 Err(e) => eprintln!("logger: --live: channel {} not served: {e}", c.topic),
             }
@@ -80,6 +116,12 @@ mod server {
 
         fn message(&mut self, id: u16, log_time_ns: u64, data: &[u8]) {
             if let Some(Some(channel)) = self.channels.get(usize::from(id)) {
+                // Kept before it is sent: a client subscribing meanwhile gets it once or twice, never not at all.
+                let mut last = self.latched.last.lock().unwrap_or_else(|e| e.into_inner());
+                if let Some((_, kept)) = last.get_mut(&channel.id()) {
+                    *kept = Some((data.to_vec(), log_time_ns));
+                }
+                drop(last);
                 channel.log_with_meta(data, foxglove::PartialMetadata::with_log_time(log_time_ns));
             }
         }

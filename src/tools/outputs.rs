@@ -32,12 +32,13 @@ pub fn write_run(
     std::fs::write(&scenario_path, scenario.to_toml())
         .with_context(|| format!("writing {}", scenario_path.display()))?;
     let mut files = vec![trace_path, summary_path, scenario_path];
+    let setpoint = |name: &str| scenario.setpoint.get(name);
     if silrig_flight::trace::LOOP_COLUMNS.iter().all(|c| trace.index(c).is_some()) {
         let f_true = silrig_flight::f_true::from_trace(trace, scenario);
-        files.extend(silrig_plot::plot_closed_loop(trace, f_true.as_ref(), out_dir, &plot_title(scenario))?);
+        let title = plot_title(scenario);
+        files.extend(silrig_plot::plot_closed_loop(trace, f_true.as_ref(), &setpoint, out_dir, &title)?);
     } else if let Some(plant) = plant {
         let title = format!("{}, plant {}: every signal, commands in orange", scenario.name, plant.plant);
-        let setpoint = |name: &str| scenario.setpoint.get(name);
         files.extend(silrig_plot::plot_signals(trace, Some(plant), &setpoint, out_dir, "signals", &title)?);
     }
     Ok(files)
@@ -124,7 +125,7 @@ pub fn compare(scenarios: &[Scenario], out_dir: &Path) -> anyhow::Result<Compari
         summaries.push(summary);
         traces.push((scenario.name.clone(), trace));
     }
-    let overlay = silrig_plot::plot_overlay(&traces, out_dir, "overlay")?;
+    let overlay = silrig_plot::plot_overlay(&traces, out_dir, "overlay")?.files;
     Ok(Comparison { summaries, overlay, left_envelope })
 }
 

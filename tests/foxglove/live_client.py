@@ -6,7 +6,8 @@ It connects to ws://ADDR (trying again until --connect-timeout-s, since the logg
 starts), subscribes to every channel the server advertises, as it advertises them, and writes to OUT one JSON line
 per advertised channel ({"advertised": {...}}) and one per message received, in arrival order: {"topic", "log_time_ns",
 "data" (hex)}. It ends when the server closes the connection, or after --disconnect-after-s (a client that leaves
-mid-run). --slow-ms blocks the client that long after each message (a client that cannot keep up).
+mid-run); --connect-after-trace-in FILE waits until another client's OUT shows a `/trace` message before connecting
+(a client that joins late). --slow-ms blocks the client that long after each message (a client that cannot keep up).
 """
 
 import argparse
@@ -43,6 +44,7 @@ async def serve(args, out):
         sys.exit(f"live_client.py: the server chose subprotocol {ws.subprotocol!r}, not {SUBPROTOCOL}")
     topics = {}
     next_id = 0
+    flushed = False
     try:
         async for msg in ws:
             if isinstance(msg, str):
@@ -61,6 +63,9 @@ async def serve(args, out):
                 subscription, log_time_ns = struct.unpack_from("<IQ", msg, 1)
                 record = {"topic": topics[subscription], "log_time_ns": log_time_ns, "data": msg[13:].hex()}
                 out.write(json.dumps(record) + "\n")
+                if record["topic"] == "/trace" and not flushed:
+                    out.flush()  # a client joining later waits for this line (--connect-after-trace-in)
+                    flushed = True
                 if args.slow_ms:
                     time.sleep(args.slow_ms / 1000)
     except websockets.exceptions.ConnectionClosed:
@@ -73,8 +78,17 @@ async def main():
     parser.add_argument("out", help="where the JSON lines go")
     parser.add_argument("--connect-timeout-s", type=float, default=30.0)
     parser.add_argument("--disconnect-after-s", type=float, default=None)
+    parser.add_argument("--connect-after-trace-in", default=None)
     parser.add_argument("--slow-ms", type=float, default=0.0)
     args = parser.parse_args()
+    while args.connect_after_trace_in is not None:
+        try:
+            with open(args.connect_after_trace_in) as other:
+                if '"topic": "/trace"' in other.read():
+                    break
+        except FileNotFoundError:
+            pass
+        await asyncio.sleep(0.05)
     with open(args.out, "w") as out:
         if args.disconnect_after_s is None:
             await serve(args, out)

@@ -87,7 +87,9 @@ def main(path):
                                    "orientation": [c.pose.orientation.x, c.pose.orientation.y,
                                                    c.pose.orientation.z, c.pose.orientation.w],
                                    "size": [c.size.x, c.size.y, c.size.z]} for c in e.cubes],
-                        "cylinders": len(e.cylinders)} for e in body.entities]
+                        "cylinders": len(e.cylinders),
+                        "cylinder_positions": [[c.pose.position.x, c.pose.position.y, c.pose.position.z]
+                                               for c in e.cylinders]} for e in body.entities]
                     out["scenes"].append({"publish_time": message.publish_time, "entities": entities,
                                           "deletions": len(body.deletions)})
             elif topic in ("/plant", "/plant_info"):

@@ -9,6 +9,7 @@
 //! it), escaping, tables, inline figures, the events and the file list.
 
 pub mod check;
+mod control;
 pub mod run;
 pub mod sweep;
 pub mod view3d;
@@ -190,6 +191,11 @@ pub fn outcome_cell(outcome: silrig_flight::criteria::Outcome) -> String {
 /// The figure `<dir>/<stem>.svg` inline, with a caption linking its PNG and SVG files (relative to the page in
 /// `page_dir`); `None` when there is no such figure.
 pub fn figure(page_dir: &Path, dir: &Path, stem: &str) -> Option<String> {
+    figure_with(page_dir, dir, stem, "")
+}
+
+/// [`figure`] with a one-line caption, before the file links, saying what to look for in it (`""` for none).
+pub fn figure_with(page_dir: &Path, dir: &Path, stem: &str, look_for: &str) -> Option<String> {
     let svg = dir.join(format!("{stem}.svg"));
     let text = std::fs::read_to_string(&svg).ok()?;
     // The document's own `<svg>` element, without the XML prolog a file may carry.
@@ -204,8 +210,10 @@ pub fn figure(page_dir: &Path, dir: &Path, stem: &str) -> Option<String> {
     };
     let rel = dir.strip_prefix(page_dir).ok().filter(|r| !r.as_os_str().is_empty());
     let name = rel.map_or(stem.to_string(), |r| format!("{}/{stem}", r.display()));
+    let look_for =
+        if look_for.is_empty() { String::new() } else { format!("<span class=\"look\">{}</span> ", esc(look_for)) };
     Some(format!(
-        "<figure data-figure=\"{}\">\n{}\n<figcaption>{}{}{} <span class=\"hint\">(click to zoom)</span>\
+        "<figure data-figure=\"{}\">\n{}\n<figcaption>{look_for}{}{}{} <span class=\"hint\">(click to zoom)</span>\
          </figcaption>\n</figure>\n",
         esc(&name),
         body.trim_end(),
@@ -280,6 +288,7 @@ fn file_role(name: &str) -> &'static str {
         "scenario.toml" | "case-scenario.toml" => "the scenario as flown",
         "controller.env" | "plant.env" => "the run's SILRIG_* variables",
         "timer-baseline.json" => "the OS timer floor measured beside the run",
+        "foxglove-layout.json" => "a Foxglove or Lichtblick layout for this plant's recording: import it there",
         n if n.ends_with(".mcap") => "the recording (MCAP)",
         n if n.ends_with(".report.json") => "a process's own report",
         n if n.ends_with(".checkpoint.json") => "a process's checkpoint (a restart resumes from it)",
@@ -364,6 +373,10 @@ figure svg{width:100%;height:auto;display:block;border:1px solid var(--line);cur
 figure.zoomed{max-width:none}
 figure.zoomed svg{cursor:zoom-out}
 figcaption{font-size:13px;color:var(--muted);margin-top:4px}
+figcaption .look{color:var(--fg);font-size:14px}
+ul.verdict{list-style:none;padding:0;margin:4px 0 8px}ul.verdict li{margin:3px 0}
+ul.verdict .tag{min-width:74px;text-align:center;margin-right:8px}
+details{margin:6px 0}details>summary{cursor:pointer;font-weight:600;font-size:14px;padding:3px 0}
 .hint{font-size:12px}
 input.filter{width:360px;max-width:100%;padding:4px 8px;font-size:13px}
 #view3d canvas{width:100%;max-width:960px;height:auto;display:block;border:1px solid var(--line);cursor:grab}
@@ -374,7 +387,9 @@ input.filter{width:360px;max-width:100%;padding:4px 8px;font-size:13px}
 
 /// The page's only script: click a figure to zoom it to the window's width, type to filter a table, and, once the
 /// page has loaded, mark on `<body>` how many figures there are (`data-figures`), how many rendered with a size
-/// (`data-figures-rendered`) and how many script errors happened (`data-errors`): what the browser test reads.
+/// (`data-figures-rendered`), how many script errors happened (`data-errors`) and where the first figure ends,
+/// px from the page's top (`data-first-figure-bottom`, whether it is on the first screen): what the browser test
+/// reads.
 const SCRIPT: &str = "
 (function(){
 var errors=0;
@@ -395,6 +410,8 @@ figs.forEach(function(s){var r=s.getBoundingClientRect();if(r.width>0&&r.height>
 document.body.setAttribute('data-figures',String(figs.length));
 document.body.setAttribute('data-figures-rendered',String(shown));
 document.body.setAttribute('data-errors',String(errors));
+var first=figs.length?figs[0].getBoundingClientRect():null;
+document.body.setAttribute('data-first-figure-bottom',String(first?Math.ceil(first.bottom+window.scrollY):0));
 });
 })();
 ";

@@ -10,8 +10,8 @@
 
 use silrig_flight::signals::{OutputSignal, PlantSignals};
 use silrig_flight::trace::Trace;
-use silrig_model::quad::rotors::{ROTOR_POSITION, ROTORS};
-use silrig_recording::foxglove::{BodySignals, aircraft_model};
+use silrig_model::quad::rotors::ROTORS;
+use silrig_recording::foxglove::{BodySignals, aircraft_model, quadrotor_model, rotor_arm_m};
 use silrig_recording::reader::RecordedRun;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -26,8 +26,6 @@ const MAX_RATE_HZ: f64 = 50.0;
 /// Recordings read for the view at most: a longer run's is left to Foxglove (reading it whole would hold every
 /// sample in memory), and the view flies `trace.csv`'s columns.
 const MAX_RECORDING_BYTES: u64 = 256 << 20;
-/// The quadrotor's arm drawn when the scenario gives none (the built-in quadrotor's default), m.
-const DEFAULT_ARM_M: f64 = 0.17;
 
 /// The trace thinned to the frames the view plays, in the view's units.
 #[derive(Debug, Clone, PartialEq)]
@@ -86,31 +84,6 @@ pub fn frames(trace: &Trace) -> Result<Frames, String> {
     })
 }
 
-/// The quadrotor's parts: a hub, two arms and four rotor discs, m in the body (forward-left-up).
-fn quad_model(arm_m: f64) -> serde_json::Value {
-    use serde_json::json;
-    let along = arm_m / std::f64::consts::SQRT_2;
-    // Motor order's (forward, right) to forward-left.
-    let rotors: Vec<_> = ROTOR_POSITION
-        .iter()
-        .map(|[x, y]| json!({"center": [x * along, -y * along, 0.03 * arm_m], "diameter": 0.9 * arm_m}))
-        .collect();
-    let grey = [0.35, 0.37, 0.4];
-    let turn = |deg: f64| [0.0, 0.0, (deg.to_radians() / 2.0).sin(), (deg.to_radians() / 2.0).cos()];
-    json!({
-        "kind": "quadrotor",
-        "length_m": 2.6 * arm_m,
-        "boxes": [
-            {"center": [0.0, 0.0, 0.0], "size": [0.45 * arm_m, 0.35 * arm_m, 0.15 * arm_m], "color": grey},
-            {"center": [0.3 * arm_m, 0.0, 0.05 * arm_m], "size": [0.2 * arm_m, 0.12 * arm_m, 0.1 * arm_m],
-             "color": [0.8, 0.1, 0.1]},
-            {"center": [0.0, 0.0, 0.0], "q": turn(45.0), "size": [2.0 * arm_m, 0.08 * arm_m, 0.05 * arm_m], "color": grey},
-            {"center": [0.0, 0.0, 0.0], "q": turn(-45.0), "size": [2.0 * arm_m, 0.08 * arm_m, 0.05 * arm_m], "color": grey},
-        ],
-        "rotors": rotors,
-    })
-}
-
 /// Numbers as JSON text with `digits` decimals, flattened.
 fn flat<const N: usize>(rows: &[[f64; N]], digits: usize) -> String {
     let mut out = String::from("[");
@@ -152,11 +125,12 @@ pub fn section(dir: &Path) -> String {
         Ok(f) => f,
         Err(why) => return format!("<p>No 3-D view: {}.</p>\n", super::esc(&why)),
     };
-    let arm_m = silrig_flight::scenario::Scenario::load(&dir.join("scenario.toml"))
-        .ok()
-        .and_then(|s| s.plant.parameters.get("arm_m").copied())
-        .unwrap_or(DEFAULT_ARM_M);
-    let model = if frames.rotors.is_some() { quad_model(arm_m) } else { aircraft_model() };
+    let model = if frames.rotors.is_some() {
+        let scenario = std::fs::read_to_string(dir.join("scenario.toml")).unwrap_or_default();
+        quadrotor_model(rotor_arm_m(&scenario))
+    } else {
+        aircraft_model()
+    };
     let length_m = model["length_m"].as_f64().unwrap_or(1.0);
     let lowest_m = frames.enu_m.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
     // The ground when the flight comes near it, else a plane below the flight (an aircraft at 10,000 ft).
