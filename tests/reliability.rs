@@ -148,17 +148,27 @@ fn an_outside_sigterm_to_any_process_is_a_failed_run_not_a_clean_one() {
 }
 
 #[test]
-fn ctrl_c_and_sigterm_to_the_launcher_stop_the_run_with_130_and_143_saying_when() {
-    for (sig, code, name) in [(libc::SIGINT, 130, "SIGINT"), (libc::SIGTERM, 143, "SIGTERM")] {
+fn ctrl_c_sigterm_and_a_hangup_stop_the_run_with_130_143_and_129_saying_when() {
+    for (sig, code, name) in
+        [(libc::SIGINT, 130, "SIGINT"), (libc::SIGTERM, 143, "SIGTERM"), (libc::SIGHUP, 129, "SIGHUP")]
+    {
         let dir = temp_dir(&format!("stop-{code}"));
         let id = run_id(&format!("stop-{code}"));
         let out = dir.join("run");
-        let launcher = launch(&id, &out, &["--duration-s", "120"]);
+        let mut command = Command::new(SILRIG);
+        command.args(["run", "--no-baseline", "--run-id", &id, "--out", out.to_str().unwrap(), "--duration-s", "120"]);
+        // In a process group of its own, as a shell's job: a closed terminal or a dropped ssh session hangs up
+        // the whole group, the rig's processes with the launcher.
+        std::os::unix::process::CommandExt::process_group(&mut command, 0);
+        let launcher = command.stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
         wait_until_ticking(&out);
         std::thread::sleep(Duration::from_secs(1));
-        // To the launcher alone (a script's `kill`, a CI runner's), not to the group as a terminal's Ctrl-C: the
-        // launcher ends the timer baseline too, which once ran on to the end of the planned 120 s.
-        signal(launcher.id(), sig);
+        // SIGINT and SIGTERM to the launcher alone (a script's `kill`, a CI runner's), not to the group as a
+        // terminal's Ctrl-C: the launcher ends the timer baseline too, which once ran on to the end of the planned
+        // 120 s. SIGHUP to the group, as a terminal's hangup.
+        let target = if sig == libc::SIGHUP { -(launcher.id() as i32) } else { launcher.id() as i32 };
+        // SAFETY: kill(2) on the launcher this test started, or the process group it leads.
+        unsafe { libc::kill(target, sig) };
         let signalled = std::time::Instant::now();
         let o = wait_with_watchdog(launcher, Duration::from_secs(150));
         let stdout = String::from_utf8_lossy(&o.stdout);
@@ -170,7 +180,14 @@ fn ctrl_c_and_sigterm_to_the_launcher_stop_the_run_with_130_and_143_saying_when(
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
         assert_eq!(report["stopped_by"]["signal"], name);
+        assert_eq!(report["stopped_by"]["exit_status"], code);
         assert!(report["stopped_by"]["at_s"].as_f64().unwrap() < 60.0);
+        assert!(!out.join(".silrig-run.lock").exists(), "{name}: the folder's lock is removed");
+        assert!(!Path::new(&format!("/tmp/silrig_{id}.lock")).exists(), "{name}: the run id's lock is removed");
+        for role in ["plant", "controller", "logger"] {
+            let p = report["processes"].as_array().unwrap().iter().find(|p| p["process"] == role);
+            assert!(p.is_some(), "{name}: the {role} ended cleanly, writing its report: {stdout}");
+        }
         no_shared_memory_left(&id);
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -605,6 +622,97 @@ fn every_file_of_a_run_is_its_owners_only_whatever_the_umask() {
     assert!(running.is_empty(), "open to others while running: {running:?}");
     let after = open_to_others(&out);
     assert!(after.is_empty(), "open to others: {after:?}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_os_floor_killed_from_outside_is_a_line_of_the_report_and_the_comparison_says_it_is_missing() {
+    let dir = temp_dir("floor-killed");
+    let id = run_id("floor-killed");
+    let out = dir.join("run");
+    let launcher = launch_with(&[], &id, &out, &["--duration-s", "3"]);
+    wait_until_ticking(&out);
+    // The baseline is the launcher's `silrig timer-baseline` child.
+    let baseline = *children_of(launcher.id())
+        .iter()
+        .find(|p| std::fs::read_to_string(format!("/proc/{p}/comm")).is_ok_and(|c| c.trim() == "silrig"))
+        .expect("the OS-floor baseline beside the run");
+    signal(baseline, libc::SIGKILL);
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let said = format!(
+        "the OS floor (the timer baseline, pid {baseline}) ended before the run did, killed by signal 9: no signal of \
+         the launcher's, so something else ended it"
+    );
+    assert!(stdout.contains(&format!("no OS floor to read the plant's wake-up lateness against: {said}")), "{stdout}");
+    assert!(stdout.contains(&format!("note: {said}")), "{stdout}");
+    assert!(!stdout.contains("x the OS floor"), "no comparison with a floor that is not there: {stdout}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert!(report["timer_baseline"].is_null());
+    assert_eq!(report["timer_baseline_missing"], said.as_str());
+    let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        page.contains("No OS floor to read the plant's wake-up lateness against: the OS floor (the timer baseline"),
+        "report.html"
+    );
+    // The flight itself is whole: the run passes, saying what it could not measure.
+    assert_eq!(o.status.code(), Some(0), "{stdout}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// CLOCK_MONOTONIC now, ns: the clock of the run's events.
+fn monotonic_ns() -> u64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: clock_gettime writes the timespec it is given.
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+/// The first event of `kind` in the run's log: its time, ns.
+fn event_ns(out: &Path, kind: &str) -> u64 {
+    let text = std::fs::read_to_string(out.join("events.jsonl")).unwrap();
+    let event = text.lines().map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()).find(|e| e["kind"] == kind);
+    event.unwrap_or_else(|| panic!("no {kind} event: {text}"))["t_ns"].as_u64().unwrap()
+}
+
+#[test]
+fn a_death_is_recorded_and_restarted_when_it_happens_not_seconds_later() {
+    let dir = temp_dir("death-seen");
+    let id = run_id("death-seen");
+    let out = dir.join("run");
+    let launcher = launch(&id, &out, &["--duration-s", "3", "--restart", "on-failure"]);
+    wait_until_ticking(&out);
+    std::thread::sleep(Duration::from_millis(800));
+    let killed_ns = monotonic_ns();
+    signal(pid_of(&out, "controller", launcher.id()), libc::SIGTERM);
+    let o = wait_with_watchdog(launcher, Duration::from_secs(60));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("controller #2"), "restarted: {stdout}");
+    // Seen when it happened: the old grace for a clean exit (2 s) is gone. Loosely, on a shared machine: well
+    // under that grace, never a tight bound.
+    let seen_s = (event_ns(&out, "process-died") - killed_ns) as f64 / 1e9;
+    assert!(seen_s < 1.5, "the death was recorded {seen_s:.2} s after the SIGTERM: {stdout}");
+    no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_command_that_ignores_sigterm_at_the_end_is_named_with_the_time_it_cost() {
+    let dir = temp_dir("ignores-term");
+    let id = run_id("ignores-term");
+    let out = dir.join("run");
+    // A helper the controller's command starts that ignores SIGTERM, as a wrapper script's might (the controller
+    // itself sets its own handler).
+    let cmd = "sh -c \"trap '' TERM; sleep 60 & exec python3 examples/python/pid_attitude.py\"";
+    let launcher = launch(&id, &out, &["--duration-s", "1", "--controller-cmd", cmd]);
+    let o = wait_with_watchdog(launcher, Duration::from_secs(90));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let note = stdout.lines().find(|l| l.starts_with("note: controller: pid ")).unwrap_or_else(|| panic!("{stdout}"));
+    assert!(note.contains("(`sleep`) of its command ignored SIGTERM: killed after "), "{note}");
+    assert!(note.ends_with(" s, which the end of the run waited for"), "{note}");
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }

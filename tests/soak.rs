@@ -46,9 +46,22 @@ struct Soak {
 
 /// `silrig soak FLAGS` with run id `run_id` in a folder of the test's own; it must pass.
 fn fly_soak(name: &str, run_id: &str, flags: &[&str]) -> Soak {
+    fly_soak_under(&[], name, run_id, flags)
+}
+
+/// [`fly_soak`] started through `wrappers` (`timeout 120`, `/usr/bin/time`, as CI jobs start commands).
+fn fly_soak_under(wrappers: &[&str], name: &str, run_id: &str, flags: &[&str]) -> Soak {
     let dir = temp_dir("soak", name);
     let out = dir.join("out");
-    let child = Command::new(SILRIG)
+    let mut command = match wrappers.split_first() {
+        Some((first, rest)) => {
+            let mut c = Command::new(first);
+            c.args(rest).arg(SILRIG);
+            c
+        }
+        None => Command::new(SILRIG),
+    };
+    let child = command
         .arg("soak")
         .args(flags)
         .args(["--run-id", run_id, "--out", out.to_str().unwrap()])
@@ -63,6 +76,21 @@ fn fly_soak(name: &str, run_id: &str, flags: &[&str]) -> Soak {
     assert!(soak["problems"].as_array().unwrap().is_empty(), "{context}");
     assert_eq!(o.status.code(), Some(0), "{context}");
     Soak { dir, out, soak, stdout, context }
+}
+
+#[test]
+fn a_soak_under_timeout_and_time_counts_only_what_the_run_started() {
+    // Both wrappers name the run id on their command lines and outlive the run by design: they are no leftovers.
+    let run_id = format!("soak{}-w", std::process::id());
+    let wrappers = ["timeout", "200", "/usr/bin/time", "-f", "wrapped: %e s"];
+    let Soak { dir, soak, stdout, context, .. } =
+        fly_soak_under(&wrappers, "wrapped", &run_id, &["--duration-s", "15", "--seed", "3"]);
+    assert!(stdout.contains("soak passed"), "{context}");
+    assert!(stdout.contains("left after the run: 0 processes, 0 shared-memory files, 0 lock files"), "{context}");
+    assert!(context.contains("wrapped: "), "/usr/bin/time reported the soak: {context}");
+    assert_eq!(soak["leftovers"]["processes"].as_array().unwrap().len(), 0, "{context}");
+    no_shared_memory_left(&run_id);
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

@@ -171,7 +171,8 @@ fn two_users_side_by_side_can_neither_read_nor_join_nor_take_the_others_run() {
             .unwrap();
     let said = String::from_utf8_lossy(&take.stderr);
     assert_eq!(take.status.code(), Some(2), "{said}");
-    assert!(said.contains("is taken by another silrig run (another user's"), "{said}");
+    let lock = format!("run id {id} is claimed by /tmp/silrig_{id}.lock of user nobody (uid {NOBODY})");
+    assert!(said.contains(&lock), "{said}");
     // ... nor join it as its controller.
     let join = as_user(
         bob,
@@ -183,11 +184,52 @@ fn two_users_side_by_side_can_neither_read_nor_join_nor_take_the_others_run() {
     .unwrap();
     let said = String::from_utf8_lossy(&join.stderr);
     assert!(!join.status.success() && said.contains("cannot create iceoryx2 node"), "bob joined alice's run: {said}");
+    // In words: whose run it is and what to do, no internal type (`NodeCreationFailure::...`).
+    let words = format!("the run's files (/tmp/silrig_{id}) belong to uid {NOBODY}, and a run is its owner's alone");
+    assert!(said.contains(&words) && !said.contains("::"), "{said}");
     // Alice's run is untouched by all of it.
     let o = common::wait_with_watchdog(alice, Duration::from_secs(60));
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
     let rows = std::fs::read_to_string(alice_out.join("trace.csv")).unwrap().lines().count() - 1;
     assert_eq!(rows, 401);
+    common::no_shared_memory_left(&id);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_run_id_lock_of_another_user_is_refused_naming_it_and_one_of_a_dead_launcher_is_taken_over() {
+    // SAFETY: geteuid has no preconditions.
+    if unsafe { libc::geteuid() } != 0 {
+        eprintln!("skipped: planting another user's lock needs root, as CI runs");
+        return;
+    }
+    let dir = world_readable_rig("foreign-lock");
+    let id = format!("u{}-lock", std::process::id());
+    let lock = PathBuf::from(format!("/tmp/silrig_{id}.lock"));
+    // Root's launcher SIGKILLed: its lock stays, owner-only, naming a pid that has gone.
+    let mut gone = Command::new("true").spawn().unwrap();
+    gone.wait().unwrap();
+    std::fs::write(&lock, gone.id().to_string()).unwrap();
+    std::fs::set_permissions(&lock, std::fs::Permissions::from_mode(0o600)).unwrap();
+    let o = silrig_as_user(&dir, &["run", "--mode", "lockstep", "--duration-s", "0.3", "--run-id", &id]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "run id {id} is claimed by {} of user root (uid 0), which only that user or root can remove",
+            lock.display()
+        )),
+        "{stderr}"
+    );
+    assert!(lock.exists(), "another user's lock is never removed by this one");
+    // Its owner, whose launcher is dead, takes it over.
+    let out = dir.join("runs/by-root");
+    let o = Command::new(SILRIG)
+        .args(["run", "--mode", "lockstep", "--duration-s", "0.3", "--run-id", &id, "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!lock.exists(), "removed at the end of the run that took it over");
     common::no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }

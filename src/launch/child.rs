@@ -18,16 +18,18 @@ pub struct ChildProcess {
     group: bool,
     /// The thread copying its output to its log ([`forward_output`]).
     output: Option<std::thread::JoinHandle<()>>,
+    /// What [`ChildProcess::finish`] had to SIGKILL, in words with the time it waited for it.
+    outlasted: Vec<String>,
 }
 
 impl ChildProcess {
     pub(crate) fn new(child: std::process::Child) -> Self {
-        Self { child, status: None, group: false, output: None }
+        Self { child, status: None, group: false, output: None, outlasted: Vec::new() }
     }
 
     /// A child started with `process_group(0)`: signalled as a group, so it and what it started stop together.
     pub(crate) fn group_leader(child: std::process::Child) -> Self {
-        Self { child, status: None, group: true, output: None }
+        Self { child, status: None, group: true, output: None, outlasted: Vec::new() }
     }
 
     pub(crate) fn with_output(mut self, output: std::thread::JoinHandle<()>) -> Self {
@@ -75,40 +77,73 @@ impl ChildProcess {
         }
     }
 
-    /// Wait up to `timeout` for the process to end; then SIGKILL it. Always reaps.
+    /// Wait up to `timeout` for the process to end; then SIGKILL it. Always reaps. What had to be killed is noted
+    /// ([`ChildProcess::take_outlasted`]).
     pub fn finish(&mut self, timeout: Duration) -> std::io::Result<ExitStatus> {
-        let deadline = Instant::now() + timeout;
-        while self.poll()?.is_none() && Instant::now() < deadline {
+        let start = Instant::now();
+        while self.poll()?.is_none() && start.elapsed() < timeout {
             std::thread::sleep(Duration::from_millis(5));
         }
         if self.status.is_none() {
+            let pid = self.child.id();
+            let name = process_name(pid as libc::pid_t);
             self.signal(libc::SIGKILL);
             self.status = Some(self.child.wait()?);
             self.let_output_catch_up();
+            self.outlasted.push(format!(
+                "pid {pid} (`{name}`) did not end when told to: killed after {:.1} s",
+                start.elapsed().as_secs_f64()
+            ));
         }
         self.end_group_leftovers(timeout);
         Ok(self.status.expect("reaped"))
     }
 
+    /// What [`ChildProcess::finish`] had to SIGKILL (the process, or what its command started), each in words with
+    /// the seconds the stop waited for it; empty when everything ended when told.
+    pub(crate) fn take_outlasted(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.outlasted)
+    }
+
     /// A user's command may leave processes it started (`sh -c "helper & exec my_controller"`) after it ended:
     /// they end with the run. Linux never gives out a pid still used as a process group id, so while any process
     /// sits in the group the id names this group alone; SIGTERM, then SIGKILL past `timeout`.
-    fn end_group_leftovers(&self, timeout: Duration) {
+    fn end_group_leftovers(&mut self, timeout: Duration) {
         let pgid = self.child.id() as libc::pid_t;
         if !self.group {
             return;
         }
-        let deadline = Instant::now() + timeout;
+        let start = Instant::now();
         let mut signal = libc::SIGTERM;
-        while !members_of_group(pgid).is_empty() {
+        let mut killed = Vec::new();
+        loop {
+            let members = members_of_group(pgid);
+            if members.is_empty() {
+                break;
+            }
+            if signal == libc::SIGKILL && killed.is_empty() {
+                killed = members.iter().map(|pid| format!("pid {pid} (`{}`)", process_name(*pid))).collect();
+            }
             // SAFETY: kill(2) on a process group that still has members (see above), so it is this group.
             unsafe { libc::kill(-pgid, signal) };
-            if Instant::now() >= deadline {
+            if start.elapsed() >= timeout {
                 signal = libc::SIGKILL;
             }
             std::thread::sleep(Duration::from_millis(10));
         }
+        if !killed.is_empty() {
+            self.outlasted.push(format!(
+                "{} of its command ignored SIGTERM: killed after {:.1} s",
+                killed.join(", "),
+                start.elapsed().as_secs_f64()
+            ));
+        }
     }
+}
+
+/// A process's name as the kernel keeps it (`/proc/<pid>/comm`), or `?` once it has gone.
+fn process_name(pid: libc::pid_t) -> String {
+    std::fs::read_to_string(format!("/proc/{pid}/comm")).map_or_else(|_| "?".into(), |c| c.trim().to_string())
 }
 
 /// The live processes in process group `pgid` (from `/proc/<pid>/stat`; zombies, which init reaps, left out).
@@ -128,14 +163,17 @@ fn members_of_group(pgid: libc::pid_t) -> Vec<libc::pid_t> {
 
 /// The child gets `signal` when the launcher dies, however it dies (`kill -9` included), so nothing outlives its
 /// run. Linux ties the signal to the thread that forked the child: the launcher starts and restarts every process
-/// from its main thread, which lives as long as the launcher.
+/// from its main thread, which lives as long as the launcher. It ignores SIGHUP: a closed terminal hangs up the
+/// launcher, which stops its processes with SIGTERM as for any stop, reports and removes its locks; a hangup
+/// reaching them too would end them behind its back.
 pub(crate) fn end_with_launcher(command: &mut Command, signal: libc::c_int) {
     use std::os::unix::process::CommandExt;
     let launcher = std::process::id() as libc::pid_t;
     // SAFETY: the closure runs in the child between fork and exec and calls only async-signal-safe functions
-    // (prctl, getppid, raise).
+    // (prctl, getppid, raise, signal).
     unsafe {
         command.pre_exec(move || {
+            silrig_rig::signals::ignore_hangup();
             libc::prctl(libc::PR_SET_PDEATHSIG, signal as libc::c_ulong, 0, 0, 0);
             // The launcher may have died between fork and prctl: then the signal never comes, so send it now.
             if libc::getppid() != launcher {

@@ -106,14 +106,23 @@ fn supervise(
 /// cyclictest's output in the run's folder, as it printed it.
 const CYCLICTEST_OUTPUT: &str = "cyclictest.txt";
 
-/// The baseline's report (None if it wrote none); after a failed run it is not waited for.
+/// The OS floor measured beside the run, or why there is none: a baseline that ended before the launcher stopped
+/// it (killed from outside, say) or wrote nothing readable is a line of the report, never a silent absence.
+struct Floor {
+    report: Option<BaselineReport>,
+    missing: Option<String>,
+}
+
+/// The baseline's report; after a failed run it is not waited for.
 fn finish_baseline(
     baseline: &mut ChildProcess,
     floor: FloorSource,
     scenario: &Scenario,
     out: &Path,
     failed: bool,
-) -> std::io::Result<Option<BaselineReport>> {
+) -> std::io::Result<Floor> {
+    // Looked at before the launcher signals it: an end already there came from somewhere else.
+    let ended_early = baseline.poll()?.filter(|status| !status.success());
     if failed {
         baseline.signal(libc::SIGKILL);
     } else if signals::termination_requested() {
@@ -122,25 +131,33 @@ fn finish_baseline(
         baseline.signal(libc::SIGINT);
     }
     baseline.finish(Duration::from_secs_f64(scenario.timing.duration_s + 10.0))?;
-    if floor == FloorSource::Cyclictest {
+    let report = if floor == FloorSource::Cyclictest {
         let text = std::fs::read_to_string(out.join(CYCLICTEST_OUTPUT)).unwrap_or_default();
         let timing = &scenario.timing;
         let priority = Role::Plant.fifo_priority().unwrap_or(0);
-        return Ok(match crate::floor::cyclictest::parse(&text, timing.period_ns(), timing.duration_s, priority) {
-            Ok(report) => Some(report),
-            Err(e) => {
-                eprintln!("silrig run: warning: no OS floor: {e} (see {})", out.join(CYCLICTEST_OUTPUT).display());
-                None
-            }
-        });
-    }
-    let path = out.join("timer-baseline.json");
-    let report = std::fs::read_to_string(&path).ok().and_then(|t| serde_json::from_str(&t).ok());
-    if report.is_none() {
-        // Killed, or its output did not fit on the disk: no file rather than a torn one.
-        let _ = std::fs::remove_file(&path);
-    }
-    Ok(report)
+        crate::floor::cyclictest::parse(&text, timing.period_ns(), timing.duration_s, priority)
+            .map_err(|e| format!("{e} (see {})", out.join(CYCLICTEST_OUTPUT).display()))
+    } else {
+        let path = out.join("timer-baseline.json");
+        let report = std::fs::read_to_string(&path).ok().and_then(|t| serde_json::from_str(&t).ok());
+        if report.is_none() {
+            // Killed, or its output did not fit on the disk: no file rather than a torn one.
+            let _ = std::fs::remove_file(&path);
+        }
+        report.ok_or_else(|| "it wrote no report".to_string())
+    };
+    let source = if floor == FloorSource::Cyclictest { "cyclictest" } else { "the timer baseline" };
+    let missing = match (&report, ended_early) {
+        (_, Some(status)) => Some(format!(
+            "the OS floor ({source}, pid {}) ended before the run did, {}: no signal of the launcher's, so \
+             something else ended it",
+            baseline.pid(),
+            crate::child::describe(status)
+        )),
+        (Err(why), None) if !failed => Some(format!("the OS floor ({source}): {why}")),
+        _ => None,
+    };
+    Ok(Floor { report: report.ok(), missing })
 }
 
 /// What a process the launcher stopped at the normal end of a run reports as "terminated by signal" (its SIGTERM)
@@ -192,7 +209,7 @@ struct Flown {
     bridge: Option<super::remote::RemoteBridge>,
     /// The processes a planned fault ended for good.
     ended_by_plan: Vec<Role>,
-    timer_baseline: Option<BaselineReport>,
+    floor: Floor,
     conditions: (MachineConditions, MachineConditions),
 }
 
@@ -255,9 +272,9 @@ fn fly(opts: &LaunchOptions, prepared: &Prepared) -> anyhow::Result<Flown> {
         sup.failures.extend(b.failure.take());
     }
     sup.note_final_reports();
-    let timer_baseline = match baseline.as_mut() {
+    let floor = match baseline.as_mut() {
         Some(b) => finish_baseline(b, opts.floor, scenario, out, !sup.failures.is_empty())?,
-        None => None,
+        None => Floor { report: None, missing: None },
     };
     let conditions = (conditions_start, MachineConditions::now());
     if controller == ControllerLaunch::External && bridge.is_none() {
@@ -266,17 +283,18 @@ fn fly(opts: &LaunchOptions, prepared: &Prepared) -> anyhow::Result<Flown> {
     if plant_external {
         wait_for_external_report(out, Role::Plant);
     }
-    Ok(Flown { sup, controller, bridge, ended_by_plan, timer_baseline, conditions })
+    Ok(Flown { sup, controller, bridge, ended_by_plan, floor, conditions })
 }
 
 /// Phase 4: the processes' reports merged with their lives, the trace's control summary, how the run ended and
 /// what it left behind.
 fn report_of(opts: &LaunchOptions, prepared: &Prepared, flown: Flown) -> anyhow::Result<RigReport> {
     let Prepared { scenario, run_id, out, .. } = prepared;
-    let Flown { mut sup, controller, bridge, ended_by_plan, timer_baseline, conditions } = flown;
+    let Flown { mut sup, controller, bridge, ended_by_plan, floor, conditions } = flown;
     let dt_s = scenario.timing.dt_s;
     let mut failures = std::mem::take(&mut sup.failures);
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> = floor.missing.iter().cloned().collect();
+    notes.append(&mut sup.notes);
     let external = (controller == ControllerLaunch::External, opts.plant == PlantKind::External);
     let mut processes =
         process_reports(opts, out, (external.0, bridge.is_some()), &ended_by_plan, &mut failures, &mut notes);
@@ -319,7 +337,8 @@ fn report_of(opts: &LaunchOptions, prepared: &Prepared, flown: Flown) -> anyhow:
         cycles_per_s: if wall_s > 0.0 { ticks as f64 / wall_s } else { 0.0 },
         processes,
         lives: sup.lives,
-        timer_baseline,
+        timer_baseline: floor.report,
+        timer_baseline_missing: floor.missing,
         control,
         faults: super::fault_report::fault_records(&scenario.faults, out, dt_s),
         discontinuities: super::fault_report::discontinuities(out, dt_s),

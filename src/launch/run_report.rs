@@ -38,6 +38,9 @@ pub struct RigReport {
     pub lives: Vec<ProcessLife>,
     /// The OS floor measured beside a realtime run.
     pub timer_baseline: Option<BaselineReport>,
+    /// Why a realtime run that started its OS floor has none to show (it was killed from outside, say).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timer_baseline_missing: Option<String>,
     /// Control quality of the logged trace (as `silrig sim` reports it).
     pub control: Option<Summary>,
     /// Every fault of the plan and what became of it.
@@ -418,6 +421,11 @@ impl RigReport {
         let mut out = format!("\n{}\n", summary_table_header());
         for l in self.processes.iter().flat_map(|p| &p.latencies).filter(|l| l.summary.count > 0) {
             out += &format!("{}\n", summary_line(&l.name, &l.summary));
+        }
+        if let Some(why) = &self.timer_baseline_missing {
+            out += &format!(
+                "no OS floor to read the plant's wake-up lateness against: {why}; the figures above stand alone\n"
+            );
         }
         if let Some(b) = &self.timer_baseline {
             out += &format!("{}\n", summary_line("os-floor.wake_lateness", &b.lateness));

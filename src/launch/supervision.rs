@@ -83,6 +83,9 @@ impl RoleProcess {
     }
 }
 
+/// How long a process told to stop at the end of the run (and what its command started) may take before SIGKILL.
+const STOP_GRACE: Duration = Duration::from_secs(5);
+
 /// How long a process that exited cleanly before the plant's end waits for that end before it counts as a death.
 const CLEAN_EXIT_GRACE: Duration = Duration::from_secs(2);
 
@@ -156,6 +159,11 @@ fn last_chars(text: &str, max_chars: usize) -> &str {
     text.char_indices().nth(skip).map_or("", |(at, _)| &text[at..])
 }
 
+/// Whether `role`'s report says a signal ended it (a SIGTERM or SIGINT it acted on, writing its report).
+fn ended_on_signal(out: &Path, role: Role) -> bool {
+    read_report(out, role.label()).is_ok_and(|r| r.ended == "terminated by signal")
+}
+
 /// The run's processes and what became of them.
 pub(crate) struct Supervisor {
     bin_dir: PathBuf,
@@ -183,6 +191,8 @@ pub(crate) struct Supervisor {
     pub(crate) wall_s: f64,
     /// Processes that failed, and how.
     pub(crate) failures: Vec<String>,
+    /// What the report should say that is no failure: a process the run's end had to SIGKILL, and what it cost.
+    pub(crate) notes: Vec<String>,
     /// Every process started, one entry per life (a restart starts a new life).
     pub(crate) lives: Vec<ProcessLife>,
 }
@@ -218,6 +228,7 @@ impl Supervisor {
             stopping: false,
             wall_s: 0.0,
             failures: Vec::new(),
+            notes: Vec::new(),
             lives: Vec::new(),
         };
         for role in [Role::Logger, Role::Controller, Role::Plant] {
@@ -313,9 +324,15 @@ impl Supervisor {
                 continue;
             }
             // A process that ends cleanly by itself mid-run has usually seen the plant's last tick a moment before
-            // the plant's own exit reaches us: judge it once the plant has had time to end.
-            // (Before the plant's first tick there is no last tick to have seen: judged at once.)
-            let wait = status.success() && p.role != Role::Plant && self.plant_done_at.is_none() && !self.stopping;
+            // the plant's own exit reaches us: judge it once the plant has had time to end. (Before the plant's
+            // first tick there is no last tick to have seen; a planned end, or one its report says a signal asked
+            // for, is no end of the flight: judged at once, so a death is recorded, and restarted, when it happens.)
+            let wait = status.success()
+                && p.role != Role::Plant
+                && self.plant_done_at.is_none()
+                && !self.stopping
+                && !p.planned_exit
+                && !ended_on_signal(&self.args.out, p.role);
             if wait && self.plant_ticking() {
                 let p = &mut self.processes[i];
                 let seen = *p.clean_exit_seen.get_or_insert_with(Instant::now);
@@ -495,7 +512,7 @@ impl Supervisor {
         self.processes.iter().filter(|p| p.ended_for_good() && p.killed_by_plan).map(|p| p.role).collect()
     }
 
-    /// SIGTERM to every process still running, reap all (SIGKILL after 5 s); an exit other than a clean one of a
+    /// SIGTERM to every process still running, reap all (SIGKILL after [`STOP_GRACE`]); an exit other than a clean one of a
     /// process that was still running is a failure, unless one is recorded for it already.
     pub(crate) fn stop_all(&mut self) -> std::io::Result<()> {
         if self.plant_done_at.is_none() {
@@ -511,8 +528,11 @@ impl Supervisor {
         for i in 0..self.processes.len() {
             let p = &mut self.processes[i];
             let already_ended = p.process.has_ended();
-            let status = p.process.finish(Duration::from_secs(5))?;
+            let status = p.process.finish(STOP_GRACE)?;
             let (role, pid) = (p.role, p.process.pid());
+            for what in p.process.take_outlasted() {
+                self.notes.push(format!("{role}: {what}, which the end of the run waited for"));
+            }
             // A life already noted stays as it was: only open ones are ended here.
             self.end_life(pid, status, if already_ended { "" } else { " at the end of the run" });
             if !already_ended && !status.success() && !self.failures.iter().any(|f| f.starts_with(role.label())) {

@@ -295,6 +295,8 @@ fn timing(r: &RigReport, out: &Path) -> String {
             esc(&b.source.to_string()),
             esc(&b.policy.to_string())
         );
+    } else if let Some(why) = &r.timer_baseline_missing {
+        html += &format!("<p>No OS floor to read the plant's wake-up lateness against: {}.</p>\n", esc(why));
     } else if r.mode == "realtime" && r.timer_baseline.is_none() {
         html += "<p>No OS floor was measured beside this run (--no-baseline, or the floor could not be taken).</p>\n";
     }

@@ -402,7 +402,7 @@ fn problems(r: &SoakReport) -> Vec<String> {
         }
     }
     if r.leftovers.count() > 0 {
-        p.push(format!("left after the run: {:?}", r.leftovers));
+        p.push(format!("left after the run: {}", r.leftovers.describe()));
     }
     if let Some(h) = &r.controller_host
         && (h.bridge_starts, h.controller_starts) != (1, 1)

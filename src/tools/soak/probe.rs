@@ -94,6 +94,16 @@ pub fn children(parent: u32) -> Vec<u32> {
         .collect()
 }
 
+/// `pid` and its ancestors up to init, by their parents in `/proc`.
+pub fn lineage(pid: u32) -> BTreeSet<u32> {
+    let mut line = BTreeSet::from([pid]);
+    let mut at = pid;
+    while let Some((_, parent)) = stat(at).filter(|(_, parent)| *parent > 0 && line.insert(*parent)) {
+        at = parent;
+    }
+    line
+}
+
 /// (state, ppid) from `/proc/<pid>/stat` (the command name may hold spaces and parentheses: read past the last `)`).
 fn stat(pid: u32) -> Option<(char, u32)> {
     let text = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
@@ -175,9 +185,12 @@ impl Leftovers {
                 processes.insert(format!("{pid} ({})", process_name(pid)));
             }
         }
-        let me = std::process::id();
+        // The soak and whatever started it (`timeout`, `/usr/bin/time`, a CI runner's shell) may name the run id
+        // too, and are alive by design: only what the run started counts.
+        let mine = lineage(std::process::id());
         if let Ok(dir) = std::fs::read_dir("/proc") {
-            for pid in dir.filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok()).filter(|p| *p != me) {
+            let all = dir.filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok());
+            for pid in all.filter(|p| !mine.contains(p)) {
                 let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
                 let named = cmdline.split(|b| *b == 0).any(|a| a == run_id.as_bytes());
                 if named && stat(pid).is_some_and(|(state, _)| state != 'Z') {
@@ -198,6 +211,21 @@ impl Leftovers {
             shm_files: shm_entries(&format!("sr_{run_id}_")),
             lock_files,
         }
+    }
+
+    /// What is left, in words (empty when nothing is).
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if !self.processes.is_empty() {
+            parts.push(format!("processes of the run still alive: {}", self.processes.join(", ")));
+        }
+        if !self.shm_files.is_empty() {
+            parts.push(format!("shared-memory files in /dev/shm: {}", self.shm_files.join(", ")));
+        }
+        if !self.lock_files.is_empty() {
+            parts.push(format!("lock files and folders: {}", self.lock_files.join(", ")));
+        }
+        parts.join("; ")
     }
 
     /// Add what another namespace of the run left (the controller's host of a soak with the bridge).
@@ -229,5 +257,33 @@ mod tests {
         child.wait().unwrap();
         assert!(found);
         assert!(!process_name(me).is_empty());
+    }
+
+    #[test]
+    fn what_started_the_soak_is_never_a_leftover_though_it_names_the_run_id() {
+        let me = std::process::id();
+        let line = lineage(me);
+        assert!(line.contains(&me) && line.contains(&1), "up to init: {line:?}");
+        assert!(line.contains(&stat(me).unwrap().1), "the parent: {line:?}");
+        // A process that names the run id and is not of the soak's lineage is one.
+        let run_id = format!("leftover-test-{me}");
+        let mut stray =
+            std::process::Command::new("python3").args(["-c", "import time; time.sleep(30)", &run_id]).spawn().unwrap();
+        // Until it has exec'd, the child's command line is this test's.
+        let named = || std::fs::read(format!("/proc/{}/cmdline", stray.id())).unwrap_or_default();
+        let start = std::time::Instant::now();
+        while !named().split(|b| *b == 0).any(|a| a == run_id.as_bytes()) {
+            assert!(start.elapsed() < std::time::Duration::from_secs(10), "the stray process never started");
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        let out = std::env::temp_dir();
+        let left = Leftovers::find(&run_id, &out, &BTreeSet::new());
+        stray.kill().unwrap();
+        stray.wait().unwrap();
+        // By its program's name (python3, or the launcher of a python3 shim).
+        assert!(left.processes.len() == 1 && left.processes[0].starts_with(&format!("{} (", stray.id())), "{left:?}");
+        let said = left.describe();
+        assert!(said.starts_with("processes of the run still alive: ") && !said.contains('{'), "{said}");
+        assert_eq!(Leftovers::default().describe(), "");
     }
 }

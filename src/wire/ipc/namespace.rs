@@ -79,25 +79,43 @@ pub fn rig_config(run: &RunId) -> Config {
 /// owner only.
 pub fn create_node(run: &RunId, name: &str) -> Result<Node<ipc::Service>, IpcError> {
     let node_name = NodeName::new(name).map_err(|e| IpcError::Name { name: name.into(), detail: format!("{e:?}") })?;
-    let node = NodeBuilder::new().name(&node_name).config(&rig_config(run)).create::<ipc::Service>().map_err(|e| {
-        IpcError::Node { run: run.to_string(), node: name.into(), detail: node_failure_detail(run, &e.to_string()) }
-    })?;
+    let node =
+        NodeBuilder::new().name(&node_name).config(&rig_config(run)).create::<ipc::Service>().map_err(|e| {
+            IpcError::Node { run: run.to_string(), node: name.into(), detail: node_failure_detail(run, e) }
+        })?;
     restrict_global_mgmt(run);
     Ok(node)
 }
 
-/// iceoryx2's reason, with the cause we can see when it only says "internal error": a run's root path taken by
-/// something that is not a folder of ours.
-fn node_failure_detail(run: &RunId, iceoryx2_reason: &str) -> String {
+/// iceoryx2's reason in words (its error prints as `NodeCreationFailure::...`), with the cause we can see: a run's
+/// root path taken by something that is not a folder of ours, or a run of another user, whose files are owner-only.
+fn node_failure_detail(run: &RunId, failure: iceoryx2::node::NodeCreationFailure) -> String {
+    use iceoryx2::node::NodeCreationFailure as F;
+    use std::os::unix::fs::MetadataExt;
     let root = run.root_dir();
     // Without its trailing slash, so that a file there is seen as one.
-    match std::fs::symlink_metadata(root.components().as_path()) {
+    let root = root.components().as_path().to_path_buf();
+    let reason = match failure {
+        F::InsufficientPermissions => "no permission to create its files",
+        F::InternalError => "iceoryx2 failed inside",
+        F::SystemCorrupted => "another process removed the run's files meanwhile (a cleanup of this run id?)",
+        F::UnableToGenerateUniqueNodeId => "it could not take a node id from the run's shared counter",
+    };
+    // SAFETY: geteuid has no preconditions.
+    let me = unsafe { libc::geteuid() };
+    match std::fs::symlink_metadata(&root) {
         Ok(m) if !m.is_dir() => format!(
             "{} exists and is not a folder (it is where iceoryx2 keeps the run's state): remove it, or choose another \
-             run id ({iceoryx2_reason})",
-            root.components().as_path().display()
+             run id ({reason})",
+            root.display()
         ),
-        _ => iceoryx2_reason.to_string(),
+        Ok(m) if m.uid() != me && me != 0 => format!(
+            "{reason}: the run's files ({}) belong to uid {}, and a run is its owner's alone: join it as that user, \
+             or start a run of your own with another run id",
+            root.display(),
+            m.uid()
+        ),
+        _ => format!("{reason} (under {} and /dev/shm)", root.display()),
     }
 }
 
