@@ -5,8 +5,8 @@
 
 use silrig_flight::f16_signals::F16Outputs;
 use silrig_flight::scenario::Scenario;
-use silrig_flight::signals::PlantSignals;
 use silrig_flight::setpoints::SetpointTrack;
+use silrig_flight::signals::PlantSignals;
 use silrig_flight::sim::{measurement, setpoint_rad, write_attitude_diagnostics};
 use silrig_model::control::AttitudeController;
 use silrig_rig::controller::Controller;
