@@ -106,8 +106,9 @@ pub const PEER_RULES: [&str; 7] = [
      names, possibly none) before it creates its command publisher, which is what the plant starts on, and again with \
      its first command",
     "a controller takes its set points from the scenario the run flies (the TOML file SILRIG_SCENARIO names): its \
-     [setpoint] table gives outputs by name in their unit, and phi_deg, theta_deg and psi_deg are 0 when not given \
-     (libsilrig_client reads them for you: silrig_session_setpoint)",
+     [setpoint] table gives outputs by name in their unit, and phi_deg, theta_deg and psi_deg are 0 when not given; \
+     its [[setpoint_steps]] change some of them during the run, each from its at_s on, so a sample is answered for \
+     the set points in force at its t_sim_s (libsilrig_client reads them for you: silrig_session_setpoint_at)",
     "a command carries a value for every input, also those the controller does not command: for each, where its \
      actuator is in the sample being answered (the output PlantInfo.input_held_output names), or PlantInfo.input_hold \
      when it names none (NO_OUTPUT); libsilrig_client fills them in: silrig_session_held_command",
