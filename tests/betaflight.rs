@@ -1,6 +1,7 @@
 //! Betaflight's SITL in the loop: `examples/betaflight/setup.sh` builds and configures it once (cached under
 //! `target/betaflight`), and `configs/quad-betaflight.toml` flies the quadrotor with it as the controller in
-//! realtime at 1 kHz: armed and climbing with nothing disarming it; its RC cut (Betaflight's own failsafe engages and
+//! realtime at 1 kHz: armed and climbing with nothing disarming it, a roll stick step flown (banked, pitch and
+//! heading kept, level again); its RC cut (Betaflight's own failsafe engages and
 //! drops it, read over MSP and judged in the fault report); its program killed (the rig's failsafe holds, it is
 //! started again and armed again). Skipped, saying why, only outside CI when the source distribution cannot be
 //! fetched (no network and no cached copy); in CI (`CI` set) that fails it. The SITL binds fixed ports, so the tests
@@ -70,6 +71,30 @@ fn betaflight_arms_and_flies_the_quadrotor_in_realtime() {
         .collect();
     assert!(run.event("controller", "device-disarmed").is_none(), "it disarmed in the climb:\n{}", said.join("\n"));
     assert_eq!(run.counter("controller", "device_disarms"), 0, "{controller}");
+    // The roll stick's step (20 s to 24 s) is flown under control: a bank to the right, pitch and heading kept,
+    // level again after it (with the motors' order read wrong, any step tumbled it within 0.5 s).
+    let armed_s = device_events(&run, "device-armed")[0];
+    assert!(armed_s < 18.0, "armed at {armed_s} s: too late for the roll step at 20 s");
+    let (t, phi, theta, psi) = (
+        Run::column(&header, "t_s"),
+        Run::column(&header, "phi_deg"),
+        Run::column(&header, "theta_deg"),
+        Run::column(&header, "psi_deg"),
+    );
+    let during = |from_s: f64, to_s: f64| rows.iter().filter(move |r| r[t] >= from_s && r[t] <= to_s);
+    let banked: Vec<f64> = during(21.0, 24.0).map(|r| r[phi]).collect();
+    assert!(banked.iter().all(|p| (0.2..10.0).contains(p)), "roll under the stick: {banked:?}");
+    for r in during(19.0, 30.0) {
+        assert!(
+            r[theta].abs() < 2.0 && r[psi].abs() < 5.0,
+            "t {} s: pitch {} deg, heading {} deg",
+            r[t],
+            r[theta],
+            r[psi]
+        );
+    }
+    let level: Vec<f64> = during(26.0, 30.0).map(|r| r[phi]).collect();
+    assert!(level.iter().all(|p| p.abs() < 0.5), "level after the stick came back: {level:?}");
     run.finish();
 }
 

@@ -9,6 +9,17 @@ use super::msp::{Latest, Status, StatusWatch, flags_in_words};
 /// Betaflight's `RX_FAILSAFE` arming-disable flag (bit 2, `runtime_config.h`).
 const RX_FAILSAFE: u32 = 1 << 2;
 
+/// How long a (re)started device may answer over MSP without setting its receiver up before it is started again: a
+/// start of Betaflight's SITL whose status stays at `BOOT_GRACE_TIME` alone never sets its receiver up (2 of 3 starts
+/// on 2026-11-28, the machine loaded), and it is sent nothing until it does (see [`Arming::ready`]).
+const STUCK_START_NS: u64 = 5_000_000_000;
+
+/// Whether a start is stuck: the device answers over MSP (`answered`), its receiver is not up, and it started more
+/// than [`STUCK_START_NS`] ago.
+fn stuck_start(receiver_up: bool, answered: bool, since_start_ns: u64) -> bool {
+    answered && !receiver_up && since_start_ns > STUCK_START_NS
+}
+
 /// Whether a status shows the receiver set up: `RX_FAILSAFE` (it looked for RC and found none), or armed.
 fn receiver_up(status: &Status) -> bool {
     status.arming_disabled & RX_FAILSAFE != 0 || status.armed
@@ -107,6 +118,12 @@ impl Arming {
         self.receiver_up
     }
 
+    /// Whether this start of the device is stuck ([`STUCK_START_NS`]): it should be started again.
+    pub fn stuck(&self, now_ns: u64) -> bool {
+        let since_start_ns = self.started_ns.map_or(0, |started| now_ns.saturating_sub(started));
+        stuck_start(self.receiver_up, self.watch.latest().status.is_some(), since_start_ns)
+    }
+
     /// Hold the switch and the held set points low while they must be; else they keep the values in force (the
     /// scenario's at this tick, `[[setpoint_steps]]` included).
     pub fn hold(&self, setpoints: &mut [f64]) {
@@ -189,5 +206,14 @@ mod tests {
         // RX_FAILSAFE ANGLE BOOT_GRACE_TIME CALIBRATING: the first status of a SITL that armed.
         assert!(receiver_up(&status(false, (1 << 2) | (1 << 8) | (1 << 9) | (1 << 12))));
         assert!(receiver_up(&status(true, 0)));
+    }
+
+    #[test]
+    fn a_start_is_stuck_when_it_answers_without_its_receiver_for_five_seconds() {
+        let s = 1_000_000_000;
+        assert!(stuck_start(false, true, 5 * s + 1));
+        assert!(!stuck_start(false, true, 5 * s), "not before 5 s");
+        assert!(!stuck_start(true, true, 60 * s), "its receiver is up");
+        assert!(!stuck_start(false, false, 60 * s), "it does not answer: the arming's own timeout says so");
     }
 }

@@ -337,6 +337,18 @@ impl Controller for DeviceController {
             if let Err(e) = arming.check(now_ns) {
                 self.failure = Some(e);
             }
+            if arming.stuck(now_ns)
+                && let Some(supervisor) = &mut self.supervisor
+            {
+                let detail = format!(
+                    "device `{}` answers but has not set its receiver up 5 s after it started: started again",
+                    self.layout.name
+                );
+                eprintln!("silrig controller: {detail}");
+                self.events.emit(None, "device-stuck", detail);
+                supervisor.kill();
+                arming.restart(now_ns);
+            }
             if let Some(state) = &mut self.state {
                 state.observe(&arming.latest(), sample.header.tick, sample.t_sim_s);
             }
