@@ -108,14 +108,16 @@ fn motor_packets_land_in_the_inputs_and_bad_ones_change_nothing() {
     let packet: Vec<u8> = [0.1f32, 0.2, 0.3, 0.4].iter().flat_map(|v| v.to_le_bytes()).collect();
     let mut inputs = [0.0; 4];
     motors.decode(layout.byte_order, &packet, &mut inputs).unwrap();
-    assert_eq!(inputs, [0.1f32, 0.2, 0.3, 0.4].map(f64::from));
+    // sitl.c sends its motors 2, 3, 4, 1 in that order: the quadrotor's motor1 (rear right) is the packet's last.
+    let in_motor_order = [0.4f32, 0.1, 0.2, 0.3].map(f64::from);
+    assert_eq!(inputs, in_motor_order);
     let short = motors.decode(layout.byte_order, &packet[..12], &mut inputs).unwrap_err();
     assert_eq!(short, DecodeError::WrongSize { packet: "motors".into(), got: 12, want: 16 });
     assert_eq!(short.to_string(), "packet `motors` of 12 bytes refused: its layout has 16");
     let nan: Vec<u8> = [0.9f32, f32::NAN, 0.9, 0.9].iter().flat_map(|v| v.to_le_bytes()).collect();
     let e = motors.decode(layout.byte_order, &nan, &mut inputs).unwrap_err().to_string();
     assert_eq!(e, "packet `motors` refused: field 2 is NaN, not a finite number");
-    assert_eq!(inputs, [0.1f32, 0.2, 0.3, 0.4].map(f64::from), "a refused packet changes no input");
+    assert_eq!(inputs, in_motor_order, "a refused packet changes no input");
 }
 
 const SMALL: &str = r#"
