@@ -52,8 +52,9 @@ pub struct BodySignals {
     attitude: [(usize, f64); 3],
     /// aileron, elevator, rudder, when announced: (output index, rad per unit).
     surfaces: [Option<(usize, f64)>; 3],
-    /// Whether the plant announces four rotor speeds (`omega1_radps` .. `omega4_radps`): drawn as an X quadrotor.
-    rotorcraft: bool,
+    /// The four rotor speeds' output indices (`omega1_radps` .. `omega4_radps`), when announced: drawn as an X
+    /// quadrotor.
+    rotors: Option<[usize; ROTORS]>,
 }
 
 /// The first of `stem` with one of `units` (name suffix, factor) that `plant` announces.
@@ -69,13 +70,24 @@ impl BodySignals {
         let position = [find(plant, "north", &length)?, find(plant, "east", &length)?, find(plant, "alt", &length)?];
         let attitude = [find(plant, "phi", &angle)?, find(plant, "theta", &angle)?, find(plant, "psi", &angle)?];
         let surfaces = ["aileron", "elevator", "rudder"].map(|s| find(plant, s, &angle));
-        let rotorcraft = (1..=ROTORS).all(|k| plant.output(&format!("omega{k}_radps")).is_ok());
-        Some(Self { position, attitude, surfaces, rotorcraft })
+        let rotors: Option<Vec<usize>> = (1..=ROTORS).map(|k| plant.output(&format!("omega{k}_radps")).ok()).collect();
+        let rotors = rotors.and_then(|r| r.try_into().ok());
+        Some(Self { position, attitude, surfaces, rotors })
     }
 
     /// Whether the plant is drawn as an X quadrotor (it announces four rotor speeds) rather than the aircraft.
     pub fn rotorcraft(&self) -> bool {
-        self.rotorcraft
+        self.rotors.is_some()
+    }
+
+    /// Whether the plant announces any of the aircraft's surface positions.
+    pub fn has_surfaces(&self) -> bool {
+        self.surfaces.iter().any(Option::is_some)
+    }
+
+    /// The four rotor speeds, rad/s, in motor order, when the plant announces them.
+    pub fn rotor_speeds_radps(&self, outputs: &[f64]) -> Option<[f64; ROTORS]> {
+        self.rotors.map(|rotors| rotors.map(|k| outputs[k]))
     }
 
     /// The body's position in `world` (east, north, up), m, from a sample's outputs.
@@ -117,6 +129,8 @@ pub struct ProtoBuffer {
     bytes: Vec<u8>,
     transform: FrameTransform,
     scene: SceneUpdate,
+    /// The moving surfaces of the model drawn, whose cubes follow the scene's fixed blocks (none: the quadrotor).
+    surfaces: &'static [Surface],
 }
 
 impl Default for ProtoBuffer {
@@ -126,7 +140,8 @@ impl Default for ProtoBuffer {
             child_frame_id: BODY_FRAME.into(),
             ..Default::default()
         };
-        Self { bytes: Vec::new(), transform, scene: SceneUpdate { deletions: Vec::new(), entities: vec![aircraft()] } }
+        let scene = SceneUpdate { deletions: Vec::new(), entities: vec![aircraft()] };
+        Self { bytes: Vec::new(), transform, scene, surfaces: &SURFACES }
     }
 }
 
@@ -134,6 +149,7 @@ impl ProtoBuffer {
     /// Draw an X quadrotor of arm `arm_m` (centre to rotor axis, m) from now on, or the aircraft again (`None`).
     pub fn draw(&mut self, rotorcraft_arm_m: Option<f64>) {
         self.scene.entities[0] = rotorcraft_arm_m.map_or_else(aircraft, quadrotor);
+        self.surfaces = if rotorcraft_arm_m.is_some() { &[] } else { &SURFACES };
     }
 
     /// The message last encoded.
@@ -196,7 +212,7 @@ const BLOCKS: [Block; 3] = [
 ];
 
 /// Which way a surface turns: about the body's y axis (aileron, elevator) or its z axis (rudder).
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 enum Hinge {
     Y,
     Z,
@@ -204,6 +220,7 @@ enum Hinge {
 
 /// A moving surface: a box hinged on a line through `hinge_m` along its axis, its centre `center_aft_m` behind the
 /// hinge; it turns by `sign` times a surface's position (index into aileron, elevator, rudder).
+#[derive(Debug)]
 struct Surface {
     surface: usize,
     sign: f64,
@@ -434,9 +451,7 @@ pub fn quadrotor_model(arm_m: f64) -> serde_json::Value {
 pub fn aircraft_scene(buffer: &mut ProtoBuffer, wall_ns: u64, surfaces_rad: [f64; 3]) {
     let entity = &mut buffer.scene.entities[0];
     entity.timestamp = timestamp(wall_ns);
-    // The quadrotor has no surfaces: its cubes stay where they are.
-    let surfaces = if entity.cylinders.len() == ROTORS { &[][..] } else { &SURFACES[..] };
-    for (cube, s) in entity.cubes[BLOCKS.len()..].iter_mut().zip(surfaces) {
+    for (cube, s) in entity.cubes[BLOCKS.len()..].iter_mut().zip(buffer.surfaces) {
         let (center, orientation) = s.pose(surfaces_rad);
         cube.pose = pose(center, orientation);
     }

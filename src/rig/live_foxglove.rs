@@ -80,11 +80,11 @@ mod server {
         }
     }
 
-    /// The server and its channels, by the recording's channel id.
+    /// The server and its channels, by the recording's channel id, each with whether it is latched.
     pub(super) struct FoxgloveTap {
         pub(super) context: Arc<foxglove::Context>,
         pub(super) server: Option<foxglove::WebSocketServerHandle>,
-        pub(super) channels: Vec<Option<Arc<foxglove::RawChannel>>>,
+        pub(super) channels: Vec<Option<(Arc<foxglove::RawChannel>, bool)>>,
         pub(super) latched: Arc<Latched>,
     }
 
@@ -103,11 +103,12 @@ mod server {
             }
             match built {
                 Ok(channel) => {
-                    if LATCHED_TOPICS.contains(&c.topic) {
+                    let latched = LATCHED_TOPICS.contains(&c.topic);
+                    if latched {
                         let mut last = self.latched.last.lock().unwrap_or_else(|e| e.into_inner());
                         last.insert(channel.id(), (channel.clone(), None));
                     }
-                    self.channels[id] = Some(channel)
+                    self.channels[id] = Some((channel, latched))
                 }
                 // The recording has the channel whatever the server makes of it.
                 Err(e) => eprintln!("logger: --live: channel {} not served: {e}", c.topic),
@@ -115,13 +116,15 @@ mod server {
         }
 
         fn message(&mut self, id: u16, log_time_ns: u64, data: &[u8]) {
-            if let Some(Some(channel)) = self.channels.get(usize::from(id)) {
-                // Kept before it is sent: a client subscribing meanwhile gets it once or twice, never not at all.
-                let mut last = self.latched.last.lock().unwrap_or_else(|e| e.into_inner());
-                if let Some((_, kept)) = last.get_mut(&channel.id()) {
-                    *kept = Some((data.to_vec(), log_time_ns));
+            if let Some(Some((channel, latched))) = self.channels.get(usize::from(id)) {
+                // Kept before it is sent: a client subscribing meanwhile gets it once or twice, never not at all. Only
+                // the latched channels' messages (one a plant life) take the lock, not the rows of every tick.
+                if *latched {
+                    let mut last = self.latched.last.lock().unwrap_or_else(|e| e.into_inner());
+                    if let Some((_, kept)) = last.get_mut(&channel.id()) {
+                        *kept = Some((data.to_vec(), log_time_ns));
+                    }
                 }
-                drop(last);
                 channel.log_with_meta(data, foxglove::PartialMetadata::with_log_time(log_time_ns));
             }
         }

@@ -52,6 +52,8 @@ pub struct Arming {
     switch: usize,
     held: Vec<usize>,
     started_ns: Option<u64>,
+    /// What the device said over MSP when [`Self::check`] last looked.
+    latest: Latest,
     raised: bool,
     /// Its receiver is set up: it has said `RX_FAILSAFE` (no RC yet) or that it is armed, since it (re)started.
     receiver_up: bool,
@@ -90,6 +92,7 @@ impl Arming {
             switch: 0,
             held: Vec::new(),
             started_ns: None,
+            latest: Latest::default(),
             raised: false,
             receiver_up: false,
             armed: false,
@@ -121,7 +124,7 @@ impl Arming {
     /// Whether this start of the device is stuck ([`STUCK_START_NS`]): it should be started again.
     pub fn stuck(&self, now_ns: u64) -> bool {
         let since_start_ns = self.started_ns.map_or(0, |started| now_ns.saturating_sub(started));
-        stuck_start(self.receiver_up, self.watch.latest().status.is_some(), since_start_ns)
+        stuck_start(self.receiver_up, self.latest.status.is_some(), since_start_ns)
     }
 
     /// Hold the switch and the held set points low while they must be; else they keep the values in force (the
@@ -141,7 +144,9 @@ impl Arming {
     /// when it has not armed in time.
     pub fn check(&mut self, now_ns: u64) -> Result<(), String> {
         let started = *self.started_ns.get_or_insert(now_ns);
-        let latest = self.watch.latest();
+        // Read once a tick; what the tick's other questions ask of it (stuck, the state's events) read this copy.
+        self.latest = self.watch.latest();
+        let latest = &self.latest;
         if let Some(status) = latest.status {
             self.cycle_us = status.cycle_us;
             self.receiver_up |= receiver_up(&status);
@@ -160,7 +165,7 @@ impl Arming {
         if self.armed || now_ns.saturating_sub(started) < (self.options.within_s * 1e9) as u64 {
             return Ok(());
         }
-        let why = match (latest.status, latest.problem) {
+        let why = match (latest.status, &latest.problem) {
             (Some(status), _) => format!("its arming-disable flags: {}", flags_in_words(status.arming_disabled)),
             (None, Some(problem)) => format!("its MSP on port {} never answered: {problem}", self.options.msp_port),
             (None, None) => format!("its MSP on port {} never answered", self.options.msp_port),
@@ -173,14 +178,16 @@ impl Arming {
         self.armed
     }
 
-    /// What the device last said over MSP (read every 100 ms), for watching its state beyond arming.
-    pub fn latest(&self) -> Latest {
-        self.watch.latest()
+    /// What the device last said over MSP (read every 100 ms), as [`Self::check`] last read it, for watching its
+    /// state beyond arming.
+    pub fn latest(&self) -> &Latest {
+        &self.latest
     }
 
     /// The device restarted: lower the switch and the held set points, and arm it again.
     pub fn restart(&mut self, now_ns: u64) {
         self.watch.forget();
+        self.latest = Latest::default();
         (self.started_ns, self.raised, self.armed, self.receiver_up) = (Some(now_ns), false, false, false);
     }
 

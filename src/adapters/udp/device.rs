@@ -350,7 +350,7 @@ impl Controller for DeviceController {
                 arming.restart(now_ns);
             }
             if let Some(state) = &mut self.state {
-                state.observe(&arming.latest(), sample.header.tick, sample.t_sim_s);
+                state.observe(arming.latest(), sample.header.tick, sample.t_sim_s);
             }
         }
         // Silence is counted from the first packet sent.

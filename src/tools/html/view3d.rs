@@ -10,7 +10,6 @@
 
 use silrig_flight::signals::{OutputSignal, PlantSignals};
 use silrig_flight::trace::Trace;
-use silrig_model::quad::rotors::ROTORS;
 use silrig_recording::foxglove::{BodySignals, aircraft_model, quadrotor_model, rotor_arm_m};
 use silrig_recording::reader::RecordedRun;
 use std::fmt::Write as _;
@@ -67,19 +66,18 @@ pub fn frames(trace: &Trace) -> Result<Frames, String> {
     if rows.last() != Some(&last) {
         rows.push(last);
     }
-    let any_surface =
-        ["aileron", "elevator", "rudder"].iter().any(|s| trace.columns.iter().any(|c| c.starts_with(&format!("{s}_"))));
-    let rotor_cols: Vec<usize> = (1..=ROTORS).filter_map(|k| trace.index(&format!("omega{k}_radps"))).collect();
-    let rotors = (rotor_cols.len() == ROTORS).then(|| {
-        let top = rows.iter().flat_map(|r| rotor_cols.iter().map(|&k| r[k].abs())).fold(0.0, f64::max);
+    let rotors = body.rotorcraft().then(|| {
+        let speeds: Vec<[f64; 4]> =
+            rows.iter().map(|r| body.rotor_speeds_radps(r).unwrap_or_default().map(f64::abs)).collect();
+        let top = speeds.iter().flatten().copied().fold(0.0, f64::max);
         let scale = if top > 0.0 { 1.0 / top } else { 0.0 };
-        rows.iter().map(|r| [0, 1, 2, 3].map(|k| (r[rotor_cols[k]].abs() * scale).clamp(0.0, 1.0))).collect()
+        speeds.into_iter().map(|s| s.map(|v| (v * scale).clamp(0.0, 1.0))).collect()
     });
     Ok(Frames {
         t_s: rows.iter().map(|r| r[t_col]).collect(),
         enu_m: rows.iter().map(|r| body.translation_m(r)).collect(),
         rotation: rows.iter().map(|r| body.rotation(r)).collect(),
-        surfaces_rad: any_surface.then(|| rows.iter().map(|r| body.surfaces_rad(r)).collect()),
+        surfaces_rad: body.has_surfaces().then(|| rows.iter().map(|r| body.surfaces_rad(r)).collect()),
         rotors,
     })
 }
