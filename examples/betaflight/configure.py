@@ -6,6 +6,13 @@ its working folder) and exit.
 The settings (docs/src/guides/betaflight.md says why each):
   aux 0 0 0 1700 2100 0 0   ARM on AUX1 (channel 5) high
   aux 1 1 1 1700 2100 0 0   ANGLE mode on AUX2 (channel 6) high
+  aux 2 3 2 1700 2100 0 0   ALTHOLD (altitude hold) on AUX3 (channel 7) high
+  set ap_hover_throttle = 1525
+                            the quadrotor's hover (motors at 0.527) as Betaflight's throttle: its motors run at
+                            0.055 + 0.945 (T - 1050) / 950 of a throttle T in us (idle 5.5 %, min_check 1050)
+  set ap_altitude_d = 40    altitude hold's damping: its default 15 left the quadrotor (no vertical drag in the
+                            model, where a real quadrotor's drag damps it) swinging 1.8..4.4 m around a 3.4 m target
+                            with a period of about 8 s; 40 damps it (docs/src/guides/betaflight.md)
 """
 
 import socket
@@ -16,6 +23,9 @@ import time
 SETTINGS = [
     "aux 0 0 0 1700 2100 0 0",
     "aux 1 1 1 1700 2100 0 0",
+    "aux 2 3 2 1700 2100 0 0",
+    "set ap_hover_throttle = 1525",
+    "set ap_altitude_d = 40",
 ]
 
 

