@@ -2,22 +2,27 @@
 //! the device's arming-disable flags clear (read over MSP, [`super::msp`]), then raised to the scenario's value, so
 //! the switch goes low to high after the flags clear, as Betaflight requires; the set points it must see low to arm
 //! (the throttle) are held at 0 until it reports itself armed. Not armed within `within_s` of its (re)start, the
-//! run fails naming the flags that kept it from arming, in words. After a restart of the device, the same again.
+//! run fails naming the flags that kept it from arming, in words. After a restart of the device, the same again; and
+//! after it disarmed itself in flight (Betaflight's failsafe drops it), as a pilot would once the link is back: the
+//! switch lowered, the throttle held low, the switch raised once its flags clear, timed from the disarm. A scenario
+//! that lowers the switch itself is not armed again, nor failed for it, until it raises it.
 
 use super::msp::{Latest, Status, StatusWatch, flags_in_words};
 
 /// Betaflight's `RX_FAILSAFE` arming-disable flag (bit 2, `runtime_config.h`).
 const RX_FAILSAFE: u32 = 1 << 2;
 
-/// How long a (re)started device may answer over MSP without setting its receiver up before it is started again: a
-/// start of Betaflight's SITL whose status stays at `BOOT_GRACE_TIME` alone never sets its receiver up (2 of 3 starts
-/// on 2026-11-28, the machine loaded), and it is sent nothing until it does (see [`Arming::ready`]).
+/// How long a (re)started device may go without setting its receiver up before it is started again: a start of
+/// Betaflight's SITL whose status stays at `BOOT_GRACE_TIME` alone never sets its receiver up (2 of 3 starts on
+/// 2026-11-28, the machine loaded), and it is sent nothing until it does (see [`Arming::ready`]); and some starts
+/// never answer over MSP at all (their output stops before the SITL takes its first TCP connection: 2 of 4 starts at
+/// a load average of 25 the same day).
 const STUCK_START_NS: u64 = 5_000_000_000;
 
-/// Whether a start is stuck: the device answers over MSP (`answered`), its receiver is not up, and it started more
-/// than [`STUCK_START_NS`] ago.
-fn stuck_start(receiver_up: bool, answered: bool, since_start_ns: u64) -> bool {
-    answered && !receiver_up && since_start_ns > STUCK_START_NS
+/// Whether a start is stuck: its receiver is not up, and it started more than [`STUCK_START_NS`] ago. (Started
+/// again each time, a device that never answers ends the run when its `max_restarts` are spent.)
+fn stuck_start(receiver_up: bool, since_start_ns: u64) -> bool {
+    !receiver_up && since_start_ns > STUCK_START_NS
 }
 
 /// Whether a status shows the receiver set up: `RX_FAILSAFE` (it looked for RC and found none), or armed.
@@ -55,6 +60,8 @@ pub struct Arming {
     /// What the device said over MSP when [`Self::check`] last looked.
     latest: Latest,
     raised: bool,
+    /// The scenario's switch is high at the tick [`Self::hold`] last saw: it wants the device armed.
+    wanted: bool,
     /// Its receiver is set up: it has said `RX_FAILSAFE` (no RC yet) or that it is armed, since it (re)started.
     receiver_up: bool,
     armed: bool,
@@ -94,6 +101,7 @@ impl Arming {
             started_ns: None,
             latest: Latest::default(),
             raised: false,
+            wanted: true,
             receiver_up: false,
             armed: false,
             armed_after_ms: None,
@@ -124,12 +132,13 @@ impl Arming {
     /// Whether this start of the device is stuck ([`STUCK_START_NS`]): it should be started again.
     pub fn stuck(&self, now_ns: u64) -> bool {
         let since_start_ns = self.started_ns.map_or(0, |started| now_ns.saturating_sub(started));
-        stuck_start(self.receiver_up, self.latest.status.is_some(), since_start_ns)
+        stuck_start(self.receiver_up, since_start_ns)
     }
 
     /// Hold the switch and the held set points low while they must be; else they keep the values in force (the
     /// scenario's at this tick, `[[setpoint_steps]]` included).
-    pub fn hold(&self, setpoints: &mut [f64]) {
+    pub fn hold(&mut self, setpoints: &mut [f64]) {
+        self.wanted = setpoints[self.switch] >= 0.5;
         if !self.raised {
             setpoints[self.switch] = 0.0;
         }
@@ -140,21 +149,33 @@ impl Arming {
         }
     }
 
-    /// Raise the switch once the flags clear, note when the device says it is armed; an error, naming the flags,
-    /// when it has not armed in time.
+    /// Raise the switch once the flags clear, note when the device says it is armed (and when it disarmed itself);
+    /// an error, naming the flags, when it has not armed in time.
     pub fn check(&mut self, now_ns: u64) -> Result<(), String> {
-        let started = *self.started_ns.get_or_insert(now_ns);
         // Read once a tick; what the tick's other questions ask of it (stuck, the state's events) read this copy.
         self.latest = self.watch.latest();
-        let latest = &self.latest;
-        if let Some(status) = latest.status {
+        self.judge(now_ns)
+    }
+
+    /// [`Self::check`] on the status read.
+    fn judge(&mut self, now_ns: u64) -> Result<(), String> {
+        let started = *self.started_ns.get_or_insert(now_ns);
+        let Latest { status, problem, .. } = &self.latest;
+        if let Some(status) = status {
             self.cycle_us = status.cycle_us;
-            self.receiver_up |= receiver_up(&status);
+            self.receiver_up |= receiver_up(status);
         }
         if self.armed {
-            return Ok(());
+            match status {
+                // Disarmed in flight (its failsafe dropped it, or it landed): armed again as at its start.
+                Some(s) if !s.armed => {
+                    self.disarmed(now_ns);
+                    return Ok(());
+                }
+                _ => return Ok(()),
+            }
         }
-        if let Some(status) = latest.status {
+        if let Some(status) = status {
             self.raised |= status.arming_disabled == 0;
             self.armed = status.armed;
         }
@@ -162,15 +183,26 @@ impl Arming {
             self.armed_after_ms = Some(now_ns.saturating_sub(started) / 1_000_000);
             self.armings += 1;
         }
-        if self.armed || now_ns.saturating_sub(started) < (self.options.within_s * 1e9) as u64 {
+        if self.armed || !self.wanted {
+            // Not wanted armed: its time starts when the scenario raises the switch.
+            self.started_ns = Some(now_ns);
             return Ok(());
         }
-        let why = match (latest.status, &latest.problem) {
+        if now_ns.saturating_sub(started) < (self.options.within_s * 1e9) as u64 {
+            return Ok(());
+        }
+        let why = match (status, problem) {
             (Some(status), _) => format!("its arming-disable flags: {}", flags_in_words(status.arming_disabled)),
             (None, Some(problem)) => format!("its MSP on port {} never answered: {problem}", self.options.msp_port),
             (None, None) => format!("its MSP on port {} never answered", self.options.msp_port),
         };
         Err(format!("device `{}` did not arm within {} s; {why}", self.device, self.options.within_s))
+    }
+
+    /// It said it is disarmed after it was armed: lower the switch and hold the set points low again, and time its
+    /// arming from now. Its receiver stays set up (it is the same start).
+    fn disarmed(&mut self, now_ns: u64) {
+        (self.started_ns, self.raised, self.armed) = (Some(now_ns), false, false);
     }
 
     /// Whether the device has said it is armed since it was (re)started.
@@ -216,11 +248,78 @@ mod tests {
     }
 
     #[test]
-    fn a_start_is_stuck_when_it_answers_without_its_receiver_for_five_seconds() {
+    fn a_start_is_stuck_without_its_receiver_for_five_seconds() {
         let s = 1_000_000_000;
-        assert!(stuck_start(false, true, 5 * s + 1));
-        assert!(!stuck_start(false, true, 5 * s), "not before 5 s");
-        assert!(!stuck_start(true, true, 60 * s), "its receiver is up");
-        assert!(!stuck_start(false, false, 60 * s), "it does not answer: the arming's own timeout says so");
+        assert!(stuck_start(false, 5 * s + 1));
+        assert!(!stuck_start(false, 5 * s), "not before 5 s");
+        assert!(!stuck_start(true, 60 * s), "its receiver is up");
+    }
+
+    const S: u64 = 1_000_000_000;
+
+    /// Arming of quad-betaflight's `rc_arm`, holding `rc_throttle`, within 30 s, its MSP on a port nothing answers
+    /// (the tests give the statuses by hand); the bound set points are `rc_arm`, `rc_throttle`.
+    fn arming() -> Arming {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/quad-betaflight.toml");
+        let scenario = Scenario::load(std::path::Path::new(path)).unwrap();
+        let options = ArmingOptions {
+            switch: "rc_arm".into(),
+            low_until_armed: vec!["rc_throttle".into()],
+            msp_port: 9,
+            within_s: 30.0,
+        };
+        let mut a = Arming::new(&options, "bf", std::net::Ipv4Addr::LOCALHOST.into(), &scenario).unwrap();
+        a.bind(&["rc_arm".into(), "rc_throttle".into()]).unwrap();
+        a
+    }
+
+    /// Betaflight says `flags`, armed or not, at `t_ns`; the set points the device is sent then.
+    fn says(a: &mut Arming, armed: bool, flags: u32, t_ns: u64) -> (Result<(), String>, [f64; 2]) {
+        let status = Status { cycle_us: 125, armed, arming_disabled: flags, modes: u64::from(armed) };
+        a.latest = Latest { status: Some(status), read_ns: t_ns, problem: None };
+        let judged = a.judge(t_ns);
+        let mut sent = [1.0, 0.5];
+        a.hold(&mut sent);
+        (judged, sent)
+    }
+
+    #[test]
+    fn disarmed_by_its_failsafe_it_is_armed_again_with_the_switch_lowered_first() {
+        let mut a = arming();
+        // RX_FAILSAFE: the switch and the throttle held low; the flags clear: the switch goes up, the throttle not yet.
+        assert_eq!(says(&mut a, false, 1 << 2, 0).1, [0.0, 0.0]);
+        assert_eq!(says(&mut a, false, 0, S).1, [1.0, 0.0]);
+        assert_eq!(says(&mut a, true, 0, 2 * S).1, [1.0, 0.5]);
+        assert_eq!(a.counters()[0], ("device_armings".to_string(), 1));
+        // Its failsafe drops it (FAILSAFE RX_FAILSAFE): the switch goes low again and the throttle is held.
+        assert_eq!(says(&mut a, false, (1 << 1) | (1 << 2), 10 * S).1, [0.0, 0.0]);
+        // The link back, its failsafe ended: ARM_SWITCH until it sees the switch low, then the flags clear.
+        assert_eq!(says(&mut a, false, 1 << 28, 14 * S).1, [0.0, 0.0]);
+        assert_eq!(says(&mut a, false, 0, 15 * S).1, [1.0, 0.0]);
+        let (judged, sent) = says(&mut a, true, 0, 16 * S);
+        assert_eq!((judged, sent), (Ok(()), [1.0, 0.5]));
+        assert_eq!(a.counters()[0], ("device_armings".to_string(), 2));
+        // Timed from the disarm at 10 s.
+        assert_eq!(a.counters()[1], ("device_armed_after_ms".to_string(), 6000));
+    }
+
+    #[test]
+    fn not_armed_again_in_time_after_a_disarm_fails_naming_its_flags_unless_the_switch_is_low() {
+        let mut a = arming();
+        says(&mut a, false, 0, 0);
+        says(&mut a, true, 0, S);
+        says(&mut a, false, 1 << 1, 10 * S);
+        assert_eq!(says(&mut a, false, 1 << 1, 39 * S).0, Ok(()), "within 30 s of the disarm");
+        let e = says(&mut a, false, 1 << 1, 41 * S).0.unwrap_err();
+        assert_eq!(e, "device `bf` did not arm within 30 s; its arming-disable flags: FAILSAFE (failsafe is active)");
+        // A scenario that lowered the switch itself does not want it armed: no failure, however long.
+        let mut a = arming();
+        let status = Status { cycle_us: 125, armed: false, arming_disabled: 1 << 28, modes: 0 };
+        a.latest = Latest { status: Some(status), read_ns: 1, problem: None };
+        let mut low = [0.0, 0.5];
+        for t_s in [0, 20, 40, 60] {
+            a.hold(&mut low);
+            assert_eq!(a.judge(t_s * S), Ok(()), "at {t_s} s");
+        }
     }
 }

@@ -155,7 +155,7 @@ impl DeviceController {
         for (value, track) in self.setpoints.iter_mut().zip(&self.setpoint_tracks) {
             *value = track.at(sample.t_sim_s);
         }
-        if let Some(arming) = &self.arming {
+        if let Some(arming) = &mut self.arming {
             if !arming.ready() {
                 // Still starting: its silence is counted from when it is ready.
                 self.heard_ns = Some(monotonic_ns());
@@ -340,8 +340,10 @@ impl Controller for DeviceController {
             if arming.stuck(now_ns)
                 && let Some(supervisor) = &mut self.supervisor
             {
+                let what =
+                    if arming.latest().status.is_some() { "answers but has not" } else { "has not answered nor" };
                 let detail = format!(
-                    "device `{}` answers but has not set its receiver up 5 s after it started: started again",
+                    "device `{}` {what} set its receiver up 5 s after it started: started again",
                     self.layout.name
                 );
                 eprintln!("silrig controller: {detail}");
