@@ -461,17 +461,21 @@ impl Scenario {
         let text = std::fs::read_to_string(path)
             .map_err(|cause| ScenarioError::Io { path: path.display().to_string(), cause })?;
         let mut scenario = Self::from_toml(&text, &path.display().to_string())?;
-        // Absolute, so the scenario means the same FMU wherever a run writes it down.
-        if let Some(fmu) = scenario.plant.fmu.as_mut().filter(|f| f.is_relative()) {
-            let beside = path.parent().unwrap_or(Path::new("")).join(&*fmu);
-            *fmu = std::path::absolute(&beside).unwrap_or(beside);
-        }
-        let controller = &mut scenario.controller;
-        for file in controller.fmu.iter_mut().chain(controller.device.iter_mut()).filter(|f| f.is_relative()) {
-            let beside = path.parent().unwrap_or(Path::new("")).join(&*file);
+        scenario.files_beside(path);
+        Ok(scenario)
+    }
+
+    /// Make the files the scenario names (plant and controller FMUs, a device's layout) absolute, a relative one
+    /// read beside the scenario file `path`: so the scenario means the same files wherever a run (or a check's
+    /// case) writes it down.
+    pub fn files_beside(&mut self, path: &Path) {
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let controller = &mut self.controller;
+        let files = self.plant.fmu.iter_mut().chain(controller.fmu.iter_mut()).chain(controller.device.iter_mut());
+        for file in files.filter(|f| f.is_relative()) {
+            let beside = dir.join(&*file);
             *file = std::path::absolute(&beside).unwrap_or(beside);
         }
-        Ok(scenario)
     }
 
     /// The embedded default scenario.

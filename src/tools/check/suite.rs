@@ -319,6 +319,10 @@ fn case_scenario(c: &CaseFile, path: Option<&Path>, base: BaseScenario) -> Resul
     }
     let mut scenario = Scenario::from_toml(&table.to_string(), &format!("{origin} with the case's `set`"))
         .map_err(|e| e.to_string())?;
+    // The case's scenario is written into its own folder: the files it names are read beside the scenario file.
+    if let Some(p) = path {
+        scenario.files_beside(p);
+    }
     for (i, flag) in c.faults.iter().enumerate() {
         scenario.faults.push(parse_fault_flag(flag).map_err(|e| format!("`faults[{i}]`: {e}"))?);
     }
@@ -362,6 +366,12 @@ mod tests {
                 .expect("the paper-gains suite loads");
         assert_eq!(paper.cases[0].scenario.name, "paper");
         assert_eq!(paper.cases[1].scenario.name, "paper-next-tick");
+        // A device's layout, named relative to the suite's scenario, is found from the case's own folder too.
+        let bf = Suite::load(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/check-betaflight.toml")))
+            .expect("the Betaflight suite loads");
+        let layout = bf.cases[0].scenario.controller.device.clone().expect("a device");
+        assert!(layout.is_absolute() && layout.ends_with("configs/devices/betaflight-sitl.toml"), "{layout:?}");
+        assert!(layout.exists(), "{layout:?}");
     }
 
     #[test]
