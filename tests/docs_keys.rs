@@ -534,12 +534,12 @@ fn fields(file: &str, name: &str) -> Vec<String> {
 
 /// The structs (and the one enum) scenario and suite files are read into, with the files that declare them and
 /// the key prefix each has on each page.
-const STRUCTS: [(&str, &str, &[&str], &[&str]); 22] = [
+const STRUCTS: [(&str, &str, &[&str], &[&str]); 23] = [
     ("src/flight/scenario.rs", "Scenario", &[""], &[]),
     ("src/model/vehicle.rs", "InitialCondition", &["initial"], &[]),
     ("src/flight/setpoints.rs", "Setpoint", &["setpoint"], &[]),
     ("src/flight/setpoints.rs", "SetpointStep", &["setpoint_steps"], &[]),
-    ("src/flight/scenario.rs", "Disturbance", &["disturbance"], &[]),
+    ("src/flight/disturbance.rs", "Disturbance", &["disturbance"], &[]),
     ("src/flight/scenario.rs", "PlantOptions", &["plant"], &[]),
     ("src/flight/scenario.rs", "AeroScale", &["plant.aero_scale"], &[]),
     ("src/flight/scenario.rs", "ControllerOptions", &["controller"], &[]),
@@ -563,6 +563,12 @@ const STRUCTS: [(&str, &str, &[&str], &[&str]); 22] = [
         "AbsMax",
         &["criteria.outputs.<output>.abs_max"],
         &["cases.criteria.outputs.<output>.abs_max"],
+    ),
+    (
+        "src/flight/criteria.rs",
+        "HeldBand",
+        &["criteria.outputs.<output>.held"],
+        &["cases.criteria.outputs.<output>.held"],
     ),
     ("src/flight/criteria.rs", "Settled", &["criteria.settled"], &["cases.criteria.settled"]),
     ("src/flight/criteria.rs", "BodyRateLimit", &["criteria.body_rate_max_dps"], &["cases.criteria.body_rate_max_dps"]),

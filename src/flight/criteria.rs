@@ -86,6 +86,21 @@ pub struct OutputCriteria {
     /// No oscillation in the late window (`timing.late_window_s`) that swings more than this either way, sustained
     /// (at least two whole periods, not decaying: the summary's limit-cycle detector with this amplitude).
     pub oscillation_max: Option<f64>,
+    /// From `from_s` for `for_s` seconds, within `band` of its own value at `from_s`: a hold judged where it began
+    /// (an autopilot's altitude hold switched on in flight holds the altitude it was engaged at, not a set point).
+    pub held: Option<HeldBand>,
+}
+
+/// `held = { from_s = T, for_s = D, band = B }` of an output, B in its unit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeldBand {
+    /// When the hold begins, s: the output's value then is the reference.
+    pub from_s: f64,
+    /// How long it must hold, s.
+    pub for_s: f64,
+    /// Half-width of the band around the value at `from_s`.
+    pub band: f64,
 }
 
 /// `settled = { within_s = T, band = B }` of an output, B in its unit.
@@ -121,6 +136,7 @@ impl OutputCriteria {
             || self.min.is_some()
             || self.abs_max.is_some()
             || self.oscillation_max.is_some()
+            || self.held.is_some()
     }
 
     /// Refuse what cannot be judged over a run of `duration_s`; `at` is the table's key below `criteria`
@@ -150,6 +166,18 @@ impl OutputCriteria {
         }
         if let Some(a) = self.abs_max {
             within_run("abs_max.after_s", a.after_s)?;
+        }
+        if let Some(h) = self.held {
+            positive(&key("held.band"), h.band)?;
+            positive(&key("held.for_s"), h.for_s)?;
+            within_run("held.from_s", h.from_s)?;
+            if h.from_s + h.for_s > duration_s {
+                return Err(format!(
+                    "`criteria.{}` ends at {} s, after the run's {duration_s} s: shorten `for_s` or start earlier",
+                    key("held"),
+                    h.from_s + h.for_s
+                ));
+            }
         }
         for (k, v) in [("max", self.max), ("min", self.min)] {
             if let Some(v) = v

@@ -9,6 +9,8 @@ use crate::summary::Summary;
 use crate::summary::measures::{StepSettled, largest_overshoot, slowest_settle};
 use crate::trace::Trace;
 
+mod held;
+
 /// A judgement of `criterion`: what was measured against what limit, failed when `failure` says why.
 pub fn judgement(criterion: &str, measured: String, limit: String, failure: Option<String>) -> Judgement {
     Judgement {
@@ -113,6 +115,10 @@ fn judge_output(name: &str, c: &OutputCriteria, scenario: &Scenario, trace: Opti
                     Some(m) => m,
                     None => return no_evidence(&label(key), limit, "the trace ends before `after_s`"),
                 },
+                "held" => match held::held(name, output.t, output.x, c.held.expect("asked")) {
+                    Some(m) => m,
+                    None => return no_evidence(&label(key), limit, "the trace ends before `from_s + for_s`"),
+                },
                 _ => output.oscillation(c.oscillation_max.expect("asked"), scenario.timing.late_window_s()),
             };
             judgement(&label(key), measured, limit, failure).with_value(value)
@@ -144,6 +150,9 @@ fn asked_of_output(c: &OutputCriteria, setpoint: f64, steps: bool, scenario: &Sc
     }
     if let Some(a) = c.abs_max {
         asked.push(("abs_max", format!("|value| at most {} after {} s", a.max, a.after_s)));
+    }
+    if let Some(h) = c.held {
+        asked.push(("held", held::limit_words(h)));
     }
     if let Some(o) = c.oscillation_max {
         let late = crate::summary::seconds(scenario.timing.late_window_s());

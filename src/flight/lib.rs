@@ -1,7 +1,7 @@
 //! silrig-flight: a closed-loop flight as data and as one deterministic process: what to fly, what may go wrong,
 //! how it went and whether that was good enough. Files yes, IPC and clocks no.
 //!
-//! - [`scenario`]: TOML scenarios (initial condition, set points, disturbance, plant and controller options,
+//! - [`scenario`]: TOML scenarios (initial condition, set points, [`disturbance`], plant and controller options,
 //!   actuator limits, [`timing`]) with `validate`; [`setpoints`]: `[setpoint]` and the steps that change it during
 //!   a run, the value in force at a time; [`fault`]: the fault plan as data, targeting a [`role`] (a rig process); [`dispersion`]: seeded per-key distributions for sweeps; [`controller_map`]: `[controller.map]`'s
 //!   values (a plant signal or a constant).
@@ -20,6 +20,7 @@
 pub mod controller_map;
 pub mod criteria;
 pub mod dispersion;
+pub mod disturbance;
 pub mod f16_signals;
 pub mod f_true;
 pub mod fault;

@@ -70,47 +70,7 @@ pub use silrig_model::vehicle::{InitialCondition, InitialMode};
 
 pub use crate::setpoints::{Setpoint, SetpointStep, SetpointTrack};
 
-/// d(t) = amplitude * sin(frequency * t) on the chosen Euler-angle accelerations.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Disturbance {
-    /// Amplitude, rad/s^2.
-    #[serde(default)]
-    pub amplitude_radps2: f64,
-    /// Angular frequency, rad/s.
-    #[serde(default)]
-    pub frequency_radps: f64,
-    /// Channels it acts on: any of "phi", "theta", "psi".
-    #[serde(default = "all_channels")]
-    pub channels: Vec<String>,
-}
-
-fn all_channels() -> Vec<String> {
-    silrig_model::control::CHANNEL_NAMES.iter().map(|s| s.to_string()).collect()
-}
-
-impl Default for Disturbance {
-    fn default() -> Self {
-        Self { amplitude_radps2: 0.0, frequency_radps: 0.0, channels: all_channels() }
-    }
-}
-
-impl Disturbance {
-    /// The disturbance at time `t_s`, per channel, rad/s^2.
-    #[inline]
-    pub fn at(&self, t_s: f64, mask: &[bool; 3]) -> [f64; 3] {
-        if self.amplitude_radps2 == 0.0 {
-            return [0.0; 3];
-        }
-        let d = self.amplitude_radps2 * (self.frequency_radps * t_s).sin();
-        mask.map(|on| if on { d } else { 0.0 })
-    }
-
-    /// Which channels are disturbed.
-    pub fn channel_mask(&self) -> [bool; 3] {
-        silrig_model::control::CHANNEL_NAMES.map(|n| self.channels.iter().any(|c| c == n))
-    }
-}
+pub use crate::disturbance::Disturbance;
 
 /// The built-in vehicle a scenario flies (`[plant] model`) when no plant of your own replaces it.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -581,25 +541,7 @@ impl Scenario {
 
     /// `[disturbance]` and `[plant]`: what acts on the F-16 and how it differs from the tables.
     fn validate_plant(&self) -> Result<(), (String, String)> {
-        let d = &self.disturbance;
-        if !(d.amplitude_radps2.abs() <= 100.0) {
-            return refuse(
-                "disturbance.amplitude_radps2",
-                format!("must be within -100..100 rad/s^2, got {}", d.amplitude_radps2),
-            );
-        }
-        if d.frequency_radps > 1000.0 {
-            return refuse(
-                "disturbance.frequency_radps",
-                format!("must be at most 1000 rad/s, got {}", d.frequency_radps),
-            );
-        }
-        if !(d.frequency_radps >= 0.0 && d.frequency_radps.is_finite()) {
-            return refuse("disturbance.frequency_radps", format!("must be >= 0, got {}", d.frequency_radps));
-        }
-        if let Some(c) = d.channels.iter().find(|c| !silrig_model::control::CHANNEL_NAMES.contains(&c.as_str())) {
-            return refuse("disturbance.channels", format!("unknown channel {c:?}; use \"phi\", \"theta\" or \"psi\""));
-        }
+        self.disturbance.validate()?;
         if !(0.0..=1.0).contains(&self.plant.xcg) {
             return refuse("plant.xcg", format!("must be a fraction of the chord in 0..1, got {}", self.plant.xcg));
         }
@@ -647,7 +589,7 @@ impl Scenario {
 }
 
 /// A scenario refused: the dotted key and the problem.
-fn refuse(key: &str, problem: String) -> Result<(), (String, String)> {
+pub(crate) fn refuse(key: &str, problem: String) -> Result<(), (String, String)> {
     Err((key.to_string(), problem))
 }
 
