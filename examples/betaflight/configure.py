@@ -13,6 +13,10 @@ The settings (docs/src/guides/betaflight.md says why each):
   set ap_altitude_d = 40    altitude hold's damping: its default 15 left the quadrotor (no vertical drag in the
                             model, where a real quadrotor's drag damps it) swinging 1.8..4.4 m around a 3.4 m target
                             with a period of about 8 s; 40 damps it (docs/src/guides/betaflight.md)
+  set runaway_takeoff_prevention = OFF
+                            the rig arms it again in flight (after its failsafe, or its program killed and started
+                            again), which a pilot never does: armed in the air under a hover's throttle, its runaway
+                            takeoff check read the climb-free hover as a runaway and disarmed it (RUNAWAY_TAKEOFF)
 """
 
 import socket
@@ -26,6 +30,7 @@ SETTINGS = [
     "aux 2 3 2 1700 2100 0 0",
     "set ap_hover_throttle = 1525",
     "set ap_altitude_d = 40",
+    "set runaway_takeoff_prevention = OFF",
 ]
 
 
