@@ -188,6 +188,7 @@ fn write_run_metadata(
         ("ticks".to_string(), meta.ticks.to_string()),
         ("silrig_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
         (meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string()),
+        (cdr::ARRAYS_KEY.to_string(), cdr::ARRAYS_BOUNDED.to_string()),
         ("file".to_string(), path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
     ]);
     writer.write_metadata(meta_keys::RUN, &run)?;

@@ -116,11 +116,20 @@ struct Codecs {
 }
 
 impl Codecs {
-    fn new() -> Self {
-        Self {
-            plant: CdrCodec::of::<PlantSample>(),
-            command: CdrCodec::of::<CommandSample>(),
-            plant_info: CdrCodec::of::<PlantInfo>(),
+    /// As a file's run metadata says its arrays are written: bounded sequences ([`cdr::ARRAYS_KEY`]), or all fixed
+    /// (the recordings before them).
+    fn new(run: &BTreeMap<String, String>) -> Self {
+        match run.get(cdr::ARRAYS_KEY).map(String::as_str) {
+            Some(cdr::ARRAYS_BOUNDED) => Self {
+                plant: CdrCodec::of::<PlantSample>(),
+                command: CdrCodec::of::<CommandSample>(),
+                plant_info: CdrCodec::of::<PlantInfo>(),
+            },
+            _ => Self {
+                plant: CdrCodec::fixed::<PlantSample>(),
+                command: CdrCodec::fixed::<CommandSample>(),
+                plant_info: CdrCodec::fixed::<PlantInfo>(),
+            },
         }
     }
 }
@@ -249,7 +258,8 @@ impl RecordedRun {
             return Err(unreadable("not an MCAP file (no MCAP magic at its start)".into()));
         }
         let mut topics_by_id: HashMap<u16, (String, String, BTreeMap<String, String>)> = HashMap::new();
-        let codecs = Codecs::new();
+        // Set by the file's run metadata, which comes before its first message.
+        let mut codecs = Codecs::new(&BTreeMap::new());
         let mut messages = 0u64;
         let mut layout_checked = false;
         // A record whose length field was damaged would have the reader reserve that many bytes (an abort, not an
@@ -260,6 +270,7 @@ impl RecordedRun {
             let record = record.map_err(|e| cut_short(path, &bytes, messages, e.to_string()))?;
             match record {
                 mcap::records::Record::Metadata(m) if m.name == meta_keys::RUN => {
+                    codecs = Codecs::new(&m.metadata);
                     self.add_run_metadata(path, m.metadata)?;
                     layout_checked = true;
                 }
