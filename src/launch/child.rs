@@ -61,6 +61,14 @@ impl ChildProcess {
         Ok(self.status)
     }
 
+    /// Whether process `pid` is this child or, for a user's command, a process of the group it leads (what a
+    /// `sh -c` wrapper started): who a node of the run belongs to.
+    pub(crate) fn owns(&self, pid: i64) -> bool {
+        let own = i64::from(self.child.id());
+        pid == own
+            || (self.group && libc::pid_t::try_from(pid).ok().and_then(live_group_of) == Some(own as libc::pid_t))
+    }
+
     pub(crate) fn has_ended(&self) -> bool {
         self.status.is_some()
     }
@@ -146,18 +154,23 @@ fn process_name(pid: libc::pid_t) -> String {
     std::fs::read_to_string(format!("/proc/{pid}/comm")).map_or_else(|_| "?".into(), |c| c.trim().to_string())
 }
 
-/// The live processes in process group `pgid` (from `/proc/<pid>/stat`; zombies, which init reaps, left out).
+/// The process group of a live process (from `/proc/<pid>/stat`); `None` for a zombie or a process gone.
+fn live_group_of(pid: libc::pid_t) -> Option<libc::pid_t> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // After the command in parentheses (which may hold spaces): state, ppid, pgrp.
+    let fields: Vec<&str> = stat.rsplit_once(')').map_or("", |(_, rest)| rest).split_whitespace().collect();
+    if fields.first().is_none_or(|state| *state == "Z") {
+        return None;
+    }
+    fields.get(2)?.parse().ok()
+}
+
+/// The live processes in process group `pgid` (zombies, which init reaps, left out).
 fn members_of_group(pgid: libc::pid_t) -> Vec<libc::pid_t> {
     let Ok(entries) = std::fs::read_dir("/proc") else { return Vec::new() };
     entries
         .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<libc::pid_t>().ok())
-        .filter(|pid| {
-            std::fs::read_to_string(format!("/proc/{pid}/stat")).ok().is_some_and(|stat| {
-                // After the command in parentheses (which may hold spaces): state, ppid, pgrp.
-                let fields: Vec<&str> = stat.rsplit_once(')').map_or("", |(_, rest)| rest).split_whitespace().collect();
-                fields.first().is_some_and(|state| *state != "Z") && fields.get(2) == Some(&pgid.to_string().as_str())
-            })
-        })
+        .filter(|pid| live_group_of(*pid) == Some(pgid))
         .collect()
 }
 

@@ -4,8 +4,9 @@
 //! - [`launcher`]: `silrig run` from options to report, in phases; [`options`]: what it is asked to do; `prepare`:
 //!   phase 1, the options, the scenario and its FMUs checked and the run's folder and id claimed; [`supervision`]:
 //!   the processes, their lives and restarts; [`child`]: one child process, started, its output logged, reaped
-//!   once; [`program`]: finding the binaries and splitting a user's command; [`claim`]: run ids and the locks that
-//!   claim a run's folder and id; [`process_env`]: the run's variables for a process started by hand.
+//!   once; `joining`: who has joined the run, and a role that never did; [`program`]: finding the binaries and
+//!   splitting a user's command; [`claim`]: run ids and the locks that claim a run's folder and id;
+//!   [`process_env`]: the run's variables for a process started by hand.
 //! - [`fault_schedule`]: carrying out process faults (signals) on time; [`fault_report`]: what each fault did.
 //! - [`run_report`]: `report.json` and the timing tables; [`run_figures`]: the run's figures, or why one is left out; [`floor`]: the OS timer floor measured
 //!   beside a run (ours and cyclictest's); [`held_outputs`]: the ticks a degraded plant held, flagged and judged.
@@ -20,6 +21,7 @@ pub mod fault_report;
 pub mod fault_schedule;
 pub mod floor;
 pub mod held_outputs;
+mod joining;
 pub mod launcher;
 pub mod options;
 mod prepare;
