@@ -159,4 +159,33 @@ mod tests {
         assert_eq!(PlantKind::of(&scenario), PlantKind::Fmu("airframe.fmu".into()));
         assert_eq!(ControllerKind::of(&scenario), ControllerKind::Fmu("pid.fmu".into()));
     }
+
+    #[test]
+    fn a_plant_fmu_with_no_controller_named_gets_the_law_that_fits_its_signals() {
+        let mut scenario = Scenario::embedded_any_plant();
+        let quad = Scenario::from_toml("name = \"q\"\n[plant]\nmodel = \"quad\"\n", "test").unwrap();
+        let quad_signals = silrig_flight::quad::builtin_signals(&quad).unwrap();
+        let f16_signals = silrig_flight::f16_signals::f16_signals([0.0; 4]);
+        // Not a plant FMU: the FMU's signals are never read.
+        let unread = |_: &Path| -> anyhow::Result<PlantSignals> { panic!("read") };
+        assert_eq!(ControllerKind::fitting(&scenario, unread).unwrap(), ControllerKind::AttitudeLaw);
+        scenario.plant.fmu = Some("plant.fmu".into());
+        let fit = |signals: &PlantSignals| ControllerKind::fitting(&scenario, |_| Ok(signals.clone()));
+        assert_eq!(fit(&quad_signals).unwrap(), ControllerKind::QuadLaw);
+        assert_eq!(fit(&f16_signals).unwrap(), ControllerKind::AttitudeLaw);
+        let mut toy = quad_signals.clone();
+        toy.plant = "toy".into();
+        toy.outputs.retain(|o| o.name != "alt_m");
+        let refused = fit(&toy).unwrap_err().to_string();
+        assert!(
+            refused.starts_with(
+                "the plant FMU toy fits no built-in controller (ours for the F-16: plant toy has no output \
+                 `vt_fps`; ours for the quadrotor: plant toy has no output `alt_m`); its outputs: phi_deg, theta_deg"
+            ),
+            "{refused}"
+        );
+        assert!(refused.contains("its inputs: motor1, motor2, motor3, motor4. Name the controller"), "{refused}");
+        scenario.controller.fmu = Some("pid.fmu".into());
+        assert_eq!(ControllerKind::fitting(&scenario, unread).unwrap(), ControllerKind::Fmu("pid.fmu".into()));
+    }
 }
