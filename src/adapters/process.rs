@@ -163,7 +163,11 @@ mod tests {
     #[test]
     fn a_plant_fmu_with_no_controller_named_gets_the_law_that_fits_its_signals() {
         let mut scenario = Scenario::embedded_any_plant();
-        let quad = Scenario::from_toml("name = \"q\"\n[plant]\nmodel = \"quad\"\n", "test").unwrap();
+        let quad = Scenario::from_toml(
+            "name = \"q\"\n[plant]\nmodel = \"quad\"\n[timing]\ndt_s = 0.001\nduration_s = 1.0\ncommand_timing = \"next-tick\"\n",
+            "test",
+        )
+        .unwrap();
         let quad_signals = silrig_flight::quad::builtin_signals(&quad).unwrap();
         let f16_signals = silrig_flight::f16_signals::f16_signals([0.0; 4]);
         // Not a plant FMU: the FMU's signals are never read.
