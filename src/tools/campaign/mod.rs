@@ -189,6 +189,12 @@ impl Campaign {
         }
     }
 
+    /// Whether a controller flies its plant: without `--controller-cmd` its cases fly in one process or under the
+    /// rig's silrig-controller, where a plant FMU needs a built-in controller that fits it (or one named).
+    pub fn controller_fits(&self) -> anyhow::Result<()> {
+        if self.commands.controller_cmd.is_none() { self.models.controller_fits() } else { Ok(()) }
+    }
+
     /// The criteria's names, in the order every flown case's judgements come in.
     pub fn criterion_names(&self) -> Vec<String> {
         silrig_flight::judge::judge_flight(&self.criteria, &self.scenario, None, None)
@@ -229,6 +235,7 @@ impl Campaign {
         mut sink: impl FnMut(CaseResult) -> anyhow::Result<()>,
     ) -> anyhow::Result<Option<rig_case::Interrupted>> {
         silrig_rig::signals::install_termination_flag();
+        self.controller_fits()?;
         let scratch = self.commands.any().then(rig_case::Scratch::new).transpose()?;
         let total = indices.end - indices.start;
         let (done, next, stop) = (AtomicU64::new(0), AtomicU64::new(indices.start), AtomicBool::new(false));
@@ -500,6 +507,8 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
     };
     check_runs(runs)?;
     let campaign = Campaign::load(config, &opts.fmus, &opts.commands())?;
+    // Before its folder is made: a sweep no controller can fly is refused with nothing written.
+    campaign.controller_fits()?;
     let seed = opts.seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(jobs(opts.jobs)?);
     let out =
