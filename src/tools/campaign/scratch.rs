@@ -149,7 +149,12 @@ impl Scratch {
         let flown = fly_in(campaign, case, &run_dir, Some(&self.case_id(index, "-a")), false, warm);
         let again = std::fs::read(run_dir.join("trace.csv")).unwrap_or_default();
         let _ = std::fs::remove_dir_all(&run_dir);
-        flown?;
+        // A rig that failed the second time (a crash, a silence, a loaded machine's timeout) says nothing of state
+        // kept: it is started again, as after any failed case.
+        if flown?.2 {
+            self.after_flight(true);
+            return Ok(());
+        }
         if let Some(row) = first_difference(first, &again) {
             self.go_cold(&format!(
                 "case {index} flown a second time in the same warm processes gave another trace.csv (from its line \
