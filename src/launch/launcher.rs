@@ -180,9 +180,15 @@ fn mark_stopped_at_end(processes: &mut [ProcessReport], lives: &[ProcessLife]) {
 /// `report.json`). An `Err` means the run could not be set up; a run whose processes failed returns `Ok` with
 /// `failures` filled in.
 pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
+    run_with(opts, None)
+}
+
+/// [`run`], its processes forked by a sweep's warm rig when given one (see [`crate::warm`]): the same run, the
+/// same files, without starting the programs again.
+pub fn run_with(opts: &LaunchOptions, warm: Option<std::sync::Arc<crate::warm::WarmRig>>) -> anyhow::Result<RigReport> {
     signals::install_termination_flag();
     let prepared = prepare(opts)?;
-    let flown = fly(opts, &prepared)?;
+    let flown = fly(opts, &prepared, warm)?;
     let mut report = report_of(opts, &prepared, flown)?;
     // A full disk must not cost the user the report: it is printed whatever happens to the files.
     if !opts.no_figures {
@@ -216,7 +222,11 @@ struct Flown {
 
 /// Phases 2 and 3: start the processes (the OS floor first), supervise them to the end of the flight with the
 /// plan's faults, and stop them.
-fn fly(opts: &LaunchOptions, prepared: &Prepared) -> anyhow::Result<Flown> {
+fn fly(
+    opts: &LaunchOptions,
+    prepared: &Prepared,
+    warm: Option<std::sync::Arc<crate::warm::WarmRig>>,
+) -> anyhow::Result<Flown> {
     let Prepared { scenario, run_id, out, scenario_path, .. } = prepared;
     let controller = opts.controller_launch();
     let mut args = ProcessArgs {
@@ -254,7 +264,7 @@ fn fly(opts: &LaunchOptions, prepared: &Prepared) -> anyhow::Result<Flown> {
         None => Vec::new(),
     };
     let launch = (controller.clone(), plant_launch, logger_args);
-    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), launch)?;
+    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), launch, warm)?;
     sup.plant_fmu = scenario.plant.fmu.clone();
     sup.controller_fmu = scenario.controller.fmu.clone();
     let mut faults = FaultSchedule::new(&scenario.faults, out, events, run_id, scenario.timing.dt_s);

@@ -10,6 +10,7 @@
 //! - [`fault_schedule`]: carrying out process faults (signals) on time; [`fault_report`]: what each fault did.
 //! - [`run_report`]: `report.json` and the timing tables; [`run_figures`]: the run's figures, or why one is left out; [`floor`]: the OS timer floor measured
 //!   beside a run (ours and cyclictest's); [`held_outputs`]: the ticks a degraded plant held, flagged and judged.
+//! - [`warm`]: a sweep's warm rig, whose warm processes fork each case's processes.
 //! - [`remote`]: the plant-side bridge for a controller on another host.
 //!
 //! Layers: uses `silrig-rig` (the processes it starts), `silrig-plot`, `silrig-recording`, `silrig-wire` and
@@ -31,3 +32,4 @@ pub mod remote;
 pub mod run_figures;
 pub mod run_report;
 pub mod supervision;
+pub mod warm;

@@ -199,18 +199,21 @@ pub(crate) struct Supervisor {
     pub(crate) notes: Vec<String>,
     /// Every process started, one entry per life (a restart starts a new life).
     pub(crate) lives: Vec<ProcessLife>,
+    /// A sweep's warm rig, whose warm processes fork the run's processes.
+    warm: Option<std::sync::Arc<crate::warm::WarmRig>>,
 }
 
 impl Supervisor {
     /// Start the three processes with `args`: the logger first and the plant last, staggered, because concurrent
     /// node creation with dead-node cleanup is where iceoryx2 has had races (#1880).
     /// `launch`: where the controller comes from, the plant's command (`None`: external), and what the logger's
-    /// command line gets beyond the run's arguments.
+    /// command line gets beyond the run's arguments. `warm`: a sweep's warm rig forks them.
     pub(crate) fn start(
         args: ProcessArgs,
         events: EventLog,
         restart: SupervisionOptions,
         launch: (ControllerLaunch, Option<Option<String>>, Vec<String>),
+        warm: Option<std::sync::Arc<crate::warm::WarmRig>>,
     ) -> anyhow::Result<Self> {
         let (controller, plant, logger_args) = launch;
         let bin_dir = binary_dir()?;
@@ -234,6 +237,7 @@ impl Supervisor {
             failures: Vec::new(),
             notes: Vec::new(),
             lives: Vec::new(),
+            warm,
         };
         for role in [Role::Logger, Role::Controller, Role::Plant] {
             if (role == Role::Controller && sup.controller == ControllerLaunch::External)
@@ -260,7 +264,14 @@ impl Supervisor {
         let args = ProcessArgs { resume, ..self.args.clone() };
         let command = self.command_of(role);
         let extra: &[String] = if role == Role::Logger { &self.logger_args } else { &[] };
-        let process = start_process(role, command, &args, extra, &self.bin_dir, log.into(), writer.into())?;
+        let process = match self.warm.as_ref().and_then(|w| w.process(role)) {
+            // A sweep's warm rig: the same command line and variables, forked by the role's warm process.
+            Some(warm) => {
+                drop(log);
+                warm.fly(role, command, &args, extra, &self.bin_dir, writer.into())?
+            }
+            None => start_process(role, command, &args, extra, &self.bin_dir, log.into(), writer.into())?,
+        };
         Ok(process.with_output(output))
     }
 

@@ -9,6 +9,7 @@ pub mod case;
 pub mod figures;
 pub mod report;
 pub mod rig_case;
+pub mod scratch;
 pub mod shard;
 
 use anyhow::Context;
@@ -85,12 +86,16 @@ pub struct SweepOptions {
     /// `setpoint.<output>`. A case whose plant crashes or exits early fails, with the rig's reason.
     #[arg(long, value_name = "CMD")]
     pub plant_cmd: Option<String>,
+    /// With --controller-cmd or --plant-cmd: start every case's processes afresh, as `silrig run` does, instead of
+    /// forking them from programs kept warm from case to case (slower; the same results).
+    #[arg(long)]
+    pub cold: bool,
 }
 
 impl SweepOptions {
     /// `--controller-cmd` and `--plant-cmd`, as given.
     pub fn commands(&self) -> RigCommands {
-        RigCommands { controller_cmd: self.controller_cmd.clone(), plant_cmd: self.plant_cmd.clone() }
+        RigCommands { controller_cmd: self.controller_cmd.clone(), plant_cmd: self.plant_cmd.clone(), cold: self.cold }
     }
 }
 
@@ -236,7 +241,7 @@ impl Campaign {
     ) -> anyhow::Result<Option<rig_case::Interrupted>> {
         silrig_rig::signals::install_termination_flag();
         self.controller_fits()?;
-        let scratch = self.commands.any().then(rig_case::Scratch::new).transpose()?;
+        let scratch = self.commands.any().then(|| scratch::Scratch::new(self.commands.cold)).transpose()?;
         let total = indices.end - indices.start;
         let (done, next, stop) = (AtomicU64::new(0), AtomicU64::new(indices.start), AtomicBool::new(false));
         // The first case not yet handed to `sink`: no worker starts a case a window or more past it.
