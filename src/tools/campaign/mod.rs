@@ -226,6 +226,14 @@ impl Campaign {
         )
     }
 
+    /// What flying takes first: SIGINT and SIGTERM caught, the controller checked against the plant, and with a
+    /// controller or plant command the cases' run folders (and each worker's warm rig, unless cold).
+    fn ready_to_fly(&self) -> anyhow::Result<Option<scratch::Scratch>> {
+        silrig_rig::signals::install_termination_flag();
+        self.controller_fits()?;
+        self.commands.any().then(|| scratch::Scratch::new(self.commands.cold)).transpose()
+    }
+
     /// Fly the cases `indices` under `seed` on `jobs` threads (with a controller or plant command, `jobs` rigs side
     /// by side), reporting progress on stderr, and hand each result to `sink` in index order as soon as the cases
     /// before it are flown: at most [`REORDER_WINDOW`] results wait for their turn, so memory stays bounded
@@ -239,9 +247,7 @@ impl Campaign {
         jobs: usize,
         mut sink: impl FnMut(CaseResult) -> anyhow::Result<()>,
     ) -> anyhow::Result<Option<rig_case::Interrupted>> {
-        silrig_rig::signals::install_termination_flag();
-        self.controller_fits()?;
-        let scratch = self.commands.any().then(|| scratch::Scratch::new(self.commands.cold)).transpose()?;
+        let scratch = self.ready_to_fly()?;
         let total = indices.end - indices.start;
         let (done, next, stop) = (AtomicU64::new(0), AtomicU64::new(indices.start), AtomicBool::new(false));
         // The first case not yet handed to `sink`: no worker starts a case a window or more past it.
