@@ -1,7 +1,7 @@
 //! `silrig-bridge`: the rig's streams between the plant's host and a controller's host over Zenoh, and
 //! `silrig-bridge keygen` for the key both hosts hold. Parses the arguments and calls the library.
 
-use clap::{Parser, Subcommand};
+use clap::Parser;
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -9,31 +9,31 @@ use std::process::ExitCode;
     name = "silrig-bridge",
     version,
     about = "Carry a silrig run's streams to a controller on another host",
-    args_conflicts_with_subcommands = true,
-    subcommand_negates_reqs = true
+    after_help = "The bridge key both hosts hold: `silrig-bridge keygen FILE` (see `silrig-bridge keygen --help`)."
 )]
 struct Cli {
-    #[command(subcommand)]
-    command: Option<Command>,
     #[command(flatten)]
     bridge: silrig::bridge::BridgeOptions,
 }
 
-#[derive(Subcommand)]
-enum Command {
-    /// Write a new bridge key to FILE, readable by its owner only (never over an existing file); copy it to the
-    /// other host (scp -p) and give it to both bridges with --key (silrig run: --bridge-key).
-    Keygen {
-        /// Where to write it.
-        file: std::path::PathBuf,
-    },
+/// A subcommand of its own words: the bridge's flags (a required run id among them) have nothing to do with it.
+#[derive(Parser)]
+#[command(
+    name = "silrig-bridge keygen",
+    version,
+    about = "Write a new bridge key to FILE, readable by its owner only (never over an existing file); copy it to the \
+             other host (scp -p) and give it to both bridges with --key (silrig run: --bridge-key)"
+)]
+struct Keygen {
+    /// Where to write it.
+    file: std::path::PathBuf,
 }
 
 fn main() -> ExitCode {
     silrig::rig::owner_only_files();
-    let cli = Cli::parse();
-    if let Some(Command::Keygen { file }) = &cli.command {
-        return match silrig::bridge::key::write_new(file) {
+    if std::env::args().nth(1).as_deref() == Some("keygen") {
+        let Keygen { file } = Keygen::parse_from(std::env::args().skip(1));
+        return match silrig::bridge::key::write_new(&file) {
             Ok(key) => {
                 eprintln!("silrig-bridge: wrote bridge key {} to {}", key.fingerprint(), file.display());
                 ExitCode::SUCCESS
@@ -41,6 +41,7 @@ fn main() -> ExitCode {
             Err(e) => fail(&e),
         };
     }
+    let cli = Cli::parse();
     if cli.bridge.check {
         return match silrig::bridge::check(&cli.bridge) {
             Ok(line) => {

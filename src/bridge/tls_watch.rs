@@ -30,21 +30,26 @@ pub(super) fn watch(inbox: Arc<Inbox>) {
     let _ = tracing::subscriber::set_global_default(Watch { inbox });
 }
 
+/// How Zenoh's accept loop ends its line for any failed accept, a TLS handshake's included.
+const ACCEPT_HINT: &str = ". Hint: increase the system open file limit";
+/// What Zenoh's connecting side says before TLS's own words.
+const CONNECT_FAILED: &str = "Can not create a new TLS link bound to ";
+
 /// The failure in a log line of Zenoh's TLS link or connection retries, if it is one.
 pub fn refusal(text: &str) -> Option<Refusal> {
-    if !text.contains("TLS") {
-        return None;
-    }
-    // The accept loop's line ends with a hint about open files that a handshake failure has nothing to do with.
-    let text = text.split(". Hint:").next().unwrap_or(text);
-    let failed = ["handshake", "certificate", "alert", "Can not create a new TLS link"];
-    if !failed.iter().any(|f| text.contains(f)) {
-        return None;
-    }
-    // Keep TLS's own words: what follows the last "...: " Zenoh put before them.
-    let detail = text.rsplit(": ").next().unwrap_or(text).trim_end_matches(|c| c == '.' || c == ' ');
-    let detail = detail.split(". Retry in").next().unwrap_or(detail).to_string();
-    let lower = text.to_ascii_lowercase();
+    let detail = if let Some((error, _)) = text.split_once(ACCEPT_HINT) {
+        // The listening side: the line is TLS's error, then the hint.
+        error
+    } else {
+        // The connecting side: "... bound to <server name>: <TLS's error>. Retry in ...".
+        // "... bound to <server name>: <TLS's error> at <file>:<line>.. Retry in ...": Zenoh's errors say where.
+        let (_, after) = text.split_once(CONNECT_FAILED)?;
+        let error = after.split_once(": ").map_or(after, |(_, e)| e);
+        let error = error.split(". Retry in").next().unwrap_or(error);
+        error.find(" at ").filter(|&i| error[i..].contains(".rs:")).map_or(error, |i| &error[..i])
+    };
+    let detail = detail.trim().trim_end_matches('.').to_string();
+    let lower = detail.to_ascii_lowercase();
     let certificate =
         ["certificate", "unknownca", "unknown ca", "unknownissuer", "decrypterror"].iter().any(|w| lower.contains(w));
     Some(Refusal { detail, certificate })
@@ -112,20 +117,22 @@ mod tests {
 
     #[test]
     fn zenoh_s_lines_are_read_into_tls_s_words() {
-        let server = "TLS handshake error: invalid peer certificate: UnknownIssuer. Hint: increase the system open \
-                      file limit.";
+        let server = "received fatal alert: UnknownCA. Hint: increase the system open file limit.";
         assert_eq!(
             refusal(server),
-            Some(Refusal { detail: "UnknownIssuer".into(), certificate: true }),
+            Some(Refusal { detail: "received fatal alert: UnknownCA".into(), certificate: true }),
             "the accept loop's failure, without its hint"
         );
         let client = "Unable to connect to configured peer tls/10.0.0.1:7447! Can not create a new TLS link bound to \
-                      IpAddress(V4(Ipv4Addr([10, 0, 0, 1]))): received fatal alert: UnknownCA. Retry in 100ms.";
-        assert_eq!(refusal(client), Some(Refusal { detail: "UnknownCA".into(), certificate: true }));
-        let plain = "TLS handshake error: received corrupt message of type InvalidContentType. Hint: increase the \
-                     system open file limit.";
+                      IpAddress(V4(Ipv4Addr([10, 0, 0, 1]))): invalid peer certificate: UnknownIssuer at \
+                      /src/zenoh-link-tls/src/unicast.rs:378.. Retry in 100ms.";
+        assert_eq!(
+            refusal(client),
+            Some(Refusal { detail: "invalid peer certificate: UnknownIssuer".into(), certificate: true })
+        );
+        let plain = "received corrupt message of type InvalidContentType. Hint: increase the system open file limit.";
         let r = refusal(plain).unwrap();
-        assert!(!r.certificate && r.detail.contains("InvalidContentType"), "{r:?}");
+        assert!(!r.certificate && r.detail == "received corrupt message of type InvalidContentType", "{r:?}");
         assert_eq!(refusal("Successfully connected to configured peer tls/10.0.0.1:7447"), None);
         assert_eq!(refusal("Unable to connect to configured peer tcp/10.0.0.1:7447! Connection refused"), None);
     }
