@@ -32,7 +32,9 @@ struct Keygen {
 fn main() -> ExitCode {
     silrig::rig::owner_only_files();
     if std::env::args().nth(1).as_deref() == Some("keygen") {
-        let Keygen { file } = Keygen::parse_from(std::env::args().skip(1));
+        // Named as typed in its usage line, not as `keygen`.
+        let args = std::iter::once("silrig-bridge keygen".to_string()).chain(std::env::args().skip(2));
+        let Keygen { file } = Keygen::parse_from(args);
         return match silrig::bridge::key::write_new(&file) {
             Ok(key) => {
                 eprintln!("silrig-bridge: wrote bridge key {} to {}", key.fingerprint(), file.display());
