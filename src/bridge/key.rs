@@ -58,7 +58,7 @@ impl BridgeKey {
         cert.extended_key_usages = vec![ExtendedKeyUsagePurpose::ServerAuth, ExtendedKeyUsagePurpose::ClientAuth];
         let issuer = Issuer::new(ca, ca_key);
         let cert_pem = cert.signed_by(&key, &issuer).map_err(words)?.pem();
-        Ok(Self { ca_pem, cert_pem, key_pem: key.serialize_pem() })
+        Self::from_text(&Self { ca_pem, cert_pem, key_pem: key.serialize_pem() }.to_text())
     }
 
     /// The file's text: a comment saying what it is, then the three PEM blocks.
@@ -83,7 +83,9 @@ impl BridgeKey {
                 "not a bridge key: it holds the PEM blocks {tags:?}, where `silrig-bridge keygen` writes {BLOCKS:?}"
             ));
         }
-        let [ca, cert, key] = [0, 1, 2].map(|i| pem::encode(&blocks[i]));
+        // One form whatever wrote the file (rcgen, an editor: line endings differ), so equal keys compare equal.
+        let lf = pem::EncodeConfig::new().set_line_ending(pem::LineEnding::LF);
+        let [ca, cert, key] = [0, 1, 2].map(|i| pem::encode_config(&blocks[i], lf));
         Ok(Self { ca_pem: ca, cert_pem: cert, key_pem: key })
     }
 
