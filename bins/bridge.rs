@@ -22,7 +22,7 @@ struct Cli {
     name = "silrig-bridge keygen",
     version,
     about = "Write a new bridge key to FILE, readable by its owner only (never over an existing file); copy it to the \
-             other host (scp -p) and give it to both bridges with --key (silrig run: --bridge-key)"
+             other host (scp -p) and give it to both bridges with --key (silrig run --bridge-key)"
 )]
 struct Keygen {
     /// Where to write it.
