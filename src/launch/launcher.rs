@@ -252,13 +252,15 @@ fn fly(
     let conditions_start = MachineConditions::now();
     let events = EventLog::new(out, "launcher");
     let mut bridge = match &opts.bridge_listen {
-        Some(listen) => Some(super::remote::RemoteBridge::start(listen, &args, events.clone())?),
+        Some(listen) => {
+            Some(super::remote::RemoteBridge::start(listen, &opts.bridge_security(), &args, events.clone())?)
+        }
         None => None,
     };
     let plant_launch = if plant_external { None } else { Some(opts.plant_cmd.clone()) };
     let logger_args = match opts.live {
         Some(LiveServe::Foxglove(addr)) => {
-            eprintln!("silrig run: serving the run live on ws://{addr} (Foxglove WebSocket protocol)");
+            eprintln!("{}", super::options::live_line(addr));
             vec!["--live-foxglove".to_string(), addr.to_string()]
         }
         None => Vec::new(),

@@ -64,6 +64,9 @@ pub(crate) fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         }
     }
     let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
+    if let Some(listen) = &opts.bridge_listen {
+        super::remote::check(listen, &opts.bridge_security(), run_id.as_str())?;
+    }
     let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));
     refuse_used_folder(&out)?;
     let created = !out.exists();

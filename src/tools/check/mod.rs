@@ -196,6 +196,8 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         // Not used: the controller is always one the launcher starts.
         external_timeout_s: 120.0,
         bridge_listen: None,
+        bridge_key: None,
+        bridge_insecure: false,
         // The case's scenario says.
         command_timing: None,
         live: None,
