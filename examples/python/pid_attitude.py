@@ -64,6 +64,8 @@ class PidAttitude(Controller):
             self.integral = [held[k] for k in self.inputs]
         surfaces = [0.0, 0.0, 0.0]
         errors = [0.0, 0.0, 0.0]
+        # The set points in force at this sample (a scenario's [[setpoint_steps]] change them during the run).
+        self.setpoint_deg = tuple(self.session.setpoint(name, t_s=sample.t_s) for name in ANGLES)
         for c in range(3):
             error = self.setpoint_deg[c] - sample[ANGLES[c]]
             rate = sample[RATES[c]]

@@ -12,6 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use silrig_adapters::in_process::MakeController;
 use silrig_flight::scenario::{Scenario, Setpoint};
+use silrig_flight::setpoints::{self, SetpointStep};
 use silrig_flight::signals::PlantSignals;
 use silrig_rig::controller::Controller;
 use silrig_rig::session::Status;
@@ -27,6 +28,8 @@ pub struct InProcessSession {
     plant: Py<Plant>,
     signals: PlantSignals,
     setpoint: Setpoint,
+    /// The scenario's `[[setpoint_steps]]`, for `setpoint(name, t_s=...)`.
+    setpoint_steps: Vec<SetpointStep>,
     /// The controller's step, s.
     #[pyo3(get)]
     dt_s: f64,
@@ -42,10 +45,11 @@ impl InProcessSession {
         (self.setpoint.phi_deg, self.setpoint.theta_deg, self.setpoint.psi_deg)
     }
 
-    /// The scenario's set point of output `name` in its unit; `default` when the scenario gives none.
-    #[pyo3(signature = (name, default = None))]
-    fn setpoint(&self, name: &str, default: Option<f64>) -> Option<f64> {
-        self.setpoint.get(name).or(default)
+    /// The scenario's set point of output `name` in its unit; `default` when the scenario gives none. At the start,
+    /// or with `t_s` (a sample's `t_s`) the value in force then, as the served session's `setpoint` reads it.
+    #[pyo3(signature = (name, default = None, t_s = None))]
+    fn setpoint(&self, name: &str, default: Option<f64>, t_s: Option<f64>) -> Option<f64> {
+        setpoints::value_at(&self.setpoint, &self.setpoint_steps, name, t_s.unwrap_or(0.0)).or(default)
     }
 
     /// The plant's announcement (a `Plant`).
@@ -91,6 +95,7 @@ struct PythonController {
     controller: Py<PyAny>,
     diagnostic_names: Vec<String>,
     setpoint: Setpoint,
+    setpoint_steps: Vec<SetpointStep>,
     dt_s: f64,
     /// Set by `connect`.
     session: Option<Py<InProcessSession>>,
@@ -110,6 +115,7 @@ impl PythonController {
             controller,
             diagnostic_names,
             setpoint: scenario.setpoint.clone(),
+            setpoint_steps: scenario.setpoint_steps.clone(),
             dt_s: scenario.timing.controller_dt_s(),
             session: None,
             output_index: None,
@@ -125,6 +131,7 @@ impl PythonController {
             plant: Py::new(py, plant)?,
             signals: signals.clone(),
             setpoint: self.setpoint.clone(),
+            setpoint_steps: self.setpoint_steps.clone(),
             dt_s: self.dt_s,
             held: signals.hold(),
         };

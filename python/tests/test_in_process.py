@@ -34,6 +34,24 @@ def test_sim_with_your_controller_is_the_lockstep_rigs_trace_value_for_value(tmp
     assert flown["trace"]["elevator_cmd_deg"] != silrig.sim(SCENARIO)["trace"]["elevator_cmd_deg"]
 
 
+def test_the_example_pid_follows_set_point_steps_in_process_and_served_alike(tmp_path):
+    # robust.toml (theta 10 deg) with a step of theta to 4 deg at 2 s: both ways of flying read the set point in
+    # force at each sample, so each error after 2 s is against 4 deg, and the two traces are equal.
+    scenario = tmp_path / "steps.toml"
+    scenario.write_text(SCENARIO.read_text() + "\n[[setpoint_steps]]\nat_s = 2.0\ntheta_deg = 4.0\n")
+    out = tmp_path / "run"
+    controller = f"{sys.executable} {ROOT}/examples/python/pid_attitude_native.py"
+    args = ["--mode", "lockstep", "--controller-cmd", controller, str(scenario)]
+    r, _ = silrig_run("inproc-steps", out, args)
+    assert r.returncode == 0, r.stdout + r.stderr
+    rig = read_csv_columns(out / "trace.csv")
+    flown = silrig.sim(scenario, controller=PidAttitude())
+    assert_same_columns(flown["trace"], rig)
+    trace = flown["trace"]
+    for t, theta, error in zip(trace["t_s"], trace["theta_deg"], trace["err_theta_deg"]):
+        assert error == pytest.approx((10.0 if t < 2.0 - 1e-9 else 4.0) - theta, abs=1e-9), t
+
+
 def test_sweep_flies_a_fresh_copy_of_your_controller_per_case():
     pid = PidAttitude()
     one = silrig.sweep(SWEEP, runs=3, jobs=1, controller=pid)

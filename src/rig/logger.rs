@@ -409,8 +409,10 @@ impl LoggerLoop {
             let step_exec_ns = self.step_exec_after(tick, sample.sample.header.epoch);
             self.writer.row(&plant, &sample, next.as_ref(), command.as_ref(), step_exec_ns)?;
             self.rec.count("rows_written", 1);
-            // Commands answering ticks already written can no longer be used.
-            self.pending_command.retain(|t, _| *t > tick);
+            // Commands answering ticks already written can no longer be used (they sort first: no walk of the rest).
+            while self.pending_command.first_key_value().is_some_and(|(t, _)| *t <= tick) {
+                self.pending_command.pop_first();
+            }
         }
         Ok(())
     }

@@ -5,7 +5,7 @@
 pub mod fmu;
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -111,6 +111,35 @@ pub fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
         }
         std::thread::sleep(Duration::from_millis(20));
     }
+}
+
+/// `program ARGS` (`silrig` running rigs: a sweep, a case through the rig) from the repository root, to its end (5
+/// minutes at most): (exit code, stdout, stderr). The rigs it flew (run ids `r<its pid>-...`) left no shared
+/// memory, and its run and scratch folders are gone.
+#[allow(dead_code)]
+pub fn run_leaving_nothing(program: &str, args: &[&str]) -> (Option<i32>, String, String) {
+    let child = Command::new(program)
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let runs = format!("r{:x}-", child.id());
+    let o = wait_with_watchdog(child, Duration::from_secs(300));
+    let named = |dir: &Path, prefixes: &[String]| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().to_string())
+            .filter(|n| prefixes.iter().any(|p| n.starts_with(p)))
+            .collect()
+    };
+    let shm = named(Path::new("/dev/shm"), &[format!("sr_{runs}")]);
+    assert!(shm.is_empty(), "shared memory left behind: {shm:?}");
+    let tmp = named(&std::env::temp_dir(), &[format!("silrig_{runs}"), format!("silrig-sweep-{runs}")]);
+    assert!(tmp.is_empty(), "run or scratch folders left behind: {tmp:?}");
+    (o.status.code(), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
 }
 
 /// The run's `/dev/shm` files and iceoryx2 root folder are gone.
