@@ -426,6 +426,11 @@ impl PlantLoop {
         self.events.emit(Some(self.sim_tick), kind, detail);
     }
 
+    /// An event of the plant at `tick`: a restarted plant's resume, said before its loop reaches that tick.
+    pub fn event_at(&self, tick: u64, kind: &str, detail: String) {
+        self.events.emit(Some(tick), kind, detail);
+    }
+
     /// Add to one of the report's counters.
     pub fn count(&mut self, counter: &str, n: u64) {
         self.rec.count(counter, n);

@@ -314,7 +314,8 @@ impl PlantSession {
                 self.latest.borrow_mut().tick = offer.tick;
                 self.chain.set_positions(&offer.actuator_positions);
                 let again = self.lp.flown_again(offer.tick);
-                self.lp.event("plant-resumed", format!("resumed at tick {} from its checkpoint{again}", offer.tick));
+                let detail = format!("resumed at tick {} from its checkpoint{again}", offer.tick);
+                self.lp.event_at(offer.tick, "plant-resumed", detail);
             }
             Err(why) => {
                 let again = self.lp.flown_again(0);
