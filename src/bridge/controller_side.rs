@@ -147,7 +147,13 @@ impl ControllerSide {
         let reply = replies.recv().map_err(|_| {
             anyhow::anyhow!("the plant-side bridge did not send the run's scenario within {RUN_INFO_TIMEOUT:?}")
         })?;
-        let sample = reply.result().map_err(|e| anyhow::anyhow!("the run's scenario: {:?}", e.payload().to_bytes()))?;
+        // The plant side's refusal is text: said as such, not as a list of bytes.
+        let sample = reply.result().map_err(|e| {
+            anyhow::anyhow!(
+                "the plant-side bridge refused the run's scenario: {}",
+                String::from_utf8_lossy(&e.payload().to_bytes())
+            )
+        })?;
         let info: RunInfo = serde_json::from_slice(&sample.payload().to_bytes())?;
         let scenario_path = args.out.join("scenario.toml");
         silrig_flight::files::write_atomically(&scenario_path, &info.scenario_toml)?;

@@ -20,6 +20,7 @@
 //!   snapshots `silrig run` and `silrig top` read; [`tick_beacon`]: the plant's newest tick, by which the
 //!   launcher times process faults; [`checkpoint_slot`]: the plant's newest checkpoint in shared memory, what a
 //!   restarted plant resumes from.
+//! - [`warm`]: a process kept warm for a campaign, forking one flight after another.
 //! - Here: the arguments and options every process takes ([`ProcessArgs`], [`ProcessOptions`]), the
 //!   checkpoint writer, and how a process ends.
 //!
@@ -45,6 +46,7 @@ pub mod session;
 pub mod signals;
 pub mod status;
 pub mod tick_beacon;
+pub mod warm;
 
 use silrig_flight::files::write_atomically;
 use silrig_flight::scenario::Scenario;
@@ -379,6 +381,10 @@ pub fn finish_process(
 
 /// Whether our parent is `silrig` (the launcher), read from /proc.
 fn started_by_launcher() -> bool {
+    // A warm process's flight: the sweep that asked for it cleans up its run.
+    if warm::is_flight() {
+        return true;
+    }
     // SAFETY: getppid has no preconditions.
     let parent = unsafe { libc::getppid() };
     std::fs::read_to_string(format!("/proc/{parent}/comm")).is_ok_and(|c| c.trim() == "silrig")

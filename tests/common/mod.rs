@@ -155,6 +155,25 @@ pub fn no_shared_memory_left(run_id: &str) {
     assert!(!Path::new(&format!("/tmp/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
 }
 
+/// A message a person reads is in words: no Rust path (`Type::Variant`), no Debug dump of a value or an error
+/// (`Some(`, `Err(`, `Os {`, `kind:`, a `Name { field: ` struct). `what` says whose message it is when it fails.
+#[allow(dead_code)]
+pub fn assert_in_words(what: &str, message: &str) {
+    for (at, _) in message.match_indices("::") {
+        let before = message[..at].chars().next_back().is_some_and(|c| c.is_ascii_alphanumeric());
+        let after = message[at + 2..].chars().next().is_some_and(|c| c.is_ascii_alphabetic());
+        assert!(!(before && after), "{what}: a Rust path in its message: {message}");
+    }
+    for dump in ["Some(", "Err(", "Ok(", "Os {", "kind:", "{:?}"] {
+        assert!(!message.contains(dump), "{what}: a Debug dump (`{dump}`) in its message: {message}");
+    }
+    for (at, _) in message.match_indices(" { ") {
+        let rest = &message[at + 3..];
+        let field = rest.chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').count();
+        assert!(field == 0 || !rest[field..].starts_with(": "), "{what}: a Debug struct in its message: {message}");
+    }
+}
+
 /// A finished `silrig run` of a test: its exit code, output, report and folders.
 #[allow(dead_code)]
 pub struct Run {
@@ -231,11 +250,13 @@ impl Run {
         self.events().into_iter().find(|e| e["process"] == process && e["kind"] == kind)
     }
 
-    /// `silrig run ARGS` that must be refused before any process starts: exit 2, no run folder left; its stderr.
+    /// `silrig run ARGS` that must be refused before any process starts: exit 2, no run folder left, the refusal in
+    /// words ([`assert_in_words`]); its stderr.
     pub fn refused(silrig: &str, suite: &str, id_prefix: &str, test: &str, args: &[&str]) -> String {
         let r = Run::start(silrig, suite, id_prefix, test, args);
         assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
         assert!(!r.out.exists(), "a refused run left {}", r.out.display());
+        assert_in_words(&format!("silrig run {}", args.join(" ")), &r.stderr);
         let stderr = r.stderr.clone();
         r.finish();
         stderr

@@ -320,8 +320,11 @@ fn sweep_case(
     let mut campaign = crate::campaign::Campaign::from_scenario(scenario, &scenario_path.display().to_string())?;
     // A controller or plant of the user's own flies each dispersed case through the lockstep rig, as `silrig sweep
     // --controller-cmd` and `--plant-cmd` do; the worst cases' commands name them.
-    let commands =
-        crate::campaign::RigCommands { controller_cmd: opts.controller_cmd.clone(), plant_cmd: opts.plant_cmd.clone() };
+    let commands = crate::campaign::RigCommands {
+        controller_cmd: opts.controller_cmd.clone(),
+        plant_cmd: opts.plant_cmd.clone(),
+        cold: false,
+    };
     if commands.any() {
         campaign.flags = commands.to_args();
         campaign.fly_commands(commands)?;
