@@ -360,6 +360,7 @@ fn report_of(opts: &LaunchOptions, prepared: &Prepared, flown: Flown) -> anyhow:
         control,
         faults: super::fault_report::fault_records(&scenario.faults, out, dt_s),
         discontinuities: super::fault_report::discontinuities(out, dt_s),
+        plant_resumes: super::fault_report::plant_resumes(out),
         duration_s: scenario.timing.duration_s,
         stopped_by,
         failures,

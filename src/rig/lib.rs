@@ -18,7 +18,8 @@
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
 //!   snapshots `silrig run` and `silrig top` read; [`tick_beacon`]: the plant's newest tick, by which the
-//!   launcher times process faults.
+//!   launcher times process faults; [`checkpoint_slot`]: the plant's newest checkpoint in shared memory, what a
+//!   restarted plant resumes from.
 //! - [`warm`]: a process kept warm for a campaign, forking one flight after another.
 //! - Here: the arguments and options every process takes ([`ProcessArgs`], [`ProcessOptions`]), the
 //!   checkpoint writer, and how a process ends.
@@ -30,6 +31,7 @@
 //! adapters (the F-16, our law, FMUs, which of them a process flies) are `silrig-adapters`, and the launcher that
 //! starts these processes is `silrig-launch`, both above.
 
+pub mod checkpoint_slot;
 pub mod controller;
 pub mod events;
 pub mod live_foxglove;
