@@ -16,6 +16,10 @@ struct Cli {
 
 fn main() -> std::process::ExitCode {
     silrig::rig::owner_only_files();
-    let cli = Cli::parse();
+    // In a sweep's warm rig this process forks one flight after another; each returns here with its arguments.
+    let cli = match silrig::rig::warm::serve_flights() {
+        Some(argv) => Cli::parse_from(argv),
+        None => Cli::parse(),
+    };
     silrig::rig::finish_process("logger", &cli.args, silrig::rig::logger::run_logger(&cli.args, cli.live_foxglove))
 }

@@ -199,7 +199,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Trim { airspeed_mps, altitude_ft, xcg, json } => trim(airspeed_mps, altitude_ft, xcg, json),
         Command::Plant { command: PlantCommand::Derivative } => plant_derivative(),
         Command::Sim { config, out, sample: Some(index), seed, fmus, controller_cmd, plant_cmd } => {
-            let commands = silrig::campaign::RigCommands { controller_cmd, plant_cmd };
+            let commands = silrig::campaign::RigCommands { controller_cmd, plant_cmd, cold: false };
             sim_sample(config.as_deref(), out, index, seed, &fmus, &commands)
         }
         Command::Sim { config, out, fmus, .. } => sim(config.as_deref(), out, &fmus),

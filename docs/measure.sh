@@ -16,13 +16,15 @@
 #   fmu         silrig bench fmu on the exported F-16                             measurements/plants-controllers.md
 #   sizes       the default run's files and report.html                          measurements/recording.md
 #   check       silrig check --repeat 20 (the flake benchmark; about 20 minutes)  measurements/campaigns.md
+#   peers       against FMPy and JSBSim, $PEERS_PAIRS pairs each (default 5), campaigns of $PEERS_CASES cases
+#               (default 100) (examples/peers)                                   measurements/peers.md
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q
 export PATH="$PWD/target/release:$PATH"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-all=(model timer ipc realtime lockstep controllers sweep rigsweep fmu sizes check)
+all=(model timer ipc realtime lockstep controllers sweep rigsweep fmu sizes check peers)
 wanted=("$@")
 [ ${#wanted[@]} -eq 0 ] && wanted=("${all[@]}")
 
@@ -33,6 +35,8 @@ header() {
 }
 # The median, minimum and maximum of the numbers on stdin.
 stats() { python3 -c 'import sys,statistics as s; v=[float(x) for x in sys.stdin.read().split()]; print(f"median {s.median(v):.4g} (min {min(v):.4g} .. max {max(v):.4g}, {len(v)} runs)")'; }
+# Pairs "A B" on stdin (taken in turn, A B A B ...): each one's median, and the ratio A/B pair by pair.
+pairs() { python3 -c 'import sys,statistics as s; p=[tuple(map(float,l.split())) for l in sys.stdin if l.strip()]; r=[a/b for a,b in p]; m=lambda v: f"{s.median(v):.4g} ({min(v):.4g} .. {max(v):.4g})"; print(f"A median {m([a for a,_ in p])}; B median {m([b for _,b in p])}; A/B per pair {m(r)}, {len(p)} pairs")'; }
 # A figure of a report.json: report DIR EXPR, EXPR a Python expression on `r` (the report), `p99(name)` (a
 # distribution's p99 in us, e.g. plant.wake_lateness) and `proc(role)` (a process's entry).
 report() {
@@ -96,6 +100,35 @@ for name in "${wanted[@]}"; do
     check)
       header check "silrig check --repeat 20"
       silrig check --repeat 20 --out "$work/repeat" | tail -n 60 ;;
+    peers)
+      # Set up (not timed): the C PID, the PID FMU, the two scenarios' F-16 FMUs, the trace FMPy replays, the
+      # cases FMPy flies. The Python is target/test-venv's (fmpy, jsbsim), or $PEERS_PYTHON.
+      py=${PEERS_PYTHON:-target/test-venv/bin/python3}
+      n=${PEERS_PAIRS:-5}
+      cases=${PEERS_CASES:-100}
+      cc -std=c11 -O2 -I examples/c examples/c/pid_attitude.c -L target/release -lsilrig_client \
+        -Wl,-rpath,"$PWD/target/release" -lm -o "$work/pid_attitude"
+      PYTHON=$py sh examples/fmu/build.sh examples/fmu/pid "$work/pid.fmu" > /dev/null
+      silrig export-fmu --out "$work/f16-100s.fmu" examples/peers/f16-100s.toml > /dev/null
+      silrig export-fmu --out "$work/campaign.fmu" examples/peers/pid-campaign.toml > /dev/null
+      silrig sim --plant-fmu "$work/f16-100s.fmu" --out "$work/sim" examples/peers/f16-100s.toml > /dev/null
+      sweep="silrig sweep examples/peers/pid-campaign.toml --runs $cases --jobs 1 --controller-cmd $work/pid_attitude"
+      $sweep --out "$work/cases" > /dev/null 2>&1
+      header "peers: sim against simulate_fmu" "A: silrig sim --plant-fmu f16-100s.fmu examples/peers/f16-100s.toml; B: $py examples/peers/fmpy_f16.py simulate f16-100s.fmu TRACE OUT.csv ($n pairs, wall s)"
+      for k in $(seq "$n"); do
+        echo "$(wall silrig sim --plant-fmu "$work/f16-100s.fmu" --out "$work/sim$k" examples/peers/f16-100s.toml)" \
+          "$(wall "$py" examples/peers/fmpy_f16.py simulate "$work/f16-100s.fmu" "$work/sim/trace.csv" "$work/fmpy$k.csv")"
+      done | pairs
+      "$py" examples/peers/fmpy_f16.py compare "$work/sim/trace.csv" "$work/fmpy1.csv"
+      header "peers: F-16 step against JSBSim's" "A: silrig bench (plant RK4 step); B: $py examples/peers/jsbsim_f16.py bench ($n pairs, ns a step)"
+      for k in $(seq "$n"); do
+        echo "$(silrig bench | awk '/plant RK4 step/ {print $8}') $("$py" examples/peers/jsbsim_f16.py bench | awk '/JSBSim f16 step/ {print $8}')"
+      done | pairs
+      header "peers: campaign of $cases cases" "A: $sweep; B: $py examples/peers/fmpy_campaign.py campaign.fmu pid.fmu cases.csv OUT.csv ($n pairs, wall s)"
+      for k in $(seq "$n"); do
+        echo "$(wall $sweep --out "$work/sweep$k")" \
+          "$(wall "$py" examples/peers/fmpy_campaign.py "$work/campaign.fmu" "$work/pid.fmu" "$work/cases/cases.csv" "$work/fc$k.csv")"
+      done | pairs ;;
     *) echo "unknown benchmark $name; one of: ${all[*]}" >&2; exit 2 ;;
   esac
 done

@@ -37,5 +37,6 @@ out=docs/src/reference/cli.md
   echo "\`silrig run\` starts these itself; start them by hand to debug one (see [Fly the rig](../guides/run.md))."
   echo
   for p in silrig-plant silrig-controller silrig-logger silrig-bridge; do section "\`$p\`" "$p"; done
+  section '`silrig-bridge keygen`' silrig-bridge keygen
 } > "$out"
 echo "wrote $out"

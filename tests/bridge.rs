@@ -32,18 +32,33 @@ fn ip(args: &[&str]) {
     assert!(o.status.success(), "ip {}: {}", args.join(" "), String::from_utf8_lossy(&o.stderr));
 }
 
-/// Two namespaces and the veth pair between them; removed on drop (deleting a namespace removes its veth end).
+/// Two namespaces and the veth pair between them, and the bridge key both hosts hold (off the loopback a bridge
+/// needs one); removed on drop (deleting a namespace removes its veth end).
 struct Hosts {
     plant: String,
     controller: String,
     controller_if: String,
+    key: PathBuf,
+}
+
+/// A new bridge key from `silrig-bridge keygen`, in the target folder (visible on both hosts).
+fn keygen(name: &str) -> PathBuf {
+    let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("bridge-{}-{name}.key", std::process::id()));
+    let _ = std::fs::remove_file(&path);
+    let o = Command::new(BRIDGE).arg("keygen").arg(&path).output().unwrap();
+    assert!(o.status.success(), "keygen: {}", String::from_utf8_lossy(&o.stderr));
+    path
 }
 
 impl Hosts {
     fn new(tag: &str) -> Self {
         let base = format!("b{}{tag}", std::process::id() % 100_000);
-        let hosts =
-            Hosts { plant: format!("{base}p"), controller: format!("{base}c"), controller_if: format!("{base}c") };
+        let hosts = Hosts {
+            plant: format!("{base}p"),
+            controller: format!("{base}c"),
+            controller_if: format!("{base}c"),
+            key: keygen(tag),
+        };
         let plant_if = format!("{base}p");
         ip(&["netns", "add", &hosts.plant]);
         ip(&["netns", "add", &hosts.controller]);
@@ -81,6 +96,7 @@ impl Drop for Hosts {
         for ns in [&self.plant, &self.controller] {
             let _ = Command::new("ip").args(["netns", "del", ns]).status();
         }
+        let _ = std::fs::remove_file(&self.key);
     }
 }
 
@@ -162,6 +178,8 @@ fn plant_host_with(
         "30",
         "--bridge-listen",
         PLANT_ADDR,
+        "--bridge-key",
+        hosts.key.to_str().unwrap(),
     ]);
     Proc::spawn(command.args(flags).envs(env.iter().copied()))
 }
@@ -186,13 +204,19 @@ fn controller_bridge(hosts: &Hosts, run: &str, out: &Path) -> Proc {
 
 /// The same with environment variables (the bridge's test impairment).
 fn controller_bridge_with(hosts: &Hosts, run: &str, out: &Path, env: &[(&str, &str)]) -> Proc {
-    Proc::spawn(
-        Command::new("ip")
-            .args(["netns", "exec", &hosts.controller, "unshare", "--mount", "sh", "-c", PRIVATE_TMP, "sh"])
-            .arg(env!("CARGO_MANIFEST_DIR"))
-            .args([BRIDGE, "--connect", PLANT_ADDR, "--run-id", run, "--out", out.to_str().unwrap()])
-            .envs(env.iter().copied()),
-    )
+    Proc::spawn(third_host(hosts, &["--key", hosts.key.to_str().unwrap()], run, out).envs(env.iter().copied()))
+}
+
+/// `silrig-bridge --connect` with `security` (a key, none, `--insecure`) from the controller's host, in a mount
+/// namespace of its own: the controller's, or a third host's.
+fn third_host(hosts: &Hosts, security: &[&str], run: &str, out: &Path) -> Command {
+    let mut command = Command::new("ip");
+    command
+        .args(["netns", "exec", &hosts.controller, "unshare", "--mount", "sh", "-c", PRIVATE_TMP, "sh"])
+        .arg(env!("CARGO_MANIFEST_DIR"))
+        .args([BRIDGE, "--connect", PLANT_ADDR, "--run-id", run, "--out", out.to_str().unwrap()])
+        .args(security);
+    command
 }
 
 /// A program run inside the namespaces (network and mount) of process `pid` on the controller's host.
@@ -345,6 +369,8 @@ fn a_link_cut_trips_the_failsafe_and_the_flight_recovers_also_after_a_bridge_res
         &run,
         "--out",
         ctl_out.to_str().unwrap(),
+        "--key",
+        hosts.key.to_str().unwrap(),
     ]));
     wait_for(Duration::from_secs(20), "the flight resumes with the restarted bridge", || {
         let e = events(&out);
@@ -615,4 +641,228 @@ fn both_hosts_on_one_machine_fly_with_a_local_run_id_and_leave_nothing() {
     for dir in [out, ctl_out] {
         let _ = std::fs::remove_dir_all(dir);
     }
+}
+
+/// What [`stranger_peer`] is told, in [`STRANGER`]: where to connect, the run, the key (none: plain TCP) and how
+/// long to try.
+const STRANGER: &str = "SILRIG_TEST_STRANGER";
+
+/// A raw Zenoh peer, as a stranger on the network would write one against a run whose id it knows: connects to the
+/// plant's address, says hello as the run's controller-side bridge with a controller connected, publishes commands
+/// with that hello's epoch, asks for the run's scenario and listens to every key of the run; prints what it got.
+/// This test binary runs itself as that peer (`--exact stranger_peer`) in the controller's network namespace, with
+/// [`STRANGER`] set; run without it, as by `cargo test`, it is not a test and returns at once.
+#[test]
+fn stranger_peer() {
+    use silrig::bridge::frame::{CommandTrailer, Hello, Side};
+    use silrig::bridge::zenoh::Wait;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let Ok(spec) = std::env::var(STRANGER) else { return };
+    let spec: Value = serde_json::from_str(&spec).unwrap();
+    let (endpoint, run) = (spec["endpoint"].as_str().unwrap(), spec["run"].as_str().unwrap().to_string());
+    let key = spec["key"].as_str().map(|k| silrig::bridge::key::BridgeKey::read(Path::new(k)).unwrap());
+    let session = silrig::bridge::net::open_session(Side::Controller, endpoint, key.as_ref()).unwrap();
+    let samples = Arc::new(AtomicU64::new(0));
+    let counted = samples.clone();
+    let _all = session
+        .declare_subscriber(format!("silrig/{run}/**"))
+        .callback(move |sample| {
+            // Its own puts come back to it: only what the plant side sent counts.
+            let key = sample.key_expr().as_str();
+            if !key.ends_with("/command") && !key.ends_with("/hello/controller") {
+                counted.fetch_add(1, Ordering::Relaxed);
+            }
+        })
+        .wait()
+        .unwrap();
+    let epoch = 0x5157_4e47_4552_0001;
+    let layout_version = silrig::wire::WIRE_LAYOUT_VERSION;
+    let hello = Hello {
+        side: Side::Controller,
+        run_id: run.clone(),
+        layout_version,
+        epoch,
+        serving: None,
+        controller_connected: true,
+    };
+    let trailer = CommandTrailer { bridge_epoch: epoch, residence_ns: 1 }.to_bytes().to_vec();
+    let (mut replies, start) = (0, Instant::now());
+    while start.elapsed().as_secs_f64() < spec["seconds"].as_f64().unwrap() {
+        let _ = session.put(format!("silrig/{run}/hello/controller"), hello.to_bytes()).wait();
+        let _ = session.put(format!("silrig/{run}/command"), vec![0xab; 64]).attachment(trailer.clone()).wait();
+        if let Ok(answers) = session.get(format!("silrig/{run}/run")).timeout(Duration::from_millis(100)).wait() {
+            while let Ok(answer) = answers.recv() {
+                replies += usize::from(answer.result().is_ok());
+            }
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    println!("STRANGER {}", serde_json::json!({"samples": samples.load(Ordering::Relaxed), "run_infos": replies}));
+}
+
+/// [`stranger_peer`] from the controller's host for `seconds`, with `key` or none; what it got.
+fn stranger(hosts: &Hosts, run: &str, key: Option<&Path>, seconds: f64) -> Value {
+    let endpoint = if key.is_some() { format!("tls/{PLANT_ADDR}") } else { format!("tcp/{PLANT_ADDR}") };
+    let spec = serde_json::json!({"endpoint": endpoint, "run": run, "key": key, "seconds": seconds});
+    let exe = std::env::current_exe().unwrap();
+    let o = Command::new("ip")
+        .args(["netns", "exec", &hosts.controller])
+        .arg(exe)
+        .args(["--exact", "stranger_peer", "--nocapture", "--test-threads", "1"])
+        .env(STRANGER, spec.to_string())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{text}");
+    // After the harness's "test stranger_peer ... " on the same line.
+    let line = text.lines().find_map(|l| l.split_once("STRANGER ")).unwrap_or_else(|| panic!("{text}")).1;
+    serde_json::from_str(line).unwrap_or_else(|e| panic!("{e}: {text}"))
+}
+
+fn peer_joins(out: &Path) -> usize {
+    events(out).iter().filter(|e| e["process"] == "bridge" && e["kind"] == "bridge-peer-joined").count()
+}
+
+/// A run flying with its controller behind the key; strangers from the network knock: our own bridge without a key
+/// (refused before it tries), with `--insecure` (plain TCP: the plant side refuses the link) and with another key
+/// (stopped at once, in words, on both hosts), and a raw Zenoh peer without the key and with another one, which
+/// says hello as the run's controller side, publishes commands and listens to every key: it reads nothing, its
+/// hello and commands never reach the plant side, the plant side's only peer is the run's own bridge. The same raw
+/// peer with the run's key does read samples and is heard (refused as a second controller side), so the test sees
+/// a peer that gets in.
+#[test]
+fn a_stranger_without_the_key_can_neither_join_nor_read_nor_command_and_a_wrong_key_is_named_on_both_hosts() {
+    let _one = ONE_RIG.lock().unwrap_or_else(|e| e.into_inner());
+    let hosts = Hosts::new("s");
+    let (run, out, ctl_out) = (run_id("stranger"), folder("stranger", "plant"), folder("stranger", "controller"));
+    let launcher = plant_host(&hosts, &run, &out, "14");
+    let bridge = controller_bridge(&hosts, &run, &ctl_out);
+    let _ctl = controller(bridge.pid(), &run, &ctl_out);
+    wait_for(Duration::from_secs(60), "the plant ticks", || has_event(&out, "plant", "ticking"));
+    let log = || std::fs::read_to_string(out.join("bridge.stderr.log")).unwrap_or_default();
+    let other_out = folder("stranger", "other");
+    let timeout = ["--connect-timeout-s", "3"];
+
+    // No key: refused before it tries, saying what the key is for and how to make one.
+    let (status, said) = Proc::spawn(&mut third_host(&hosts, &timeout, &run, &other_out)).wait(Duration::from_secs(30));
+    assert_eq!(status.code(), Some(2), "{said}");
+    assert!(said.contains("refused to connect to tcp/10.217.0.1:7447 without a bridge key"), "{said}");
+    assert!(said.contains("silrig-bridge keygen") && said.contains("--insecure"), "{said}");
+
+    // --insecure, plain TCP: the plant side takes no link that is not TLS with the key.
+    let insecure = [&timeout[..], &["--insecure"]].concat();
+    let (status, said) =
+        Proc::spawn(&mut third_host(&hosts, &insecure, &run, &other_out)).wait(Duration::from_secs(30));
+    assert_eq!(status.code(), Some(2), "{said}");
+    assert!(said.contains("NO bridge key") && said.contains("no plant-side bridge answered"), "{said}");
+    assert!(!other_out.join("scenario.toml").exists(), "the stranger read the run's scenario");
+    wait_for(Duration::from_secs(10), "the plant side says it refused a link without TLS", || {
+        log().contains("refused a connection from the network") && log().contains("did not speak TLS")
+    });
+
+    // Another key: stopped at once, in words, on both hosts.
+    let wrong = keygen("stranger-wrong");
+    let with_wrong = [&timeout[..], &["--key", wrong.to_str().unwrap()]].concat();
+    let started = Instant::now();
+    let (status, said) =
+        Proc::spawn(&mut third_host(&hosts, &with_wrong, &run, &other_out)).wait(Duration::from_secs(30));
+    assert_eq!(status.code(), Some(2), "{said}");
+    assert!(said.contains("holds another bridge key, or refused this one"), "{said}");
+    assert!(said.contains("give both hosts the same key file"), "{said}");
+    eprintln!("a wrong key stopped the controller side after {:.1} s: {said}", started.elapsed().as_secs_f64());
+    wait_for(Duration::from_secs(10), "the plant side says a peer without the key knocked", || {
+        log().contains("does not hold this run's bridge key")
+    });
+
+    // A raw Zenoh peer without the key, then with another: reads nothing, heard by nobody.
+    for key in [None, Some(wrong.as_path())] {
+        let got = stranger(&hosts, &run, key, 2.0);
+        assert_eq!(got["samples"], 0, "a stranger ({key:?}) read the run: {got}");
+        assert_eq!(got["run_infos"], 0, "a stranger ({key:?}) read the run's scenario: {got}");
+    }
+    assert_eq!(peer_joins(&out), 1, "only the run's own controller side joined: {:?}", events(&out));
+    assert!(!has_event(&out, "bridge", "bridge-peer-refused"), "a stranger's hello reached the plant side");
+
+    // The same peer with the run's key gets in: it reads, and its hello is heard (and refused: one controller).
+    let got = stranger(&hosts, &run, Some(&hosts.key), 2.0);
+    assert!(got["samples"].as_u64().unwrap() > 0 && got["run_infos"].as_u64().unwrap() > 0, "{got}");
+    assert!(has_event(&out, "bridge", "bridge-peer-refused"), "the keyed peer's hello was not heard");
+
+    let (status, text) = launcher.wait(Duration::from_secs(120));
+    assert!(status.success(), "{text}");
+    let r = report(&out);
+    let (ticks, misses) = (counter(&r, "plant", "ticks"), counter(&r, "plant", "command_misses"));
+    // The strangers cost the flight nothing it would notice: its ticks, and its misses within what a loaded machine
+    // gives any flight across the bridge (4 % at a load average of 32 on 2 CPUs, steady from the first second).
+    assert_eq!(ticks, 1401, "{text}");
+    assert!(misses * 10 <= ticks, "the run's own flight went on: {misses} of {ticks} missed; {text}");
+    // Only the keyed peer's commands reached the plant side at all, and none was passed to the plant.
+    assert!(counter(&r, "bridge", "samples_from_unserved_bridges") > 0, "{text}");
+    assert!(counter(&r, "bridge", "connections_refused") >= 2, "{text}");
+    assert!(counter(&r, "bridge", "commands_in") <= ticks, "{text}");
+    no_shared_memory_left(&run);
+    for dir in [out, ctl_out, other_out] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    let _ = std::fs::remove_file(wrong);
+}
+
+/// Without a key a bridge serves the loopback only, unless told `--insecure`; a key others can read, or one over
+/// UDP, is refused; `silrig run --bridge-listen` says each before anything starts. No namespaces needed.
+#[test]
+fn without_a_key_only_the_loopback_is_served_and_a_key_others_can_read_is_refused() {
+    let run = run_id("nokey");
+    let check = |args: &[&str]| {
+        let o = Command::new(BRIDGE).args(["--check", "--run-id", &run]).args(args).output().unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).to_string())
+    };
+    let (code, said) = check(&["--listen", "0.0.0.0:7447"]);
+    assert_eq!(code, Some(2), "{said}");
+    assert!(said.contains("refused to listen on tcp/0.0.0.0:7447 without a bridge key"), "{said}");
+    assert!(said.contains(&format!("could join run `{run}` as its controller")), "{said}");
+    let (code, said) = check(&["--listen", "127.0.0.1:7447"]);
+    assert_eq!(code, Some(0), "{said}");
+    assert!(said.contains("no bridge key, on the loopback"), "{said}");
+    let (code, said) = check(&["--listen", "0.0.0.0:7447", "--insecure"]);
+    assert_eq!(code, Some(0), "{said}");
+    assert!(said.contains("NO bridge key (--insecure)"), "{said}");
+
+    let key = keygen("nokey");
+    let (code, said) = check(&["--listen", "0.0.0.0:7447", "--key", key.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{said}");
+    assert!(said.contains("would listen on tls/0.0.0.0:7447 with TLS with bridge key"), "{said}");
+    let (code, said) = check(&["--listen", "udp/0.0.0.0:7447", "--key", key.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{said}");
+    assert!(said.contains("needs TCP"), "{said}");
+    let o = Command::new(BRIDGE).arg("keygen").arg(&key).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("never overwritten"));
+
+    // silrig run says it before anything starts, in the bridge's words, and leaves no folder.
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o644)).unwrap();
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("bridge-{}-nokey-run", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let run_with = |flags: &[&str]| {
+        let o = Command::new(SILRIG)
+            .args(["run", "--no-baseline", "--run-id", &run, "--out", out.to_str().unwrap()])
+            .args(["--bridge-listen", "0.0.0.0:7447"])
+            .args(flags)
+            .output()
+            .unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).to_string())
+    };
+    let (code, said) = run_with(&[]);
+    assert_eq!(code, Some(2), "{said}");
+    assert!(
+        said.contains("--bridge-listen 0.0.0.0:7447: refused to listen on") && said.contains("--bridge-key"),
+        "{said}"
+    );
+    let (code, said) = run_with(&["--bridge-key", key.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{said}");
+    assert!(said.contains("its group or others may read it (mode 644)") && said.contains("chmod 600"), "{said}");
+    assert!(!out.exists(), "a refused run left its folder");
+    no_shared_memory_left(&run);
+    let _ = std::fs::remove_file(key);
 }

@@ -398,7 +398,9 @@ fn a_controller_that_exits_at_once_is_reported_with_its_status_and_stderr() {
     let r = run("exits", &["--duration-s", "1", "--startup-timeout-s", "1", "--controller-cmd", cmd, &robust()]);
     assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
     let failures = r.report["failures"].to_string();
-    assert!(failures.contains("controller: exit status 3 before the plant's first tick"), "{failures}");
+    let said = format!("controller: your --controller-cmd `{cmd}` (pid ");
+    assert!(failures.contains(&said.replace('"', "\\\"")), "{failures}");
+    assert!(failures.contains(") ended before it joined the run (exit status 3, "), "{failures}");
     assert!(failures.contains("cannot find my gains file"), "{failures}");
     // The run ends there: the plant never flew (no row logged), and is not left waiting out its start-up timeout.
     assert!(!r.out.join("trace.csv").exists() || r.trace().1.is_empty());
@@ -420,7 +422,12 @@ fn a_controllers_children_end_with_the_run_and_an_early_clean_exit_fails_it_at_o
     let cmd = format!("sh -c \"sleep {marker} & exit 0\"");
     let r = run("exits-clean", &["--duration-s", "1", "--controller-cmd", &cmd, &robust()]);
     assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
-    assert!(r.failures().contains("controller: exit status 0 before the plant's first tick"), "{}", r.failures());
+    let said = ") ended before it joined the run (exit status 0, ";
+    assert!(
+        r.failures().contains("controller: your --controller-cmd `sh -c") && r.failures().contains(said),
+        "{}",
+        r.failures()
+    );
     let left = Command::new("pgrep").args(["-f", &format!("sleep {marker}")]).output().unwrap();
     assert!(left.stdout.is_empty(), "left running: {}", String::from_utf8_lossy(&left.stdout));
     r.finish();

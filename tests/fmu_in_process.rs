@@ -5,7 +5,10 @@
 //! of its cases is the case `silrig sim --sample` flies alone; planned in shards from another folder, its shards give
 //! the same cases. A case whose FMU fails is a failed case naming the FMU's error, a case with NaN outputs fails
 //! saying they were refused, and a sampled parameter outside the FMU's declared range is an infeasible case saying so:
-//! never a crashed sweep. The FMUs are built from C by `examples/fmu/build.sh`.
+//! never a crashed sweep. A plant FMU with no controller named flies under the built-in controller that fits it (the
+//! quadrotor's FMU under ours for the quadrotor, hovering, in `sim` and the lockstep rig alike); one that fits none is
+//! refused by `sim`, `sweep` and `run`, naming its signals and the flags that name a controller. The FMUs are built
+//! from C by `examples/fmu/build.sh`, the quadrotor's by `silrig export-fmu`.
 
 mod common;
 
@@ -355,5 +358,75 @@ fn check_in_process_flies_a_lockstep_case_of_two_fmus_as_the_rig_does_and_refuse
     let o = silrig(&["check", "--in-process", "--controller-cmd", "python3 x.py"], &dir);
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
     assert!(said(&o).contains("--in-process") && said(&o).contains("--controller-cmd"), "{}", said(&o));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// The quadrotor exported as an FMU, under a scenario that gives set points and timing but does not say it is the
+/// quadrotor: `sim` and the lockstep rig choose our quadrotor controller by its signals (not the F-16's), give the
+/// same bytes, and take it off to a hover at its set point.
+#[test]
+fn the_quadrotors_fmu_gets_our_quadrotor_controller_and_hovers() {
+    let dir = common::temp_dir(SUITE, "quad-fmu");
+    let hover = format!("{ROOT}/configs/quad-hover.toml");
+    let (quad, _) = common::fmu::export_builtin(SILRIG, &dir, "quad.fmu", Some(&hover));
+    let scenario = dir.join("hover.toml");
+    std::fs::write(
+        &scenario,
+        "name = \"quad-fmu-hover\"\n[setpoint]\nalt_m = 2.0\n\
+         [timing]\ndt_s = 0.001\nduration_s = 6.0\ncommand_timing = \"next-tick\"\n",
+    )
+    .unwrap();
+    let args = ["--plant-fmu", quad.to_str().unwrap(), scenario.to_str().unwrap()];
+    let sim = sim_trace(&dir, &args);
+    same_bytes(&sim, &rig_trace("quad-fmu-rig", &args), "the quadrotor's FMU in sim and the lockstep rig");
+    let text = String::from_utf8(sim).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    assert!(header.contains(&"motor1_cmd") && !header.iter().any(|c| c.starts_with("aileron")), "{header:?}");
+    let last: Vec<f64> = text.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+    let at = |name: &str| last[header.iter().position(|c| *c == name).unwrap()];
+    assert!((at("alt_m") - 2.0).abs() < 0.05, "hovering at {} m", at("alt_m"));
+    assert!(at("phi_deg").abs() < 1.0 && at("theta_deg").abs() < 1.0 && at("on_ground") == 0.0);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A plant FMU that neither built-in controller fits (the foreign attitude vehicle: no `vt_fps`, no `alt_m`, no
+/// motors), with no controller named, is refused before it flies by `sim`, `sweep` and `run`, naming what each
+/// controller missed, the plant's signals and the flags that name one; nothing is written.
+#[test]
+fn a_plant_fmu_no_built_in_controller_fits_is_refused_naming_its_signals_and_what_to_do() {
+    let dir = common::temp_dir(SUITE, "unfit");
+    let attitude = fmu("attitude");
+    let any_plant = format!("{ROOT}/configs/any-plant.toml");
+    let sweep = dir.join("sweep.toml");
+    let dispersed = "[dispersions]\n\"setpoint.theta_deg\" = { dist = \"uniform\", min = 5.0, max = 10.0 }\n\
+                     [criteria.outputs.theta_deg]\nsettled = { within_s = 5.0, band = 0.5 }\n";
+    std::fs::write(&sweep, std::fs::read_to_string(&any_plant).unwrap() + dispersed).unwrap();
+    let refusals = [
+        silrig(&["sim", "--plant-fmu", &attitude, &any_plant, "--out", "out"], &dir),
+        silrig(&["sweep", sweep.to_str().unwrap(), "--runs", "2", "--plant-fmu", &attitude, "--out", "out"], &dir),
+    ];
+    let run =
+        Run::start(SILRIG, SUITE, "i", "unfit-run", &["--mode", "lockstep", "--plant-fmu", &attitude, &any_plant]);
+    let said_by_run = format!("{}{}", run.stdout, run.stderr);
+    for (what, code, text) in [
+        ("sim", refusals[0].status.code(), said(&refusals[0])),
+        ("sweep", refusals[1].status.code(), said(&refusals[1])),
+        ("run", run.code, said_by_run),
+    ] {
+        assert_ne!(code, Some(0), "{what}: {text}");
+        for part in [
+            "fits no built-in controller (ours for the F-16: plant ",
+            "has no output `vt_fps`; ours for the quadrotor: plant ",
+            "its outputs: phi_deg, theta_deg",
+            "its inputs: ",
+            "`--controller-fmu FILE`",
+            "`--controller-cmd CMD`",
+        ] {
+            assert!(text.contains(part), "{what} does not say {part:?}: {text}");
+        }
+    }
+    assert!(!run.out.join("trace.csv").exists(), "the run flew");
+    assert!(!dir.join("out").exists(), "sim or sweep wrote {}", dir.join("out").display());
+    run.finish();
     std::fs::remove_dir_all(dir).unwrap();
 }

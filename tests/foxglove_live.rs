@@ -132,6 +132,7 @@ fn clients_receive_every_channel_in_order_and_the_run_loses_nothing() {
     let late = received(late, &late_out, "late");
     assert_eq!(run.code, Some(0), "{}\n{}\n{}", run.stdout, run.stderr, run.failures());
     assert!(run.stderr.contains(&format!("ws://{addr}")), "the launcher does not say where: {}", run.stderr);
+    assert!(run.stderr.contains("on the loopback only"), "the launcher does not say who can reach it: {}", run.stderr);
     assert!(run.event("logger", "live-serving").is_some(), "no live-serving event");
 
     // Nothing lost: a row a tick in trace.csv, a /trace message a row in the recording.

@@ -465,8 +465,10 @@ fn a_killed_plant_of_your_own_restarts_from_its_checkpoint_and_the_flight_goes_o
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     let resumed = r.event("plant", "plant-resumed").expect("a plant-resumed event");
     let detail = resumed["detail"].as_str().unwrap();
-    let tick: u64 = detail.rsplit(' ').next().unwrap().parse().unwrap();
+    let tick = resumed["tick"].as_u64().unwrap();
     assert!((50..=100).contains(&tick) && tick.is_multiple_of(10), "{detail}");
+    let resumes = &r.report["plant_resumes"];
+    assert_eq!(resumes[0]["at_tick"].as_u64(), Some(tick), "report.json's plant_resumes: {resumes}");
     assert!(r.event("plant", "plant-restarted-from-start").is_none(), "flew again from tick 0");
     // Every tick is logged exactly once, in order, and the model took up its state where it was saved.
     let (header, rows) = r.trace();

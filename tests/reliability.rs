@@ -446,7 +446,9 @@ fn a_damaged_plant_checkpoint_stops_the_restart_rather_than_flying_again_from_th
     let out = dir.join("run");
     let launcher = launch(&id, &out, &["--duration-s", "4", "--fault", "plant:kill@1s,restart_after=1s"]);
     wait_for_injection(&out, "plant kill");
-    // Torn, as a disk that filled mid-write would leave it.
+    // Without the run's shared-memory copy (as for a plant resumed by hand after the run's end) the file is what
+    // the restarted plant reads: torn, as a disk that filled mid-write would leave it.
+    std::fs::remove_file(format!("/dev/shm/sr_{id}_plant.checkpoint")).unwrap();
     std::fs::write(out.join("plant.checkpoint.json"), "{\"tick\": 100, \"state\": {\"vt_fps\": 5").unwrap();
     let o = wait_with_watchdog(launcher, Duration::from_secs(60));
     let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));

@@ -10,8 +10,6 @@ mod common;
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::Duration;
 
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -46,33 +44,9 @@ fn short_config(dir: &Path) -> PathBuf {
     path
 }
 
-/// `silrig ARGS` from the repository root, to its end (5 minutes at most): (exit code, stdout, stderr). The rigs
-/// it flew (run ids `r<its pid>-...`) left no shared memory, and its scratch folders are gone.
+/// `silrig ARGS` from the repository root, to its end (5 minutes at most), leaving nothing behind.
 fn silrig(args: &[&str]) -> (Option<i32>, String, String) {
-    let child = Command::new(SILRIG)
-        .args(args)
-        .current_dir(ROOT)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let runs = format!("r{:x}-", child.id());
-    let o = common::wait_with_watchdog(child, Duration::from_secs(300));
-    let shm: Vec<String> = std::fs::read_dir("/dev/shm")
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().to_string())
-        .filter(|n| n.starts_with(&format!("sr_{runs}")))
-        .collect();
-    assert!(shm.is_empty(), "shared memory left behind: {shm:?}");
-    let tmp: Vec<String> = std::fs::read_dir(std::env::temp_dir())
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().to_string())
-        .filter(|n| n.starts_with(&format!("silrig_{runs}")) || n.starts_with(&format!("silrig-sweep-{runs}")))
-        .collect();
-    assert!(tmp.is_empty(), "run or scratch folders left behind: {tmp:?}");
-    (o.status.code(), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+    common::run_leaving_nothing(SILRIG, args)
 }
 
 /// `silrig ARGS`, which must succeed.

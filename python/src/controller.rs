@@ -162,6 +162,8 @@ pub struct ControllerSession {
 impl ControllerSession {
     /// Open from the environment, announcing `diagnostic_names`.
     fn open(diagnostic_names: Vec<String>) -> Result<Self, SessionError> {
+        // A sweep's warm rig forks each flight here, before the run's variables are read.
+        let _ = silrig_rig::warm::serve_flights();
         let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
         let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
         let session = rig_session::ControllerSession::open(args, scenario, &diagnostic_names)?;

@@ -77,6 +77,8 @@ impl PlantSession {
     fn open(model: &Bound<'_, PyAny>) -> PyResult<Result<Self, SessionError>> {
         let signals = signals_of(model)?;
         let open = || -> Result<Self, SessionError> {
+            // A sweep's warm rig forks each flight here, before the run's variables are read.
+            let _ = silrig_rig::warm::serve_flights();
             let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
             let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
             let session = rig_plant::PlantSession::open(args, scenario, &signals)?;
@@ -186,6 +188,8 @@ impl PlantSession {
 #[pyfunction]
 #[pyo3(signature = (name, default = None))]
 pub fn plant_parameter(py: Python<'_>, name: &str, default: Option<f64>) -> PyResult<Option<f64>> {
+    // A sweep's warm rig forks each flight here, before the run's variables are read.
+    let _ = silrig_rig::warm::serve_flights();
     let args = ProcessArgs::from_env(std::env::vars()).map_err(|e| silrig_error(py, Status::ErrSetup, e))?;
     let scenario = args.scenario().map_err(|e| silrig_error(py, Status::ErrSetup, format!("{e:#}")))?;
     Ok(scenario.plant.parameters.get(name).copied().or(default))

@@ -14,7 +14,8 @@
 //! [`Models`] opens a scenario's FMUs once (unpacking is the slow part) and flies any number of flights of it, each
 //! with fresh instances, from any number of threads unless an FMU says its binary allows one instance per process.
 //! What it opens and flies is a match on the scenario's [`PlantKind`] and [`ControllerKind`], one arm per adapter,
-//! as in [`crate::process`]; or, in place of the scenario's controller, one the caller brings
+//! as in [`crate::process`] (a plant FMU with no controller named gets the built-in law that fits its signals, or
+//! a refusal when it would fly); or, in place of the scenario's controller, one the caller brings
 //! ([`Models::fly_controller`]: the Python package's `silrig.sim(..., controller=...)`), made anew for each flight.
 
 use crate::builtin::attitude_law::AttitudeLaw;
@@ -274,6 +275,8 @@ enum OpenedController {
     QuadLaw,
     Fmu(Arc<Fmu>),
     Given(MakeController),
+    /// A plant FMU that no built-in law fits, with no controller named: why, said when it would fly.
+    Unfit(String),
 }
 
 /// Makes a flight's controller for that flight's scenario (a sweep's case: its dispersed set points and step); an
@@ -293,7 +296,7 @@ impl OpenedController {
     fn fmu(&self) -> Option<&Arc<Fmu>> {
         match self {
             Self::Fmu(fmu) => Some(fmu),
-            Self::AttitudeLaw | Self::QuadLaw | Self::Given(_) => None,
+            Self::AttitudeLaw | Self::QuadLaw | Self::Given(_) | Self::Unfit(_) => None,
         }
     }
 }
@@ -315,11 +318,19 @@ impl Models {
             }
             PlantKind::Fmu(path) => OpenedPlant::Fmu(Arc::new(Fmu::open(&path)?)),
         };
-        let controller = match ControllerKind::of(scenario) {
-            ControllerKind::AttitudeLaw => OpenedController::AttitudeLaw,
-            ControllerKind::QuadLaw => OpenedController::QuadLaw,
-            ControllerKind::Fmu(path) => OpenedController::Fmu(Arc::new(Fmu::open(&path)?)),
-            ControllerKind::Device(layout) => anyhow::bail!(
+        // A plant FMU that no built-in law fits is refused when it would fly, not now: the caller may bring its
+        // own controller (`fly_controller`, a sweep's `--controller-cmd`).
+        let fmu_signals = |_: &Path| -> anyhow::Result<PlantSignals> {
+            let fmu = plant.fmu().expect("a plant FMU is opened as one");
+            let signals = crate::fmu::plant::fmu_signals(fmu.file(), &fmu.description, scenario);
+            Ok(signals.map_err(anyhow::Error::msg)?.signals)
+        };
+        let controller = match ControllerKind::fitting(scenario, fmu_signals) {
+            Err(unfit) => OpenedController::Unfit(format!("{unfit:#}")),
+            Ok(ControllerKind::AttitudeLaw) => OpenedController::AttitudeLaw,
+            Ok(ControllerKind::QuadLaw) => OpenedController::QuadLaw,
+            Ok(ControllerKind::Fmu(path)) => OpenedController::Fmu(Arc::new(Fmu::open(&path)?)),
+            Ok(ControllerKind::Device(layout)) => anyhow::bail!(
                 "the controller is the device of {}: a device flies through the rig (`silrig run`), not in one \
                  process",
                 layout.display()
@@ -332,6 +343,15 @@ impl Models {
     /// then not read, but for the step: `timing.controller_every_ticks`).
     pub fn fly_controller(&mut self, make: MakeController) {
         self.controller = OpenedController::Given(make);
+    }
+
+    /// Whether a controller flies the plant: the error says why no built-in controller fits a plant FMU and how
+    /// to name one (a caller's controller, [`Models::fly_controller`], flies it instead).
+    pub fn controller_fits(&self) -> anyhow::Result<()> {
+        match &self.controller {
+            OpenedController::Unfit(why) => Err(anyhow::anyhow!("{why}")),
+            _ => Ok(()),
+        }
     }
 
     /// Whether the scenario flies an FMU.
@@ -413,6 +433,7 @@ impl Models {
             OpenedController::QuadLaw => Box::new(QuadLaw::new(scenario).map_err(|e| setup(anyhow::anyhow!(e)))?),
             OpenedController::Fmu(fmu) => Box::new(FmuController::new(fmu.clone(), scenario).map_err(setup)?),
             OpenedController::Given(make) => make(scenario).map_err(|e| setup(anyhow::anyhow!(e)))?,
+            OpenedController::Unfit(why) => return Err(setup(anyhow::anyhow!("{why}"))),
         };
         let connect = |e: String| setup(anyhow::anyhow!(e));
         match &self.plant {

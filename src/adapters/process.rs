@@ -8,14 +8,15 @@ use crate::builtin::f16_plant::F16Plant;
 use crate::builtin::quad_law::QuadLaw;
 use crate::builtin::quad_plant::QuadPlant;
 use crate::fmu::controller::run_fmu_controller;
-use crate::fmu::plant::run_fmu_plant;
+use crate::fmu::plant::{FmuPlant, run_fmu_plant};
 use crate::udp::device::run_device_controller;
 use silrig_flight::scenario::Scenario;
+use silrig_flight::signals::PlantSignals;
 use silrig_rig::ProcessArgs;
-use silrig_rig::controller::serve;
+use silrig_rig::controller::{Controller, serve};
 use silrig_rig::plant::run_plant_model;
 use silrig_rig::report::ProcessReport;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// What flies as the plant.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -53,7 +54,8 @@ pub enum ControllerKind {
 }
 
 impl ControllerKind {
-    /// The kind of controller `scenario` flies.
+    /// The kind of controller `scenario` names, or ours for its built-in vehicle; for a plant FMU with no
+    /// controller named, [`ControllerKind::fitting`] chooses.
     pub fn of(scenario: &Scenario) -> Self {
         if let Some(layout) = &scenario.controller.device {
             return Self::Device(layout.clone());
@@ -64,6 +66,48 @@ impl ControllerKind {
             None => Self::AttitudeLaw,
         }
     }
+
+    /// The kind of controller `scenario` flies: the one it names (an FMU, a device), or ours for its built-in
+    /// vehicle; for a plant FMU with none named, our law that connects to the FMU's signals (`plant_fmu_signals`,
+    /// read only then): the quadrotor's for the quadrotor's FMU, the F-16's for the F-16's. None fitting, the
+    /// error names the plant's signals and how to name its controller.
+    pub fn fitting(
+        scenario: &Scenario,
+        plant_fmu_signals: impl FnOnce(&Path) -> anyhow::Result<PlantSignals>,
+    ) -> anyhow::Result<Self> {
+        let named = Self::of(scenario);
+        let Some(fmu) = &scenario.plant.fmu else { return Ok(named) };
+        if scenario.controller.fmu.is_some() || scenario.controller.device.is_some() {
+            return Ok(named);
+        }
+        let plant = plant_fmu_signals(fmu)?;
+        let f16 = AttitudeLaw::new(scenario).connect(&plant);
+        let quad = QuadLaw::new(scenario).and_then(|mut law| law.connect(&plant));
+        match (f16, quad) {
+            (Ok(()), _) => Ok(Self::AttitudeLaw),
+            (_, Ok(())) => Ok(Self::QuadLaw),
+            (Err(f16), Err(quad)) => Err(anyhow::anyhow!(fits_no_law(&plant, &f16, &quad))),
+        }
+    }
+}
+
+/// Why no built-in law flies this plant: what each missed, the plant's signals, and how to name a controller.
+fn fits_no_law(plant: &PlantSignals, f16: &str, quad: &str) -> String {
+    // A law's refusal names the signal it missed, then lists the plant's, which are said once below.
+    let missed = |why: &str| why.split_once("; its ").map_or(why, |(first, _)| first).to_string();
+    let outputs: Vec<&str> = plant.outputs.iter().map(|o| o.name.as_str()).collect();
+    let inputs: Vec<&str> = plant.inputs.iter().map(|i| i.name.as_str()).collect();
+    format!(
+        "the plant FMU {} fits no built-in controller (ours for the F-16: {}; ours for the quadrotor: {}); its \
+         outputs: {}; its inputs: {}. Name the controller that flies it: `--controller-fmu FILE` (or `[controller] \
+         fmu` in the scenario), or, with `silrig run` and `silrig check`, `--controller-cmd CMD` or \
+         `--controller external`",
+        plant.plant,
+        missed(f16),
+        missed(quad),
+        outputs.join(", "),
+        inputs.join(", "),
+    )
 }
 
 /// Run the plant process to the end of the scenario (or SIGTERM) and write its report.
@@ -86,7 +130,8 @@ pub fn run_plant(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
 /// Run the controller process until the run ends (or SIGTERM) and write its report.
 pub fn run_controller(args: &ProcessArgs) -> anyhow::Result<ProcessReport> {
     let scenario = args.scenario()?;
-    match ControllerKind::of(&scenario) {
+    let kind = ControllerKind::fitting(&scenario, |fmu| Ok(FmuPlant::check(fmu, &scenario)?.signals))?;
+    match kind {
         ControllerKind::AttitudeLaw => {
             let law = Box::new(AttitudeLaw::new(&scenario));
             serve(args, scenario, law)
@@ -113,5 +158,38 @@ mod tests {
         scenario.controller.fmu = Some("pid.fmu".into());
         assert_eq!(PlantKind::of(&scenario), PlantKind::Fmu("airframe.fmu".into()));
         assert_eq!(ControllerKind::of(&scenario), ControllerKind::Fmu("pid.fmu".into()));
+    }
+
+    #[test]
+    fn a_plant_fmu_with_no_controller_named_gets_the_law_that_fits_its_signals() {
+        let mut scenario = Scenario::embedded_any_plant();
+        let quad = Scenario::from_toml(
+            "name = \"q\"\n[plant]\nmodel = \"quad\"\n[timing]\ndt_s = 0.001\nduration_s = 1.0\ncommand_timing = \"next-tick\"\n",
+            "test",
+        )
+        .unwrap();
+        let quad_signals = silrig_flight::quad::builtin_signals(&quad).unwrap();
+        let f16_signals = silrig_flight::f16_signals::f16_signals([0.0; 4]);
+        // Not a plant FMU: the FMU's signals are never read.
+        let unread = |_: &Path| -> anyhow::Result<PlantSignals> { panic!("read") };
+        assert_eq!(ControllerKind::fitting(&scenario, unread).unwrap(), ControllerKind::AttitudeLaw);
+        scenario.plant.fmu = Some("plant.fmu".into());
+        let fit = |signals: &PlantSignals| ControllerKind::fitting(&scenario, |_| Ok(signals.clone()));
+        assert_eq!(fit(&quad_signals).unwrap(), ControllerKind::QuadLaw);
+        assert_eq!(fit(&f16_signals).unwrap(), ControllerKind::AttitudeLaw);
+        let mut toy = quad_signals.clone();
+        toy.plant = "toy".into();
+        toy.outputs.retain(|o| o.name != "alt_m");
+        let refused = fit(&toy).unwrap_err().to_string();
+        assert!(
+            refused.starts_with(
+                "the plant FMU toy fits no built-in controller (ours for the F-16: plant toy has no output \
+                 `vt_fps`; ours for the quadrotor: plant toy has no output `alt_m`); its outputs: phi_deg, theta_deg"
+            ),
+            "{refused}"
+        );
+        assert!(refused.contains("its inputs: motor1, motor2, motor3, motor4. Name the controller"), "{refused}");
+        scenario.controller.fmu = Some("pid.fmu".into());
+        assert_eq!(ControllerKind::fitting(&scenario, unread).unwrap(), ControllerKind::Fmu("pid.fmu".into()));
     }
 }

@@ -8,7 +8,8 @@ use super::frame::{self, CommandTrailer, Hello, RunInfo, Side};
 use super::link::{Link, listener_fd, read_hello};
 use super::net::{self, Arrival, Keys};
 use super::options::{
-    BridgeOptions, CONTROLLER_REPORT, FINISHED_GRACE, REFUSED_AFTER, REPORT_RECEIVED, REPORT_WAIT, RUN_INFO_TIMEOUT,
+    BridgeOptions, CONTROLLER_REPORT, FINISHED_GRACE, Plan, REFUSED_AFTER, REPORT_RECEIVED, REPORT_WAIT,
+    RUN_INFO_TIMEOUT,
 };
 use super::peer::{PeerChange, PeerWatch};
 use super::stamps::TickStamps;
@@ -55,9 +56,10 @@ pub(super) struct ControllerSide {
 }
 
 impl ControllerSide {
-    pub(super) fn start(opts: &BridgeOptions, endpoint: &str) -> anyhow::Result<Self> {
+    pub(super) fn start(opts: &BridgeOptions, plan: &Plan) -> anyhow::Result<Self> {
         let args = &opts.process;
-        let mut link = Link::open(Side::Controller, endpoint, args)?;
+        let mut link = Link::open(plan, args)?;
+        eprintln!("silrig-bridge: connecting to {} ({})", plan.endpoint, plan.security());
         link.subscribe(link.keys.of("plant"), "plant")?;
         link.subscribe(link.keys.of("plant-info"), "plant-info")?;
         link.subscribe(link.keys.of("finished"), "finished")?;
@@ -115,6 +117,9 @@ impl ControllerSide {
         let deadline = monotonic_ns() + (timeout_s * 1e9) as u64;
         loop {
             for arrival in link.inbox.take() {
+                if let Arrival::LinkRefused { text } = &arrival {
+                    link.wrong_key(text)?;
+                }
                 let Arrival::Hello { bytes, .. } = arrival else { continue };
                 let Ok(h) = Hello::from_bytes(&bytes) else { continue };
                 if h.run_id != link.run {
@@ -147,7 +152,13 @@ impl ControllerSide {
         let reply = replies.recv().map_err(|_| {
             anyhow::anyhow!("the plant-side bridge did not send the run's scenario within {RUN_INFO_TIMEOUT:?}")
         })?;
-        let sample = reply.result().map_err(|e| anyhow::anyhow!("the run's scenario: {:?}", e.payload().to_bytes()))?;
+        // The plant side's refusal is text: said as such, not as a list of bytes.
+        let sample = reply.result().map_err(|e| {
+            anyhow::anyhow!(
+                "the plant-side bridge refused the run's scenario: {}",
+                String::from_utf8_lossy(&e.payload().to_bytes())
+            )
+        })?;
         let info: RunInfo = serde_json::from_slice(&sample.payload().to_bytes())?;
         let scenario_path = args.out.join("scenario.toml");
         silrig_flight::files::write_atomically(&scenario_path, &info.scenario_toml)?;
@@ -342,6 +353,14 @@ impl ControllerSide {
             Arrival::Finished => {
                 let _ = self.plant.announce_finished();
                 self.finished_at_ns.get_or_insert(now);
+            }
+            // The link was lost and, reconnecting, met another key (the plant side restarted with it): the plant's
+            // watchdog sees the commands stop; said here once, and the bridge keeps trying.
+            Arrival::LinkRefused { text } => {
+                if let Err(e) = self.link.wrong_key(&text) {
+                    self.rec.count("connections_refused", 1);
+                    self.link.say("bridge-connection-refused", e.to_string(), true);
+                }
             }
         }
         Ok(())

@@ -19,7 +19,8 @@ pub enum BridgeError {
     /// Nobody answered at the endpoint.
     #[error(
         "no plant-side bridge answered at {endpoint} within {waited_s} s: is `silrig run --bridge-listen` running \
-         on that host, is the address right, and is the port open in its firewall?"
+         on that host, is the address right, is the port open in its firewall, and do both bridges give the same \
+         bridge key (or neither)?"
     )]
     Unreachable {
         /// Where we connected.
@@ -64,6 +65,23 @@ pub enum BridgeError {
     /// A file could not be written or read.
     #[error("{0}")]
     Io(String),
+    /// The bridge key: missing, unreadable, readable by others, not a key, or its absence where one is needed.
+    #[error("{0}")]
+    Key(String),
+    /// The TLS handshake with the plant-side bridge failed over a certificate: the hosts hold different keys.
+    #[error(
+        "the plant-side bridge at {endpoint} holds another bridge key, or refused this one (TLS: {detail}): give \
+         both hosts the same key file; this one's fingerprint is {fingerprint}, and each bridge prints its own when \
+         it starts"
+    )]
+    WrongKey {
+        /// Where we connected.
+        endpoint: String,
+        /// What TLS said.
+        detail: String,
+        /// This side's key.
+        fingerprint: String,
+    },
 }
 
 /// Zenoh's errors do not say which of our declarations failed: `what` names it.

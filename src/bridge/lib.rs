@@ -20,9 +20,12 @@
 //! The folder, each file with what it owns (none imports a file that imports it back):
 //!
 //! - `lib.rs`: [`run_bridge`], which picks the side and writes the report, and this map.
-//! - `options.rs`: [`BridgeOptions`] (the flags, checked into a side and an endpoint) and the fixed timings
-//!   ([`HELLO_PERIOD`], [`REFUSED_AFTER`], [`RUN_INFO_TIMEOUT`], [`FINISHED_GRACE`]).
+//! - `options.rs`: [`BridgeOptions`] (the flags, checked into a [`Plan`]: side, endpoint, key) and the fixed
+//!   timings ([`HELLO_PERIOD`], [`REFUSED_AFTER`], [`RUN_INFO_TIMEOUT`], [`FINISHED_GRACE`]).
 //! - `error.rs`: [`BridgeError`], each failure phrased for the person running the bridge.
+//! - [`key`]: the bridge key both hosts hold (made by `silrig-bridge keygen`, read from an owner-only file) and
+//!   the TLS settings it gives Zenoh.
+//! - [`tls_watch`]: Zenoh's TLS handshake failures, which it only logs, caught for the bridge to say in words.
 //! - [`frame`]: what crosses the network, as bytes, checked on arrival; pure.
 //! - [`net`]: the Zenoh session, the run's keys and the inbox Zenoh's threads fill.
 //! - [`impair`]: the test-only delay and loss of arrivals (`SILRIG_BRIDGE_TEST_*`), for want of `sch_netem`.
@@ -37,18 +40,22 @@ mod controller_side;
 mod error;
 pub mod frame;
 pub mod impair;
+pub mod key;
 mod link;
 pub mod net;
 mod options;
 pub mod peer;
 mod plant_side;
 mod stamps;
+pub mod tls_watch;
 
 pub use error::BridgeError;
 pub use options::{
-    BridgeOptions, CONTROLLER_REPORT, FINISHED_GRACE, HELLO_PERIOD, REFUSED_AFTER, REPORT_ABSENT, REPORT_RECEIVED,
-    REPORT_WAIT, RUN_INFO_TIMEOUT,
+    BridgeOptions, CONTROLLER_REPORT, FINISHED_GRACE, HELLO_PERIOD, Plan, REFUSED_AFTER, REPORT_ABSENT,
+    REPORT_RECEIVED, REPORT_WAIT, RUN_INFO_TIMEOUT,
 };
+/// Zenoh as the bridge uses it, for a test's raw peer beside the bridges (`tests/bridge.rs`'s stranger).
+pub use zenoh;
 
 use controller_side::ControllerSide;
 use frame::Side;
@@ -61,7 +68,7 @@ use silrig_rig::{RigMode, signals};
 /// (`<out>/bridge.report.json`).
 pub fn run_bridge(opts: &BridgeOptions) -> anyhow::Result<ProcessReport> {
     signals::install_termination_flag();
-    let (side, endpoint) = opts.side()?;
+    let plan = opts.plan()?;
     let args = &opts.process;
     if args.mode == RigMode::Realtime {
         // Before Zenoh starts its threads, so they inherit it: the network leg is on the loop's critical path.
@@ -71,10 +78,10 @@ pub fn run_bridge(opts: &BridgeOptions) -> anyhow::Result<ProcessReport> {
         }
     }
     let scheduling = silrig_wire::clock::current_policy().to_string();
-    let (mut rec, scenario, ended) = match side {
-        Side::Plant => PlantSide::start(opts, &endpoint)?.run()?,
+    let (mut rec, scenario, ended) = match plan.side {
+        Side::Plant => PlantSide::start(opts, &plan)?.run()?,
         Side::Controller => {
-            let ended = ControllerSide::start(opts, &endpoint)?.run()?;
+            let ended = ControllerSide::start(opts, &plan)?.run()?;
             clean_controller_host(opts.local_run_id());
             ended
         }
@@ -82,6 +89,13 @@ pub fn run_bridge(opts: &BridgeOptions) -> anyhow::Result<ProcessReport> {
     rec.declare(&["peer_losses"]);
     let meta = ReportMeta::new(args, &scenario, scheduling, ended);
     Ok(rec.finish(meta, &args.out)?)
+}
+
+/// `--check`: what the bridge would do, in a line, or why it would not start.
+pub fn check(opts: &BridgeOptions) -> Result<String, BridgeError> {
+    let plan = opts.plan()?;
+    let verb = if plan.side == Side::Plant { "listen on" } else { "connect to" };
+    Ok(format!("would {verb} {} with {}", plan.endpoint, plan.security()))
 }
 
 /// The controller's host has no launcher to remove the iceoryx2 files of its half of the run: the bridge, ending

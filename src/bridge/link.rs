@@ -4,10 +4,11 @@
 //! ([`super::impair`]). Knows neither side, so both build on it.
 
 use super::error::{BridgeError, zenoh_err};
-use super::frame::{Hello, Side};
+use super::frame::Hello;
 use super::impair::{self, Impairment, ImpairmentSpec};
 use super::net::{self, Arrival, Inbox, Keys};
-use super::options::HELLO_PERIOD;
+use super::options::{HELLO_PERIOD, Plan};
+use super::tls_watch;
 use silrig_rig::ProcessArgs;
 use silrig_rig::events::EventLog;
 use silrig_wire::clock::monotonic_ns;
@@ -36,14 +37,22 @@ pub(super) struct Link {
     impairment: Option<Arc<Impairment>>,
     /// The wire layout version this bridge says it speaks: its build's, or a test's stand-in for another build.
     pub(super) layout_version: u32,
+    /// The bridge key's fingerprint, when there is one.
+    fingerprint: Option<String>,
 }
 
 impl Link {
-    pub(super) fn open(side: Side, endpoint: &str, args: &ProcessArgs) -> Result<Self, BridgeError> {
+    pub(super) fn open(plan: &Plan, args: &ProcessArgs) -> Result<Self, BridgeError> {
+        let (side, endpoint) = (plan.side, plan.endpoint.as_str());
         std::fs::create_dir_all(&args.out).map_err(|e| BridgeError::Io(format!("{}: {e}", args.out.display())))?;
         let spec = ImpairmentSpec::from_env()?;
         let layout_version = impair::layout_version_from_env()?;
-        let session = net::open_session(side, endpoint)?;
+        let inbox = Inbox::new().map_err(|e| BridgeError::Io(format!("eventfd: {e}")))?;
+        // Before the session, so a handshake that fails at once is caught too.
+        if plan.key.is_some() {
+            tls_watch::watch(inbox.clone());
+        }
+        let session = net::open_session(side, endpoint, plan.key.as_ref())?;
         let run = args.run_id.to_string();
         let keys = Keys::new(&run);
         let hello = session
@@ -51,7 +60,6 @@ impl Link {
             .congestion_control(CongestionControl::Drop)
             .wait()
             .map_err(zenoh_err("hello publisher"))?;
-        let inbox = Inbox::new().map_err(|e| BridgeError::Io(format!("eventfd: {e}")))?;
         let mut link = Self {
             endpoint: endpoint.into(),
             run,
@@ -66,7 +74,11 @@ impl Link {
             next_hello_ns: 0,
             events: EventLog::new(&args.out, "bridge"),
             said: BTreeSet::new(),
+            fingerprint: plan.key.as_ref().map(|k| k.fingerprint()),
         };
+        if plan.insecure {
+            link.say("bridge-insecure", format!("warning: {}", plan.security()), false);
+        }
         if let Some(spec) = spec {
             link.say("bridge-test-impairment", format!("warning: {}", spec.describe()), false);
         }
@@ -140,6 +152,18 @@ impl Link {
             self.next_hello_ns = now + HELLO_PERIOD.as_nanos() as u64;
         }
         self.next_hello_ns
+    }
+
+    /// On the connecting side: a handshake that failed over a certificate means the hosts hold different keys.
+    pub(super) fn wrong_key(&self, text: &str) -> Result<(), BridgeError> {
+        match (tls_watch::refusal(text), &self.fingerprint) {
+            (Some(r), Some(fingerprint)) if r.certificate => Err(BridgeError::WrongKey {
+                endpoint: self.endpoint.clone(),
+                detail: r.detail,
+                fingerprint: fingerprint.clone(),
+            }),
+            _ => Ok(()),
+        }
     }
 
     /// Say `text` on stderr and in the events, the first time only when `once`.

@@ -1,19 +1,20 @@
 //! The Zenoh side of a bridge: the session (peer mode on the one endpoint given, scouting off, so bridges of other
-//! rigs on the network never join), the run's keys, and an inbox where Zenoh's threads leave what arrives and wake
-//! the bridge's loop through an eventfd. iceoryx2 ports are `!Send`: only the loop touches them, never a Zenoh
-//! callback.
+//! rigs on the network never join; TLS with mutual authentication when there is a bridge key), the run's keys, and
+//! an inbox where Zenoh's threads leave what arrives and wake the bridge's loop through an eventfd. iceoryx2 ports
+//! are `!Send`: only the loop touches them, never a Zenoh callback.
 
 use super::error::BridgeError;
 use super::frame::Side;
+use super::key::BridgeKey;
 use std::collections::VecDeque;
 use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
 use std::sync::{Arc, Mutex};
 
-/// A Zenoh locator from what the user typed: `IP:PORT` (TCP), `tcp/IP:PORT` or `udp/IP:PORT`.
+/// A Zenoh locator from what the user typed: `IP:PORT` (TCP), `tcp/IP:PORT`, `udp/IP:PORT` or `tls/IP:PORT`.
 pub fn endpoint(text: &str) -> Result<String, String> {
     let (proto, addr) = match text.split_once('/') {
-        Some((p @ ("tcp" | "udp"), addr)) => (p, addr),
-        Some((p, _)) => return Err(format!("endpoint {text:?}: transport `{p}` is not tcp or udp")),
+        Some((p @ ("tcp" | "udp" | "tls"), addr)) => (p, addr),
+        Some((p, _)) => return Err(format!("endpoint {text:?}: transport `{p}` is not tcp, udp or tls")),
         None => ("tcp", text),
     };
     let (host, port) =
@@ -23,6 +24,25 @@ pub fn endpoint(text: &str) -> Result<String, String> {
         return Err(format!("endpoint {text:?}: give HOST:PORT with a port in 1..65535 (e.g. 192.168.1.20:7447)"));
     }
     Ok(format!("{proto}/{addr}"))
+}
+
+/// Whether a locator's host is this machine's loopback (127.0.0.0/8, ::1 or `localhost`): a peer there is a
+/// process of this host, so a bridge without a key may listen there.
+pub fn is_loopback(locator: &str) -> bool {
+    let addr = locator.split_once('/').map_or(locator, |(_, a)| a);
+    let host = addr.rsplit_once(':').map_or(addr, |(h, _)| h);
+    let host = host.trim_start_matches('[').trim_end_matches(']');
+    host == "localhost" || host.parse::<std::net::IpAddr>().is_ok_and(|ip| ip.is_loopback())
+}
+
+/// The same locator on TLS (a bridge key needs TCP under it), or why it cannot be.
+pub fn on_tls(locator: &str) -> Result<String, String> {
+    match locator.split_once('/') {
+        Some(("tcp" | "tls", addr)) => Ok(format!("tls/{addr}")),
+        _ => Err(format!(
+            "{locator}: a bridge key runs the link over TLS, which needs TCP: give IP:PORT (or tcp/IP:PORT)"
+        )),
+    }
 }
 
 /// The run's keys: `silrig/<run id>/...`.
@@ -54,8 +74,9 @@ impl Keys {
 }
 
 /// Open the session: the plant side listens on `endpoint`, the controller side connects to it and keeps retrying
-/// in the background (also after the link or the other bridge went away).
-pub fn open_session(side: Side, endpoint: &str) -> Result<zenoh::Session, BridgeError> {
+/// in the background (also after the link or the other bridge went away). With `bridge_key`, the link is TLS and
+/// each side requires the other's certificate to chain to the key's CA.
+pub fn open_session(side: Side, endpoint: &str, bridge_key: Option<&BridgeKey>) -> Result<zenoh::Session, BridgeError> {
     use zenoh::Wait;
     let mut config = zenoh::Config::default();
     let json = |v: &str| v.to_string();
@@ -75,7 +96,8 @@ pub fn open_session(side: Side, endpoint: &str) -> Result<zenoh::Session, Bridge
         // No timestamps, no admin space: nothing we use.
         ("adminspace/enabled", json("false")),
     ];
-    for (k, v) in settings {
+    let tls = bridge_key.map(BridgeKey::zenoh_settings).unwrap_or_default();
+    for (k, v) in settings.into_iter().chain(tls) {
         config.insert_json5(k, &v).map_err(|e| BridgeError::Zenoh(format!("config {k} = {v}: {e}")))?;
     }
     zenoh::open(config).wait().map_err(|e| BridgeError::Zenoh(format!("{} bridge on {endpoint}: {e}", side.label())))
@@ -101,6 +123,11 @@ pub enum Arrival {
         key: String,
         /// The hello's bytes.
         bytes: Vec<u8>,
+    },
+    /// A TLS link failed its handshake: Zenoh's log line (see [`super::tls_watch`]).
+    LinkRefused {
+        /// Zenoh's text.
+        text: String,
     },
 }
 
@@ -165,10 +192,24 @@ mod tests {
         assert_eq!(endpoint("10.0.0.1:7447").unwrap(), "tcp/10.0.0.1:7447");
         assert_eq!(endpoint("udp/10.0.0.1:7447").unwrap(), "udp/10.0.0.1:7447");
         assert_eq!(endpoint("tcp/[::1]:7447").unwrap(), "tcp/[::1]:7447");
-        assert!(endpoint("quic/10.0.0.1:7447").unwrap_err().contains("`quic` is not tcp or udp"));
+        assert!(endpoint("quic/10.0.0.1:7447").unwrap_err().contains("`quic` is not tcp, udp or tls"));
+        assert_eq!(endpoint("tls/10.0.0.1:7447").unwrap(), "tls/10.0.0.1:7447");
         assert!(endpoint("10.0.0.1").unwrap_err().contains("HOST:PORT"));
         assert!(endpoint("10.0.0.1:0").unwrap_err().contains("1..65535"));
         assert!(endpoint(":7447").unwrap_err().contains("HOST:PORT"));
+    }
+
+    #[test]
+    fn the_loopback_is_told_from_the_network_and_a_key_needs_tcp() {
+        for local in ["tcp/127.0.0.1:7447", "udp/127.3.2.1:7447", "tcp/[::1]:7447", "tcp/localhost:7447"] {
+            assert!(is_loopback(local), "{local}");
+        }
+        for remote in ["tcp/0.0.0.0:7447", "tcp/10.0.0.1:7447", "tcp/[::]:7447", "tcp/plant.lab:7447"] {
+            assert!(!is_loopback(remote), "{remote}");
+        }
+        assert_eq!(on_tls("tcp/10.0.0.1:7447").unwrap(), "tls/10.0.0.1:7447");
+        assert_eq!(on_tls("tls/10.0.0.1:7447").unwrap(), "tls/10.0.0.1:7447");
+        assert!(on_tls("udp/10.0.0.1:7447").unwrap_err().contains("needs TCP"));
     }
 
     #[test]

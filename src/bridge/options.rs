@@ -1,10 +1,13 @@
-//! What a bridge is asked to do: the `silrig-bridge` flags ([`BridgeOptions`]), checked into a side and a Zenoh
-//! endpoint, and the fixed timings both sides keep beside them.
+//! What a bridge is asked to do: the `silrig-bridge` flags ([`BridgeOptions`]), checked into a [`Plan`] (a side,
+//! a Zenoh endpoint and the bridge key, or the reason none is needed), and the fixed timings both sides keep beside
+//! them.
 
 use super::error::BridgeError;
 use super::frame::Side;
+use super::key::BridgeKey;
 use super::net;
 use silrig_rig::ProcessArgs;
+use std::path::PathBuf;
 use std::time::Duration;
 
 /// How often each bridge says hello.
@@ -28,11 +31,12 @@ pub const REPORT_ABSENT: &str = "controller-report-absent";
 /// What `silrig-bridge` is asked to do.
 #[derive(Debug, Clone, clap::Args)]
 pub struct BridgeOptions {
-    /// Plant's host: listen for the controller side's bridge here (IP:PORT, tcp/IP:PORT or udp/IP:PORT).
-    /// `silrig run --bridge-listen` starts this side for you.
+    /// Plant's host: listen for the controller side's bridge here (IP:PORT, tcp/IP:PORT or udp/IP:PORT; any
+    /// address but the loopback needs --key). `silrig run --bridge-listen` starts this side for you.
     #[arg(long, value_name = "ENDPOINT", required_unless_present = "connect", conflicts_with = "connect")]
     pub listen: Option<String>,
-    /// Controller's host: connect to the plant-side bridge there (IP:PORT, tcp/IP:PORT or udp/IP:PORT).
+    /// Controller's host: connect to the plant-side bridge there (IP:PORT, tcp/IP:PORT or udp/IP:PORT; any
+    /// address but the loopback needs --key, the plant side's key file).
     #[arg(long, value_name = "ENDPOINT")]
     pub connect: Option<String>,
     /// Controller side: give up when no plant-side bridge of this run answers within this long, s.
@@ -46,6 +50,19 @@ pub struct BridgeOptions {
     /// --bridge` does.
     #[arg(long, value_name = "RUN_ID", requires = "connect")]
     pub local_run_id: Option<silrig_wire::ipc::namespace::RunId>,
+    /// The bridge key, the same file on both hosts (make it with `silrig-bridge keygen FILE`, copy it with `scp
+    /// -p`): the link runs over TLS and each bridge admits only a peer holding the key. Needed on any address but
+    /// the loopback; the file must be readable by its owner only.
+    #[arg(long, value_name = "FILE")]
+    pub key: Option<PathBuf>,
+    /// No key on an address other than the loopback: anyone who reaches the port can join the run, read its
+    /// samples and command the plant, and the link is not encrypted. Only on a network you trust.
+    #[arg(long, conflicts_with = "key")]
+    pub insecure: bool,
+    /// Check the flags and the key, then exit (0: the bridge would start; 2: why not). `silrig run
+    /// --bridge-listen` does this before it starts anything.
+    #[arg(long)]
+    pub check: bool,
     /// The run: its id, and on the plant side its scenario, mode and tuning (the controller side takes those from
     /// the plant side and writes them to <out>/scenario.toml and <out>/controller.env for its controller).
     #[command(flatten)]
@@ -58,8 +75,25 @@ impl BridgeOptions {
         self.local_run_id.as_ref().unwrap_or(&self.process.run_id)
     }
 
+    /// What this bridge will do, checked: its side, its endpoint and its key (read from its owner-only file).
+    pub fn plan(&self) -> Result<Plan, BridgeError> {
+        let (side, endpoint) = self.side()?;
+        let key = self.key.as_deref().map(BridgeKey::read).transpose()?;
+        let flag = if side == Side::Plant { "--listen" } else { "--connect" };
+        let endpoint = match &key {
+            Some(_) => net::on_tls(&endpoint).map_err(|e| BridgeError::Usage(format!("{flag}: {e}")))?,
+            None if endpoint.starts_with("tls/") => {
+                return Err(BridgeError::Key(format!("{flag} {endpoint}: TLS needs the bridge key: give --key FILE")));
+            }
+            None if self.insecure || net::is_loopback(&endpoint) => endpoint,
+            None => return Err(BridgeError::Key(no_key_refusal(side, &endpoint, &self.process.run_id.to_string()))),
+        };
+        let insecure = key.is_none() && !net::is_loopback(&endpoint);
+        Ok(Plan { side, endpoint, key, insecure })
+    }
+
     /// The side and the Zenoh endpoint, checked.
-    pub fn side(&self) -> Result<(Side, String), BridgeError> {
+    fn side(&self) -> Result<(Side, String), BridgeError> {
         silrig_rig::flag_in_range("connect-timeout-s", self.connect_timeout_s, 0.1, 3600.0, "s")
             .and_then(|()| silrig_rig::flag_in_range("peer-timeout-ms", self.peer_timeout_ms, 150.0, 60_000.0, "ms"))
             .and_then(|()| self.process.options.validate())
@@ -72,4 +106,50 @@ impl BridgeOptions {
         let flag = if side == Side::Plant { "--listen" } else { "--connect" };
         Ok((side, net::endpoint(text).map_err(|e| BridgeError::Usage(format!("{flag}: {e}")))?))
     }
+}
+
+/// What a bridge will do, its flags checked.
+#[derive(Debug)]
+pub struct Plan {
+    /// Which host it serves.
+    pub side: Side,
+    /// The Zenoh locator (`tls/...` with a key).
+    pub endpoint: String,
+    /// The bridge key, if given.
+    pub key: Option<BridgeKey>,
+    /// No key, off the loopback, because `--insecure` said so: said when the bridge starts.
+    pub insecure: bool,
+}
+
+impl Plan {
+    /// How the link is secured, for the line a bridge prints when it starts.
+    pub fn security(&self) -> String {
+        match &self.key {
+            Some(key) => format!("TLS with bridge key {}", key.fingerprint()),
+            None if self.insecure => "NO bridge key (--insecure): anyone who reaches the port can join the run, read \
+                                      its samples and command the plant"
+                .to_string(),
+            None => "no bridge key, on the loopback: only this host's processes reach it".to_string(),
+        }
+    }
+}
+
+/// Why a bridge without a key may not use an address off the loopback, and what to do.
+fn no_key_refusal(side: Side, endpoint: &str, run: &str) -> String {
+    let risk = match side {
+        Side::Plant => format!(
+            "any peer that reaches {endpoint} could join run `{run}` as its controller, read its samples and command \
+             the plant"
+        ),
+        Side::Controller => format!(
+            "the link to {endpoint} would be open: anyone on the way could read the samples and pose as the plant"
+        ),
+    };
+    format!(
+        "refused to {} {endpoint} without a bridge key: {risk}. Make a key with `silrig-bridge keygen lab.key`, copy \
+         it to the other host (scp -p lab.key ...), and give it to both bridges (silrig-bridge --key lab.key, \
+         silrig run --bridge-key lab.key); or, on a network you trust, say --insecure (silrig run \
+         --bridge-insecure)",
+        if side == Side::Plant { "listen on" } else { "connect to" }
+    )
 }

@@ -7,7 +7,7 @@ use super::error::zenoh_err;
 use super::frame::{self, CommandTrailer, Hello, RunInfo, Side};
 use super::link::{Link, listener_fd, read_hello};
 use super::net::{self, Arrival, Keys};
-use super::options::{BridgeOptions, CONTROLLER_REPORT, REPORT_ABSENT, REPORT_RECEIVED};
+use super::options::{BridgeOptions, CONTROLLER_REPORT, Plan, REPORT_ABSENT, REPORT_RECEIVED};
 use super::peer::{PeerChange, PeerWatch};
 use super::stamps::TickStamps;
 use silrig_rig::report::Recorder;
@@ -50,7 +50,7 @@ pub(super) struct PlantSide {
 }
 
 impl PlantSide {
-    pub(super) fn start(opts: &BridgeOptions, endpoint: &str) -> anyhow::Result<Self> {
+    pub(super) fn start(opts: &BridgeOptions, plan: &Plan) -> anyhow::Result<Self> {
         let args = &opts.process;
         let scenario = args.scenario()?;
         let scenario_toml = match &args.config {
@@ -64,7 +64,7 @@ impl PlantSide {
         // Every sample goes on, as to the logger.
         let samples = plant_stream.subscriber(LOGGER_BUFFER)?;
         let plant_infos = ipc::open_stream::<PlantInfo>(&node, Stream::PlantInfo)?.subscriber(CONSUMER_BUFFER)?;
-        let mut link = Link::open(Side::Plant, endpoint, args)?;
+        let mut link = Link::open(plan, args)?;
         link.subscribe(link.keys.of("command"), "command")?;
         link.subscribe(link.keys.of("controller-info"), "controller-info")?;
         link.subscribe(link.keys.of(CONTROLLER_REPORT), CONTROLLER_REPORT)?;
@@ -91,11 +91,14 @@ impl PlantSide {
                  controller's host: both network legs and both Zenoh stacks",
             )],
         );
+        let key_flag = if plan.key.is_some() { " --key <the same key file>" } else { "" };
         eprintln!(
-            "silrig-bridge: run {} listening on {endpoint}; on the controller's host run\n  silrig-bridge --connect \
-             <this host>:{} --run-id {} --out <folder>",
+            "silrig-bridge: run {} listening on {} ({}); on the controller's host run\n  silrig-bridge --connect \
+             <this host>:{} --run-id {}{key_flag} --out <folder>",
             link.run,
-            endpoint.rsplit(':').next().unwrap_or("7447"),
+            plan.endpoint,
+            plan.security(),
+            plan.endpoint.rsplit(':').next().unwrap_or("7447"),
             link.run
         );
         Ok(Self {
@@ -299,6 +302,19 @@ impl PlantSide {
                 }
             }
             Arrival::Finished => {}
+            Arrival::LinkRefused { text } => {
+                if let Some(r) = super::tls_watch::refusal(&text) {
+                    self.rec.count("connections_refused", 1);
+                    let why = if r.certificate {
+                        "the peer does not hold this run's bridge key: if it is your controller-side bridge, give it \
+                         the same key file"
+                    } else {
+                        "the peer did not speak TLS: a bridge without --key, or another program on this port"
+                    };
+                    let text = format!("refused a connection from the network (TLS: {}): {why}", r.detail);
+                    self.link.say("bridge-connection-refused", text, true);
+                }
+            }
         }
         Ok(())
     }

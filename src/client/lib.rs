@@ -107,6 +107,8 @@ pub unsafe extern "C" fn silrig_session_open(
             let name = unsafe { CStr::from_ptr(name) };
             names.push(name.to_str().map_err(|_| usage(&format!("diagnostic name {i} is not UTF-8")))?.to_string());
         }
+        // A sweep's warm rig forks each flight here, before the run's variables are read.
+        let _ = silrig_rig::warm::serve_flights();
         let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
         let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
         let session = ControllerSession::open(args, scenario, &names)?;
@@ -476,6 +478,8 @@ pub unsafe extern "C" fn silrig_plant_open(
         }
         // SAFETY: checked non-NULL; the caller gives a readable announcement.
         let signals = unsafe { info.read() }.signals().map_err(SessionError::Plant)?;
+        // A sweep's warm rig forks each flight here, before the run's variables are read.
+        let _ = silrig_rig::warm::serve_flights();
         let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
         let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
         let session = PlantSession::open(args, scenario, &signals)?;
@@ -500,6 +504,8 @@ pub unsafe extern "C" fn silrig_plant_parameter(name: *const c_char, value_out: 
         if value_out.is_null() {
             return Err(usage("value_out is NULL"));
         }
+        // A sweep's warm rig forks each flight here, before the run's variables are read.
+        let _ = silrig_rig::warm::serve_flights();
         let args = ProcessArgs::from_env(std::env::vars()).map_err(SessionError::Setup)?;
         let scenario = args.scenario().map_err(|e| SessionError::Setup(format!("{e:#}")))?;
         let Some(value) = scenario.plant.parameters.get(name) else { return Ok(Status::NotGiven) };

@@ -182,7 +182,7 @@ mod tests {
         let g = quad_guid(&s, &e).unwrap();
         assert!(xml.contains(&format!("guid=\"{g}\"")) && xml.contains("modelIdentifier=\"silrig_fmu_quad\""));
         assert_ne!(quad_guid(&QuadStarts::default(), &e).unwrap(), g);
-        assert_eq!(xml.matches("<ScalarVariable").count(), 27 + 4 + 14);
+        assert_eq!(xml.matches("<ScalarVariable").count(), 27 + 4 + 18);
         assert!(xml.contains("<Tool name=\"silrig\"><Plant name=\"quad\"/></Tool>"), "{xml}");
         // In the air the motors start at the hover command; on the ground, stopped.
         let hover = params.hover_command();

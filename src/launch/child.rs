@@ -6,13 +6,15 @@ use crate::program::split_command;
 use anyhow::Context;
 use silrig_flight::role::Role;
 use silrig_rig::ProcessArgs;
+use std::os::fd::{AsRawFd, OwnedFd};
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitStatus, Stdio};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A child process the launcher started: reaped once, signalled only while not reaped.
 pub struct ChildProcess {
-    child: std::process::Child,
+    child: Handle,
     status: Option<ExitStatus>,
     /// It leads a process group of its own (a user's shell command): signals go to the whole group.
     group: bool,
@@ -22,14 +24,49 @@ pub struct ChildProcess {
     outlasted: Vec<String>,
 }
 
+/// How the process came to be: started here, or forked by a warm process of a sweep's rig (and reaped by it).
+enum Handle {
+    Spawned(std::process::Child),
+    Forked(ForkedChild),
+}
+
+impl Handle {
+    fn id(&self) -> u32 {
+        match self {
+            Handle::Spawned(child) => child.id(),
+            Handle::Forked(child) => child.id(),
+        }
+    }
+
+    fn try_wait(&mut self) -> std::io::Result<Option<ExitStatus>> {
+        match self {
+            Handle::Spawned(child) => child.try_wait(),
+            Handle::Forked(child) => child.try_wait(),
+        }
+    }
+
+    fn wait(&mut self) -> std::io::Result<ExitStatus> {
+        match self {
+            Handle::Spawned(child) => child.wait(),
+            Handle::Forked(child) => child.wait(),
+        }
+    }
+}
+
 impl ChildProcess {
     pub(crate) fn new(child: std::process::Child) -> Self {
-        Self { child, status: None, group: false, output: None, outlasted: Vec::new() }
+        Self { child: Handle::Spawned(child), status: None, group: false, output: None, outlasted: Vec::new() }
     }
 
     /// A child started with `process_group(0)`: signalled as a group, so it and what it started stop together.
     pub(crate) fn group_leader(child: std::process::Child) -> Self {
-        Self { child, status: None, group: true, output: None, outlasted: Vec::new() }
+        Self { child: Handle::Spawned(child), status: None, group: true, output: None, outlasted: Vec::new() }
+    }
+
+    /// A flight a warm process forked: it leads a process group of its own, signalled as a group. While it runs
+    /// its warm process holds it unreaped, so its pid and group id name it alone.
+    pub(crate) fn forked(child: ForkedChild) -> Self {
+        Self { child: Handle::Forked(child), status: None, group: true, output: None, outlasted: Vec::new() }
     }
 
     pub(crate) fn with_output(mut self, output: std::thread::JoinHandle<()>) -> Self {
@@ -59,6 +96,14 @@ impl ChildProcess {
             }
         }
         Ok(self.status)
+    }
+
+    /// Whether process `pid` is this child or, for a user's command, a process of the group it leads (what a
+    /// `sh -c` wrapper started): who a node of the run belongs to.
+    pub(crate) fn owns(&self, pid: i64) -> bool {
+        let own = i64::from(self.child.id());
+        pid == own
+            || (self.group && libc::pid_t::try_from(pid).ok().and_then(live_group_of) == Some(own as libc::pid_t))
     }
 
     pub(crate) fn has_ended(&self) -> bool {
@@ -146,18 +191,23 @@ fn process_name(pid: libc::pid_t) -> String {
     std::fs::read_to_string(format!("/proc/{pid}/comm")).map_or_else(|_| "?".into(), |c| c.trim().to_string())
 }
 
-/// The live processes in process group `pgid` (from `/proc/<pid>/stat`; zombies, which init reaps, left out).
+/// The process group of a live process (from `/proc/<pid>/stat`); `None` for a zombie or a process gone.
+fn live_group_of(pid: libc::pid_t) -> Option<libc::pid_t> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // After the command in parentheses (which may hold spaces): state, ppid, pgrp.
+    let fields: Vec<&str> = stat.rsplit_once(')').map_or("", |(_, rest)| rest).split_whitespace().collect();
+    if fields.first().is_none_or(|state| *state == "Z") {
+        return None;
+    }
+    fields.get(2)?.parse().ok()
+}
+
+/// The live processes in process group `pgid` (zombies, which init reaps, left out).
 fn members_of_group(pgid: libc::pid_t) -> Vec<libc::pid_t> {
     let Ok(entries) = std::fs::read_dir("/proc") else { return Vec::new() };
     entries
         .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<libc::pid_t>().ok())
-        .filter(|pid| {
-            std::fs::read_to_string(format!("/proc/{pid}/stat")).ok().is_some_and(|stat| {
-                // After the command in parentheses (which may hold spaces): state, ppid, pgrp.
-                let fields: Vec<&str> = stat.rsplit_once(')').map_or("", |(_, rest)| rest).split_whitespace().collect();
-                fields.first().is_some_and(|state| *state != "Z") && fields.get(2) == Some(&pgid.to_string().as_str())
-            })
-        })
+        .filter(|pid| live_group_of(*pid) == Some(pgid))
         .collect()
 }
 
@@ -197,37 +247,50 @@ pub fn start_process(
     stdout: Stdio,
     stderr: Stdio,
 ) -> anyhow::Result<ChildProcess> {
+    let (mut process, group) = process_command(role, command, args, extra_args, bin_dir)?;
+    let what = match command {
+        Some(cmd) => format!("starting the {role} command `{cmd}`"),
+        None => format!("starting {} (build it with `cargo build --release`)", bin_dir.join(role.binary()).display()),
+    };
+    let child = process.stdin(Stdio::null()).stdout(stdout).stderr(stderr).spawn().context(what)?;
+    Ok(if group { ChildProcess::group_leader(child) } else { ChildProcess::new(child) })
+}
+
+/// The command that starts `role`'s process (see [`start_process`]), tied to this process's life, and whether it
+/// leads a process group of its own (a user's command does).
+pub(crate) fn process_command(
+    role: Role,
+    command: Option<&str>,
+    args: &ProcessArgs,
+    extra_args: &[String],
+    bin_dir: &Path,
+) -> anyhow::Result<(Command, bool)> {
     if let Some(cmd) = command {
         use std::os::unix::process::CommandExt;
         let words = split_command(cmd).map_err(|e| anyhow::anyhow!("--{role}-cmd: {e}"))?;
         let mut command = Command::new(&words[0]);
         end_with_launcher(&mut command, libc::SIGTERM);
-        let child = command
-            .args(&words[1..])
-            .envs(args.to_env())
-            .env("SILRIG_CLIENT_LIB", bin_dir.join("libsilrig_client.so"))
-            .process_group(0)
-            .stdin(Stdio::null())
-            .stdout(stdout)
-            .stderr(stderr)
-            .spawn()
-            .with_context(|| format!("starting the {role} command `{cmd}`"))?;
-        return Ok(ChildProcess::group_leader(child));
+        command.args(&words[1..]).envs(process_env(args, bin_dir)).process_group(0);
+        return Ok((command, true));
     }
-    let exe = bin_dir.join(role.binary());
-    let mut command = Command::new(&exe);
-    // A stopped plant cannot act on SIGTERM until continued, and nobody is left to continue it: it gets SIGKILL
-    // (the next run removes what it leaves); the others end cleanly on SIGTERM, writing what they hold.
-    end_with_launcher(&mut command, if role == Role::Plant { libc::SIGKILL } else { libc::SIGTERM });
-    let child = command
-        .args(args.to_argv())
-        .args(extra_args)
-        .stdin(Stdio::null())
-        .stdout(stdout)
-        .stderr(stderr)
-        .spawn()
-        .with_context(|| format!("starting {} (build it with `cargo build --release`)", exe.display()))?;
-    Ok(ChildProcess::new(child))
+    let mut command = Command::new(bin_dir.join(role.binary()));
+    end_with_launcher(&mut command, death_signal(role));
+    command.args(args.to_argv()).args(extra_args);
+    Ok((command, false))
+}
+
+/// The variables a user's command gets: the run's, and where the client library is.
+pub(crate) fn process_env(args: &ProcessArgs, bin_dir: &Path) -> Vec<(String, String)> {
+    let mut env = args.to_env();
+    env.push(("SILRIG_CLIENT_LIB".into(), bin_dir.join("libsilrig_client.so").display().to_string()));
+    env
+}
+
+/// The signal a process gets when its launcher dies. A stopped plant cannot act on SIGTERM until continued, and
+/// nobody is left to continue it: it gets SIGKILL (the next run removes what it leaves); the others end cleanly on
+/// SIGTERM, writing what they hold.
+pub(crate) fn death_signal(role: Role) -> libc::c_int {
+    if role == Role::Plant { libc::SIGKILL } else { libc::SIGTERM }
 }
 
 /// Copy a child's output (stdout and stderr, one pipe) into `log_path` line by line. When the log cannot be
@@ -296,6 +359,61 @@ pub(crate) fn forward_output(
             );
         }
     })
+}
+
+/// A process a warm program forked; its warm program reaps it and says how it ended.
+pub struct ForkedChild {
+    pid: u32,
+    socket: Arc<OwnedFd>,
+    status: Option<ExitStatus>,
+}
+
+impl ForkedChild {
+    pub(crate) fn new(pid: u32, socket: Arc<OwnedFd>) -> Self {
+        Self { pid, socket, status: None }
+    }
+
+    pub(crate) fn id(&self) -> u32 {
+        self.pid
+    }
+
+    /// Its exit status once its warm program has said it ended; a warm program that is gone took it with it
+    /// (killed: the flight dies with its warm program).
+    pub(crate) fn try_wait(&mut self) -> std::io::Result<Option<ExitStatus>> {
+        use std::os::unix::process::ExitStatusExt;
+        if self.status.is_some() {
+            return Ok(self.status);
+        }
+        let mut poll = libc::pollfd { fd: self.socket.as_raw_fd(), events: libc::POLLIN, revents: 0 };
+        // SAFETY: poll on one valid descriptor, without waiting.
+        if unsafe { libc::poll(&mut poll, 1, 0) } <= 0 {
+            return Ok(None);
+        }
+        let raw = match silrig_rig::warm::receive(&self.socket)? {
+            None => libc::SIGKILL,
+            Some((text, _)) => {
+                let text = String::from_utf8_lossy(&text).into_owned();
+                let mut words = text.split(' ');
+                match (words.next(), words.next().and_then(|p| p.parse::<u32>().ok()), words.next()) {
+                    (Some("exited"), Some(pid), Some(status)) if pid == self.pid => {
+                        status.parse::<i32>().map_err(|e| std::io::Error::other(format!("`{text}`: {e}")))?
+                    }
+                    _ => return Err(std::io::Error::other(format!("a warm program said `{text}` out of turn"))),
+                }
+            }
+        };
+        self.status = Some(ExitStatus::from_raw(raw));
+        Ok(self.status)
+    }
+
+    pub(crate) fn wait(&mut self) -> std::io::Result<ExitStatus> {
+        loop {
+            if let Some(status) = self.try_wait()? {
+                return Ok(status);
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
 }
 
 /// An exit status as a person reads it.

@@ -37,6 +37,9 @@ pub struct FaultRecord {
     /// Where the logged flight joins a re-flown one after this fault (a restarted plant), and by how much.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub discontinuity: Option<Discontinuity>,
+    /// Where a plant restarted after this fault flew on from, and how many ticks it flew again.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plant_resume: Option<PlantResume>,
     /// How the process came back, for a kill or term with `restart_after`: its start-up apart from the loop's
     /// recovery, so that a slow start is not judged as slow control.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -120,6 +123,41 @@ pub fn discontinuities(out_dir: &Path, dt_s: f64) -> Vec<Discontinuity> {
 
 fn discontinuity(e: &Event, dt_s: f64) -> Discontinuity {
     Discontinuity { at_s: e.tick.unwrap_or(0) as f64 * dt_s, detail: e.detail.clone() }
+}
+
+/// Where a restarted plant flew on from: the tick of the checkpoint it resumed from (0: from the start), and how many
+/// ticks its predecessor had already flown that it flew again (the rollback; at most one checkpoint interval).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PlantResume {
+    /// The first tick the restarted plant flew.
+    pub at_tick: u64,
+    /// Ticks flown again (None: its predecessor's newest tick is unknown, a plant not using our library).
+    pub ticks_flown_again: Option<u64>,
+}
+
+impl PlantResume {
+    /// "resumed at tick N, K ticks flown again", as the fault table and the run page say it.
+    pub fn describe(&self) -> String {
+        match self.ticks_flown_again {
+            Some(k) => format!("resumed at tick {}, {k} ticks flown again", self.at_tick),
+            None => format!("resumed at tick {}", self.at_tick),
+        }
+    }
+}
+
+/// Every restart of the plant in the run (its `plant-resumed` and `plant-restarted-from-start` events), planned or
+/// not.
+pub fn plant_resumes(out_dir: &Path) -> Vec<PlantResume> {
+    read_events(out_dir).iter().filter_map(plant_resume).collect()
+}
+
+/// The resumption a restarted plant's event says (the plant writes "...: K ticks flown again" when it knows).
+fn plant_resume(e: &Event) -> Option<PlantResume> {
+    if e.process != Role::Plant.label() || !["plant-resumed", "plant-restarted-from-start"].contains(&e.kind.as_str()) {
+        return None;
+    }
+    let again = e.detail.rsplit_once(": ").and_then(|(_, k)| k.strip_suffix(" ticks flown again")?.parse().ok());
+    Some(PlantResume { at_tick: e.tick.unwrap_or(0), ticks_flown_again: again })
 }
 
 /// CLOCK_MONOTONIC time of the plant's first tick 0, from its `ticking` event.
@@ -238,6 +276,7 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
                 plant_samples_lost: plant_lost,
                 command_samples_lost: command_lost,
                 discontinuity: window.iter().find(|e| e.kind == "flight-discontinuity").map(|e| discontinuity(e, dt_s)),
+                plant_resume: window.iter().find_map(|e| plant_resume(e)),
                 rejoin: rejoin(f, &window, t0),
             }
         })
@@ -256,6 +295,7 @@ fn empty(f: &Fault) -> FaultRecord {
         plant_samples_lost: 0,
         command_samples_lost: 0,
         discontinuity: None,
+        plant_resume: None,
         rejoin: None,
     }
 }

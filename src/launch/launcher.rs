@@ -84,6 +84,7 @@ fn supervise(
             b.poll()?;
         }
         sup.handle_exits()?;
+        sup.watch_joins();
         sup.restart_due()?;
         if let Some(live) = live.as_deref_mut() {
             live.update(sup.lives.iter().filter(|l| l.life > 1).count() as u32);
@@ -179,9 +180,15 @@ fn mark_stopped_at_end(processes: &mut [ProcessReport], lives: &[ProcessLife]) {
 /// `report.json`). An `Err` means the run could not be set up; a run whose processes failed returns `Ok` with
 /// `failures` filled in.
 pub fn run(opts: &LaunchOptions) -> anyhow::Result<RigReport> {
+    run_with(opts, None)
+}
+
+/// [`run`], its processes forked by a sweep's warm rig when given one (see [`crate::warm`]): the same run, the
+/// same files, without starting the programs again.
+pub fn run_with(opts: &LaunchOptions, warm: Option<std::sync::Arc<crate::warm::WarmRig>>) -> anyhow::Result<RigReport> {
     signals::install_termination_flag();
     let prepared = prepare(opts)?;
-    let flown = fly(opts, &prepared)?;
+    let flown = fly(opts, &prepared, warm)?;
     let mut report = report_of(opts, &prepared, flown)?;
     // A full disk must not cost the user the report: it is printed whatever happens to the files.
     if !opts.no_figures {
@@ -215,7 +222,11 @@ struct Flown {
 
 /// Phases 2 and 3: start the processes (the OS floor first), supervise them to the end of the flight with the
 /// plan's faults, and stop them.
-fn fly(opts: &LaunchOptions, prepared: &Prepared) -> anyhow::Result<Flown> {
+fn fly(
+    opts: &LaunchOptions,
+    prepared: &Prepared,
+    warm: Option<std::sync::Arc<crate::warm::WarmRig>>,
+) -> anyhow::Result<Flown> {
     let Prepared { scenario, run_id, out, scenario_path, .. } = prepared;
     let controller = opts.controller_launch();
     let mut args = ProcessArgs {
@@ -241,19 +252,21 @@ fn fly(opts: &LaunchOptions, prepared: &Prepared) -> anyhow::Result<Flown> {
     let conditions_start = MachineConditions::now();
     let events = EventLog::new(out, "launcher");
     let mut bridge = match &opts.bridge_listen {
-        Some(listen) => Some(super::remote::RemoteBridge::start(listen, &args, events.clone())?),
+        Some(listen) => {
+            Some(super::remote::RemoteBridge::start(listen, &opts.bridge_security(), &args, events.clone())?)
+        }
         None => None,
     };
     let plant_launch = if plant_external { None } else { Some(opts.plant_cmd.clone()) };
     let logger_args = match opts.live {
         Some(LiveServe::Foxglove(addr)) => {
-            eprintln!("silrig run: serving the run live on ws://{addr} (Foxglove WebSocket protocol)");
+            eprintln!("{}", super::options::live_line(addr));
             vec!["--live-foxglove".to_string(), addr.to_string()]
         }
         None => Vec::new(),
     };
     let launch = (controller.clone(), plant_launch, logger_args);
-    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), launch)?;
+    let mut sup = Supervisor::start(args, events.clone(), opts.supervision.clone(), launch, warm)?;
     sup.plant_fmu = scenario.plant.fmu.clone();
     sup.controller_fmu = scenario.controller.fmu.clone();
     let mut faults = FaultSchedule::new(&scenario.faults, out, events, run_id, scenario.timing.dt_s);
@@ -292,12 +305,17 @@ fn report_of(opts: &LaunchOptions, prepared: &Prepared, flown: Flown) -> anyhow:
     let Prepared { scenario, run_id, out, .. } = prepared;
     let Flown { mut sup, controller, bridge, ended_by_plan, floor, conditions } = flown;
     let dt_s = scenario.timing.dt_s;
+    // A run that failed before the plant's first tick (a process never joined, or ended at once) stopped its
+    // peers before they had anything to report: their missing reports are no failures of their own.
+    let stopped_before_flight = !sup.failures.is_empty() && !sup.plant_ticking();
     let mut failures = std::mem::take(&mut sup.failures);
     let mut notes: Vec<String> = floor.missing.iter().cloned().collect();
     notes.append(&mut sup.notes);
     let external = (controller == ControllerLaunch::External, opts.plant == PlantKind::External);
+    // A process the plan ended for good has no report to give, nor has any of a run stopped before its flight.
+    let no_report_due = if stopped_before_flight { Role::ALL.to_vec() } else { ended_by_plan.clone() };
     let mut processes =
-        process_reports(opts, out, (external.0, bridge.is_some()), &ended_by_plan, &mut failures, &mut notes);
+        process_reports(opts, out, (external.0, bridge.is_some()), &no_report_due, &mut failures, &mut notes);
     super::run_report::merge_lives(&mut processes, &sup.lives, out, &mut notes);
     mark_stopped_at_end(&mut processes, &sup.lives);
     failures.extend(super::held_outputs::flag_held_rows(out, scenario));
@@ -342,6 +360,7 @@ fn report_of(opts: &LaunchOptions, prepared: &Prepared, flown: Flown) -> anyhow:
         control,
         faults: super::fault_report::fault_records(&scenario.faults, out, dt_s),
         discontinuities: super::fault_report::discontinuities(out, dt_s),
+        plant_resumes: super::fault_report::plant_resumes(out),
         duration_s: scenario.timing.duration_s,
         stopped_by,
         failures,
@@ -353,13 +372,14 @@ fn report_of(opts: &LaunchOptions, prepared: &Prepared, flown: Flown) -> anyhow:
 }
 
 /// Every process's report (the bridge's too when there is one); a missing one is a failure, or a note saying why
-/// none was due: a process on the other host, or started outside the launcher, or ended for good by the plan.
+/// none was due: a process on the other host, or started outside the launcher, or `no_report_due` (ended for good
+/// by the plan, or of a run that failed before its flight started).
 /// `(controller_external, across_hosts)`: the controller started by hand, the controller on the other host.
 fn process_reports(
     opts: &LaunchOptions,
     out: &Path,
     (controller_external, across_hosts): (bool, bool),
-    ended_by_plan: &[Role],
+    no_report_due: &[Role],
     failures: &mut Vec<String>,
     notes: &mut Vec<String>,
 ) -> Vec<ProcessReport> {
@@ -367,6 +387,9 @@ fn process_reports(
     for role in Role::ALL {
         match read_report(out, role.label()) {
             Ok(r) => processes.push(r),
+            // A process a planned fault killed for good, or of a run that failed before its flight, has no report
+            // to give; anything else should have one.
+            Err(_) if no_report_due.contains(&role) => {}
             // It runs on the other host, which sends its report back at the end (see the bridge's events).
             Err(_) if role == Role::Controller && across_hosts => notes.push(
                 "controller: on the other host; its report did not come back (the controller-side bridge sends it \
@@ -391,8 +414,6 @@ fn process_reports(
                  need not): its timing is what the plant and the logger measured (sense-to-actuate, misses)"
                     .to_string(),
             ),
-            // A process a planned fault killed for good has no report to give; anything else should have one.
-            Err(_) if ended_by_plan.contains(&role) => {}
             Err(e) => failures.push(format!("{role}: no report ({e})")),
         }
     }

@@ -92,10 +92,20 @@ pub struct LaunchOptions {
     pub external_timeout_s: f64,
     /// The controller runs on another host: start the plant-side bridge listening here (IP:PORT, tcp/IP:PORT or
     /// udp/IP:PORT) instead of a controller, and wait up to --external-timeout-s for `silrig-bridge --connect` and a
-    /// controller on the other host. Next-tick timing unless --command-timing says otherwise. Needs silrig-bridge
-    /// (`cargo build --release --features bridge`).
+    /// controller on the other host. Any address but the loopback needs --bridge-key (or --bridge-insecure).
+    /// Next-tick timing unless --command-timing says otherwise. Needs silrig-bridge (`cargo build --release
+    /// --features bridge`).
     #[arg(long, value_name = "ENDPOINT", conflicts_with_all = ["controller_cmd", "controller"])]
     pub bridge_listen: Option<String>,
+    /// The bridge key for --bridge-listen (`silrig-bridge keygen FILE`, the same file on the controller's host,
+    /// readable by its owner only): the link runs over TLS and only a bridge holding the key can join. Needed on
+    /// any address but the loopback.
+    #[arg(long, value_name = "FILE", requires = "bridge_listen")]
+    pub bridge_key: Option<PathBuf>,
+    /// --bridge-listen off the loopback without a key: anyone who reaches the port can join the run, read its
+    /// samples and command the plant. Only on a network you trust.
+    #[arg(long, requires = "bridge_listen", conflicts_with = "bridge_key")]
+    pub bridge_insecure: bool,
     /// Override the scenario's command timing: same-tick (the plant waits up to --command-budget-ms for the answer
     /// to the tick it just published) or next-tick.
     #[arg(long, value_enum)]
@@ -128,6 +138,25 @@ pub fn parse_live(value: &str) -> Result<LiveServe, String> {
         .map_err(|e| format!("`{addr}` is no IP:PORT address ({e}), e.g. foxglove=127.0.0.1:8765"))
 }
 
+/// The line the launcher prints when it serves the run live on `addr`: where, and who can reach it (the server
+/// has no authentication and no TLS, so off the loopback it is anyone on the network).
+pub fn live_line(addr: SocketAddr) -> String {
+    let reach = if addr.ip().is_loopback() {
+        format!(
+            "on the loopback only: programs on this host can connect, no other machine (serve the network with \
+                 --live foxglove=0.0.0.0:{})",
+            addr.port()
+        )
+    } else {
+        format!(
+            "open to the network: anyone who reaches port {} of this host can watch the run (no \
+                 authentication, no TLS)",
+            addr.port()
+        )
+    };
+    format!("silrig run: serving the run live on ws://{addr} (Foxglove WebSocket protocol), {reach}")
+}
+
 /// Who measures the OS floor beside a realtime run (`--floor`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum FloorSource {
@@ -157,6 +186,15 @@ pub enum PlantKind {
 }
 
 impl LaunchOptions {
+    /// The plant-side bridge's flags for its security: `--key FILE` or `--insecure`, or none (the loopback).
+    pub fn bridge_security(&self) -> Vec<String> {
+        match (&self.bridge_key, self.bridge_insecure) {
+            (Some(key), _) => vec!["--key".into(), key.display().to_string()],
+            (None, true) => vec!["--insecure".into()],
+            (None, false) => Vec::new(),
+        }
+    }
+
     /// Whether the plant is a built-in vehicle (no `--plant-cmd`, `--plant external` or plant FMU).
     pub(crate) fn flies_builtin(&self, scenario: &Scenario) -> bool {
         self.plant_cmd.is_none() && self.plant != PlantKind::External && scenario.plant.fmu.is_none()
@@ -174,5 +212,41 @@ impl LaunchOptions {
             (Some(cmd), _) => ControllerLaunch::Command(cmd.clone()),
             (None, _) => ControllerLaunch::Ours,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_live_line_says_who_can_reach_the_server() {
+        let LiveServe::Foxglove(local) = parse_live("foxglove").unwrap();
+        assert_eq!(local.to_string(), LIVE_FOXGLOVE_DEFAULT, "the loopback unless told otherwise");
+        let line = live_line(local);
+        assert!(line.contains("ws://127.0.0.1:8765") && line.contains("on the loopback only"), "{line}");
+        assert!(line.contains("foxglove=0.0.0.0:8765"), "says how to serve the network: {line}");
+        let LiveServe::Foxglove(open) = parse_live("foxglove=0.0.0.0:9000").unwrap();
+        let line = live_line(open);
+        assert!(line.contains("open to the network") && line.contains("port 9000"), "{line}");
+        assert!(!line.contains("loopback"), "{line}");
+    }
+
+    #[test]
+    fn the_bridge_s_security_flags_follow_silrig_run_s() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            opts: LaunchOptions,
+        }
+        let parse = |args: &[&str]| Cli::try_parse_from([&["silrig"], args].concat()).map(|c| c.opts);
+        let keyed = parse(&["--bridge-listen", "0.0.0.0:7447", "--bridge-key", "lab.key"]).unwrap();
+        assert_eq!(keyed.bridge_security(), ["--key", "lab.key"]);
+        let open = parse(&["--bridge-listen", "0.0.0.0:7447", "--bridge-insecure"]).unwrap();
+        assert_eq!(open.bridge_security(), ["--insecure"]);
+        assert!(parse(&["--bridge-listen", "127.0.0.1:7447"]).unwrap().bridge_security().is_empty());
+        assert!(parse(&["--bridge-key", "lab.key"]).is_err(), "a key without --bridge-listen");
+        assert!(parse(&["--bridge-listen", "0.0.0.0:7447", "--bridge-key", "k", "--bridge-insecure"]).is_err());
     }
 }

@@ -4,6 +4,7 @@
 use super::claim::{Claim, fresh_run_id, refuse_used_folder, remove_stale_claims};
 use super::options::{ControllerKind, LaunchOptions, LiveServe, PlantKind};
 use crate::program::check_command;
+use crate::supervision::ControllerLaunch;
 use anyhow::Context;
 use silrig_flight::fault::FaultTarget;
 use silrig_flight::role::Role;
@@ -63,6 +64,9 @@ pub(crate) fn prepare(opts: &LaunchOptions) -> anyhow::Result<Prepared> {
         }
     }
     let run_id = opts.run_id.clone().unwrap_or_else(fresh_run_id);
+    if let Some(listen) = &opts.bridge_listen {
+        super::remote::check(listen, &opts.bridge_security(), run_id.as_str())?;
+    }
     let out = opts.out.clone().unwrap_or_else(|| Path::new("out").join(format!("run-{run_id}")));
     refuse_used_folder(&out)?;
     let created = !out.exists();
@@ -119,6 +123,7 @@ fn claim(scenario: Scenario, run_id: RunId, out: PathBuf) -> anyhow::Result<Prep
 /// The FMUs of `--plant-fmu` and `--controller-fmu` (or the scenario's) by their absolute paths, as the processes
 /// read them from the run's folder, each checked here with its variables and parameters, before any process starts.
 fn place_fmus(opts: &LaunchOptions, scenario: &mut Scenario) -> anyhow::Result<()> {
+    let mut plant_fmu_signals = None;
     if let Some(fmu) = &opts.plant_fmu {
         scenario.plant.fmu = Some(fmu.clone());
     }
@@ -131,7 +136,7 @@ fn place_fmus(opts: &LaunchOptions, scenario: &mut Scenario) -> anyhow::Result<(
         // The processes read the scenario from the run's folder: the FMU by its absolute path.
         let fmu = std::path::absolute(&fmu).map_err(|e| anyhow::anyhow!("--plant-fmu {}: {e}", fmu.display()))?;
         // Every problem of the file, its variables and the parameters is said here, before any process starts.
-        silrig_adapters::fmu::plant::FmuPlant::check(&fmu, scenario)?;
+        plant_fmu_signals = Some(silrig_adapters::fmu::plant::FmuPlant::check(&fmu, scenario)?.signals);
         scenario.plant.fmu = Some(fmu);
     }
     if let Some(fmu) = &opts.controller_fmu {
@@ -156,6 +161,13 @@ fn place_fmus(opts: &LaunchOptions, scenario: &mut Scenario) -> anyhow::Result<(
         };
         silrig_adapters::fmu::controller::FmuController::check(&fmu, scenario, plant.as_ref())?;
         scenario.controller.fmu = Some(fmu);
+    }
+    // A plant FMU under silrig-controller with no controller named flies the built-in law that fits its signals;
+    // one that fits none is refused now, naming them.
+    if let Some(signals) = plant_fmu_signals
+        && matches!(opts.controller_launch(), ControllerLaunch::Ours)
+    {
+        silrig_adapters::process::ControllerKind::fitting(scenario, |_| Ok(signals))?;
     }
     Ok(())
 }

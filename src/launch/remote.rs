@@ -45,16 +45,17 @@ const RESTART_PAUSE: Duration = Duration::from_millis(200);
 const REPORT_BACK_WAIT: Duration = Duration::from_secs(6);
 
 impl RemoteBridge {
-    /// Start the plant-side bridge listening on `listen` for the run `args` describes.
-    pub(crate) fn start(listen: &str, args: &ProcessArgs, events: EventLog) -> anyhow::Result<Self> {
-        let exe = binary_dir()?.join(BRIDGE_BINARY);
-        anyhow::ensure!(
-            exe.is_file(),
-            "--bridge-listen needs {}, which this build does not have: build it with `cargo build --release \
-             --features bridge`",
-            exe.display()
-        );
+    /// Start the plant-side bridge listening on `listen` with `security` (its key or `--insecure`, see [`check`])
+    /// for the run `args` describes.
+    pub(crate) fn start(
+        listen: &str,
+        security: &[String],
+        args: &ProcessArgs,
+        events: EventLog,
+    ) -> anyhow::Result<Self> {
+        let exe = bridge_binary()?;
         let mut argv = vec!["--listen".to_string(), listen.to_string()];
+        argv.extend(security.iter().cloned());
         argv.extend(args.to_argv());
         let log = args.out.join("bridge.stderr.log");
         let child = spawn(&exe, &argv, &log)?;
@@ -154,6 +155,37 @@ impl RemoteBridge {
         self.child.signal(libc::SIGTERM);
         self.child.finish(Duration::from_secs(5)).map(|_| ())
     }
+}
+
+fn bridge_binary() -> anyhow::Result<PathBuf> {
+    let exe = binary_dir()?.join(BRIDGE_BINARY);
+    anyhow::ensure!(
+        exe.is_file(),
+        "--bridge-listen needs {}, which this build does not have: build it with `cargo build --release --features \
+         bridge`",
+        exe.display()
+    );
+    Ok(exe)
+}
+
+/// Before anything starts: whether the plant-side bridge would start on `listen` with `security` (its key read and
+/// owner-only, or no key needed there, or `--insecure`), asked of `silrig-bridge --check`, which owns those rules,
+/// and refused in its words. A bridge that could never start would otherwise die three times before the run fails.
+pub(crate) fn check(listen: &str, security: &[String], run_id: &str) -> anyhow::Result<()> {
+    let exe = bridge_binary()?;
+    let o = Command::new(&exe)
+        .args(["--check", "--listen", listen])
+        .args(security)
+        .args(["--run-id", run_id])
+        .stdin(Stdio::null())
+        .output()
+        .with_context(|| format!("starting {}", exe.display()))?;
+    if o.status.success() {
+        return Ok(());
+    }
+    let said = String::from_utf8_lossy(&o.stderr);
+    let said = said.trim().trim_start_matches("silrig-bridge: ").trim_start_matches("error: ");
+    anyhow::bail!("--bridge-listen {listen}: {said}")
 }
 
 fn spawn(exe: &PathBuf, argv: &[String], log: &PathBuf) -> anyhow::Result<ChildProcess> {

@@ -237,6 +237,7 @@ mod tests {
             plant_samples_lost: 0,
             command_samples_lost: 0,
             discontinuity: None,
+            plant_resume: None,
             rejoin: None,
         };
         assert_eq!(window_end(&record(0, None), 8.0, &plan), Some(9.0), "the planned window");

@@ -2,7 +2,7 @@
 //! floor measured beside them, control quality of the logged trace, the fault table, failures, the figures left
 //! out and leftovers.
 
-use super::fault_report::{Discontinuity, FaultRecord};
+use super::fault_report::{Discontinuity, FaultRecord, PlantResume};
 use crate::floor::timer_baseline::BaselineReport;
 use serde::{Deserialize, Serialize};
 use silrig_flight::summary::{Summary, summarize};
@@ -48,6 +48,9 @@ pub struct RigReport {
     /// Every place the logged flight joins a re-flown one (a restarted plant), planned or not.
     #[serde(default)]
     pub discontinuities: Vec<Discontinuity>,
+    /// Every restart of the plant, planned or not: the tick it flew on from and how many ticks it flew again.
+    #[serde(default)]
+    pub plant_resumes: Vec<PlantResume>,
     /// The scenario's duration, s.
     #[serde(default)]
     pub duration_s: f64,
@@ -326,6 +329,9 @@ impl RigReport {
         if let Some(s) = &self.stopped_by {
             out += &format!("stopped by the user ({}) at t = {:.2} s of {:.2} s\n", s.signal, s.at_s, self.duration_s);
         }
+        for r in self.unplanned_plant_resumes() {
+            out += &format!("plant restarted outside the fault plan: {}\n", r.describe());
+        }
         for d in &self.discontinuities {
             out += &format!("flight discontinuity at t = {:.2} s: {}\n", d.at_s, d.detail);
         }
@@ -481,6 +487,12 @@ impl RigReport {
         out
     }
 
+    /// The plant's restarts no fault of the plan accounts for (`--restart on-failure`, a plant killed from outside):
+    /// the fault table shows the others.
+    pub fn unplanned_plant_resumes(&self) -> impl Iterator<Item = &PlantResume> {
+        self.plant_resumes.iter().filter(|r| !self.faults.iter().any(|f| f.plant_resume.as_ref() == Some(*r)))
+    }
+
     /// The fault table (empty without faults).
     fn faults_text(&self) -> String {
         if self.faults.is_empty() {
@@ -506,6 +518,9 @@ impl RigReport {
                 f.plant_samples_lost,
                 f.command_samples_lost
             );
+            if let Some(r) = &f.plant_resume {
+                out += &format!("  {:<32} plant {}\n", "", r.describe());
+            }
             if let Some(d) = &f.discontinuity {
                 out += &format!("  {:<32} flight discontinuity at {:.3} s (below)\n", "", d.at_s);
             }

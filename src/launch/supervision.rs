@@ -3,6 +3,7 @@
 //! children it started and has not reaped, so a pid is never reused under it.
 
 use crate::child::{ChildProcess, describe, forward_output, start_process};
+use crate::joining::{self, Joining};
 use crate::program::binary_dir;
 use crate::run_report::ProcessLife;
 use anyhow::Context;
@@ -60,6 +61,8 @@ pub(crate) struct RoleProcess {
     restarts: u32,
     /// When to start it again.
     pub(crate) restart_at: Option<Instant>,
+    /// Whether it has joined the run yet ([`Supervisor::watch_joins`]).
+    joining: Joining,
 }
 
 impl RoleProcess {
@@ -74,6 +77,7 @@ impl RoleProcess {
             clean_exit_seen: None,
             restarts,
             restart_at: None,
+            joining: Joining::started(restarts),
         }
     }
 
@@ -195,18 +199,21 @@ pub(crate) struct Supervisor {
     pub(crate) notes: Vec<String>,
     /// Every process started, one entry per life (a restart starts a new life).
     pub(crate) lives: Vec<ProcessLife>,
+    /// A sweep's warm rig, whose warm processes fork the run's processes.
+    warm: Option<std::sync::Arc<crate::warm::WarmRig>>,
 }
 
 impl Supervisor {
     /// Start the three processes with `args`: the logger first and the plant last, staggered, because concurrent
     /// node creation with dead-node cleanup is where iceoryx2 has had races (#1880).
     /// `launch`: where the controller comes from, the plant's command (`None`: external), and what the logger's
-    /// command line gets beyond the run's arguments.
+    /// command line gets beyond the run's arguments. `warm`: a sweep's warm rig forks them.
     pub(crate) fn start(
         args: ProcessArgs,
         events: EventLog,
         restart: SupervisionOptions,
         launch: (ControllerLaunch, Option<Option<String>>, Vec<String>),
+        warm: Option<std::sync::Arc<crate::warm::WarmRig>>,
     ) -> anyhow::Result<Self> {
         let (controller, plant, logger_args) = launch;
         let bin_dir = binary_dir()?;
@@ -230,6 +237,7 @@ impl Supervisor {
             failures: Vec::new(),
             notes: Vec::new(),
             lives: Vec::new(),
+            warm,
         };
         for role in [Role::Logger, Role::Controller, Role::Plant] {
             if (role == Role::Controller && sup.controller == ControllerLaunch::External)
@@ -254,14 +262,60 @@ impl Supervisor {
         let marker = resume.then(|| format!("--- silrig run: {role} restarted ---"));
         let output = forward_output(reader, log_path, role, marker);
         let args = ProcessArgs { resume, ..self.args.clone() };
-        let command = match (role, &self.controller) {
+        let command = self.command_of(role);
+        let extra: &[String] = if role == Role::Logger { &self.logger_args } else { &[] };
+        let process = match self.warm.as_ref().and_then(|w| w.process(role)) {
+            // A sweep's warm rig: the same command line and variables, forked by the role's warm process.
+            Some(warm) => {
+                drop(log);
+                warm.fly(role, command, &args, extra, &self.bin_dir, writer.into())?
+            }
+            None => start_process(role, command, &args, extra, &self.bin_dir, log.into(), writer.into())?,
+        };
+        Ok(process.with_output(output))
+    }
+
+    /// The user's command that runs `role` (`--controller-cmd`, `--plant-cmd`), if one does.
+    fn command_of(&self, role: Role) -> Option<&str> {
+        match (role, &self.controller) {
             (Role::Controller, ControllerLaunch::Command(cmd)) => Some(cmd.as_str()),
             (Role::Plant, _) => self.plant_cmd.as_deref(),
             _ => None,
-        };
-        let extra: &[String] = if role == Role::Logger { &self.logger_args } else { &[] };
-        let process = start_process(role, command, &args, extra, &self.bin_dir, log.into(), writer.into())?;
-        Ok(process.with_output(output))
+        }
+    }
+
+    /// Note who has joined the run. A process still running that has not joined within the start-up timeout is
+    /// the run's culprit, its failure the first: the run stops for it at once, without a restart (a second start
+    /// would wait as long), and the peers that give up waiting for it are no failure of their own. Looked at until
+    /// everyone started has joined, and at every exit (the exit may be a peer giving up on one that never joined).
+    pub(crate) fn watch_joins(&mut self) {
+        let waiting = |p: &RoleProcess| matches!(p.joining, Joining::Waited { .. });
+        if self.plant_done_at.is_some() || self.stopping || !self.processes.iter().any(waiting) {
+            return;
+        }
+        let nodes = joining::nodes(&self.args.run_id);
+        let timeout = Duration::from_secs_f64(self.args.options.startup_timeout_s);
+        for i in 0..self.processes.len() {
+            let p = &mut self.processes[i];
+            let Joining::Waited { since } = p.joining else { continue };
+            if joining::has_joined(&p.process, &nodes) {
+                p.joining = Joining::Joined;
+                continue;
+            }
+            if p.process.has_ended() || since.elapsed() < timeout {
+                continue;
+            }
+            p.joining = Joining::NeverJoined;
+            let (role, pid) = (p.role, p.process.pid());
+            let command = self.command_of(role);
+            let who = joining::who(role, command, pid);
+            let waited_s = since.elapsed().as_secs_f64();
+            let failure = joining::never_joined(role, &who, command.is_some(), &self.args.run_id, waited_s);
+            self.events.emit(None, "process-never-joined", failure.clone());
+            eprintln!("silrig run: {failure}");
+            self.failures.insert(0, failure);
+            self.plant_done();
+        }
     }
 
     fn begin_life(&mut self, role: Role, life: u32, pid: u32) {
@@ -303,7 +357,7 @@ impl Supervisor {
     }
 
     /// Whether the plant has started ticking (its `ticking` event is in the run's events).
-    fn plant_ticking(&self) -> bool {
+    pub(crate) fn plant_ticking(&self) -> bool {
         std::fs::read_to_string(self.args.out.join("events.jsonl")).is_ok_and(|t| t.contains("\"ticking\""))
     }
 
@@ -340,8 +394,10 @@ impl Supervisor {
                     continue;
                 }
             }
+            self.processes[i].exit_handled = true;
+            // Before its node is cleaned up: whether it had joined, and whether a peer it waited for never did.
+            self.watch_joins();
             let p = &mut self.processes[i];
-            p.exit_handled = true;
             let (role, pid, planned) = (p.role, p.process.pid(), p.planned_exit);
             self.end_life(pid, status, if planned { " (the fault plan)" } else { "" });
             let p = &mut self.processes[i];
@@ -405,19 +461,28 @@ impl Supervisor {
         {
             return;
         }
-        let death = self.death_of(role, status, &ended);
+        let death = self.death_of(i, status, &ended);
         self.on_death(i, death);
     }
 
-    /// A death in words: how it ended, when, which FMU it was flying if it crashed, and the end of its stderr.
-    fn death_of(&self, role: Role, status: ExitStatus, ended: &str) -> String {
+    /// A death in words: how it ended, when (a user's command before it joined the run: with the command and how
+    /// soon), which FMU it was flying if it crashed, and the end of its stderr.
+    fn death_of(&self, i: usize, status: ExitStatus, ended: &str) -> String {
+        let p = &self.processes[i];
+        let role = p.role;
         let how = if status.success() && !ended.is_empty() {
             format!("ended ({ended}; the launcher sent no signal)")
         } else {
             describe(status)
         };
         let tail = stderr_tail(&self.args.out, role);
-        let when = if self.plant_ticking() { "before the end of the run" } else { "before the plant's first tick" };
+        let ticking = self.plant_ticking();
+        // A user's command that ends before it joined: said with the command, so the first line names the culprit.
+        if let (Joining::Waited { since }, false, Some(command)) = (p.joining, ticking, self.command_of(role)) {
+            let who = joining::who(role, Some(command), p.process.pid());
+            return joining::exited_before_joining(role, &who, &how, since.elapsed().as_secs_f64(), &tail);
+        }
+        let when = if ticking { "before the end of the run" } else { "before the plant's first tick" };
         let fmu = match (role, status.code()) {
             // A crash in an FMU's code takes its process with it: say which FMU it was flying.
             (Role::Plant, None) => self.plant_fmu.as_ref(),
@@ -533,9 +598,23 @@ impl Supervisor {
             for what in p.process.take_outlasted() {
                 self.notes.push(format!("{role}: {what}, which the end of the run waited for"));
             }
-            // A life already noted stays as it was: only open ones are ended here.
-            self.end_life(pid, status, if already_ended { "" } else { " at the end of the run" });
-            if !already_ended && !status.success() && !self.failures.iter().any(|f| f.starts_with(role.label())) {
+            // A life already noted stays as it was: only open ones are ended here. One that never joined was
+            // stopped for that, and its end on the launcher's signal is no death of its own.
+            let how = match (already_ended, p.joining) {
+                (true, _) => "",
+                (false, Joining::NeverJoined) => " on the launcher's SIGTERM (it never joined the run)",
+                (false, _) => " at the end of the run",
+            };
+            self.end_life(pid, status, how);
+            // In a run that failed already, a process the stop's SIGTERM killed before it could act on it (one
+            // still starting when a peer died at once) is the launcher's doing, not a failure of its own.
+            use std::os::unix::process::ExitStatusExt;
+            let stopped_by_us = status.signal() == Some(libc::SIGTERM) && !self.failures.is_empty();
+            if !already_ended
+                && !status.success()
+                && !stopped_by_us
+                && !self.failures.iter().any(|f| f.starts_with(role.label()))
+            {
                 let tail = stderr_tail(&self.args.out, role);
                 self.failures.push(format!("{role}: {}{tail}", describe(status)));
             }

@@ -5,9 +5,13 @@
 //! ([`silrig_wire::wire::WireField`]), so a field added to the wire appears in the recording without an edit here.
 //!
 //! Every field is written as received: numbers in their own binary form (so every f64, NaN and -0.0 included,
-//! reads back bit for bit), `SampleHeader` as a nested message, fixed arrays as ROS fixed arrays, byte arrays (names
-//! and units) as strings. `_pad` fields are left out. [`CdrCodec::decode`] is the inverse, which replay uses to send
-//! the recorded samples again bit for bit.
+//! reads back bit for bit), `SampleHeader` as a nested message, byte arrays (names and units) as strings. A number
+//! array with a count beside it (`outputs` and `outputs_len`, `inputs` and `inputs_len`, `diagnostics` and
+//! `diagnostics_len`) is a ROS bounded sequence of the entries in use (`float64[<=64] diagnostics`): the wire has the
+//! rest 0, and writing them was most of a `/command` message (4 inputs and 21 diagnostics of the F-16 in 80 slots).
+//! Other arrays are ROS fixed arrays. `_pad` fields are left out. [`CdrCodec::decode`] is the inverse, which replay
+//! uses to send the recorded samples again bit for bit; [`CdrCodec::fixed`] reads the recordings written before the
+//! sequences, whose arrays were all fixed ([`ARRAYS_KEY`] tells them apart).
 
 use crate::json::{Element, bytes_of, fields_shown, shape};
 use silrig_wire::wire::{SampleHeader, WireField, WireType};
@@ -20,6 +24,11 @@ pub const MESSAGE_ENCODING: &str = "cdr";
 pub const PACKAGE: &str = "silrig";
 /// CDR encapsulation header: plain CDR, little-endian.
 const ENCAPSULATION_LE: [u8; 4] = [0, 1, 0, 0];
+/// The recording's run metadata key that says its counted arrays are bounded sequences ([`ARRAYS_BOUNDED`]);
+/// recordings without it wrote every array fixed.
+pub const ARRAYS_KEY: &str = "cdr_arrays";
+/// [`ARRAYS_KEY`]'s value in recordings whose counted arrays are bounded sequences.
+pub const ARRAYS_BOUNDED: &str = "bounded";
 /// Separates a definition from the definitions it uses, as `ros2 bag` writes them.
 const DEFINITION_SEPARATOR: &str = "================================================================================\n";
 
@@ -175,6 +184,18 @@ struct Step {
     count: usize,
     /// Bytes per element (the NUL-padded text's length for text).
     size: usize,
+    /// A bounded sequence: where its count (a `u32`) sits in the wire type.
+    len_offset: Option<usize>,
+}
+
+/// The count field beside a number array (`outputs_len` beside `outputs`), which makes it a bounded sequence.
+fn count_field(fields: &'static [WireField], array: &WireField) -> Option<&'static WireField> {
+    let s = shape(array);
+    if !s.array || matches!(s.element, Element::Text | Element::Header) {
+        return None;
+    }
+    let name = format!("{}_len", array.name);
+    fields.iter().find(|f| f.name == name && f.rust_type.trim() == "u32")
 }
 
 /// A wire type's CDR codec: its field table flattened once (nested headers expanded, padding left out), so
@@ -186,28 +207,47 @@ pub struct CdrCodec {
     size: usize,
 }
 
-fn flatten(fields: &'static [WireField], base: usize, steps: &mut Vec<Step>) {
+fn flatten(fields: &'static [WireField], base: usize, bounded: bool, steps: &mut Vec<Step>) {
     for field in fields_shown(fields) {
         let s = shape(field);
         let offset = base + field.offset;
         if s.element == Element::Header {
             let n = if s.array { field.size / size_of::<SampleHeader>() } else { 1 };
             for k in 0..n {
-                flatten(SampleHeader::FIELDS, offset + k * size_of::<SampleHeader>(), steps);
+                flatten(SampleHeader::FIELDS, offset + k * size_of::<SampleHeader>(), bounded, steps);
             }
             continue;
         }
         let size = s.element.size(s.text_len);
-        steps.push(Step { offset, element: s.element, count: field.size / size, size });
+        let len_offset = count_field(fields, field).filter(|_| bounded).map(|len| base + len.offset);
+        steps.push(Step { offset, element: s.element, count: field.size / size, size, len_offset });
     }
 }
 
 impl CdrCodec {
-    /// The codec of `T`.
+    /// The codec of `T` as the logger writes it: counted arrays as bounded sequences.
     pub fn of<T: WireType + Copy>() -> Self {
+        Self::with::<T>(true)
+    }
+
+    /// The codec of `T` as recordings without [`ARRAYS_KEY`] hold it: every array fixed.
+    pub fn fixed<T: WireType + Copy>() -> Self {
+        Self::with::<T>(false)
+    }
+
+    fn with<T: WireType + Copy>(bounded: bool) -> Self {
         let mut steps = Vec::new();
-        flatten(T::FIELDS, 0, &mut steps);
+        flatten(T::FIELDS, 0, bounded, &mut steps);
         Self { type_name: T::TYPE_NAME, steps, size: size_of::<T>() }
+    }
+
+    /// The elements of `step` to write: all of a fixed array, the ones in use of a sequence (its count, bounded by
+    /// the array, written first).
+    fn in_use(step: &Step, bytes: &[u8], out: &mut CdrBuffer) -> usize {
+        let Some(at) = step.len_offset else { return step.count };
+        let n = (u32::from_ne_bytes(bytes[at..at + 4].try_into().expect("4 bytes")) as usize).min(step.count);
+        out.u32(n as u32);
+        n
     }
 
     /// Append `sample`'s fields to `out` (after [`CdrBuffer::start`]; the caller adds any fields after them).
@@ -215,7 +255,12 @@ impl CdrCodec {
         debug_assert_eq!(size_of::<T>(), self.size, "the codec of {}", self.type_name);
         let bytes = bytes_of(sample);
         for step in &self.steps {
-            let data = &bytes[step.offset..step.offset + step.count * step.size];
+            let count = Self::in_use(step, bytes, out);
+            if count == 0 {
+                // CDR aligns an element, not a sequence: an empty one has no padding after its count.
+                continue;
+            }
+            let data = &bytes[step.offset..step.offset + count * step.size];
             match step.element {
                 Element::Text => {
                     for text in data.chunks_exact(step.size) {
@@ -254,7 +299,12 @@ impl CdrCodec {
         // SAFETY: as in `bytes_of`; the slice covers exactly the sample, which outlives it, and any bytes are valid.
         let bytes = unsafe { std::slice::from_raw_parts_mut((&mut sample as *mut T).cast::<u8>(), size_of::<T>()) };
         for step in &self.steps {
-            let data = &mut bytes[step.offset..step.offset + step.count * step.size];
+            let count = match step.len_offset {
+                Some(_) => Self::sequence_len(step, reader)?,
+                None => step.count,
+            };
+            // A sequence's entries past its count stay 0, as the wire has them.
+            let data = &mut bytes[step.offset..step.offset + count * step.size];
             for chunk in data.chunks_exact_mut(step.size) {
                 match step.element {
                     Element::Text => {
@@ -271,6 +321,15 @@ impl CdrCodec {
             }
         }
         Ok(sample)
+    }
+
+    /// A bounded sequence's count, refused past the array's length.
+    fn sequence_len(step: &Step, reader: &mut CdrReader) -> Result<usize, CdrError> {
+        let n = reader.u32()? as usize;
+        if n > step.count {
+            return Err(reader.error(format!("a sequence of {n} entries where at most {} fit", step.count)));
+        }
+        Ok(n)
     }
 }
 
@@ -295,7 +354,12 @@ fn fields_msg(fields: &'static [WireField]) -> String {
     let mut out = String::new();
     for field in fields_shown(fields) {
         let s = shape(field);
-        let array = if s.array { format!("[{}]", field.size / s.element.size(s.text_len)) } else { String::new() };
+        let n = field.size / s.element.size(s.text_len);
+        let array = match (s.array, count_field(fields, field)) {
+            (true, Some(_)) => format!("[<={n}]"),
+            (true, None) => format!("[{n}]"),
+            (false, _) => String::new(),
+        };
         out += &comment(field.doc);
         out += &format!("{}{array} {}\n", ros_type(s.element), field.name);
     }
@@ -375,10 +439,11 @@ mod tests {
     fn plant() -> PlantSample {
         let mut s = PlantSample::zeroed();
         s.header = SampleHeader { seq: 7, tick: 41, t_send_ns: u64::MAX - 3, epoch: 2, layout_version: 3, _pad: 0 };
-        s.outputs = std::array::from_fn(|i| 0.1 * i as f64 + 1.0 / 3.0);
+        // Entries past the count are 0, as the wire has them.
+        s.outputs_len = 20;
+        s.outputs = std::array::from_fn(|i| if i < 20 { 0.1 * i as f64 + 1.0 / 3.0 } else { 0.0 });
         s.outputs[4] = -0.0;
         s.outputs[5..9].copy_from_slice(&[-1e-300, f64::NAN, f64::NEG_INFINITY, f64::MIN_POSITIVE]);
-        s.outputs_len = 20;
         s.t_sim_s = 0.41;
         s.flags = 0b101;
         s.wake_lateness_ns = -12;
@@ -401,7 +466,10 @@ mod tests {
         assert_eq!(u64::from_le_bytes(data[12..20].try_into().unwrap()), 41);
         assert_eq!(u32::from_le_bytes(data[36..40].try_into().unwrap()), 3);
         assert_eq!(f64::from_le_bytes(data[44..52].try_into().unwrap()), 0.41);
-        assert_eq!(data.len(), 4 + 40 + 8 + 8 + 8 + 4 + 4 + 32 * 8 + 8);
+        // outputs as a sequence: its count (20) after outputs_len, 4 bytes of padding, the 20 entries in use.
+        assert_eq!(u32::from_le_bytes(data[76..80].try_into().unwrap()), 20);
+        assert_eq!(f64::from_le_bytes(data[84..92].try_into().unwrap()), 1.0 / 3.0);
+        assert_eq!(data.len(), 4 + 40 + 8 + 8 + 8 + 4 + 4 + 4 + 4 + 20 * 8 + 8);
         let mut reader = CdrReader::new(PlantSample::TYPE_NAME, data).unwrap();
         let back: PlantSample = codec.decode(&mut reader).unwrap();
         assert_eq!(reader.u64().unwrap(), 99);
@@ -431,15 +499,63 @@ mod tests {
         let mut c = CommandSample::zeroed();
         c.inputs_len = 3;
         c.inputs[..3].copy_from_slice(&[f64::NAN, f64::INFINITY, 1.5]);
+        c.diagnostics_len = 64;
         c.diagnostics[63] = -2.25;
         check(c);
+        check(CommandSample::zeroed());
         check(PlantInfo::new(&f16).unwrap());
         check(ControllerInfo::new(&["s_phi".to_string(), "w_phi_0".to_string()]).unwrap());
         check(LogAckSample::new(12));
         let msg = sample_msg::<PlantInfo>(&[]);
         assert!(msg.contains("string[32] output_names\n") && msg.contains("silrig/SampleHeader header\n"), "{msg}");
         assert!(msg.contains("\nMSG: silrig/SampleHeader\n") && msg.contains("uint32 layout_version\n"), "{msg}");
-        assert!(sample_msg::<PlantSample>(&[]).contains("float64[32] outputs\n"));
+        assert!(sample_msg::<PlantSample>(&[]).contains("float64[<=32] outputs\n"));
+        let msg = sample_msg::<CommandSample>(&[]);
+        assert!(msg.contains("float64[<=16] inputs\n") && msg.contains("float64[<=64] diagnostics\n"), "{msg}");
+    }
+
+    #[test]
+    fn only_the_entries_in_use_are_written_and_an_empty_sequence_has_no_padding() {
+        let mut c = CommandSample::zeroed();
+        c.diagnostics_len = 2;
+        c.diagnostics[..2].copy_from_slice(&[0.5, -0.25]);
+        // Past the count: not the wire's contract, and not recorded.
+        c.diagnostics[9] = 7.0;
+        let codec = CdrCodec::of::<CommandSample>();
+        let mut out = CdrBuffer::default();
+        out.start();
+        codec.encode(&c, &mut out);
+        let data = out.bytes();
+        // header 40, answers_tick 8, compute_ns 8, flags, inputs_len, diagnostics_len 12: then the inputs' count
+        // (0) at 68 and, with no padding, the diagnostics' count (2) at 72, 4 bytes of padding, two entries.
+        assert_eq!(u32::from_le_bytes(data[4 + 68..4 + 72].try_into().unwrap()), 0);
+        assert_eq!(u32::from_le_bytes(data[4 + 72..4 + 76].try_into().unwrap()), 2);
+        assert_eq!(f64::from_le_bytes(data[4 + 80..4 + 88].try_into().unwrap()), 0.5);
+        assert_eq!(data.len(), 4 + 80 + 2 * 8);
+        let back: CommandSample = codec.decode(&mut CdrReader::new("c", data).unwrap()).unwrap();
+        assert_eq!((back.diagnostics(), back.diagnostics[9]), (&[0.5, -0.25][..], 0.0));
+        assert_eq!(back.inputs.map(f64::to_bits), c.inputs.map(f64::to_bits));
+    }
+
+    #[test]
+    fn a_recording_of_fixed_arrays_still_reads_and_a_sequence_too_long_is_refused() {
+        let mut c = CommandSample::zeroed();
+        c.inputs_len = 1;
+        c.diagnostics[63] = -2.25;
+        let fixed = CdrCodec::fixed::<CommandSample>();
+        let mut out = CdrBuffer::default();
+        out.start();
+        fixed.encode(&c, &mut out);
+        assert_eq!(out.bytes().len(), 4 + 72 + 80 * 8);
+        let back: CommandSample = fixed.decode(&mut CdrReader::new("c", out.bytes()).unwrap()).unwrap();
+        assert_eq!(bytes_of(&back), bytes_of(&c));
+        let mut long = CdrBuffer::default();
+        long.start();
+        CdrCodec::of::<PlantSample>().encode(&plant(), &mut long);
+        let mut data = long.bytes().to_vec();
+        data[76..80].copy_from_slice(&33u32.to_le_bytes());
+        let err = CdrCodec::of::<PlantSample>().decode::<PlantSample>(&mut CdrReader::new("p", &data).unwrap());
+        assert!(err.unwrap_err().to_string().contains("a sequence of 33 entries where at most 32 fit"));
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! The MCAP sink: the run as Foxglove, PlotJuggler and `ros2 bag` open it. Binary messages (CDR, with ROS 2 message
 //! definitions generated from the wire's field tables, [`super::cdr`]) on [`super::topics`]: `/plant` and
-//! `/command` (every field as received, with header stamps, flags and the logger's receive stamp), `/plant_info`
+//! `/command` (every field as received, the arrays' entries in use as bounded sequences, with header stamps, flags and
+//! the logger's receive stamp), `/plant_info`
 //! (the plant's announcement), `/trace` (the trace row, one float64 field per column) and `/timing` (the per-tick
 //! stamps); `/events` holds the run's `events.jsonl` lines as they appear, as JSON. A plant that announces its
 //! position and attitude also gets the aircraft in 3-D for Foxglove's 3D panel ([`super::foxglove`]): `/body_transform`
@@ -188,6 +189,7 @@ fn write_run_metadata(
         ("ticks".to_string(), meta.ticks.to_string()),
         ("silrig_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
         (meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string()),
+        (cdr::ARRAYS_KEY.to_string(), cdr::ARRAYS_BOUNDED.to_string()),
         ("file".to_string(), path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()),
     ]);
     writer.write_metadata(meta_keys::RUN, &run)?;

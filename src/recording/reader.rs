@@ -116,11 +116,20 @@ struct Codecs {
 }
 
 impl Codecs {
-    fn new() -> Self {
-        Self {
-            plant: CdrCodec::of::<PlantSample>(),
-            command: CdrCodec::of::<CommandSample>(),
-            plant_info: CdrCodec::of::<PlantInfo>(),
+    /// As a file's run metadata says its arrays are written: bounded sequences ([`cdr::ARRAYS_KEY`]), or all fixed
+    /// (the recordings before them).
+    fn new(run: &BTreeMap<String, String>) -> Self {
+        match run.get(cdr::ARRAYS_KEY).map(String::as_str) {
+            Some(cdr::ARRAYS_BOUNDED) => Self {
+                plant: CdrCodec::of::<PlantSample>(),
+                command: CdrCodec::of::<CommandSample>(),
+                plant_info: CdrCodec::of::<PlantInfo>(),
+            },
+            _ => Self {
+                plant: CdrCodec::fixed::<PlantSample>(),
+                command: CdrCodec::fixed::<CommandSample>(),
+                plant_info: CdrCodec::fixed::<PlantInfo>(),
+            },
         }
     }
 }
@@ -249,7 +258,8 @@ impl RecordedRun {
             return Err(unreadable("not an MCAP file (no MCAP magic at its start)".into()));
         }
         let mut topics_by_id: HashMap<u16, (String, String, BTreeMap<String, String>)> = HashMap::new();
-        let codecs = Codecs::new();
+        // Set by the file's run metadata, which comes before its first message.
+        let mut codecs = Codecs::new(&BTreeMap::new());
         let mut messages = 0u64;
         let mut layout_checked = false;
         // A record whose length field was damaged would have the reader reserve that many bytes (an abort, not an
@@ -260,6 +270,7 @@ impl RecordedRun {
             let record = record.map_err(|e| cut_short(path, &bytes, messages, e.to_string()))?;
             match record {
                 mcap::records::Record::Metadata(m) if m.name == meta_keys::RUN => {
+                    codecs = Codecs::new(&m.metadata);
                     self.add_run_metadata(path, m.metadata)?;
                     layout_checked = true;
                 }
@@ -413,6 +424,43 @@ mod tests {
         assert_eq!(run.plant[0].header, plant.header);
         assert_eq!(run.commands[&3].diagnostics[2].to_bits(), std::f64::consts::PI.to_bits());
         assert_eq!(run.trace_columns, ["t_s", "phi_deg"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A CDR recording of one command, its arrays fixed or bounded as `run` (the run metadata) says.
+    fn write_cdr_command(path: &Path, run: &BTreeMap<String, String>, codec: &CdrCodec, command: &CommandSample) {
+        let mut writer = mcap::Writer::new(std::io::BufWriter::new(std::fs::File::create(path).unwrap())).unwrap();
+        let metadata = mcap::records::Metadata { name: meta_keys::RUN.into(), metadata: run.clone() };
+        writer.write_metadata(&metadata).unwrap();
+        let schema = writer.add_schema("silrig/msg/CommandSample", cdr::SCHEMA_ENCODING, b"").unwrap();
+        let channel_id = writer.add_channel(schema, topics::COMMAND, cdr::MESSAGE_ENCODING, &BTreeMap::new()).unwrap();
+        let mut data = cdr::CdrBuffer::default();
+        data.start();
+        codec.encode(command, &mut data);
+        data.u64(6);
+        let header = mcap::records::MessageHeader { channel_id, sequence: 1, log_time: 1, publish_time: 1 };
+        writer.write_to_known_channel(&header, data.bytes()).unwrap();
+        writer.finish().unwrap();
+    }
+
+    #[test]
+    fn a_recording_reads_its_arrays_as_its_metadata_says_they_were_written() {
+        let dir = std::env::temp_dir().join(format!("silrig-reader-arrays-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut command = CommandSample::zeroed();
+        command.answers_tick = 4;
+        (command.inputs_len, command.diagnostics_len) = (2, 3);
+        command.inputs[..2].copy_from_slice(&[1.5, -0.0]);
+        command.diagnostics[..3].copy_from_slice(&[0.25, f64::NAN, 7.0]);
+        let old = BTreeMap::from([(meta_keys::LAYOUT_VERSION.to_string(), WIRE_LAYOUT_VERSION.to_string())]);
+        let mut new = old.clone();
+        new.insert(cdr::ARRAYS_KEY.to_string(), cdr::ARRAYS_BOUNDED.to_string());
+        for (run, codec) in [(&old, CdrCodec::fixed::<CommandSample>()), (&new, CdrCodec::of::<CommandSample>())] {
+            write_cdr_command(&dir.join(crate::RECORDING_FILE), run, &codec, &command);
+            let read = RecordedRun::read(&dir).unwrap();
+            let back = &read.commands[&4];
+            assert_eq!(crate::json::bytes_of(back), crate::json::bytes_of(&command), "{run:?}");
+        }
         let _ = std::fs::remove_dir_all(&dir);
     }
 

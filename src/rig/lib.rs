@@ -18,7 +18,9 @@
 //!   log; [`signals`]: SIGTERM and SIGINT handling outside a WaitSet.
 //! - [`report`]: each process's report (counters, timing, machine conditions); [`status`]: the live status
 //!   snapshots `silrig run` and `silrig top` read; [`tick_beacon`]: the plant's newest tick, by which the
-//!   launcher times process faults.
+//!   launcher times process faults; [`checkpoint_slot`]: the plant's newest checkpoint in shared memory, what a
+//!   restarted plant resumes from.
+//! - [`warm`]: a process kept warm for a campaign, forking one flight after another.
 //! - Here: the arguments and options every process takes ([`ProcessArgs`], [`ProcessOptions`]), the
 //!   checkpoint writer, and how a process ends.
 //!
@@ -29,6 +31,7 @@
 //! adapters (the F-16, our law, FMUs, which of them a process flies) are `silrig-adapters`, and the launcher that
 //! starts these processes is `silrig-launch`, both above.
 
+pub mod checkpoint_slot;
 pub mod controller;
 pub mod events;
 pub mod live_foxglove;
@@ -43,6 +46,7 @@ pub mod session;
 pub mod signals;
 pub mod status;
 pub mod tick_beacon;
+pub mod warm;
 
 use silrig_flight::files::write_atomically;
 use silrig_flight::scenario::Scenario;
@@ -377,6 +381,10 @@ pub fn finish_process(
 
 /// Whether our parent is `silrig` (the launcher), read from /proc.
 fn started_by_launcher() -> bool {
+    // A warm process's flight: the sweep that asked for it cleans up its run.
+    if warm::is_flight() {
+        return true;
+    }
     // SAFETY: getppid has no preconditions.
     let parent = unsafe { libc::getppid() };
     std::fs::read_to_string(format!("/proc/{parent}/comm")).is_ok_and(|c| c.trim() == "silrig")

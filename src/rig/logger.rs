@@ -182,12 +182,12 @@ impl LoggerLoop {
             .as_ref()
             .map(|timer| waitset.attach_notification(timer))
             .transpose()
-            .map_err(|e| anyhow::anyhow!("attaching the lockstep timer: {e:?}"))?;
+            .map_err(|e| anyhow::anyhow!("attaching the lockstep timer: {}", ipc::in_words(&e)))?;
         let attach = |listener| (!self.lockstep).then(|| waitset.attach_notification(listener)).transpose();
-        let plant_guard =
-            attach(ports.inputs.plant.listener()).map_err(|e| anyhow::anyhow!("attaching the plant stream: {e:?}"))?;
+        let plant_guard = attach(ports.inputs.plant.listener())
+            .map_err(|e| anyhow::anyhow!("attaching the plant stream: {}", ipc::in_words(&e)))?;
         let command_guard = attach(ports.inputs.commands.listener())
-            .map_err(|e| anyhow::anyhow!("attaching the command stream: {e:?}"))?;
+            .map_err(|e| anyhow::anyhow!("attaching the command stream: {}", ipc::in_words(&e)))?;
         let exit = ipc::run_waitset(&waitset, |id| {
             let paced = pace_guard.as_ref().is_some_and(|g| id.has_event_from(g));
             if paced && let Some(timer) = &pace {
@@ -409,8 +409,10 @@ impl LoggerLoop {
             let step_exec_ns = self.step_exec_after(tick, sample.sample.header.epoch);
             self.writer.row(&plant, &sample, next.as_ref(), command.as_ref(), step_exec_ns)?;
             self.rec.count("rows_written", 1);
-            // Commands answering ticks already written can no longer be used.
-            self.pending_command.retain(|t, _| *t > tick);
+            // Commands answering ticks already written can no longer be used (they sort first: no walk of the rest).
+            while self.pending_command.first_key_value().is_some_and(|(t, _)| *t <= tick) {
+                self.pending_command.pop_first();
+            }
         }
         Ok(())
     }

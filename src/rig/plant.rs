@@ -26,6 +26,7 @@ mod ports;
 
 pub use ports::PlantPorts;
 
+use super::checkpoint_slot::{self, CheckpointSlot};
 use super::events::EventLog;
 use super::loop_faults::LoopFaults;
 use super::plant_model::{ActuatorFlags, PlantModel};
@@ -151,6 +152,13 @@ pub struct PlantLoop {
     /// Realtime only (a lockstep plant is never restarted).
     checkpoints: Option<super::CheckpointWriter>,
     checkpoint_path: std::path::PathBuf,
+    /// Realtime: the newest checkpoint in shared memory, stored by the loop itself (see [`super::checkpoint_slot`]).
+    slot: Option<CheckpointSlot>,
+    /// A checkpoint too large for the slot was said once.
+    slot_overflow_said: bool,
+    /// A restarted plant: the newest tick its predecessor published (from the tick beacon), so the restart can say
+    /// how many ticks it flies again.
+    predecessor_tick: Option<u64>,
     ticks: u64,
     budget_ns: u64,
     spin_ns: u64,
@@ -198,6 +206,17 @@ impl PlantLoop {
         let o = &args.options;
         let rec = plant_recorder(&args.run_id);
         let events = EventLog::new(&args.out, Role::Plant.label());
+        // Read before `create` says "no tick yet" again.
+        let predecessor_tick =
+            if args.resume { TickBeacon::open(&args.run_id).ok().and_then(|b| b.newest()) } else { None };
+        let slot = match realtime.then(|| CheckpointSlot::open(&args.run_id, !args.resume)) {
+            Some(Err(e)) => anyhow::bail!(
+                "cannot map the plant's checkpoint slot {}: {e} (is /dev/shm mounted and writable?)",
+                checkpoint_slot::slot_path(&args.run_id).display()
+            ),
+            Some(Ok(slot)) => Some(slot),
+            None => None,
+        };
         // Without it the launcher schedules process faults on the wall clock from tick 0, as it must for a plant
         // that does not use this library.
         let beacon = TickBeacon::create(&args.run_id)
@@ -231,6 +250,9 @@ impl PlantLoop {
             step_exec_ns: 0,
             checkpoints: realtime.then(|| super::CheckpointWriter::new(checkpoint_path.clone())),
             checkpoint_path,
+            slot,
+            slot_overflow_said: false,
+            predecessor_tick,
             scenario,
             realtime,
             scheduling,
@@ -243,29 +265,47 @@ impl PlantLoop {
         })
     }
 
-    /// A restarted plant (`--resume`) continues the flight from the checkpoint its predecessor saved. Without one
-    /// (its predecessor died before saving any), it flies again from tick 0 and says so; the logger marks where
-    /// the new flight joins the logged one. A checkpoint that exists but cannot be used (torn, garbage, out of
-    /// range) is an error: flying again from tick 0 would splice a different flight into the run.
+    /// A restarted plant (`--resume`) continues the flight from the newest checkpoint its predecessor saved (its
+    /// shared-memory slot, else its file). Without one (its predecessor died before saving any), it flies again
+    /// from tick 0 and says so; the logger marks where the new flight joins the logged one. A checkpoint that
+    /// exists but cannot be used (torn, garbage, out of range) is an error: flying again from tick 0 would splice a
+    /// different flight into the run.
     pub fn resume_from_checkpoint(&mut self) -> anyhow::Result<()> {
-        let path = &self.checkpoint_path;
-        let text = match std::fs::read_to_string(path) {
-            Ok(text) => text,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                let detail = format!("no checkpoint in {}: flying again from tick 0", path.display());
-                eprintln!("silrig-plant: warning: --resume: {detail}");
-                self.events.emit(Some(0), "plant-restarted-from-start", detail);
-                return Ok(());
-            }
-            Err(e) => anyhow::bail!("cannot resume: reading {}: {e}", path.display()),
+        let Some((text, source)) = self.saved_checkpoint()? else {
+            let path = self.checkpoint_path.display();
+            let detail = format!("no checkpoint in {path}: flying again from tick 0{}", self.flown_again(0));
+            eprintln!("silrig-plant: warning: --resume: {detail}");
+            self.events.emit(Some(0), "plant-restarted-from-start", detail);
+            return Ok(());
         };
-        let tick = self
-            .model
-            .restore(&text, self.ticks)
-            .map_err(|e| anyhow::anyhow!("cannot resume: {}: {e}", path.display()))?;
-        let detail = format!("continuing from the checkpoint at tick {tick}");
+        let tick =
+            self.model.restore(&text, self.ticks).map_err(|e| anyhow::anyhow!("cannot resume: {source}: {e}"))?;
+        let detail = format!("resumed at tick {tick} from the checkpoint in {source}{}", self.flown_again(tick));
         self.events.emit(Some(tick), "plant-resumed", detail);
         Ok(())
+    }
+
+    /// The newest checkpoint the plant's predecessor saved, and where it was: its shared-memory slot, else the
+    /// file (None: neither holds one).
+    pub fn saved_checkpoint(&self) -> anyhow::Result<Option<(String, String)>> {
+        if let Some(text) = self.slot.as_ref().and_then(CheckpointSlot::newest) {
+            return Ok(Some((text, "shared memory".into())));
+        }
+        let path = &self.checkpoint_path;
+        match std::fs::read_to_string(path) {
+            Ok(text) => Ok(Some((text, path.display().to_string()))),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => anyhow::bail!("cannot resume: reading {}: {e}", path.display()),
+        }
+    }
+
+    /// What a restarted plant adds when it flies on from `tick`: how many ticks it flies again, from its
+    /// predecessor's newest tick (nothing when that is unknown). The fault table reads the "K ticks flown again".
+    pub fn flown_again(&self, tick: u64) -> String {
+        self.predecessor_tick.map_or(String::new(), |newest| {
+            let again = (newest + 1).saturating_sub(tick);
+            format!("; the plant before it had flown to tick {newest}: {again} ticks flown again")
+        })
     }
 
     /// Phase 3: tick until the end of the scenario (ticks 0..=N), a state outside the model's envelope, or SIGTERM;
@@ -384,6 +424,11 @@ impl PlantLoop {
     /// An event of the plant at the current tick.
     pub fn event(&self, kind: &str, detail: String) {
         self.events.emit(Some(self.sim_tick), kind, detail);
+    }
+
+    /// An event of the plant at `tick`: a restarted plant's resume, said before its loop reaches that tick.
+    pub fn event_at(&self, tick: u64, kind: &str, detail: String) {
+        self.events.emit(Some(tick), kind, detail);
     }
 
     /// Add to one of the report's counters.
@@ -506,10 +551,23 @@ impl PlantLoop {
         Ok(receipt)
     }
 
-    fn save_checkpoint(&self) {
-        if let (Some(w), Some(text)) = (&self.checkpoints, self.model.checkpoint()) {
-            w.save(text);
+    /// The newest checkpoint into the shared-memory slot (memory writes: what a restarted plant takes) and to the
+    /// writer thread (the file, whenever that thread gets the CPU).
+    fn save_checkpoint(&mut self) {
+        let (Some(w), Some(text)) = (&self.checkpoints, self.model.checkpoint()) else { return };
+        if let Some(slot) = &mut self.slot
+            && !slot.store(&text)
+            && !std::mem::replace(&mut self.slot_overflow_said, true)
+        {
+            let detail = format!(
+                "the checkpoint is {} bytes, more than the {} of its shared-memory slot: a restarted plant resumes \
+                 from the file, which can be older under load",
+                text.len(),
+                checkpoint_slot::SLOT_TEXT_BYTES
+            );
+            self.events.emit(Some(self.sim_tick), "checkpoint-not-in-memory", detail);
         }
+        w.save(text);
     }
 
     /// Phase 4: the report, with what the command subscriber counted.

@@ -104,20 +104,14 @@ impl PlantModel for ExternalModel {
     }
 }
 
-/// A restarted plant's predecessor's checkpoint (offered to the model), or why it flies again from tick 0. A file
-/// that exists but cannot be used is an error: flying from tick 0 would splice a different flight into the run.
-fn read_checkpoint(
-    path: &std::path::Path,
-    plant: &PlantSignals,
-) -> Result<(Option<SavedPlant>, Option<String>), SessionError> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Ok((None, Some(format!("no checkpoint in {}: flying again from tick 0", path.display()))));
-        }
-        Err(e) => return Err(SessionError::Setup(format!("cannot resume: reading {}: {e}", path.display()))),
+/// A restarted plant's predecessor's newest checkpoint (offered to the model), or why it flies again from tick 0.
+/// One that exists but cannot be used is an error: flying from tick 0 would splice a different flight into the run.
+fn read_checkpoint(lp: &PlantLoop, plant: &PlantSignals) -> Result<(Option<SavedPlant>, Option<String>), SessionError> {
+    let Some((text, source)) = lp.saved_checkpoint().map_err(|e| SessionError::Setup(format!("{e:#}")))? else {
+        let path = lp.checkpoint_path().display();
+        return Ok((None, Some(format!("no checkpoint in {path}: flying again from tick 0{}", lp.flown_again(0)))));
     };
-    let bad = |why: String| SessionError::Setup(format!("cannot resume: {}: {why}", path.display()));
+    let bad = |why: String| SessionError::Setup(format!("cannot resume: {source}: {why}"));
     let saved: SavedPlant = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
     if saved.actuator_positions.len() != plant.inputs.len() || saved.actuator_positions.iter().any(|v| !v.is_finite()) {
         return Err(bad(format!(
@@ -207,7 +201,7 @@ impl PlantSession {
         let ready =
             ports.wait_for_peers(args.options.startup_timeout_s).map_err(|e| SessionError::Setup(e.to_string()))?;
         let (offered, from_start) = match args.resume {
-            true => read_checkpoint(lp.checkpoint_path(), plant)?,
+            true => read_checkpoint(&lp, plant)?,
             false => (None, None),
         };
         let raw_outputs = vec![0.0; plant.outputs.len()];
@@ -319,11 +313,14 @@ impl PlantSession {
             Ok(()) => {
                 self.latest.borrow_mut().tick = offer.tick;
                 self.chain.set_positions(&offer.actuator_positions);
-                self.lp.event("plant-resumed", format!("continuing from the checkpoint at tick {}", offer.tick));
+                let again = self.lp.flown_again(offer.tick);
+                let detail = format!("resumed at tick {} from its checkpoint{again}", offer.tick);
+                self.lp.event_at(offer.tick, "plant-resumed", detail);
             }
             Err(why) => {
+                let again = self.lp.flown_again(0);
                 self.from_start =
-                    Some(format!("the model did not restore its checkpoint ({why}): flying again from tick 0"))
+                    Some(format!("the model did not restore its checkpoint ({why}): flying again from tick 0{again}"))
             }
         }
     }

@@ -5,7 +5,7 @@
 pub mod fmu;
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -113,6 +113,35 @@ pub fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
     }
 }
 
+/// `program ARGS` (`silrig` running rigs: a sweep, a case through the rig) from the repository root, to its end (5
+/// minutes at most): (exit code, stdout, stderr). The rigs it flew (run ids `r<its pid>-...`) left no shared
+/// memory, and its run and scratch folders are gone.
+#[allow(dead_code)]
+pub fn run_leaving_nothing(program: &str, args: &[&str]) -> (Option<i32>, String, String) {
+    let child = Command::new(program)
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let runs = format!("r{:x}-", child.id());
+    let o = wait_with_watchdog(child, Duration::from_secs(300));
+    let named = |dir: &Path, prefixes: &[String]| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().to_string())
+            .filter(|n| prefixes.iter().any(|p| n.starts_with(p)))
+            .collect()
+    };
+    let shm = named(Path::new("/dev/shm"), &[format!("sr_{runs}")]);
+    assert!(shm.is_empty(), "shared memory left behind: {shm:?}");
+    let tmp = named(&std::env::temp_dir(), &[format!("silrig_{runs}"), format!("silrig-sweep-{runs}")]);
+    assert!(tmp.is_empty(), "run or scratch folders left behind: {tmp:?}");
+    (o.status.code(), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+}
+
 /// The run's `/dev/shm` files and iceoryx2 root folder are gone.
 pub fn no_shared_memory_left(run_id: &str) {
     let prefix = format!("sr_{run_id}_");
@@ -124,6 +153,25 @@ pub fn no_shared_memory_left(run_id: &str) {
         .collect();
     assert!(left.is_empty(), "shared memory left behind: {left:?}");
     assert!(!Path::new(&format!("/tmp/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
+}
+
+/// A message a person reads is in words: no Rust path (`Type::Variant`), no Debug dump of a value or an error
+/// (`Some(`, `Err(`, `Os {`, `kind:`, a `Name { field: ` struct). `what` says whose message it is when it fails.
+#[allow(dead_code)]
+pub fn assert_in_words(what: &str, message: &str) {
+    for (at, _) in message.match_indices("::") {
+        let before = message[..at].chars().next_back().is_some_and(|c| c.is_ascii_alphanumeric());
+        let after = message[at + 2..].chars().next().is_some_and(|c| c.is_ascii_alphabetic());
+        assert!(!(before && after), "{what}: a Rust path in its message: {message}");
+    }
+    for dump in ["Some(", "Err(", "Ok(", "Os {", "kind:", "{:?}"] {
+        assert!(!message.contains(dump), "{what}: a Debug dump (`{dump}`) in its message: {message}");
+    }
+    for (at, _) in message.match_indices(" { ") {
+        let rest = &message[at + 3..];
+        let field = rest.chars().take_while(|c| c.is_ascii_lowercase() || *c == '_').count();
+        assert!(field == 0 || !rest[field..].starts_with(": "), "{what}: a Debug struct in its message: {message}");
+    }
 }
 
 /// A finished `silrig run` of a test: its exit code, output, report and folders.
@@ -202,11 +250,13 @@ impl Run {
         self.events().into_iter().find(|e| e["process"] == process && e["kind"] == kind)
     }
 
-    /// `silrig run ARGS` that must be refused before any process starts: exit 2, no run folder left; its stderr.
+    /// `silrig run ARGS` that must be refused before any process starts: exit 2, no run folder left, the refusal in
+    /// words ([`assert_in_words`]); its stderr.
     pub fn refused(silrig: &str, suite: &str, id_prefix: &str, test: &str, args: &[&str]) -> String {
         let r = Run::start(silrig, suite, id_prefix, test, args);
         assert_eq!(r.code, Some(2), "{}\n{}", r.stdout, r.stderr);
         assert!(!r.out.exists(), "a refused run left {}", r.out.display());
+        assert_in_words(&format!("silrig run {}", args.join(" ")), &r.stderr);
         let stderr = r.stderr.clone();
         r.finish();
         stderr

@@ -292,7 +292,7 @@ mod tests {
         let (u, saturated) = c.mix(weight, [0.01, -0.02, 0.005]);
         assert!(!saturated);
         let speeds = u.map(|u| u * p.max_rotor_speed_radps);
-        let w = crate::quad::rotors::rotor_wrench(&p, &speeds, &[0.0; 3]);
+        let w = crate::quad::rotors::rotor_wrench(&p, &speeds, &[0.0; 3], &[0.0; 3]);
         assert!((w.force_b_n[2] + weight).abs() < 1e-9);
         for (got, want) in w.moment_b_nm.iter().zip([0.01, -0.02, 0.005]) {
             assert!((got - want).abs() < 1e-9, "{:?}", w.moment_b_nm);
@@ -300,7 +300,7 @@ mod tests {
         // A yaw demand beyond what the rotors can give is cut; roll is kept.
         let (u, saturated) = c.mix(weight, [0.05, 0.0, 5.0]);
         assert!(saturated);
-        let w = crate::quad::rotors::rotor_wrench(&p, &u.map(|u| u * p.max_rotor_speed_radps), &[0.0; 3]);
+        let w = crate::quad::rotors::rotor_wrench(&p, &u.map(|u| u * p.max_rotor_speed_radps), &[0.0; 3], &[0.0; 3]);
         assert!((w.moment_b_nm[0] - 0.05).abs() < 1e-9, "{:?}", w.moment_b_nm);
         assert!(w.moment_b_nm[2].abs() < 5.0);
     }

@@ -1,14 +1,17 @@
 //! A quadrotor in X configuration, the second built-in vehicle: a 6-DOF rigid body under four rotors with
-//! first-order speed dynamics, thrust and reaction torque proportional to speed squared, rotor drag, gravity and a
-//! flat ground it rests on before take-off and never falls through. Pure math: no I/O, no clock, no allocation.
+//! first-order speed dynamics, thrust and reaction torque proportional to speed squared, thrust reduced by the air
+//! climbing through the discs (axial inflow), rotor drag, the frame's quadratic drag, gravity and a flat ground it
+//! rests on before take-off and never falls through. Pure math: no I/O, no clock, no allocation.
 //!
 //! Module map: [`params`] (parameters by name, the published defaults), [`rotors`] (geometry, motor dynamics, the
-//! rotors' force and moments), [`outputs`] (what it reports and takes, by name), [`QuadVehicle`] (stepped tick by
-//! tick: RK4 over [`derivative`], then the ground contact). Frames: position and velocity in north-east-down (NED)
+//! rotors' force and moments), [`drag`] (the frame's drag), [`outputs`] (what it reports and takes, by name),
+//! [`QuadVehicle`] (stepped tick by tick: RK4 over [`derivative`], then the ground contact). Frames: position and velocity in north-east-down (NED)
 //! about a point on the ground; body axes forward-right-down (FRD); the attitude a unit quaternion (w, x, y, z)
-//! rotating body vectors into NED. Left out: the rotors' gyroscopic moments and inflow (blade flapping, induced
-//! drag), the body's own drag, wind, ground effect, and tipping over on the ground.
+//! rotating body vectors into NED. Left out: the rotors' gyroscopic moments, blade flapping, the inflow's effect on
+//! the reaction torque, the vortex ring state of a fast descent, wind, ground effect, and tipping over on the
+//! ground.
 
+pub mod drag;
 pub mod outputs;
 pub mod params;
 pub mod rotors;
@@ -86,8 +89,10 @@ pub fn derivative(
     let v_ned = Vector3::from(s.velocity_ned_mps());
     let v_b = att.inverse_transform_vector(&v_ned);
     let speeds = s.rotor_speeds_radps();
-    let w = rotor_wrench(p, &speeds, &[v_b.x, v_b.y, v_b.z]);
-    let mut accel_ned = att.transform_vector(&Vector3::from(w.force_b_n)) / p.mass_kg;
+    let v_b = [v_b.x, v_b.y, v_b.z];
+    let w = rotor_wrench(p, &speeds, &v_b, &s.rates_radps());
+    let force_b_n = Vector3::from(w.force_b_n) + Vector3::from(drag::body_drag_n(p, &v_b));
+    let mut accel_ned = att.transform_vector(&force_b_n) / p.mass_kg;
     accel_ned.z += GRAVITY_MPS2;
     let omega = Vector3::from(s.rates_radps());
     let inertia = Vector3::new(p.ixx_kgm2, p.iyy_kgm2, p.izz_kgm2);

@@ -1,5 +1,6 @@
-//! The quadrotor against closed-form answers: hover, free fall, resting and lifting off, touchdown, the moments'
-//! first response, torque-free rotation, the accelerometer, the barometer.
+//! The quadrotor against closed-form answers: hover, free fall, terminal climb, descent and fall speeds, energy
+//! lost to the air, resting and lifting off, touchdown, the moments' first response, torque-free rotation, the
+//! accelerometer, the barometer.
 
 use super::outputs::{OUTPUTS, isa_altitude_m, isa_pressure_pa, output_index, quad_outputs};
 use super::params::{GRAVITY_MPS2, QuadParams};
@@ -32,19 +33,109 @@ fn hover_commands_hold_a_hover() {
 #[test]
 fn with_the_rotors_stopped_it_falls_as_a_stone() {
     let p = QuadParams::default();
+    let p = QuadParams { body_drag_x_kgpm: 0.0, body_drag_y_kgpm: 0.0, body_drag_z_kgpm: 0.0, ..p };
     let mut v = QuadVehicle::hovering(p, 100.0, 0.0).unwrap();
     v.state = QuadState::at_rest([0.0, 0.0, -100.0], 0.0, 0.0);
     v.command([0.0; 4]);
     fly(&mut v, 2.0);
-    // down = g t^2 / 2 (no rotor turns, so no rotor drag either); RK4 is exact for this polynomial.
+    // down = g t^2 / 2 (no rotor turns, so no rotor drag or inflow either, and the frame's drag is taken away);
+    // RK4 is exact for this polynomial.
     assert!((output(&v, "alt_m") - (100.0 - 0.5 * GRAVITY_MPS2 * 4.0)).abs() < 1e-9);
     assert!((output(&v, "vd_mps") - 2.0 * GRAVITY_MPS2).abs() < 1e-9);
     assert!(v.specific_force_b_mps2().norm() < 1e-12, "free fall reads zero");
 }
 
+/// The steady vertical speed (up positive) of a level vehicle with every rotor at `omega`: the rotors' thrust less
+/// the inflow's share, the frame's drag and the weight in balance, 4 (k_T w^2 - k_z w v) - m g - c_z |v| v = 0, a
+/// quadratic in v on each side of 0.
+fn terminal_speed_up_mps(p: &QuadParams, omega: f64) -> f64 {
+    let excess_n = 4.0 * p.thrust_coeff_npradps2 * omega * omega - p.mass_kg * GRAVITY_MPS2;
+    let (b, c) = (4.0 * p.rotor_inflow_coeff * omega, p.body_drag_z_kgpm);
+    let sign = excess_n.signum();
+    sign * (-b + (b * b + 4.0 * c * excess_n.abs()).sqrt()) / (2.0 * c)
+}
+
+/// Flies a level vehicle from a hover at 1000 m with every motor held at `command` for `seconds`; its climb rate,
+/// m/s.
+fn steady_climb_mps(p: QuadParams, command: f64, seconds: f64) -> f64 {
+    let mut v = QuadVehicle::hovering(p, 1000.0, 0.0).unwrap();
+    v.command([command; 4]);
+    fly(&mut v, seconds);
+    assert!(output(&v, "phi_deg").abs() < 1e-9 && output(&v, "theta_deg").abs() < 1e-9, "it stays level");
+    -output(&v, "vd_mps")
+}
+
+#[test]
+fn at_a_fixed_throttle_it_climbs_and_descends_at_the_closed_form_terminal_speed() {
+    let p = QuadParams::default();
+    // 0.6 of full speed: 502.8 rad/s, 1.977 N more thrust than the weight; terminal climb 3.908 m/s.
+    let (climb, want) = (steady_climb_mps(p, 0.6, 30.0), terminal_speed_up_mps(&p, 0.6 * p.max_rotor_speed_radps));
+    assert!((want - 3.908).abs() < 1e-3, "{want}");
+    assert!((climb - want).abs() < 1e-6, "{climb} against {want}");
+    // Full throttle: 18.09 m/s, where RotorS's model alone would accelerate at 2.6 g for ever.
+    let full = terminal_speed_up_mps(&p, p.max_rotor_speed_radps);
+    assert!((full - 18.093).abs() < 1e-3, "{full}");
+    assert!((steady_climb_mps(p, 1.0, 30.0) - full).abs() < 1e-6);
+    // 0.45: 1.806 N short of the weight; it sinks at 4.57 m/s.
+    let (sink, want) = (steady_climb_mps(p, 0.45, 30.0), terminal_speed_up_mps(&p, 0.45 * p.max_rotor_speed_radps));
+    assert!((want + 4.565).abs() < 1e-3, "{want}");
+    assert!((sink - want).abs() < 1e-6, "{sink} against {want}");
+    // Each part alone bounds the climb too: the inflow alone (linear), the frame alone (quadratic).
+    let inflow_only = QuadParams { body_drag_z_kgpm: 0.0, ..p };
+    let excess_n = 4.0 * p.thrust_coeff_npradps2 * (0.6f64 * 838.0).powi(2) - p.mass_kg * GRAVITY_MPS2;
+    let linear = excess_n / (4.0 * p.rotor_inflow_coeff * 0.6 * 838.0);
+    assert!((steady_climb_mps(inflow_only, 0.6, 30.0) - linear).abs() < 1e-6, "{linear}");
+    let frame_only = QuadParams { rotor_inflow_coeff: 0.0, ..p };
+    let quadratic = (excess_n / p.body_drag_z_kgpm).sqrt();
+    // Quadratic drag alone nears its terminal speed as e^(-2 a t / v): a minute to come within 1e-6.
+    let got = steady_climb_mps(frame_only, 0.6, 60.0);
+    assert!((got - quadratic).abs() < 1e-6, "{got} against {quadratic}");
+}
+
+#[test]
+fn thrown_with_the_rotors_stopped_it_only_loses_energy() {
+    let p = QuadParams::default();
+    let mut v = QuadVehicle::hovering(p, 2000.0, 0.0).unwrap();
+    v.state = QuadState::at_rest([0.0, 0.0, -2000.0], 0.0, 0.0);
+    // Thrown up, forwards and sideways, turning.
+    v.state.x[3..6].copy_from_slice(&[6.0, -3.0, -15.0]);
+    v.state.x[10..13].copy_from_slice(&[0.3, -0.2, 0.5]);
+    v.command([0.0; 4]);
+    let energy_j = |v: &QuadVehicle| {
+        let speed2 = v.state.velocity_ned_mps().iter().map(|c| c * c).sum::<f64>();
+        let w = Vector3::from(v.state.rates_radps());
+        let spin = p.ixx_kgm2 * w.x * w.x + p.iyy_kgm2 * w.y * w.y + p.izz_kgm2 * w.z * w.z;
+        0.5 * p.mass_kg * speed2 + 0.5 * spin + p.mass_kg * GRAVITY_MPS2 * output(v, "alt_m")
+    };
+    let mut last = energy_j(&v);
+    for _ in 0..40_000 {
+        v.step(DT_S);
+        let now = energy_j(&v);
+        assert!(now <= last + 1e-9, "energy rose from {last} to {now} J at alt {}", output(&v, "alt_m"));
+        last = now;
+    }
+    // Tumbling, it falls no faster than along its least draggy axes: sqrt(m g / c_Dx) = 36.52 m/s.
+    let speed = v.state.velocity_ned_mps().iter().map(|c| c * c).sum::<f64>().sqrt();
+    assert!(speed < (p.mass_kg * GRAVITY_MPS2 / p.body_drag_x_kgpm).sqrt(), "{speed}");
+}
+
+#[test]
+fn dropped_level_it_falls_at_the_frames_terminal_speed() {
+    let p = QuadParams::default();
+    let mut v = QuadVehicle::hovering(p, 2000.0, 0.0).unwrap();
+    v.state = QuadState::at_rest([0.0, 0.0, -2000.0], 0.0, 0.0);
+    v.command([0.0; 4]);
+    fly(&mut v, 40.0);
+    // Along its axis with the rotors stopped: sqrt(m g / c_Dz) = 25.82 m/s.
+    let terminal = (p.mass_kg * GRAVITY_MPS2 / p.body_drag_z_kgpm).sqrt();
+    assert!((terminal - 25.823).abs() < 1e-3, "{terminal}");
+    assert!((output(&v, "vd_mps") - terminal).abs() < 1e-6, "{}", output(&v, "vd_mps"));
+}
+
 #[test]
 fn on_the_ground_it_rests_until_the_rotors_lift_it() {
-    let p = QuadParams::default();
+    // Without the air's share (inflow, frame drag), so the lift-off's acceleration has its closed form.
+    let p = QuadParams { rotor_inflow_coeff: 0.0, body_drag_z_kgpm: 0.0, ..QuadParams::default() };
     let mut v = QuadVehicle::on_ground(p, 0.0).unwrap();
     v.command([0.99 * p.hover_command(); 4]);
     fly(&mut v, 2.0);
@@ -62,7 +153,9 @@ fn on_the_ground_it_rests_until_the_rotors_lift_it() {
 
 #[test]
 fn it_lands_and_never_falls_through_the_ground() {
-    let mut v = QuadVehicle::hovering(QuadParams::default(), 1.0, 0.7).unwrap();
+    // Without the frame's drag, so the touchdown speed has its closed form.
+    let p = QuadParams { body_drag_x_kgpm: 0.0, body_drag_y_kgpm: 0.0, body_drag_z_kgpm: 0.0, ..QuadParams::default() };
+    let mut v = QuadVehicle::hovering(p, 1.0, 0.7).unwrap();
     v.state = QuadState::at_rest([3.0, 4.0, -1.0], 0.7, 0.0);
     v.state.x[10] = 0.5; // rolling as it falls
     v.command([0.0; 4]);

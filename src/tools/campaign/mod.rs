@@ -9,6 +9,7 @@ pub mod case;
 pub mod figures;
 pub mod report;
 pub mod rig_case;
+pub mod scratch;
 pub mod shard;
 
 use anyhow::Context;
@@ -85,12 +86,16 @@ pub struct SweepOptions {
     /// `setpoint.<output>`. A case whose plant crashes or exits early fails, with the rig's reason.
     #[arg(long, value_name = "CMD")]
     pub plant_cmd: Option<String>,
+    /// With --controller-cmd or --plant-cmd: start every case's processes afresh, as `silrig run` does, instead of
+    /// forking them from programs kept warm from case to case (slower; the same results).
+    #[arg(long)]
+    pub cold: bool,
 }
 
 impl SweepOptions {
     /// `--controller-cmd` and `--plant-cmd`, as given.
     pub fn commands(&self) -> RigCommands {
-        RigCommands { controller_cmd: self.controller_cmd.clone(), plant_cmd: self.plant_cmd.clone() }
+        RigCommands { controller_cmd: self.controller_cmd.clone(), plant_cmd: self.plant_cmd.clone(), cold: self.cold }
     }
 }
 
@@ -189,6 +194,12 @@ impl Campaign {
         }
     }
 
+    /// Whether a controller flies its plant: without `--controller-cmd` its cases fly in one process or under the
+    /// rig's silrig-controller, where a plant FMU needs a built-in controller that fits it (or one named).
+    pub fn controller_fits(&self) -> anyhow::Result<()> {
+        if self.commands.controller_cmd.is_none() { self.models.controller_fits() } else { Ok(()) }
+    }
+
     /// The criteria's names, in the order every flown case's judgements come in.
     pub fn criterion_names(&self) -> Vec<String> {
         silrig_flight::judge::judge_flight(&self.criteria, &self.scenario, None, None)
@@ -215,6 +226,14 @@ impl Campaign {
         )
     }
 
+    /// What flying takes first: SIGINT and SIGTERM caught, the controller checked against the plant, and with a
+    /// controller or plant command the cases' run folders (and each worker's warm rig, unless cold).
+    fn ready_to_fly(&self) -> anyhow::Result<Option<scratch::Scratch>> {
+        silrig_rig::signals::install_termination_flag();
+        self.controller_fits()?;
+        self.commands.any().then(|| scratch::Scratch::new(self.commands.cold)).transpose()
+    }
+
     /// Fly the cases `indices` under `seed` on `jobs` threads (with a controller or plant command, `jobs` rigs side
     /// by side), reporting progress on stderr, and hand each result to `sink` in index order as soon as the cases
     /// before it are flown: at most [`REORDER_WINDOW`] results wait for their turn, so memory stays bounded
@@ -228,8 +247,7 @@ impl Campaign {
         jobs: usize,
         mut sink: impl FnMut(CaseResult) -> anyhow::Result<()>,
     ) -> anyhow::Result<Option<rig_case::Interrupted>> {
-        silrig_rig::signals::install_termination_flag();
-        let scratch = self.commands.any().then(rig_case::Scratch::new).transpose()?;
+        let scratch = self.ready_to_fly()?;
         let total = indices.end - indices.start;
         let (done, next, stop) = (AtomicU64::new(0), AtomicU64::new(indices.start), AtomicBool::new(false));
         // The first case not yet handed to `sink`: no worker starts a case a window or more past it.
@@ -500,6 +518,8 @@ pub fn sweep(opts: &SweepOptions) -> anyhow::Result<SweepRun> {
     };
     check_runs(runs)?;
     let campaign = Campaign::load(config, &opts.fmus, &opts.commands())?;
+    // Before its folder is made: a sweep no controller can fly is refused with nothing written.
+    campaign.controller_fits()?;
     let seed = opts.seed.unwrap_or(campaign.scenario.seed);
     let jobs = campaign.threads(jobs(opts.jobs)?);
     let out =

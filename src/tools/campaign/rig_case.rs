@@ -23,7 +23,7 @@ use silrig_flight::trace::Trace;
 use silrig_launch::launcher::{self, LaunchOptions};
 use silrig_rig::signals;
 use silrig_wire::ipc::RunId;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The case's scenario as the rig is given it, in the case's run folder.
 pub const CASE_SCENARIO: &str = "case-scenario.toml";
@@ -52,6 +52,10 @@ pub struct RigCommands {
     /// `--plant-cmd`: the user's plant, in place of silrig-plant.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub plant_cmd: Option<String>,
+    /// `--cold`: every case's processes started afresh instead of forked from warm programs
+    /// ([`super::scratch`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub cold: bool,
 }
 
 impl RigCommands {
@@ -69,7 +73,9 @@ impl RigCommands {
 
     /// The flags as a command line repeats them (` --controller-cmd '...'`), quoted for a shell; empty when none.
     pub fn to_args(&self) -> String {
-        self.given().map(|(flag, cmd)| format!(" --{flag} {}", silrig_launch::program::shell_quote(cmd))).collect()
+        let commands =
+            self.given().map(|(flag, cmd)| format!(" --{flag} {}", silrig_launch::program::shell_quote(cmd)));
+        commands.chain(self.cold.then(|| " --cold".to_string())).collect()
     }
 
     /// Refuse, before any case flies, a command whose program cannot be found; a command beside the FMU that would
@@ -152,11 +158,24 @@ pub fn fly(
     run_id: Option<&RunId>,
     figures: bool,
 ) -> Result<(CaseResult, Option<Flight>), Interrupted> {
+    fly_in(campaign, (seed, index), run_dir, run_id, figures, None).map(|(result, flight, _)| (result, flight))
+}
+
+/// [`fly`], its processes forked by `warm` when given (a sweep's warm rig); the third value says whether the rig
+/// failed (a process crashed, went silent or could not be started), after which a warm rig is started again cold.
+pub fn fly_in(
+    campaign: &super::Campaign,
+    (seed, index): (u64, u64),
+    run_dir: &Path,
+    run_id: Option<&RunId>,
+    figures: bool,
+    warm: Option<std::sync::Arc<silrig_launch::warm::WarmRig>>,
+) -> Result<(CaseResult, Option<Flight>, bool), Interrupted> {
     check_interrupted()?;
     let (values, scenario) = case::sample(&campaign.scenario, seed, index);
     let scenario = match scenario {
         Ok(scenario) => scenario,
-        Err(reason) => return Ok((case::infeasible(index, values, reason), None)),
+        Err(reason) => return Ok((case::infeasible(index, values, reason), None, false)),
     };
     // A built-in vehicle is built in the plant's process, which would fail the case with only its stderr to say
     // why: a case that cannot be trimmed (the F-16) or flown (the quadrotor's parameters) is infeasible, as in one
@@ -168,7 +187,7 @@ pub fn fly(
             silrig_flight::sim::PlantRunner::new(&scenario).map(drop).map_err(|e| e.to_string())
         };
         if let Err(e) = built {
-            return Ok((case::infeasible(index, values, e), None));
+            return Ok((case::infeasible(index, values, e), None, false));
         }
     }
     let config = run_dir.join(CASE_SCENARIO);
@@ -176,13 +195,15 @@ pub fn fly(
         .and_then(|()| std::fs::write(&config, scenario.to_toml()))
         .map_err(anyhow::Error::from)
         .and_then(|()| launch_options(&campaign.commands, &config, run_dir, run_id, figures))
-        .and_then(|opts| launcher::run(&opts));
+        .and_then(|opts| launcher::run_with(&opts, warm));
     let report = match report {
         Ok(report) => report,
         Err(e) => {
-            return Ok((case::infeasible(index, values, format!("the rig could not be set up: {e:#}")), None));
+            let reason = format!("the rig could not be set up: {e:#}");
+            return Ok((case::infeasible(index, values, reason), None, true));
         }
     };
+    let rig_failed = !report.failures.is_empty();
     check_interrupted()?;
     // A controller or plant that died before the plant's first tick leaves no trace: the case is judged on none (every
     // criterion fails, its figures are empty), with the rig's failures as the reason.
@@ -200,38 +221,5 @@ pub fn fly(
     let plant = campaign.models.plant_signals(&scenario).ok().flatten();
     let flown = FlownScenario { trace, plant, ended_early, refusals };
     let (result, flight) = case::judge(&campaign.criteria, index, values, scenario, flown);
-    Ok((result, Some(flight)))
-}
-
-/// A sweep's scratch folder: one run folder per case in flight, each removed once its case is judged, and the
-/// folder itself when the sweep ends (however it ends).
-pub struct Scratch {
-    dir: PathBuf,
-    /// The sweep's run id; case i flies as `<it>-<i in hex>`, unique on this machine while the sweep runs.
-    run_id: RunId,
-}
-
-impl Scratch {
-    /// A fresh scratch folder in the system's temporary folder, named by a fresh run id.
-    pub fn new() -> anyhow::Result<Self> {
-        let run_id = launcher::fresh_run_id();
-        let dir = std::env::temp_dir().join(format!("silrig-sweep-{run_id}"));
-        std::fs::create_dir_all(&dir)?;
-        Ok(Self { dir, run_id })
-    }
-
-    /// Fly case `index` in a run folder of its own, judge it and remove the folder.
-    pub fn fly(&self, campaign: &super::Campaign, seed: u64, index: u64) -> Result<CaseResult, Interrupted> {
-        let run_id = RunId::new(&format!("{}-{index:x}", self.run_id)).expect("a run id and a hex number make one");
-        let run_dir = self.dir.join(format!("case-{index}"));
-        let flown = fly(campaign, seed, index, &run_dir, Some(&run_id), false);
-        let _ = std::fs::remove_dir_all(&run_dir);
-        Ok(flown?.0)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
+    Ok((result, Some(flight), rig_failed))
 }

@@ -168,7 +168,8 @@ pub fn plan(opts: &PlanOptions) -> anyhow::Result<Manifest> {
         opts.shards
     );
     let text = std::fs::read_to_string(&opts.config).with_context(|| format!("reading {}", opts.config.display()))?;
-    let commands = RigCommands { controller_cmd: opts.controller_cmd.clone(), plant_cmd: opts.plant_cmd.clone() };
+    let commands =
+        RigCommands { controller_cmd: opts.controller_cmd.clone(), plant_cmd: opts.plant_cmd.clone(), cold: false };
     let campaign = Campaign::load(&opts.config, &opts.fmus, &commands)?;
     let config = campaign.command_config();
     // Workers run from any folder: a plan that names FMUs carries the scenario with their paths made absolute.
@@ -409,6 +410,7 @@ mod tests {
             let commands = RigCommands {
                 controller_cmd: controller_cmd.map(String::from),
                 plant_cmd: plant_cmd.map(String::from),
+                cold: false,
             };
             Manifest::new("c".into(), "t".into(), 1, 10, 2, commands)
         };

@@ -196,6 +196,8 @@ fn launch_options(opts: &CheckOptions, case: &Case, scenario_path: &Path, out: P
         // Not used: the controller is always one the launcher starts.
         external_timeout_s: 120.0,
         bridge_listen: None,
+        bridge_key: None,
+        bridge_insecure: false,
         // The case's scenario says.
         command_timing: None,
         live: None,
@@ -320,8 +322,11 @@ fn sweep_case(
     let mut campaign = crate::campaign::Campaign::from_scenario(scenario, &scenario_path.display().to_string())?;
     // A controller or plant of the user's own flies each dispersed case through the lockstep rig, as `silrig sweep
     // --controller-cmd` and `--plant-cmd` do; the worst cases' commands name them.
-    let commands =
-        crate::campaign::RigCommands { controller_cmd: opts.controller_cmd.clone(), plant_cmd: opts.plant_cmd.clone() };
+    let commands = crate::campaign::RigCommands {
+        controller_cmd: opts.controller_cmd.clone(),
+        plant_cmd: opts.plant_cmd.clone(),
+        cold: false,
+    };
     if commands.any() {
         campaign.flags = commands.to_args();
         campaign.fly_commands(commands)?;

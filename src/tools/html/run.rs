@@ -153,6 +153,9 @@ fn verdict(r: &RigReport) -> String {
     for f in &r.faults {
         out += &fault_line(f);
     }
+    for p in r.unplanned_plant_resumes() {
+        out += &line(Tone::Unsure, "plant restarted", &esc(&format!("outside the fault plan: {}", p.describe())));
+    }
     for d in &r.discontinuities {
         let text = format!("the logged flight jumps at t = {:.2} s: {}", d.at_s, d.detail);
         out += &line(Tone::Unsure, "discontinuity", &esc(&text));
@@ -186,6 +189,9 @@ fn fault_line(f: &FaultRecord) -> String {
     }
     if let Some(t) = f.failsafe_at_s {
         let _ = write!(text, ", failsafe at {t:.2} s");
+    }
+    if let Some(r) = &f.plant_resume {
+        let _ = write!(text, ", plant {}", r.describe());
     }
     let lost = format!("{} plant samples and {} commands lost", f.plant_samples_lost, f.command_samples_lost);
     match f.recovered_at_s {

@@ -342,12 +342,17 @@ fn processes_text(r: &SoakReport) -> String {
     s
 }
 
+/// The run's exit code in words: a number, or none when a signal ended it.
+fn exit_in_words(code: Option<i32>) -> String {
+    code.map_or_else(|| "no exit status (a signal ended it)".to_string(), |c| format!("exit status {c}"))
+}
+
 /// Why the soak failed: every figure that must be 0 and is not, every fault not injected, not detected (watched
 /// kinds) or not recovered from, every process holding more descriptors or shared-memory files at the end.
 fn problems(r: &SoakReport) -> Vec<String> {
     let mut p = Vec::new();
     if r.run_exit != Some(0) {
-        p.push(format!("silrig run exited with {:?} (see its report)", r.run_exit));
+        p.push(format!("silrig run ended with {} (see its report)", exit_in_words(r.run_exit)));
     }
     for o in &r.faults {
         if o.injected_at_s.is_none() {
@@ -636,6 +641,12 @@ mod tests {
         let mut faults = [o];
         assert_eq!(losses(&logged, &mut faults, 0.01), (5, vec![80]));
         assert_eq!(faults[0].rows_lost, 5);
+    }
+
+    #[test]
+    fn the_runs_exit_is_said_in_words() {
+        assert_eq!(exit_in_words(Some(1)), "exit status 1");
+        assert_eq!(exit_in_words(None), "no exit status (a signal ended it)");
     }
 
     #[test]

@@ -21,8 +21,8 @@ pub mod subscriber;
 pub mod waitset;
 
 pub use namespace::{
-    CleanupReport, DEAD_RUN_GRACE, NodeSummary, RUN_ID_MAX_LEN, RunId, SHM_DIR, cleanup_dead_nodes, cleanup_dead_runs,
-    cleanup_run, create_node, rig_config,
+    CleanupReport, DEAD_RUN_GRACE, NodeOfRun, NodeSummary, RUN_ID_MAX_LEN, RunId, SHM_DIR, cleanup_dead_nodes,
+    cleanup_dead_runs, cleanup_run, create_node, nodes_of_run, rig_config,
 };
 pub use publisher::{SendReceipt, StreamPublisher};
 pub use stream::{StreamService, StreamSettings, StreamSpec, new_epoch, open_stream};
@@ -30,6 +30,29 @@ pub use subscriber::{Received, SeqObservation, SeqTracker, StreamSubscriber, Sub
 pub use waitset::{LoopEnd, LoopExit, TickTimer, rig_waitset, run_waitset};
 
 use crate::wire::WireError;
+
+/// An iceoryx2 error in words: its variant's name split into lower-case words, its type's name and any payload's
+/// brackets left out (iceoryx2 prints its errors as `PublisherCreateError::ExceedsMaxSupportedPublishers`, Display
+/// and Debug alike), so a message a person reads never holds an internal type name.
+pub fn in_words(error: &impl std::fmt::Debug) -> String {
+    let debug = format!("{error:?}");
+    // `Outer(Inner::Variant)` says most in its innermost name; `Type::Variant` in its variant.
+    let name = debug.rsplit("::").next().unwrap_or(&debug);
+    let mut words = String::new();
+    let mut previous_lower = false;
+    for c in name.chars() {
+        if c.is_ascii_uppercase() && previous_lower {
+            words.push(' ');
+        }
+        if c.is_ascii_alphanumeric() {
+            words.push(c.to_ascii_lowercase());
+        } else if !words.ends_with(' ') && !words.is_empty() {
+            words.push(' ');
+        }
+        previous_lower = c.is_ascii_lowercase() || c.is_ascii_digit();
+    }
+    words.trim().to_string()
+}
 
 /// The event ids on a stream's event service.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -166,4 +189,25 @@ pub enum IpcError {
         /// What failed.
         detail: String,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    #[derive(Debug)]
+    #[allow(dead_code)]
+    enum Inner {
+        ServiceInCorruptedState,
+    }
+    #[derive(Debug)]
+    #[allow(dead_code)]
+    enum Outer {
+        Open(Inner),
+        ExceedsMaxSupportedPublishers,
+    }
+
+    #[test]
+    fn an_iceoryx2_error_reads_as_words_without_its_type_or_brackets() {
+        assert_eq!(super::in_words(&Outer::ExceedsMaxSupportedPublishers), "exceeds max supported publishers");
+        assert_eq!(super::in_words(&Outer::Open(Inner::ServiceInCorruptedState)), "open service in corrupted state");
+    }
 }

@@ -64,6 +64,7 @@ impl std::str::FromStr for RunId {
 /// use exactly this config (passed explicitly, so no `./config/iceoryx2.toml` in the working directory can change
 /// it).
 pub fn rig_config(run: &RunId) -> Config {
+    quiet_transport_log();
     let mut cfg = Config::default();
     // A validated RunId gives an absolute path and a file name of [a-z0-9_-], both far below iceoryx2's length
     // limits, so these conversions cannot fail.
@@ -75,10 +76,21 @@ pub fn rig_config(run: &RunId) -> Config {
     cfg
 }
 
+/// iceoryx2 prints its warnings on the process's stderr in its internal calls and types
+/// (`Service::remove_node_from_service(UniqueNodeId(UniqueId { .. }))`), and a process's stderr ends up in the run's
+/// messages (the tail quoted when it dies): only its errors are printed, unless `IOX2_LOG_LEVEL` asks for more (to
+/// debug the transport). Set once per process, by the first use of a run's config, which every node and cleanup
+/// goes through.
+fn quiet_transport_log() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| set_log_level_from_env_or(LogLevel::Error));
+}
+
 /// Create a node of the run with the run's config. Every file the run has is left readable and writable by its
 /// owner only.
 pub fn create_node(run: &RunId, name: &str) -> Result<Node<ipc::Service>, IpcError> {
-    let node_name = NodeName::new(name).map_err(|e| IpcError::Name { name: name.into(), detail: format!("{e:?}") })?;
+    let node_name =
+        NodeName::new(name).map_err(|e| IpcError::Name { name: name.into(), detail: super::in_words(&e) })?;
     let node =
         NodeBuilder::new().name(&node_name).config(&rig_config(run)).create::<ipc::Service>().map_err(|e| {
             IpcError::Node { run: run.to_string(), node: name.into(), detail: node_failure_detail(run, e) }
@@ -171,8 +183,46 @@ pub fn cleanup_dead_nodes(run: &RunId) -> Result<Vec<NodeSummary>, IpcError> {
         }
         CallbackProgression::Continue
     })
-    .map_err(|e| IpcError::Cleanup { run: run.to_string(), detail: format!("listing nodes: {e:?}") })?;
+    .map_err(|e| IpcError::Cleanup {
+        run: run.to_string(),
+        detail: format!("listing nodes: {}", super::in_words(&e)),
+    })?;
     Ok(removed)
+}
+
+/// A node of the run as the launcher sees it: whose process it is, and whether that process still holds it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NodeOfRun {
+    /// The process that created it.
+    pub pid: i64,
+    /// Its process is alive (a dead one's node stays until it is cleaned up).
+    pub alive: bool,
+}
+
+/// Every node of the run, alive or dead and not cleaned up yet: who has joined it (the launcher tells a role that
+/// never joined from one that did by these pids). A node being created or removed while it looks is left out; no
+/// root folder yet means nobody has joined.
+pub fn nodes_of_run(run: &RunId) -> Result<Vec<NodeOfRun>, IpcError> {
+    let mut nodes = Vec::new();
+    if !run.root_dir().is_dir() {
+        return Ok(nodes);
+    }
+    Node::<ipc::Service>::list(&rig_config(run), |state| {
+        let (view_pid, alive) = match &state {
+            NodeState::Alive(view) => (view.details().as_ref().map(|d| d.process_id().value()), true),
+            NodeState::Dead(view) => (view.details().as_ref().map(|d| d.process_id().value()), false),
+            NodeState::Inaccessible(_) | NodeState::Undefined(_) => (None, false),
+        };
+        if let Some(pid) = view_pid {
+            nodes.push(NodeOfRun { pid: i64::from(pid), alive });
+        }
+        CallbackProgression::Continue
+    })
+    .map_err(|e| IpcError::Cleanup {
+        run: run.to_string(),
+        detail: format!("listing nodes: {}", super::in_words(&e)),
+    })?;
+    Ok(nodes)
 }
 
 /// A node found during cleanup.
@@ -243,7 +293,10 @@ pub fn cleanup_run(run: &RunId) -> Result<CleanupReport, IpcError> {
             }
             CallbackProgression::Continue
         })
-        .map_err(|e| IpcError::Cleanup { run: run.to_string(), detail: format!("listing nodes: {e:?}") })?;
+        .map_err(|e| IpcError::Cleanup {
+            run: run.to_string(),
+            detail: format!("listing nodes: {}", super::in_words(&e)),
+        })?;
     }
     if !report.alive.is_empty() {
         return Ok(report);

@@ -66,7 +66,7 @@ impl<T: WireSample> StreamPublisher<T> {
         let loan = self.publisher.loan_uninit().map_err(|e| IpcError::Transfer {
             stream: self.stream,
             op: "loan",
-            detail: format!("{e:?}"),
+            detail: super::in_words(&e),
         })?;
         // Stamped as late as possible, so that data age measured by the receiver excludes our own loan.
         let t_send_ns = clock::monotonic_ns();
@@ -74,13 +74,13 @@ impl<T: WireSample> StreamPublisher<T> {
         let delivered = loan.write_payload(out).send().map_err(|e| IpcError::Transfer {
             stream: self.stream,
             op: "send",
-            detail: format!("{e:?}"),
+            detail: super::in_words(&e),
         })?;
         self.next_seq += 1;
         self.notifier.notify().map_err(|e| IpcError::Transfer {
             stream: self.stream,
             op: "notify",
-            detail: format!("{e:?}"),
+            detail: super::in_words(&e),
         })?;
         Ok(SendReceipt { delivered, t_send_ns })
     }
@@ -91,7 +91,7 @@ impl<T: WireSample> StreamPublisher<T> {
         self.notifier.notify_with_custom_event_id(id).map(|_| ()).map_err(|e| IpcError::Transfer {
             stream: self.stream,
             op: "notify",
-            detail: format!("{e:?}"),
+            detail: super::in_words(&e),
         })
     }
 
@@ -102,7 +102,7 @@ impl<T: WireSample> StreamPublisher<T> {
         self.publisher.update_connections().map_err(|e| IpcError::Transfer {
             stream: self.stream,
             op: "update connections",
-            detail: format!("{e:?}"),
+            detail: super::in_words(&e),
         })
     }
 

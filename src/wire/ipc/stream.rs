@@ -161,7 +161,7 @@ pub fn open_stream<T: WireSample>(
     let stream = spec.label;
     let run = node.config().global.prefix.as_str().trim_start_matches("sr_").trim_end_matches('_').to_string();
     let name = ServiceName::new(spec.service_name)
-        .map_err(|e| IpcError::Name { name: spec.service_name.into(), detail: format!("{e:?}") })?;
+        .map_err(|e| IpcError::Name { name: spec.service_name.into(), detail: super::in_words(&e) })?;
 
     let pubsub = open_with_retry(
         node,
@@ -193,7 +193,7 @@ pub fn open_stream<T: WireSample>(
             run: run.clone(),
             stream,
             pattern: "publish-subscribe",
-            detail: format!("{other:?}"),
+            detail: super::in_words(&other),
         },
     })?;
 
@@ -210,7 +210,12 @@ pub fn open_stream<T: WireSample>(
         },
         transient_event,
     )
-    .map_err(|e| IpcError::OpenStream { run: run.clone(), stream, pattern: "event", detail: format!("{e:?}") })?;
+    .map_err(|e| IpcError::OpenStream {
+        run: run.clone(),
+        stream,
+        pattern: "event",
+        detail: super::in_words(&e),
+    })?;
     super::namespace::restrict_root_path(std::path::Path::new(&node.config().global.root_path().to_string()));
 
     Ok(StreamService { spec, run, pubsub, event })
@@ -285,14 +290,14 @@ impl<T: WireSample> StreamService<T> {
                 stream: self.spec.label,
                 holder: self.publisher_holder(),
             },
-            other => IpcError::Port { stream: self.spec.label, port: "publisher", detail: format!("{other:?}") },
+            other => IpcError::Port { stream: self.spec.label, port: "publisher", detail: super::in_words(&other) },
         })?;
         let notifier = self
             .event
             .notifier_builder()
             .default_event_id(EventId::new(StreamEvent::SampleSent.id()))
             .create()
-            .map_err(|e| IpcError::Port { stream: self.spec.label, port: "notifier", detail: format!("{e:?}") })?;
+            .map_err(|e| IpcError::Port { stream: self.spec.label, port: "notifier", detail: super::in_words(&e) })?;
         Ok(StreamPublisher::new(self.spec.label, publisher, notifier, epoch))
     }
 
@@ -304,11 +309,11 @@ impl<T: WireSample> StreamService<T> {
             .subscriber_builder()
             .buffer_size(buffer_size.clamp(1, self.spec.settings.subscriber_max_buffer))
             .create()
-            .map_err(|e| IpcError::Port { stream: self.spec.label, port: "subscriber", detail: format!("{e:?}") })?;
+            .map_err(|e| IpcError::Port { stream: self.spec.label, port: "subscriber", detail: super::in_words(&e) })?;
         let listener = self.event.listener_builder().create().map_err(|e| IpcError::Port {
             stream: self.spec.label,
             port: "listener",
-            detail: format!("{e:?}"),
+            detail: super::in_words(&e),
         })?;
         Ok(StreamSubscriber::new(self.spec.label, subscriber, listener))
     }

@@ -173,7 +173,7 @@ impl<T: WireSample> StreamSubscriber<T> {
         let stream = self.stream;
         self.listener
             .try_wait(|activation| self.note_event(activation.id.as_value()))
-            .map_err(|e| IpcError::Transfer { stream, op: "listener wait", detail: format!("{e:?}") })?;
+            .map_err(|e| IpcError::Transfer { stream, op: "listener wait", detail: super::in_words(&e) })?;
         self.receive_queued(on_sample)
     }
 
@@ -201,7 +201,7 @@ impl<T: WireSample> StreamSubscriber<T> {
                 Err(e) => {
                     self.stats.set(stats);
                     self.tracker.set(tracker);
-                    return Err(IpcError::Transfer { stream, op: "receive", detail: format!("{e:?}") });
+                    return Err(IpcError::Transfer { stream, op: "receive", detail: super::in_words(&e) });
                 }
             };
             let t_recv_ns = clock::monotonic_ns();

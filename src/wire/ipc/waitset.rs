@@ -8,7 +8,7 @@ use iceoryx2::waitset::WaitSetRunResult;
 
 /// A WaitSet for a rig process (iceoryx2's default signal handling; see the module doc).
 pub fn rig_waitset() -> Result<WaitSet<ipc::Service>, IpcError> {
-    WaitSetBuilder::new().create::<ipc::Service>().map_err(|e| IpcError::WaitSet(format!("{e:?}")))
+    WaitSetBuilder::new().create::<ipc::Service>().map_err(|e| IpcError::WaitSet(super::in_words(&e)))
 }
 
 /// Why [`run_waitset`] returned.
@@ -45,7 +45,7 @@ where
                 return Ok(LoopExit { end: LoopEnd::TerminationRequest, interrupts });
             }
             Ok(WaitSetRunResult::StopRequest) => return Ok(LoopExit { end: LoopEnd::Stopped, interrupts }),
-            Err(e) => return Err(IpcError::WaitSet(format!("{e:?}"))),
+            Err(e) => return Err(IpcError::WaitSet(super::in_words(&e))),
         }
     }
 }
