@@ -88,7 +88,7 @@ fn betaflight_arms_and_flies_the_quadrotor_in_realtime() {
         Run::column(&header, "psi_deg"),
     );
     let during = |from_s: f64, to_s: f64| rows.iter().filter(move |r| r[t] >= from_s && r[t] <= to_s);
-    // The hover: from 16 s for 10 s, within 1.5 m of the altitude where altitude hold engaged (0.63 to 0.93 m flown:
+    // The hover: from 16 s for 10 s, within 1.5 m of the altitude where altitude hold engaged (0.08 to 0.93 m flown:
     // engaged while still moving, it dips or rises before it holds), off the ground.
     let engaged_m = during(16.0, 33.0).next().expect("a row at 16 s")[alt];
     let held: Vec<f64> = during(16.0, 26.0).map(|r| r[alt]).collect();
@@ -108,7 +108,7 @@ fn betaflight_arms_and_flies_the_quadrotor_in_realtime() {
         );
     }
     // The roll stick's step at 26 s (0.3: 60 x (21 + 54) / 670 = 6.72 deg by its rates): it banks to the right. That
-    // it holds the bank is not asserted: with altitude hold on it tumbled in 4 of 6 flights on 2026-11-28
+    // it holds the bank is not asserted: with altitude hold on it tumbled in 4 of 8 flights on 2026-11-28
     // (docs/src/guides/betaflight.md).
     let first = during(26.0, 26.5).map(|r| r[phi]).fold(f64::MIN, f64::max);
     assert!(first > 5.0, "the roll stick did not bank it: at most {first:.2} deg in the 0.5 s after the step");

@@ -12,7 +12,7 @@ fn names(list: &[(&str, &str)]) -> Vec<String> {
 }
 
 fn rc_setpoints() -> Vec<String> {
-    ["rc_roll", "rc_pitch", "rc_throttle", "rc_yaw", "rc_arm", "rc_angle_mode"].map(String::from).to_vec()
+    ["rc_roll", "rc_pitch", "rc_throttle", "rc_yaw", "rc_arm", "rc_angle_mode", "rc_althold"].map(String::from).to_vec()
 }
 
 fn bind(text: &str) -> Result<BoundLayout, LayoutError> {
@@ -53,7 +53,7 @@ fn the_fdm_packet_carries_the_quadrotor_in_betaflights_frames() {
         set(&mut outputs, name, v);
     }
     let mut out = Vec::new();
-    let values = SendValues { t_s: 1.25, outputs: &outputs, setpoints: &[0.0; 6] };
+    let values = SendValues { t_s: 1.25, outputs: &outputs, setpoints: &[0.0; 7] };
     layout.to_device[0].encode(layout.byte_order, &values, &mut out);
     let got: Vec<f64> = (0..18).map(|k| f64_at(&out, k)).collect();
     let d = std::f64::consts::PI / 180.0;
@@ -87,8 +87,8 @@ fn the_rc_packet_turns_set_points_into_pulse_widths() {
     let layout = bind(BETAFLIGHT).unwrap();
     let rc = &layout.to_device[1];
     let mut out = Vec::new();
-    // roll, pitch, throttle, yaw, arm, angle
-    let setpoints = [0.2, -1.0, 0.5, 0.0, 1.0, 1.0];
+    // roll, pitch, throttle, yaw, arm, angle, altitude hold
+    let setpoints = [0.2, -1.0, 0.5, 0.0, 1.0, 1.0, 1.0];
     rc.encode(
         layout.byte_order,
         &SendValues { t_s: 2.0, outputs: &[0.0; OUTPUTS.len()], setpoints: &setpoints },
@@ -96,8 +96,8 @@ fn the_rc_packet_turns_set_points_into_pulse_widths() {
     );
     assert_eq!(f64_at(&out, 0), 2.0);
     let channels: Vec<u16> = (0..16).map(|k| u16::from_le_bytes([out[8 + 2 * k], out[9 + 2 * k]])).collect();
-    assert_eq!(channels[..6], [1600, 1000, 1500, 1500, 2000, 2000]);
-    assert!(channels[6..].iter().all(|c| *c == 1000));
+    assert_eq!(channels[..7], [1600, 1000, 1500, 1500, 2000, 2000, 2000]);
+    assert!(channels[7..].iter().all(|c| *c == 1000));
     assert!(rc.due(0) && !rc.due(5) && rc.due(20) && layout.to_device[0].due(7));
 }
 
