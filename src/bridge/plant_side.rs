@@ -238,26 +238,7 @@ impl PlantSide {
     fn on_arrival(&mut self, arrival: Arrival) -> anyhow::Result<()> {
         let now = monotonic_ns();
         match arrival {
-            Arrival::Hello { bytes, .. } => match read_hello(&bytes, &self.link.run, self.link.layout_version) {
-                Err(problem) => self.link.say("bridge-peer-refused", format!("{problem}: ignored"), true),
-                Ok(h) => match self.peer.heard(h, now) {
-                    Some(PeerChange::Joined { epoch, replaced }) => {
-                        let how = replaced.map_or(String::new(), |old| format!(" (replacing epoch {old:x})"));
-                        let text = format!("controller-side bridge (epoch {epoch:x}) connected from the network{how}");
-                        self.link.say("bridge-peer-joined", text, false);
-                    }
-                    Some(PeerChange::Rival { epoch }) => {
-                        let serving = self.peer.alive().map_or(0, |h| h.epoch);
-                        let text = format!(
-                            "refused a second controller-side bridge for run {} (epoch {epoch:x}): serving epoch \
-                             {serving:x}",
-                            self.link.run
-                        );
-                        self.link.say("bridge-peer-refused", text, true);
-                    }
-                    _ => {}
-                },
-            },
+            Arrival::Hello { bytes, .. } => self.on_hello(&bytes, now),
             Arrival::Sample { what, bytes, attachment } => {
                 let trailer = attachment.as_deref().and_then(CommandTrailer::from_bytes);
                 let serving = self.peer.alive().map(|h| h.epoch);
@@ -302,20 +283,47 @@ impl PlantSide {
                 }
             }
             Arrival::Finished => {}
-            Arrival::LinkRefused { text } => {
-                if let Some(r) = super::tls_watch::refusal(&text) {
-                    self.rec.count("connections_refused", 1);
-                    let why = if r.certificate {
-                        "the peer does not hold this run's bridge key: if it is your controller-side bridge, give it \
-                         the same key file"
-                    } else {
-                        "the peer did not speak TLS: a bridge without --key, or another program on this port"
-                    };
-                    let text = format!("refused a connection from the network (TLS: {}): {why}", r.detail);
-                    self.link.say("bridge-connection-refused", text, true);
-                }
-            }
+            Arrival::LinkRefused { text } => self.on_link_refused(&text),
         }
         Ok(())
+    }
+
+    /// A controller-side bridge's hello: who joined, or who was refused and why.
+    fn on_hello(&mut self, bytes: &[u8], now: u64) {
+        match read_hello(bytes, &self.link.run, self.link.layout_version) {
+            Err(problem) => self.link.say("bridge-peer-refused", format!("{problem}: ignored"), true),
+            Ok(h) => match self.peer.heard(h, now) {
+                Some(PeerChange::Joined { epoch, replaced }) => {
+                    let how = replaced.map_or(String::new(), |old| format!(" (replacing epoch {old:x})"));
+                    let text = format!("controller-side bridge (epoch {epoch:x}) connected from the network{how}");
+                    self.link.say("bridge-peer-joined", text, false);
+                }
+                Some(PeerChange::Rival { epoch }) => {
+                    let serving = self.peer.alive().map_or(0, |h| h.epoch);
+                    let text = format!(
+                        "refused a second controller-side bridge for run {} (epoch {epoch:x}): serving epoch \
+                         {serving:x}",
+                        self.link.run
+                    );
+                    self.link.say("bridge-peer-refused", text, true);
+                }
+                _ => {}
+            },
+        }
+    }
+
+    /// A connection Zenoh's TLS refused (from its log): counted and said, with what the peer lacks.
+    fn on_link_refused(&mut self, text: &str) {
+        if let Some(r) = super::tls_watch::refusal(text) {
+            self.rec.count("connections_refused", 1);
+            let why = if r.certificate {
+                "the peer does not hold this run's bridge key: if it is your controller-side bridge, give it \
+                 the same key file"
+            } else {
+                "the peer did not speak TLS: a bridge without --key, or another program on this port"
+            };
+            let text = format!("refused a connection from the network (TLS: {}): {why}", r.detail);
+            self.link.say("bridge-connection-refused", text, true);
+        }
     }
 }

@@ -200,6 +200,24 @@ fn detections_of(f: &Fault) -> (&'static [&'static str], &'static [&'static str]
     }
 }
 
+/// When each fault of `order` was injected, with its description: the launcher's or the process's own
+/// `fault-injected`; a plant-model fault acts when the flight reaches `at_s`, which after stalls and restarts is
+/// seconds of wall time after t0 + at_s.
+fn injections(order: &[&Fault], events: &[Event], clock: &SimClock) -> Vec<(String, Option<u64>)> {
+    order
+        .iter()
+        .map(|f| {
+            let desc = f.describe();
+            let at = events
+                .iter()
+                .find(|e| e.kind == "fault-injected" && e.detail.starts_with(&desc))
+                .map(|e| e.t_ns)
+                .or_else(|| f.action().is_plant_model_fault().then(|| clock.wall_ns(f.at_s)));
+            (desc, at)
+        })
+        .collect()
+}
+
 /// Records for every fault of `plan`.
 pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultRecord> {
     let events = read_events(out_dir);
@@ -211,20 +229,7 @@ pub fn fault_records(plan: &[Fault], out_dir: &Path, dt_s: f64) -> Vec<FaultReco
     let rel = |t_ns: u64| clock.sim_s(t_ns);
     let mut order: Vec<&Fault> = plan.iter().collect();
     order.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
-    // Injection: the launcher's or the process's own `fault-injected`; a plant-model fault acts when the flight
-    // reaches `at_s`, which after stalls and restarts is seconds of wall time after t0 + at_s.
-    let injected: Vec<(String, Option<u64>)> = order
-        .iter()
-        .map(|f| {
-            let desc = f.describe();
-            let at = events
-                .iter()
-                .find(|e| e.kind == "fault-injected" && e.detail.starts_with(&desc))
-                .map(|e| e.t_ns)
-                .or_else(|| f.action().is_plant_model_fault().then(|| clock.wall_ns(f.at_s)));
-            (desc, at)
-        })
-        .collect();
+    let injected = injections(&order, &events, &clock);
     order
         .iter()
         .enumerate()
