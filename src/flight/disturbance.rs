@@ -1,7 +1,6 @@
 //! The scenario's `[disturbance]`: a sine on the Euler-angle accelerations of the F-16, its channels, and the
 //! ranges its values must keep (refused naming the key, as every scenario value is).
 
-use crate::scenario::refuse;
 use serde::{Deserialize, Serialize};
 
 /// d(t) = amplitude * sin(frequency * t) on the chosen Euler-angle accelerations.
@@ -67,4 +66,9 @@ impl Disturbance {
     pub fn channel_mask(&self) -> [bool; 3] {
         silrig_model::control::CHANNEL_NAMES.map(|n| self.channels.iter().any(|c| c == n))
     }
+}
+
+/// The key refused with its problem, in the (dotted key, problem) form the scenario's checks return.
+fn refuse(key: &str, problem: String) -> Result<(), (String, String)> {
+    Err((key.to_string(), problem))
 }
