@@ -37,6 +37,14 @@ class Plant:
         self.inputs = inputs
 
 
+class Sample(dict):
+    """A sample as the session library hands it: outputs by name, and its time `t_s`."""
+
+    def __init__(self, t_s, values):
+        super().__init__(values)
+        self.t_s = t_s
+
+
 class Session:
     """The part of silrig_client's Session that PidAttitude uses, answered from the FMU's model description."""
 
@@ -49,7 +57,8 @@ class Session:
         self.setpoints = setpoints
         self.held = held
 
-    def setpoint(self, name):
+    def setpoint(self, name, default=None, t_s=None):
+        # The set points here are constant: the same at every sample's time.
         return self.setpoints.get(name, 0.0)
 
     def output(self, name):
@@ -91,7 +100,7 @@ def fly(fmu, setpoints, duration_s, delay_ticks, parameters, trace=None):
     t = 0.0
     ticks = int(round(duration_s / DT_S))
     for k in range(ticks + 1):
-        sample = dict(zip(outputs, slave.getReal(out_vr)))
+        sample = Sample(t, zip(outputs, slave.getReal(out_vr)))
         rows.append((t, sample))
         if k == ticks:
             break
