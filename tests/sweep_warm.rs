@@ -45,23 +45,11 @@ fn sweep(config: &Path, runs: u32, controller: &str, extra: &[&str], out: &Path,
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let runs_prefix = format!("r{:x}-", child.id());
+    let pid = child.id();
     let o = common::wait_with_watchdog(child, Duration::from_secs(600));
     let stderr = String::from_utf8_lossy(&o.stderr).to_string();
     assert!(o.status.success(), "silrig sweep {controller} {extra:?}: {stderr}");
-    let left = |dir: &Path, prefixes: &[String]| -> Vec<String> {
-        std::fs::read_dir(dir)
-            .unwrap()
-            .filter_map(|e| e.ok())
-            .map(|e| e.file_name().to_string_lossy().to_string())
-            .filter(|n| prefixes.iter().any(|p| n.starts_with(p)))
-            .collect()
-    };
-    let shm = left(Path::new("/dev/shm"), &[format!("sr_{runs_prefix}")]);
-    assert!(shm.is_empty(), "shared memory left behind: {shm:?}");
-    let prefixes = [format!("silrig_{runs_prefix}"), format!("silrig-sweep-{runs_prefix}")];
-    let tmp = left(&std::env::temp_dir(), &prefixes);
-    assert!(tmp.is_empty(), "run or scratch folders left behind: {tmp:?}");
+    common::assert_sweep_left_nothing(pid);
     (std::fs::read_to_string(out.join("cases.csv")).unwrap(), stderr)
 }
 

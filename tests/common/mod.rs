@@ -113,20 +113,10 @@ pub fn wait_with_watchdog(mut child: Child, limit: Duration) -> Output {
     }
 }
 
-/// `program ARGS` (`silrig` running rigs: a sweep, a case through the rig) from the repository root, to its end (5
-/// minutes at most): (exit code, stdout, stderr). The rigs it flew (run ids `r<its pid>-...`) left no shared
-/// memory, and its run and scratch folders are gone.
-#[allow(dead_code)]
-pub fn run_leaving_nothing(program: &str, args: &[&str]) -> (Option<i32>, String, String) {
-    let child = Command::new(program)
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let runs = format!("r{:x}-", child.id());
-    let o = wait_with_watchdog(child, Duration::from_secs(300));
+/// No shared memory, run folder or scratch folder is left of the runs a sweep of process `pid` started (named
+/// `r<pid in hex>-...`).
+pub fn assert_sweep_left_nothing(pid: u32) {
+    let runs = format!("r{pid:x}-");
     let named = |dir: &Path, prefixes: &[String]| -> Vec<String> {
         std::fs::read_dir(dir)
             .unwrap()
@@ -139,6 +129,23 @@ pub fn run_leaving_nothing(program: &str, args: &[&str]) -> (Option<i32>, String
     assert!(shm.is_empty(), "shared memory left behind: {shm:?}");
     let tmp = named(&std::env::temp_dir(), &[format!("silrig_{runs}"), format!("silrig-sweep-{runs}")]);
     assert!(tmp.is_empty(), "run or scratch folders left behind: {tmp:?}");
+}
+
+/// `program ARGS` (`silrig` running rigs: a sweep, a case through the rig) from the repository root, to its end (5
+/// minutes at most): (exit code, stdout, stderr). The rigs it flew (run ids `r<its pid>-...`) left no shared
+/// memory, and its run and scratch folders are gone.
+#[allow(dead_code)]
+pub fn run_leaving_nothing(program: &str, args: &[&str]) -> (Option<i32>, String, String) {
+    let child = Command::new(program)
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    let o = wait_with_watchdog(child, Duration::from_secs(300));
+    assert_sweep_left_nothing(pid);
     (o.status.code(), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
 }
 
