@@ -82,7 +82,8 @@ fn the_recording_carries_the_aircraft_in_3d_as_the_trace_flew_it() {
     let transforms = file["transforms"].as_array().unwrap();
     let scenes = file["scenes"].as_array().unwrap();
     assert!(rows.len() >= 300, "a 3 s flight: {} rows", rows.len());
-    assert_eq!((plant.len(), transforms.len()), (rows.len(), rows.len()), "one a tick");
+    // A lockstep recording's /plant ends with the plant's end-of-run sample (the last row's positions).
+    assert_eq!((plant.len(), transforms.len()), (rows.len() + 1, rows.len()), "one a tick");
 
     let deg = std::f64::consts::PI / 180.0;
     let mut last_stamp = 0;
@@ -251,8 +252,14 @@ fn check_layout(run_dir: &Path, recording: &Value, trace_columns: &[String], dis
     for p in paths {
         let (topic, field) = p.split_once('.').unwrap_or((&p, ""));
         assert!(has_topic(topic), "{p}: no topic {topic}");
+        let indexed = |array: &str| field.strip_prefix(array)?.strip_suffix(']')?.parse::<usize>().ok();
         if topic == "/trace" {
             assert!(trace_columns.iter().any(|c| c == field), "{p}: no trace column {field}");
+        } else if topic == "/plant" || topic == "/command" {
+            // A lockstep recording has no /trace: its plots read the samples (which entry is which signal:
+            // src/recording/foxglove_layout.rs's tests).
+            let k = indexed("outputs[").or_else(|| indexed("inputs[")).unwrap_or_else(|| panic!("{p}: no signal"));
+            assert!(k < trace_columns.len(), "{p}");
         } else if topic == "/events" && !field.is_empty() {
             assert!(["kind", "process", "detail", "tick", "t_ns"].contains(&field), "{p}");
         }

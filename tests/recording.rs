@@ -203,6 +203,47 @@ fn a_realtime_run_records_what_the_csv_files_hold() {
 }
 
 #[test]
+fn a_lockstep_recording_has_every_value_of_the_trace_in_its_samples_without_trace() {
+    let out = temp_dir("recording", "lockstep");
+    let id = format!("m{}-ls", std::process::id());
+    let (code, text) = run(&out, &id, &["--mode", "lockstep", "--duration-s", "2"]);
+    assert_eq!(code, Some(0), "{text}");
+    let file = &read_with_python(&[out.join("recording.mcap")])[0];
+    assert_eq!(file["complete"], true, "{}", file["error"]);
+    assert!(file["channels"].get("/trace").is_none(), "a lockstep recording has no /trace");
+    let trace = Trace::load(&out.join("trace.csv")).unwrap();
+    let columns = file["metadata"]["trace"]["columns"].as_str().expect("the trace's columns in metadata");
+    assert_eq!(columns.split(',').collect::<Vec<_>>(), trace.columns, "the recording's trace columns");
+    // Each row again from the samples as Foxglove's reader decodes them: the row's /plant sample, the /command
+    // answering it, and the next /plant sample (the last one the plant's end-of-run sample) for the positions.
+    let plant = silrig::recording::reader::RecordedRun::read(&out).unwrap().plant_signals().unwrap();
+    let diagnostics = trace.columns.len() - plant.trace_columns(&[]).len();
+    let samples = file["plant"].as_array().unwrap();
+    assert_eq!(samples.len(), trace.rows.len() + 1, "a sample a row, then the end-of-run sample");
+    let end_flags = samples[trace.rows.len()]["flags"].as_u64().unwrap() as u32;
+    assert_ne!(end_flags & silrig::wire::FLAG_END_OF_RUN, 0, "the last /plant message is the end-of-run sample");
+    let floats = |v: &Value| v.as_array().unwrap().iter().map(float_bits).collect::<Vec<f64>>();
+    let commands: std::collections::HashMap<u64, &Value> =
+        file["command"].as_array().unwrap().iter().map(|c| (c["answers_tick"].as_u64().unwrap(), c)).collect();
+    let mut row = Vec::new();
+    for (i, csv) in trace.rows.iter().enumerate() {
+        let (sample, next) = (&samples[i], &samples[i + 1]);
+        let command = commands.get(&(i as u64)).expect("lockstep answers every tick");
+        let mut diag = floats(&command["diagnostics"]);
+        diag.resize(diagnostics, f64::NAN);
+        let (inputs, next) = (floats(&command["inputs"]), floats(&next["outputs"]));
+        let t_s = float_bits(&sample["t_sim_s"]);
+        plant.trace_row(&mut row, t_s, &floats(&sample["outputs"]), Some(&inputs), Some(&next), 0, &diag);
+        for (k, (a, b)) in row.iter().zip(csv).enumerate() {
+            assert!(same(*a, *b), "row {i}, {}: from the samples {a}, trace.csv {b}", trace.columns[k]);
+        }
+    }
+    // Replay of such a recording (the diagnostics named from the columns, the rows' samples sent, not the end-of-run
+    // one): replaying_our_controller_gives_the_recorded_commands_bit_for_bit.
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
 fn a_killed_logger_leaves_a_readable_recording_and_its_successor_writes_the_next_file() {
     let out = temp_dir("recording", "killed");
     let id = format!("m{}-kill", std::process::id());

@@ -2,7 +2,9 @@
 //! the plant announced, so it fits any plant: a 3D panel following the body when the plant has a position and an
 //! attitude ([`BodySignals`]); a plot for each unit of the traced outputs (a few signals a plot); a plot for each
 //! unit of the commands, each command beside the position of the actuator it moves; the events on a timeline and
-//! the latest in full. Message paths are `/trace.<column>` (the columns of `trace.csv`) and `/events.kind`.
+//! the latest in full. Message paths are `/trace.<column>` (the columns of `trace.csv`) in a recording with `/trace`
+//! (realtime); in one without (lockstep) the same signals from the samples, `/plant.outputs[k]` and
+//! `/command.inputs[k]`, labelled with the same column names; and `/events.kind`.
 
 use crate::foxglove::BodySignals;
 use crate::topics;
@@ -15,41 +17,76 @@ pub const FILE: &str = "foxglove-layout.json";
 /// Signals a plot shows at most: more are split into plots of their own.
 const PER_PLOT: usize = 6;
 
-/// A plot panel of `/trace` columns.
-fn plot(title: &str, columns: &[String]) -> Value {
-    let paths: Vec<Value> = columns
+/// Where the plots read a plant's signals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SignalSource {
+    /// The `/trace` row, by column (realtime recordings).
+    Trace,
+    /// The samples (lockstep recordings, which have no `/trace`): an output in `/plant`, a command in `/command`.
+    Samples,
+}
+
+/// A signal a plot shows: its label (the trace's column name) and the message path it is read from.
+struct Plotted {
+    label: String,
+    path: String,
+}
+
+impl SignalSource {
+    /// Output `k` of `plant`, labelled with its trace column.
+    fn output(self, plant: &PlantSignals, k: usize) -> Plotted {
+        let label = plant.outputs[k].name.clone();
+        let path = match self {
+            SignalSource::Trace => format!("{}.{label}", topics::TRACE),
+            SignalSource::Samples => format!("{}.outputs[{k}]", topics::PLANT),
+        };
+        Plotted { label, path }
+    }
+
+    /// The command of input `k` of `plant`, labelled with its trace column.
+    fn command(self, plant: &PlantSignals, k: usize) -> Plotted {
+        let label = plant.command_column(k);
+        let path = match self {
+            SignalSource::Trace => format!("{}.{label}", topics::TRACE),
+            SignalSource::Samples => format!("{}.inputs[{k}]", topics::COMMAND),
+        };
+        Plotted { label, path }
+    }
+}
+
+/// A plot panel of these signals.
+fn plot(title: &str, signals: &[Plotted]) -> Value {
+    let paths: Vec<Value> = signals
         .iter()
-        .map(|c| {
-            json!({"value": format!("{}.{c}", topics::TRACE), "enabled": true, "timestampMethod": "receiveTime", "label": c})
-        })
+        .map(|s| json!({"value": s.path, "enabled": true, "timestampMethod": "receiveTime", "label": s.label}))
         .collect();
     json!({"title": title, "paths": paths, "showLegend": true, "isSynced": true, "xAxisVal": "timestamp"})
 }
 
+/// Add `signals` to the group of `unit` in `groups`, or start one.
+fn group_by_unit(groups: &mut Vec<(String, Vec<Plotted>)>, unit: &str, signals: impl IntoIterator<Item = Plotted>) {
+    match groups.iter_mut().find(|(u, _)| u == unit) {
+        Some((_, group)) => group.extend(signals),
+        None => groups.push((unit.to_string(), signals.into_iter().collect())),
+    }
+}
+
 /// Traced outputs that are no actuator's position, grouped by unit in the order announced.
-fn output_groups(plant: &PlantSignals) -> Vec<(String, Vec<String>)> {
+fn output_groups(plant: &PlantSignals, source: SignalSource) -> Vec<(String, Vec<Plotted>)> {
     let held: Vec<usize> = plant.inputs.iter().filter_map(|i| i.held_output).collect();
-    let mut groups: Vec<(String, Vec<String>)> = Vec::new();
-    let traced = plant.outputs.iter().enumerate().filter(|(k, o)| o.in_trace && !held.contains(k)).map(|(_, o)| o);
-    for o in traced {
-        match groups.iter_mut().find(|(unit, _)| *unit == o.unit) {
-            Some((_, names)) => names.push(o.name.clone()),
-            None => groups.push((o.unit.clone(), vec![o.name.clone()])),
-        }
+    let mut groups = Vec::new();
+    for (k, o) in plant.outputs.iter().enumerate().filter(|(k, o)| o.in_trace && !held.contains(k)) {
+        group_by_unit(&mut groups, &o.unit, [source.output(plant, k)]);
     }
     groups
 }
 
 /// Traced commands, each followed by its actuator's position when traced, grouped by the input's unit.
-fn command_groups(plant: &PlantSignals) -> Vec<(String, Vec<String>)> {
-    let mut groups: Vec<(String, Vec<String>)> = Vec::new();
+fn command_groups(plant: &PlantSignals, source: SignalSource) -> Vec<(String, Vec<Plotted>)> {
+    let mut groups = Vec::new();
     for (k, input) in plant.inputs.iter().enumerate().filter(|(_, i)| i.command_in_trace) {
-        let mut columns = vec![plant.command_column(k)];
-        columns.extend(input.held_output.map(|o| &plant.outputs[o]).filter(|o| o.in_trace).map(|o| o.name.clone()));
-        match groups.iter_mut().find(|(unit, _)| *unit == input.unit) {
-            Some((_, names)) => names.extend(columns),
-            None => groups.push((input.unit.clone(), columns)),
-        }
+        let position = input.held_output.filter(|o| plant.outputs[*o].in_trace).map(|o| source.output(plant, o));
+        group_by_unit(&mut groups, &input.unit, std::iter::once(source.command(plant, k)).chain(position));
     }
     groups
 }
@@ -73,22 +110,22 @@ fn column(ids: &[String]) -> Value {
     }
 }
 
-/// The layout for `plant`'s recording.
-pub fn layout(plant: &PlantSignals) -> Value {
+/// The layout for `plant`'s recording, its plots reading the signals from `source`.
+pub fn layout(plant: &PlantSignals, source: SignalSource) -> Value {
     let mut configs = serde_json::Map::new();
     let mut plots = Vec::new();
     let mut add_plots =
-        |what: &str, groups: Vec<(String, Vec<String>)>, configs: &mut serde_json::Map<String, Value>| {
-            for (unit, names) in groups {
-                for chunk in names.chunks(PER_PLOT) {
+        |what: &str, groups: Vec<(String, Vec<Plotted>)>, configs: &mut serde_json::Map<String, Value>| {
+            for (unit, signals) in groups {
+                for chunk in signals.chunks(PER_PLOT) {
                     let id = format!("Plot!{}", plots.len());
                     configs.insert(id.clone(), plot(&in_unit(what, &unit), chunk));
                     plots.push(id);
                 }
             }
         };
-    add_plots("outputs", output_groups(plant), &mut configs);
-    add_plots("commands and positions", command_groups(plant), &mut configs);
+    add_plots("outputs", output_groups(plant, source), &mut configs);
+    add_plots("commands and positions", command_groups(plant, source), &mut configs);
     configs.insert(
         "StateTransitions!events".into(),
         json!({"paths": [{"value": format!("{}.kind", topics::EVENTS), "timestampMethod": "receiveTime", "label": "event"}],
@@ -168,10 +205,46 @@ mod tests {
         PlantSignals { plant: "quad".into(), outputs, inputs }
     }
 
+    /// Where a plotted path points: the trace column, output or command its label names.
+    fn assert_path_is_its_label(plant: &PlantSignals, path: &str, label: &str) {
+        let index = |prefix: &str| path.strip_prefix(prefix)?.strip_suffix(']')?.parse::<usize>().ok();
+        if let Some(column) = path.strip_prefix("/trace.") {
+            assert_eq!(column, label, "{path}");
+            assert!(plant.trace_columns(&[]).iter().any(|c| c == column), "{path} is no trace column");
+        } else if let Some(k) = index("/plant.outputs[") {
+            assert_eq!(plant.outputs[k].name, label, "{path}");
+        } else if let Some(k) = index("/command.inputs[") {
+            assert_eq!(plant.command_column(k), label, "{path}");
+        } else {
+            panic!("{path} reads no signal");
+        }
+    }
+
+    #[test]
+    fn both_sources_plot_the_same_signals_each_from_where_the_recording_has_it() {
+        let plant = quadrotor_like();
+        let labels = |l: &Value| -> Vec<(String, String)> {
+            let mut found = Vec::new();
+            for c in l["configById"].as_object().unwrap().values().filter(|c| c["title"].is_string()) {
+                for p in c["paths"].as_array().unwrap() {
+                    let (path, label) = (p["value"].as_str().unwrap(), p["label"].as_str().unwrap());
+                    assert_path_is_its_label(&plant, path, label);
+                    found.push((c["title"].as_str().unwrap().to_string(), label.to_string()));
+                }
+            }
+            found.sort();
+            found
+        };
+        let (trace, samples) = (layout(&plant, SignalSource::Trace), layout(&plant, SignalSource::Samples));
+        assert_eq!(labels(&trace), labels(&samples));
+        assert!(samples.to_string().contains("/plant.outputs[10]"), "valve_pos from the samples");
+        assert!(!samples.to_string().contains("/trace."), "no /trace path without /trace");
+    }
+
     #[test]
     fn every_panel_is_placed_and_names_the_plants_own_columns() {
         let plant = quadrotor_like();
-        let l = layout(&plant);
+        let l = layout(&plant, SignalSource::Trace);
         let configs = l["configById"].as_object().unwrap();
         fn placed(node: &Value, into: &mut Vec<String>) {
             match node {
@@ -190,16 +263,12 @@ mod tests {
         ids.sort();
         assert_eq!(panels, ids);
         assert_eq!(configs["3D!silrig"]["cameraState"]["distance"], 2.0, "a quadrotor's camera is near");
-        let columns = plant.trace_columns(&[]);
         let mut titles: Vec<&str> = configs.values().filter_map(|c| c["title"].as_str()).collect();
         titles.sort();
         assert_eq!(titles, ["commands and positions", "outputs", "outputs, deg", "outputs, m", "outputs, rad/s"]);
-        for c in configs.values() {
-            for p in c["paths"].as_array().into_iter().flatten() {
-                let path = p["value"].as_str().unwrap();
-                if let Some(column) = path.strip_prefix("/trace.") {
-                    assert!(columns.iter().any(|c| c == column), "{path} is no trace column of {columns:?}");
-                }
+        for c in configs.values().filter(|c| c["title"].is_string()) {
+            for p in c["paths"].as_array().unwrap() {
+                assert_path_is_its_label(&plant, p["value"].as_str().unwrap(), p["label"].as_str().unwrap());
             }
         }
         // The position of the actuator a command moves is beside it, not among the outputs.
@@ -212,7 +281,7 @@ mod tests {
     #[test]
     fn a_plant_without_position_or_attitude_gets_no_3d_panel_and_long_groups_are_split() {
         let outputs = (0..8).map(|k| output(&format!("x{k}_m"), "m")).collect();
-        let l = layout(&PlantSignals { plant: "p".into(), outputs, inputs: Vec::new() });
+        let l = layout(&PlantSignals { plant: "p".into(), outputs, inputs: Vec::new() }, SignalSource::Samples);
         let configs = l["configById"].as_object().unwrap();
         assert!(!configs.contains_key("3D!silrig"));
         let sizes: Vec<usize> =

@@ -40,6 +40,9 @@ pub struct LoggedRow<'a> {
     pub command: Option<&'a Received<CommandSample>>,
     /// The plant's step execution time of this tick, ns: reported in the next sample, like the deflections.
     pub step_exec_ns: Option<u64>,
+    /// The plant's end-of-run sample when it closes this row (the last tick's actuator positions, which no row's
+    /// sample carries), with the logger's receive stamp.
+    pub end_of_run: Option<&'a Received<PlantSample>>,
     /// The trace row, in the order of the columns given to [`RowSink::start`].
     pub trace: &'a [f64],
 }
@@ -191,9 +194,13 @@ pub mod meta_keys {
     pub const TOML: &str = "toml";
     /// Wire layout version of every sample in the file.
     pub const LAYOUT_VERSION: &str = "layout_version";
+    /// The record of a recording without `/trace` (lockstep) holding trace.csv's columns under
+    /// [`super::TRACE_COLUMNS_KEY`], as the `/trace` channel's metadata does in the others.
+    pub const TRACE: &str = "trace";
 }
 
-/// Metadata key of the `/trace` channel: trace.csv's columns, comma-separated, in order.
+/// Metadata key of the `/trace` channel (and of the `trace` metadata record): trace.csv's columns, comma-separated,
+/// in order.
 pub const TRACE_COLUMNS_KEY: &str = "columns";
 
 /// The recording's topics.
@@ -204,7 +211,8 @@ pub mod topics {
     pub const COMMAND: &str = "/command";
     /// The plant's announcement of its signals, once.
     pub const PLANT_INFO: &str = "/plant_info";
-    /// The trace row (`trace.csv`'s columns).
+    /// The trace row (`trace.csv`'s columns); realtime recordings only: a lockstep recording leaves it out, since
+    /// every value of it is in `/plant` and `/command` ([`super::mcap_file`]).
     pub const TRACE: &str = "/trace";
     /// Per-tick stamps (`timing.csv`'s columns).
     pub const TIMING: &str = "/timing";

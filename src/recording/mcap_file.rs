@@ -3,7 +3,10 @@
 //! `/command` (every field as received, the arrays' entries in use as bounded sequences, with header stamps, flags and
 //! the logger's receive stamp), `/plant_info`
 //! (the plant's announcement), `/trace` (the trace row, one float64 field per column) and `/timing` (the per-tick
-//! stamps); `/events` holds the run's `events.jsonl` lines as they appear, as JSON. A plant that announces its
+//! stamps). `/trace` is in realtime recordings only: every value of a row is in `/plant` and `/command` (an output,
+//! a command, a diagnostic; an actuator's position in the next `/plant`), and in lockstep, where the logger's CPU
+//! a tick matters, it was a third of what LZ4 compressed; a lockstep recording keeps the trace's columns (which
+//! name the diagnostics) in the `trace` metadata record instead. `/events` holds the run's `events.jsonl` lines as they appear, as JSON. A plant that announces its
 //! position and attitude also gets the aircraft in 3-D for Foxglove's 3D panel ([`super::foxglove`]): `/body_transform`
 //! (`foxglove.FrameTransform`, world -> body, every row) and `/aircraft` (`foxglove.SceneUpdate`, the model with its
 //! surfaces deflected, written again when a surface has turned [`SCENE_SURFACE_STEP_RAD`] or a second has passed),
@@ -20,12 +23,14 @@
 
 use crate::cdr::{self, CdrBuffer, CdrCodec, MESSAGE_ENCODING, SCHEMA_ENCODING};
 use crate::foxglove::{self as fox, BodySignals, ProtoBuffer};
+use crate::foxglove_layout::{SignalSource, layout};
 use crate::mcap_writer::{ChunkCompression, McapWriter};
 use crate::{
     LoggedRow, RecordingMeta, RecordingTap, RowSink, TIMING_COLUMNS, TRACE_COLUMNS_KEY, TapChannel, meta_keys,
     recording_file_name, timing_values, topics,
 };
 use serde_json::{Value, json};
+use silrig_wire::ipc::Received;
 use silrig_wire::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION};
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -53,10 +58,44 @@ struct Channels {
     body: Option<(u16, u16)>,
 }
 
-/// The run's MCAP recording, being written.
-pub struct McapSink {
+/// The file side of the recording: the writer, who else sees each message, and the clock messages are stamped
+/// with; apart from the sink's reused message buffers, so a message is written straight from them.
+struct RecordingFile {
     path: PathBuf,
     writer: McapWriter<BufWriter<File>>,
+    /// Wall clock minus monotonic clock, ns.
+    wall_minus_monotonic_ns: i128,
+    /// Who else sees the channels and messages (the live server), if anyone.
+    tap: Option<Box<dyn RecordingTap>>,
+}
+
+impl RecordingFile {
+    fn wall_ns(&self, monotonic_ns: u64) -> u64 {
+        (i128::from(monotonic_ns) + self.wall_minus_monotonic_ns).clamp(0, i128::from(u64::MAX)) as u64
+    }
+
+    fn named(&self, e: std::io::Error) -> std::io::Error {
+        named_error(&self.path, e)
+    }
+
+    fn write(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64, data: &[u8]) -> std::io::Result<()> {
+        let (log_time, publish_time) = (self.wall_ns(t_log_ns), self.wall_ns(t_publish_ns));
+        self.writer.write_message(channel, log_time, publish_time, data).map_err(|e| named_error(&self.path, e))?;
+        if let Some(tap) = &mut self.tap {
+            tap.message(channel, log_time, data);
+        }
+        Ok(())
+    }
+
+    /// Add a channel with its schema, announced to the tap.
+    fn add_channel(&mut self, c: NewChannel) -> u16 {
+        add_channel(&mut self.writer, &mut self.tap, c)
+    }
+}
+
+/// The run's MCAP recording, being written.
+pub struct McapSink {
+    file: RecordingFile,
     channels: Channels,
     plant_codec: CdrCodec,
     command_codec: CdrCodec,
@@ -75,11 +114,11 @@ pub struct McapSink {
     events_file: Option<File>,
     /// Bytes of `events.jsonl` already recorded.
     events_read: u64,
-    /// Wall clock minus monotonic clock, ns.
-    wall_minus_monotonic_ns: i128,
+    /// The recording has `/trace` (realtime); a lockstep one keeps only its columns, in a metadata record.
+    trace_topic: bool,
+    /// The trace's columns have come ([`RowSink::start`]).
+    started: bool,
     finished: bool,
-    /// Who else sees the channels and messages (the live server), if anyone.
-    tap: Option<Box<dyn RecordingTap>>,
 }
 
 const RECEIVE_STAMP: (&str, &str) = ("t_recv_ns", "CLOCK_MONOTONIC when the logger took the sample from its queue, ns");
@@ -218,11 +257,11 @@ impl McapSink {
         let channels = add_first_channels(&mut writer, &mut tap);
         write_run_metadata(&mut writer, meta, &path).map_err(named)?;
         let wall_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+        let wall_minus_monotonic_ns = wall_ns as i128 - i128::from(silrig_wire::clock::monotonic_ns());
         Ok(Self {
             events_path: out_dir.join("events.jsonl"),
             events_file: None,
-            path,
-            writer,
+            file: RecordingFile { path, writer, wall_minus_monotonic_ns, tap },
             channels,
             plant_codec: CdrCodec::of::<PlantSample>(),
             command_codec: CdrCodec::of::<CommandSample>(),
@@ -232,48 +271,23 @@ impl McapSink {
             rotor_arm_m: fox::rotor_arm_m(&meta.scenario_toml),
             last_scene: None,
             events_read: 0,
-            wall_minus_monotonic_ns: wall_ns as i128 - i128::from(silrig_wire::clock::monotonic_ns()),
+            trace_topic: meta.mode != "lockstep",
+            started: false,
             finished: false,
-            tap,
         })
     }
 
     /// The file being written.
     pub fn path(&self) -> &Path {
-        &self.path
+        &self.file.path
     }
 
-    fn wall_ns(&self, monotonic_ns: u64) -> u64 {
-        (i128::from(monotonic_ns) + self.wall_minus_monotonic_ns).clamp(0, i128::from(u64::MAX)) as u64
-    }
-
-    fn named(&self, e: std::io::Error) -> std::io::Error {
-        named_error(&self.path, e)
-    }
-
-    fn write(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64, data: &[u8]) -> std::io::Result<()> {
-        let (log_time, publish_time) = (self.wall_ns(t_log_ns), self.wall_ns(t_publish_ns));
-        self.writer.write_message(channel, log_time, publish_time, data).map_err(|e| named_error(&self.path, e))?;
-        if let Some(tap) = &mut self.tap {
-            tap.message(channel, log_time, data);
-        }
-        Ok(())
-    }
-
-    /// Write the message in [`Self::buffer`].
-    fn write_buffer(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64) -> std::io::Result<()> {
-        let buffer = std::mem::take(&mut self.buffer);
-        let written = self.write(channel, t_log_ns, t_publish_ns, buffer.bytes());
-        self.buffer = buffer;
-        written
-    }
-
-    /// Write the message in [`Self::proto`].
-    fn write_proto(&mut self, channel: u16, t_log_ns: u64, t_publish_ns: u64) -> std::io::Result<()> {
-        let proto = std::mem::take(&mut self.proto);
-        let written = self.write(channel, t_log_ns, t_publish_ns, proto.bytes());
-        self.proto = proto;
-        written
+    /// A plant sample on `/plant`, with the logger's receive stamp after its fields.
+    fn write_plant(&mut self, r: &Received<PlantSample>) -> std::io::Result<()> {
+        self.buffer.start();
+        self.plant_codec.encode(&r.sample, &mut self.buffer);
+        self.buffer.u64(r.t_recv_ns);
+        self.file.write(self.channels.plant, r.t_recv_ns, r.sample.header.t_send_ns, self.buffer.bytes())
     }
 
     /// Add `/body_transform` and `/aircraft`, with Foxglove's schemas.
@@ -287,7 +301,7 @@ impl McapSink {
                 schema_data: &fox::descriptor_set(schema),
                 metadata: &BTreeMap::new(),
             };
-            add_channel(&mut self.writer, &mut self.tap, channel)
+            self.file.add_channel(channel)
         };
         (add(topics::BODY_TRANSFORM, fox::FRAME_TRANSFORM), add(topics::AIRCRAFT, fox::SCENE_UPDATE))
     }
@@ -311,7 +325,7 @@ impl McapSink {
             let Some(t_ns) = serde_json::from_slice::<Value>(line).ok().and_then(|v| v["t_ns"].as_u64()) else {
                 continue;
             };
-            self.write(self.channels.events, t_ns, t_ns, line)?;
+            self.file.write(self.channels.events, t_ns, t_ns, line)?;
         }
         Ok(())
     }
@@ -344,7 +358,8 @@ impl RowSink for McapSink {
         self.proto.draw(self.body_signals.as_ref().is_some_and(BodySignals::rotorcraft).then_some(self.rotor_arm_m));
         // The layout that fits this plant's recording, beside it; the recording goes on without it.
         if let Ok(signals) = info.signals() {
-            let layout = serde_json::to_string_pretty(&crate::foxglove_layout::layout(&signals)).unwrap_or_default();
+            let source = if self.trace_topic { SignalSource::Trace } else { SignalSource::Samples };
+            let layout = serde_json::to_string_pretty(&layout(&signals, source)).unwrap_or_default();
             let path = self.events_path.with_file_name(crate::foxglove_layout::FILE);
             if let Err(e) = silrig_flight::files::write_atomically(&path, &layout) {
                 eprintln!("logger: the Foxglove layout {} could not be written: {e}", path.display());
@@ -357,10 +372,20 @@ impl RowSink for McapSink {
         let t_send = info.header.t_send_ns;
         self.buffer.start();
         CdrCodec::of::<PlantInfo>().encode(info, &mut self.buffer);
-        self.write_buffer(self.channels.plant_info, t_send, t_send)
+        self.file.write(self.channels.plant_info, t_send, t_send, self.buffer.bytes())
     }
 
     fn start(&mut self, trace_columns: &[String]) -> std::io::Result<()> {
+        if self.started {
+            return Ok(());
+        }
+        self.started = true;
+        if !self.trace_topic {
+            // Lockstep: no `/trace` (a third of what LZ4 compressed a tick, and every value of it is in `/plant` and
+            // `/command`), but its columns, which name the command's diagnostics for replay.
+            let columns = BTreeMap::from([(TRACE_COLUMNS_KEY.to_string(), trace_columns.join(","))]);
+            return self.file.writer.write_metadata(meta_keys::TRACE, &columns).map_err(|e| self.file.named(e));
+        }
         if self.channels.trace.is_none() {
             let names = cdr::field_names(trace_columns);
             let header = "trace.csv's columns (the same as silrig sim), in order; an empty value is NaN";
@@ -375,7 +400,7 @@ impl RowSink for McapSink {
                 schema_data: msg.as_bytes(),
                 metadata: &columns,
             };
-            self.channels.trace = Some(add_channel(&mut self.writer, &mut self.tap, channel));
+            self.channels.trace = Some(self.file.add_channel(channel));
         }
         Ok(())
     }
@@ -383,22 +408,23 @@ impl RowSink for McapSink {
     fn row(&mut self, row: &LoggedRow) -> std::io::Result<()> {
         let plant = row.plant;
         let (t_recv, t_send) = (plant.t_recv_ns, plant.sample.header.t_send_ns);
-        self.buffer.start();
-        self.plant_codec.encode(&plant.sample, &mut self.buffer);
-        self.buffer.u64(t_recv);
-        self.write_buffer(self.channels.plant, t_recv, t_send)?;
+        self.write_plant(plant)?;
         if let Some(c) = row.command {
             self.buffer.start();
             self.command_codec.encode(&c.sample, &mut self.buffer);
             self.buffer.u64(c.t_recv_ns);
-            self.write_buffer(self.channels.command, c.t_recv_ns, c.sample.header.t_send_ns)?;
+            self.file.write(self.channels.command, c.t_recv_ns, c.sample.header.t_send_ns, self.buffer.bytes())?;
         }
-        let trace = self.channels.trace.ok_or_else(|| std::io::Error::other("recording: a row before its columns"))?;
-        self.buffer.start();
-        for v in row.trace {
-            self.buffer.f64(*v);
+        if !self.started {
+            return Err(std::io::Error::other("recording: a row before its columns"));
         }
-        self.write_buffer(trace, t_recv, t_send)?;
+        if let Some(trace) = self.channels.trace {
+            self.buffer.start();
+            for v in row.trace {
+                self.buffer.f64(*v);
+            }
+            self.file.write(trace, t_recv, t_send, self.buffer.bytes())?;
+        }
         self.buffer.start();
         let mut empty = 0u32;
         for (k, v) in timing_values(row).into_iter().enumerate() {
@@ -406,15 +432,15 @@ impl RowSink for McapSink {
             empty |= u32::from(v.is_none()) << k;
         }
         self.buffer.u32(empty);
-        self.write_buffer(self.channels.timing, t_recv, t_send)?;
+        self.file.write(self.channels.timing, t_recv, t_send, self.buffer.bytes())?;
         if let (Some(body), Some((transform, aircraft))) = (&self.body_signals, self.channels.body) {
             let outputs = plant.sample.outputs();
             let (translation, rotation, surfaces) =
                 (body.translation_m(outputs), body.rotation(outputs), body.surfaces_rad(outputs));
             // Stamped with the sample's time, so the panel draws the model at the transform of the same tick.
-            let stamp = self.wall_ns(t_send);
+            let stamp = self.file.wall_ns(t_send);
             fox::frame_transform(&mut self.proto, stamp, translation, rotation);
-            self.write_proto(transform, t_recv, t_send)?;
+            self.file.write(transform, t_recv, t_send, self.proto.bytes())?;
             let t_sim_s = plant.sample.t_sim_s;
             let due = self.last_scene.is_none_or(|(last, at_s)| {
                 surfaces.iter().zip(last).any(|(now, then)| (now - then).abs() >= SCENE_SURFACE_STEP_RAD)
@@ -422,25 +448,29 @@ impl RowSink for McapSink {
             });
             if due {
                 fox::aircraft_scene(&mut self.proto, stamp, surfaces);
-                self.write_proto(aircraft, t_recv, t_send)?;
+                self.file.write(aircraft, t_recv, t_send, self.proto.bytes())?;
                 self.last_scene = Some((surfaces, t_sim_s));
             }
         }
-        Ok(())
+        match row.end_of_run {
+            // Without `/trace`, the last row's actuator positions are only in the plant's end-of-run sample.
+            Some(end) if self.channels.trace.is_none() => self.write_plant(end),
+            _ => Ok(()),
+        }
     }
 
     fn flush(&mut self) -> std::io::Result<()> {
         self.record_new_events()?;
         // Closes the chunk: a reader can read everything up to here even if the logger dies next.
-        self.writer.flush().map_err(|e| self.named(e))
+        self.file.writer.flush().map_err(|e| self.file.named(e))
     }
 
     fn finish(&mut self) -> std::io::Result<()> {
         if !self.finished {
             self.record_new_events()?;
             self.finished = true;
-            self.writer.finish().map_err(|e| self.named(e))?;
-            if let Some(tap) = &mut self.tap {
+            self.file.writer.finish().map_err(|e| self.file.named(e))?;
+            if let Some(tap) = &mut self.file.tap {
                 tap.finish();
             }
         }
@@ -535,6 +565,32 @@ mod tests {
         // The announcement and the one whole event line.
         assert_eq!(file.len(), 2);
         assert_eq!(seen.messages, file);
+    }
+
+    #[test]
+    fn a_lockstep_recording_keeps_the_trace_columns_without_trace_and_a_realtime_one_has_trace() {
+        let columns = ["t_s".to_string(), "phi_deg".to_string(), "s_phi".to_string()];
+        let f16 = silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2]);
+        for mode in ["lockstep", "realtime"] {
+            let (dir, mut meta) = fresh_recording(&format!("trace-{mode}"));
+            meta.mode = mode.into();
+            let mut sink = McapSink::create(&dir, &meta, None).unwrap();
+            sink.plant(&PlantInfo::new(&f16).unwrap()).unwrap();
+            sink.start(&columns).unwrap();
+            sink.finish().unwrap();
+            let bytes = std::fs::read(sink.path()).unwrap();
+            let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+            let has_trace = summary.channels.values().any(|c| c.topic == topics::TRACE);
+            assert_eq!(has_trace, mode == "realtime", "{mode}");
+            if mode == "lockstep" {
+                // Replay's reader finds the columns (which name the diagnostics) in the metadata record.
+                let run = crate::reader::RecordedRun::read(&dir).unwrap();
+                assert_eq!(run.trace_columns, columns);
+            }
+            let layout = std::fs::read_to_string(dir.join(crate::foxglove_layout::FILE)).unwrap();
+            assert_eq!(layout.contains("\"/trace."), has_trace, "{mode}: the layout reads /trace only if it is there");
+            let _ = std::fs::remove_dir_all(&dir);
+        }
     }
 
     #[test]

@@ -9,7 +9,7 @@ use crate::cdr::{self, CdrCodec, CdrReader};
 use crate::json::sample_from_json;
 use crate::{TRACE_COLUMNS_KEY, meta_keys, recording_files, topics};
 use silrig_flight::signals::PlantSignals;
-use silrig_wire::wire::{CommandSample, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION, WireType};
+use silrig_wire::wire::{CommandSample, FLAG_END_OF_RUN, PlantInfo, PlantSample, WIRE_LAYOUT_VERSION, WireType};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -96,7 +96,7 @@ pub struct RecordedRun {
     pub run: BTreeMap<String, String>,
     /// The scenario the run flew, as TOML.
     pub scenario_toml: String,
-    /// trace.csv's columns.
+    /// trace.csv's columns (from the `/trace` channel, or a lockstep recording's `trace` metadata record).
     pub trace_columns: Vec<String>,
     /// The plant's announcement of its signals (the first, if a restarted logger recorded it again).
     pub plant_info: Option<PlantInfo>,
@@ -218,6 +218,12 @@ fn cut_short(path: &Path, bytes: &[u8], messages: u64, why: String) -> Recording
     }
 }
 
+/// trace.csv's columns, as the `/trace` channel's metadata or a lockstep recording's `trace` record holds them.
+fn trace_columns_in(metadata: &BTreeMap<String, String>) -> Vec<String> {
+    let columns = metadata.get(TRACE_COLUMNS_KEY).map(String::as_str).unwrap_or("");
+    columns.split(',').map(str::to_string).collect()
+}
+
 fn decode<T: WireType + Copy>(encoding: &str, codec: &CdrCodec, data: &[u8], stamped: bool) -> Result<T, String> {
     match encoding {
         cdr::MESSAGE_ENCODING => {
@@ -279,6 +285,10 @@ impl RecordedRun {
                 {
                     self.scenario_toml = m.metadata.get(meta_keys::TOML).cloned().unwrap_or_default();
                 }
+                // A lockstep recording's trace columns (it has no `/trace` channel to carry them).
+                mcap::records::Record::Metadata(m) if m.name == meta_keys::TRACE && self.trace_columns.is_empty() => {
+                    self.trace_columns = trace_columns_in(&m.metadata);
+                }
                 mcap::records::Record::Channel(c) => {
                     topics_by_id.insert(c.id, (c.topic, c.message_encoding, c.metadata));
                 }
@@ -336,7 +346,14 @@ impl RecordedRun {
         let bad =
             |why: String| RecordingError::BadMessage { path: path.to_path_buf(), topic: topic.clone(), index, why };
         match topic.as_str() {
-            topics::PLANT => self.plant.push(decode(encoding, &codecs.plant, data, true).map_err(bad)?),
+            topics::PLANT => {
+                let sample: PlantSample = decode(encoding, &codecs.plant, data, true).map_err(bad)?;
+                // A lockstep recording ends `/plant` with the plant's end-of-run sample (its last actuator
+                // positions): no row's sample, so not one replay sends.
+                if sample.flags & FLAG_END_OF_RUN == 0 {
+                    self.plant.push(sample);
+                }
+            }
             topics::COMMAND => {
                 let command: CommandSample = decode(encoding, &codecs.command, data, true).map_err(bad)?;
                 self.commands.insert(command.answers_tick, command);
@@ -344,10 +361,7 @@ impl RecordedRun {
             topics::PLANT_INFO if self.plant_info.is_none() => {
                 self.plant_info = Some(decode(encoding, &codecs.plant_info, data, false).map_err(bad)?);
             }
-            topics::TRACE if self.trace_columns.is_empty() => {
-                let columns = channel_meta.get(TRACE_COLUMNS_KEY).map(String::as_str).unwrap_or("");
-                self.trace_columns = columns.split(',').map(str::to_string).collect();
-            }
+            topics::TRACE if self.trace_columns.is_empty() => self.trace_columns = trace_columns_in(channel_meta),
             _ => {}
         }
         Ok(())

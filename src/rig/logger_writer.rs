@@ -136,6 +136,7 @@ impl Writer {
         next: Option<&PlantSample>,
         command: Option<&Received<CommandSample>>,
         step_exec_ns: Option<u64>,
+        end_of_run: Option<&Received<PlantSample>>,
     ) -> std::io::Result<()> {
         // The trace's columns are fixed by its header: missing diagnostics are empty, extra ones dropped.
         let diagnostics = &mut self.diagnostics;
@@ -155,7 +156,7 @@ impl Writer {
             self.flight_segment,
             &self.diagnostics,
         );
-        let row = LoggedRow { plant: sample, command, step_exec_ns, trace: &self.trace_row };
+        let row = LoggedRow { plant: sample, command, step_exec_ns, end_of_run, trace: &self.trace_row };
         for sink in &mut self.sinks {
             sink.row(&row)?;
         }

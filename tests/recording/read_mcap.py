@@ -68,11 +68,13 @@ def read(path):
                         }
                     elif topic == "/plant":
                         out["plant"].append({"tick": body.header.tick, "t_sim_s": bits([body.t_sim_s])[0],
+                                             "flags": body.flags,
                                              "outputs": bits(body.outputs[:body.outputs_len]),
                                              "t_recv_ns": body.t_recv_ns, "log_time": record.log_time})
                     elif topic == "/command":
                         out["command"].append({"answers_tick": body.answers_tick,
                                                "inputs": bits(body.inputs[:body.inputs_len]),
+                                               "diagnostics": bits(body.diagnostics[:body.diagnostics_len]),
                                                "epoch": body.header.epoch})
                     elif topic == "/timing":
                         out["timing"].append({s: getattr(body, s) for s in body.__slots__})
