@@ -46,6 +46,7 @@ pub mod session;
 pub mod signals;
 pub mod status;
 pub mod tick_beacon;
+pub mod tick_queue;
 pub mod warm;
 
 use silrig_flight::files::write_atomically;

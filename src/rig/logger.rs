@@ -22,6 +22,7 @@ pub use super::logger_writer::FLUSH_PERIOD_NS;
 use super::logger_writer::Writer;
 use super::loop_faults::LoopFaults;
 use super::report::{ProcessReport, Recorder, ReportMeta, request_scheduling};
+use super::tick_queue::TickQueue;
 use iceoryx2::prelude::CallbackProgression;
 use silrig_flight::role::Role;
 use silrig_flight::scenario::Scenario;
@@ -31,7 +32,6 @@ use silrig_wire::clock::{TickSchedule, monotonic_ns};
 use silrig_wire::ipc::{self, LoopEnd, Received, StreamPublisher, StreamSubscriber};
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{self, CommandSample, ControllerInfo, LogAckSample, PlantInfo, PlantSample};
-use std::collections::BTreeMap;
 use std::net::SocketAddr;
 
 /// A plant sample waits this many newer samples for its command before it is written without one.
@@ -103,11 +103,11 @@ pub struct LoggerLoop {
     loop_faults: LoopFaults,
     /// The last tick a previous logger of this run wrote (a restart), which this one continues after.
     resume_after: Option<u64>,
-    pending_plant: BTreeMap<u64, Received<PlantSample>>,
+    pending_plant: TickQueue<Received<PlantSample>>,
     /// The plant's end-of-run sample: the deflections of its last tick.
     end: Option<Received<PlantSample>>,
     /// Commands by the tick they answer.
-    pending_command: BTreeMap<u64, Received<CommandSample>>,
+    pending_command: TickQueue<Received<CommandSample>>,
     /// First tick of the current run of rows written without a command.
     missing_since: Option<u64>,
     /// The diagnostic names the newest controller epoch announced.
@@ -157,9 +157,9 @@ impl LoggerLoop {
             events,
             loop_faults,
             resume_after,
-            pending_plant: BTreeMap::new(),
+            pending_plant: TickQueue::default(),
             end: None,
-            pending_command: BTreeMap::new(),
+            pending_command: TickQueue::default(),
             missing_since: None,
             announced: None,
             plant: None,
@@ -352,7 +352,7 @@ impl LoggerLoop {
     /// The sample that closes this tick, with the actuator positions held over [t_tick, t_tick+1): the next plant
     /// sample, or the end-of-run sample when it closes this tick.
     fn closing(&self, tick: u64) -> Option<PlantSample> {
-        let next = self.pending_plant.get(&(tick + 1));
+        let next = self.pending_plant.get(tick + 1);
         let end = self.end.as_ref().filter(|e| e.sample.header.tick == tick);
         next.or(end).map(|r| r.sample)
     }
@@ -360,7 +360,7 @@ impl LoggerLoop {
     /// The execution time of this tick's step, which the sample closing the tick carries (as it carries the
     /// deflections); none when that sample is from another plant life, which did not run this step.
     fn step_exec_after(&self, tick: u64, epoch: u64) -> Option<u64> {
-        let next = self.pending_plant.get(&(tick + 1));
+        let next = self.pending_plant.get(tick + 1);
         let end = self.end.as_ref().filter(|e| e.sample.header.tick == tick);
         next.or(end).filter(|r| r.sample.header.epoch == epoch).map(|r| r.sample.previous_step_exec_ns)
     }
@@ -379,15 +379,15 @@ impl LoggerLoop {
             }
             return Ok(());
         };
-        while let Some((&tick, _)) = self.pending_plant.first_key_value() {
-            let newest = *self.pending_plant.keys().next_back().expect("non-empty");
+        while let Some(tick) = self.pending_plant.first_tick() {
+            let newest = self.pending_plant.last_tick().expect("non-empty");
             let given_up = final_flush || newest >= tick + MISSING_COMMAND_WINDOW;
-            let has_command = self.pending_command.contains_key(&tick);
+            let has_command = self.pending_command.contains(tick);
             let next = self.closing(tick);
             if !((has_command && next.is_some()) || given_up) {
                 break;
             }
-            let sample = self.pending_plant.remove(&tick).expect("present");
+            let sample = self.pending_plant.remove(tick).expect("present");
             if let Some(last) = self.writer.last_tick
                 && tick > last + 1
             {
@@ -402,7 +402,7 @@ impl LoggerLoop {
                 continue;
             }
             self.mark_discontinuity(&sample.sample);
-            let command = self.pending_command.remove(&tick);
+            let command = self.pending_command.remove(tick);
             self.note_command_gap(tick, command.is_some());
             if !self.loop_faults.is_empty() {
                 let effect = self.loop_faults.at(tick);
@@ -415,9 +415,7 @@ impl LoggerLoop {
             let end = self.end.as_ref().filter(|e| e.sample.header.tick == tick);
             self.writer.row(&plant, &sample, next.as_ref(), command.as_ref(), step_exec_ns, end)?;
             // Commands answering ticks already written can no longer be used (they sort first: no walk of the rest).
-            while self.pending_command.first_key_value().is_some_and(|(t, _)| *t <= tick) {
-                self.pending_command.pop_first();
-            }
+            self.pending_command.drop_through(tick);
         }
         Ok(())
     }
