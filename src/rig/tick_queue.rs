@@ -20,12 +20,17 @@ impl<T> Default for TickQueue<T> {
 impl<T> TickQueue<T> {
     /// Where `tick` is, or where it would go.
     fn search(&self, tick: u64) -> Result<usize, usize> {
-        // The newest tick is the usual case: checked first, without the search.
-        match self.entries.back() {
-            None => Err(0),
-            Some((last, _)) if *last < tick => Err(self.entries.len()),
-            _ => self.entries.binary_search_by_key(&tick, |(t, _)| *t),
+        // The usual cases first, without the search: a tick newer than all (an arrival), and ticks without a gap
+        // (then tick k is k - first places in).
+        let (Some((first, _)), Some((last, _))) = (self.entries.front(), self.entries.back()) else { return Err(0) };
+        if *last < tick {
+            return Err(self.entries.len());
         }
+        let guess = tick.wrapping_sub(*first);
+        if guess < self.entries.len() as u64 && self.entries[guess as usize].0 == tick {
+            return Ok(guess as usize);
+        }
+        self.entries.binary_search_by_key(&tick, |(t, _)| *t)
     }
 
     /// Keep `value` for `tick`, replacing what was kept for it.
