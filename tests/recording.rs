@@ -202,15 +202,33 @@ fn a_realtime_run_records_what_the_csv_files_hold() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// timing.csv's row of tick `i` from the samples as `read_mcap.py` decoded them: the row's plant sample, the command
+/// answering it (none: empty cells) and the sample after it (its step time, when the same plant life flew it).
+fn timing_from_samples(i: usize, sample: &Value, command: Option<&Value>, next: &Value) -> String {
+    let n = |v: &Value, key: &str| v[key].as_i64().unwrap_or_else(|| panic!("{key} in {v}")).to_string();
+    let mut cells = vec![i.to_string(), n(sample, "seq"), n(sample, "epoch"), n(sample, "t_send_ns")];
+    cells.extend([n(sample, "t_recv_ns"), n(sample, "flags")]);
+    match command {
+        Some(c) => cells.extend(["seq", "epoch", "t_send_ns", "t_recv_ns", "compute_ns"].map(|k| n(c, k))),
+        None => cells.extend(["", "", "", "", ""].map(String::from)),
+    }
+    cells.extend([u8::from(command.is_none()).to_string(), n(sample, "wake_lateness_ns")]);
+    let same_life = next["epoch"] == sample["epoch"];
+    cells.push(if same_life { n(next, "previous_step_exec_ns") } else { String::new() });
+    cells.join(",")
+}
+
 #[test]
-fn a_lockstep_recording_has_every_value_of_the_trace_in_its_samples_without_trace() {
+fn a_lockstep_recording_has_every_value_of_the_csv_files_in_its_samples_without_trace_and_timing() {
     let out = temp_dir("recording", "lockstep");
     let id = format!("m{}-ls", std::process::id());
     let (code, text) = run(&out, &id, &["--mode", "lockstep", "--duration-s", "2"]);
     assert_eq!(code, Some(0), "{text}");
     let file = &read_with_python(&[out.join("recording.mcap")])[0];
     assert_eq!(file["complete"], true, "{}", file["error"]);
-    assert!(file["channels"].get("/trace").is_none(), "a lockstep recording has no /trace");
+    for topic in ["/trace", "/timing"] {
+        assert!(file["channels"].get(topic).is_none(), "a lockstep recording has no {topic}");
+    }
     let trace = Trace::load(&out.join("trace.csv")).unwrap();
     let columns = file["metadata"]["trace"]["columns"].as_str().expect("the trace's columns in metadata");
     assert_eq!(columns.split(',').collect::<Vec<_>>(), trace.columns, "the recording's trace columns");
@@ -225,10 +243,14 @@ fn a_lockstep_recording_has_every_value_of_the_trace_in_its_samples_without_trac
     let floats = |v: &Value| v.as_array().unwrap().iter().map(float_bits).collect::<Vec<f64>>();
     let commands: std::collections::HashMap<u64, &Value> =
         file["command"].as_array().unwrap().iter().map(|c| (c["answers_tick"].as_u64().unwrap(), c)).collect();
+    let timing = std::fs::read_to_string(out.join("timing.csv")).unwrap();
+    let timing: Vec<&str> = timing.lines().skip(1).collect();
+    assert_eq!(timing.len(), trace.rows.len());
     let mut row = Vec::new();
     for (i, csv) in trace.rows.iter().enumerate() {
         let (sample, next) = (&samples[i], &samples[i + 1]);
         let command = commands.get(&(i as u64)).expect("lockstep answers every tick");
+        assert_eq!(timing_from_samples(i, sample, Some(command), next), timing[i], "timing.csv row {i}");
         let mut diag = floats(&command["diagnostics"]);
         diag.resize(diagnostics, f64::NAN);
         let (inputs, next) = (floats(&command["inputs"]), floats(&next["outputs"]));

@@ -214,7 +214,7 @@ pub mod topics {
     /// The trace row (`trace.csv`'s columns); realtime recordings only: a lockstep recording leaves it out, since
     /// every value of it is in `/plant` and `/command` ([`super::mcap_file`]).
     pub const TRACE: &str = "/trace";
-    /// Per-tick stamps (`timing.csv`'s columns).
+    /// Per-tick stamps (`timing.csv`'s columns); realtime recordings only, as [`TRACE`].
     pub const TIMING: &str = "/timing";
     /// The run's events (`events.jsonl`).
     pub const EVENTS: &str = "/events";

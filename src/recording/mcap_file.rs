@@ -3,10 +3,11 @@
 //! `/command` (every field as received, the arrays' entries in use as bounded sequences, with header stamps, flags and
 //! the logger's receive stamp), `/plant_info`
 //! (the plant's announcement), `/trace` (the trace row, one float64 field per column) and `/timing` (the per-tick
-//! stamps). `/trace` is in realtime recordings only: every value of a row is in `/plant` and `/command` (an output,
-//! a command, a diagnostic; an actuator's position in the next `/plant`), and in lockstep, where the logger's CPU
-//! a tick matters, it was a third of what LZ4 compressed; a lockstep recording keeps the trace's columns (which
-//! name the diagnostics) in the `trace` metadata record instead. `/events` holds the run's `events.jsonl` lines as they appear, as JSON. A plant that announces its
+//! stamps). `/trace` and `/timing` are in realtime recordings only: every value of theirs is in `/plant` and
+//! `/command` (an output, a command, a diagnostic, a stamp; an actuator's position and a step's time in the next
+//! `/plant`, the last row's in the plant's end-of-run sample, which ends a lockstep recording's `/plant`), and in
+//! lockstep, where the logger's CPU a tick matters, they were half of what LZ4 compressed; a lockstep recording
+//! keeps the trace's columns (which name the diagnostics) in the `trace` metadata record instead. `/events` holds the run's `events.jsonl` lines as they appear, as JSON. A plant that announces its
 //! position and attitude also gets the aircraft in 3-D for Foxglove's 3D panel ([`super::foxglove`]): `/body_transform`
 //! (`foxglove.FrameTransform`, world -> body, every row) and `/aircraft` (`foxglove.SceneUpdate`, the model with its
 //! surfaces deflected, written again when a surface has turned [`SCENE_SURFACE_STEP_RAD`] or a second has passed),
@@ -50,7 +51,8 @@ struct Channels {
     plant: u16,
     plant_info: u16,
     command: u16,
-    timing: u16,
+    /// `/timing`: realtime recordings only (a lockstep one leaves out what repeats the samples).
+    timing: Option<u16>,
     events: u16,
     /// Added with the trace's columns.
     trace: Option<u16>,
@@ -114,8 +116,9 @@ pub struct McapSink {
     events_file: Option<File>,
     /// Bytes of `events.jsonl` already recorded.
     events_read: u64,
-    /// The recording has `/trace` (realtime); a lockstep one keeps only its columns, in a metadata record.
-    trace_topic: bool,
+    /// The recording has `/trace` and `/timing`, which repeat what the samples hold (realtime); a lockstep one
+    /// leaves them out and keeps the trace's columns in a metadata record.
+    derived: bool,
     /// The trace's columns have come ([`RowSink::start`]).
     started: bool,
     finished: bool,
@@ -182,8 +185,13 @@ fn create_next_file(out_dir: &Path) -> std::io::Result<(PathBuf, File)> {
 }
 
 /// The channels every recording has from its start, whatever the controller: the wire's samples (CDR), `/timing`
-/// and `/events`. `/trace` waits for the trace's columns, the 3-D channels for the plant's announcement.
-fn add_first_channels(writer: &mut McapWriter<BufWriter<File>>, tap: &mut Option<Box<dyn RecordingTap>>) -> Channels {
+/// (with `derived`) and `/events`. `/trace` waits for the trace's columns, the 3-D channels for the plant's
+/// announcement.
+fn add_first_channels(
+    writer: &mut McapWriter<BufWriter<File>>,
+    tap: &mut Option<Box<dyn RecordingTap>>,
+    derived: bool,
+) -> Channels {
     let no_metadata = BTreeMap::new();
     let mut add = |topic: &str, name: &str, msg: String| -> u16 {
         let channel = NewChannel {
@@ -200,7 +208,7 @@ fn add_first_channels(writer: &mut McapWriter<BufWriter<File>>, tap: &mut Option
     let plant_info = add(topics::PLANT_INFO, &cdr::msg_name::<PlantInfo>(), cdr::sample_msg::<PlantInfo>(&[]));
     let command =
         add(topics::COMMAND, &cdr::msg_name::<CommandSample>(), cdr::sample_msg::<CommandSample>(&[RECEIVE_STAMP]));
-    let timing = add(topics::TIMING, TIMING_MSG, timing_msg());
+    let timing = derived.then(|| add(topics::TIMING, TIMING_MSG, timing_msg()));
     let event_schema = serde_json::to_vec(&event_schema()).expect("JSON");
     let events = NewChannel {
         topic: topics::EVENTS,
@@ -254,7 +262,8 @@ impl McapSink {
         let compression = if meta.mode == "lockstep" { ChunkCompression::Lz4 } else { ChunkCompression::Zstd(1) };
         let library = format!("silrig {}", env!("CARGO_PKG_VERSION"));
         let mut writer = McapWriter::new(BufWriter::new(file), "", &library, compression).map_err(named)?;
-        let channels = add_first_channels(&mut writer, &mut tap);
+        let derived = meta.mode != "lockstep";
+        let channels = add_first_channels(&mut writer, &mut tap, derived);
         write_run_metadata(&mut writer, meta, &path).map_err(named)?;
         let wall_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
         let wall_minus_monotonic_ns = wall_ns as i128 - i128::from(silrig_wire::clock::monotonic_ns());
@@ -271,7 +280,7 @@ impl McapSink {
             rotor_arm_m: fox::rotor_arm_m(&meta.scenario_toml),
             last_scene: None,
             events_read: 0,
-            trace_topic: meta.mode != "lockstep",
+            derived,
             started: false,
             finished: false,
         })
@@ -358,7 +367,7 @@ impl RowSink for McapSink {
         self.proto.draw(self.body_signals.as_ref().is_some_and(BodySignals::rotorcraft).then_some(self.rotor_arm_m));
         // The layout that fits this plant's recording, beside it; the recording goes on without it.
         if let Ok(signals) = info.signals() {
-            let source = if self.trace_topic { SignalSource::Trace } else { SignalSource::Samples };
+            let source = if self.derived { SignalSource::Trace } else { SignalSource::Samples };
             let layout = serde_json::to_string_pretty(&layout(&signals, source)).unwrap_or_default();
             let path = self.events_path.with_file_name(crate::foxglove_layout::FILE);
             if let Err(e) = silrig_flight::files::write_atomically(&path, &layout) {
@@ -380,7 +389,7 @@ impl RowSink for McapSink {
             return Ok(());
         }
         self.started = true;
-        if !self.trace_topic {
+        if !self.derived {
             // Lockstep: no `/trace` (a third of what LZ4 compressed a tick, and every value of it is in `/plant` and
             // `/command`), but its columns, which name the command's diagnostics for replay.
             let columns = BTreeMap::from([(TRACE_COLUMNS_KEY.to_string(), trace_columns.join(","))]);
@@ -425,14 +434,16 @@ impl RowSink for McapSink {
             }
             self.file.write(trace, t_recv, t_send, self.buffer.bytes())?;
         }
-        self.buffer.start();
-        let mut empty = 0u32;
-        for (k, v) in timing_values(row).into_iter().enumerate() {
-            self.buffer.i64(v.unwrap_or(0));
-            empty |= u32::from(v.is_none()) << k;
+        if let Some(timing) = self.channels.timing {
+            self.buffer.start();
+            let mut empty = 0u32;
+            for (k, v) in timing_values(row).into_iter().enumerate() {
+                self.buffer.i64(v.unwrap_or(0));
+                empty |= u32::from(v.is_none()) << k;
+            }
+            self.buffer.u32(empty);
+            self.file.write(timing, t_recv, t_send, self.buffer.bytes())?;
         }
-        self.buffer.u32(empty);
-        self.file.write(self.channels.timing, t_recv, t_send, self.buffer.bytes())?;
         if let (Some(body), Some((transform, aircraft))) = (&self.body_signals, self.channels.body) {
             let outputs = plant.sample.outputs();
             let (translation, rotation, surfaces) =
@@ -453,8 +464,9 @@ impl RowSink for McapSink {
             }
         }
         match row.end_of_run {
-            // Without `/trace`, the last row's actuator positions are only in the plant's end-of-run sample.
-            Some(end) if self.channels.trace.is_none() => self.write_plant(end),
+            // Without `/trace` and `/timing`, the last row's actuator positions and step time are only in the plant's
+            // end-of-run sample.
+            Some(end) if !self.derived => self.write_plant(end),
             _ => Ok(()),
         }
     }
@@ -568,7 +580,7 @@ mod tests {
     }
 
     #[test]
-    fn a_lockstep_recording_keeps_the_trace_columns_without_trace_and_a_realtime_one_has_trace() {
+    fn a_lockstep_recording_keeps_the_trace_columns_without_trace_and_timing_and_a_realtime_one_has_them() {
         let columns = ["t_s".to_string(), "phi_deg".to_string(), "s_phi".to_string()];
         let f16 = silrig_flight::f16_signals::f16_signals([0.0, -1.9, 0.0, 0.2]);
         for mode in ["lockstep", "realtime"] {
@@ -580,8 +592,9 @@ mod tests {
             sink.finish().unwrap();
             let bytes = std::fs::read(sink.path()).unwrap();
             let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
-            let has_trace = summary.channels.values().any(|c| c.topic == topics::TRACE);
-            assert_eq!(has_trace, mode == "realtime", "{mode}");
+            let has = |topic: &str| summary.channels.values().any(|c| c.topic == topic);
+            let has_trace = has(topics::TRACE);
+            assert_eq!((has_trace, has(topics::TIMING)), (mode == "realtime", mode == "realtime"), "{mode}");
             if mode == "lockstep" {
                 // Replay's reader finds the columns (which name the diagnostics) in the metadata record.
                 let run = crate::reader::RecordedRun::read(&dir).unwrap();

@@ -68,14 +68,19 @@ def read(path):
                         }
                     elif topic == "/plant":
                         out["plant"].append({"tick": body.header.tick, "t_sim_s": bits([body.t_sim_s])[0],
-                                             "flags": body.flags,
+                                             "flags": body.flags, "seq": body.header.seq,
+                                             "epoch": body.header.epoch, "t_send_ns": body.header.t_send_ns,
+                                             "wake_lateness_ns": body.wake_lateness_ns,
+                                             "previous_step_exec_ns": body.previous_step_exec_ns,
                                              "outputs": bits(body.outputs[:body.outputs_len]),
                                              "t_recv_ns": body.t_recv_ns, "log_time": record.log_time})
                     elif topic == "/command":
                         out["command"].append({"answers_tick": body.answers_tick,
                                                "inputs": bits(body.inputs[:body.inputs_len]),
                                                "diagnostics": bits(body.diagnostics[:body.diagnostics_len]),
-                                               "epoch": body.header.epoch})
+                                               "epoch": body.header.epoch, "seq": body.header.seq,
+                                               "t_send_ns": body.header.t_send_ns, "t_recv_ns": body.t_recv_ns,
+                                               "compute_ns": body.compute_ns})
                     elif topic == "/timing":
                         out["timing"].append({s: getattr(body, s) for s in body.__slots__})
                     elif topic == "/events":
