@@ -3,26 +3,25 @@
 //! beside the run) woke late was lost to the machine, as `silrig check` judges an unanswered tick
 //! ([`crate::check::timing::held_in_stalls`], the one judgement of the two); one lost with no stall seen is the rig's.
 
-use super::figures::FaultOutcome;
 use crate::check::timing::held_in_stalls;
 use silrig_launch::floor::timer_baseline::Stall;
 use std::collections::BTreeMap;
 
-/// Ticks missing from the log between tick 0 and the last logged tick, counted into the fault whose window holds
-/// them; (lost inside some window, the ticks lost outside every window).
-pub fn losses(logged: &[(u64, bool)], faults: &mut [FaultOutcome], dt_s: f64) -> (u64, Vec<u64>) {
+/// Ticks missing from the log between tick 0 and the last logged tick, counted into the first of the faults'
+/// windows (simulated s; None: a fault not injected) that holds them; (the rows lost in each window, the ticks
+/// lost outside every window).
+pub fn losses(logged: &[(u64, bool)], windows_s: &[Option<(f64, f64)>], dt_s: f64) -> (Vec<u64>, Vec<u64>) {
     let mut ticks: Vec<u64> = logged.iter().map(|r| r.0).collect();
     ticks.sort_unstable();
     ticks.dedup();
-    let mut inside = 0;
+    let mut inside = vec![0; windows_s.len()];
     let mut outside = Vec::new();
     let mut expected = 0u64;
     for &k in &ticks {
         for missing in expected..k {
             let t = missing as f64 * dt_s;
-            if let Some(o) = faults.iter_mut().find(|o| o.window_s.is_some_and(|(a, b)| t >= a && t <= b)) {
-                o.rows_lost += 1;
-                inside += 1;
+            if let Some(i) = windows_s.iter().position(|w| w.is_some_and(|(a, b)| t >= a && t <= b)) {
+                inside[i] += 1;
             } else {
                 outside.push(missing);
             }
@@ -84,31 +83,12 @@ fn estimated_send_ns(k: u64, sends: &BTreeMap<u64, u64>, dt_ns: u64) -> Option<u
 mod tests {
     use super::*;
 
-    fn outcome(window_s: (f64, f64)) -> FaultOutcome {
-        FaultOutcome {
-            fault: "x".into(),
-            kind: "logger:kill".into(),
-            watched: true,
-            injected_at_s: Some(window_s.0),
-            detected_at_s: None,
-            detected_by: None,
-            recovered_at_s: None,
-            recovered_by: None,
-            flight_back_at_s: None,
-            max_attitude_change_deg: None,
-            window_s: Some(window_s),
-            rows_lost: 0,
-        }
-    }
-
     #[test]
     fn losses_inside_and_outside_the_windows() {
         // Ticks 0..100 logged except 20..25 (inside a window at 0.2..0.3 s) and 80 (outside).
         let logged: Vec<(u64, bool)> =
             (0..100).filter(|k| !(20..25).contains(k) && *k != 80).map(|k| (k, true)).collect();
-        let mut faults = [outcome((0.2, 0.3))];
-        assert_eq!(losses(&logged, &mut faults, 0.01), (5, vec![80]));
-        assert_eq!(faults[0].rows_lost, 5);
+        assert_eq!(losses(&logged, &[None, Some((0.2, 0.3))], 0.01), (vec![0, 5], vec![80]));
     }
 
     /// A run at 100 Hz from t0, every tick sent on its grid point but the ones in `gap`, which were lost.
