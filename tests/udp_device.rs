@@ -156,6 +156,36 @@ fn a_device_that_dies_is_started_again() {
 }
 
 #[test]
+fn in_realtime_the_devices_program_runs_at_the_controllers_scheduling_in_every_life() {
+    // A program left on the normal scheduler beside a real-time controller answered under half of a 1 kHz loop's
+    // packets on a busy machine: each life of it (the first and the restarted ones) says what it runs at.
+    let dir = common::temp_dir(SUITE, "scheduling-files");
+    let (device_port, rig_port) = free_ports();
+    let text = layout(device_port, rig_port, "die-after", "f64", "theta_deg")
+        .replace(r#""-1.5"]"#, r#""-1.5", "scheduling.txt"]"#);
+    std::fs::write(dir.join("device.toml"), text).unwrap();
+    let scenario = dir.join("scenario.toml");
+    let timing = "[timing]\ndt_s = 0.01\nduration_s = 2.0\ncommand_timing = \"same-tick\"\n";
+    std::fs::write(&scenario, format!("name = \"udp-fake\"\n[controller]\ndevice = \"device.toml\"\n{timing}"))
+        .unwrap();
+    let run = Run::start(SILRIG, SUITE, "ud", "scheduling", &[scenario.to_str().unwrap(), "--mode", "realtime"]);
+    assert_eq!(run.code, Some(0), "{}\n{}", run.stdout, run.stderr);
+    let lives = std::fs::read_to_string(dir.join("scheduling.txt")).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    // 50 replies a life, 201 ticks: a first life and restarted ones.
+    assert!(lives.lines().count() >= 2, "{lives}");
+    // "SCHED_FIFO 79, memory locked" as root; "SCHED_OTHER, ..." where real-time priority is refused.
+    let controller = run.process("controller")["scheduling"].as_str().unwrap().to_string();
+    let policy = controller.split(',').next().unwrap();
+    let want = if policy == "SCHED_OTHER" { "SCHED_OTHER 0".to_string() } else { policy.to_string() };
+    assert!(
+        lives.lines().all(|life| life == want),
+        "the controller runs at {controller}; the device's lives:\n{lives}"
+    );
+    run.finish();
+}
+
+#[test]
 fn a_device_that_never_answers_fails_the_run_naming_its_address_and_ports() {
     let (mut device_port, mut rig_port) = (0, 0);
     let run = fly("silent", "silent", |d, r| {

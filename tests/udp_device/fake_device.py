@@ -9,14 +9,22 @@ says:
   die-after   exits after N=50 replies (the rig's supervision starts it again)
   echo        every reply's elevator is the packet's third f64 (what the layout sends there: a set point)
 
-Usage: fake_device.py PORT_IN REPLY_PORT MODE ELEVATOR
+Usage: fake_device.py PORT_IN REPLY_PORT MODE ELEVATOR [SCHEDULING_FILE]
+
+With SCHEDULING_FILE, each life first appends its scheduling to it ("SCHED_FIFO 79", "SCHED_OTHER 0").
 """
 
+import os
 import socket
 import struct
 import sys
 
 port_in, reply_port, mode, elevator = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], float(sys.argv[4])
+if len(sys.argv) > 5:
+    names = {os.SCHED_OTHER: "SCHED_OTHER", os.SCHED_FIFO: "SCHED_FIFO", os.SCHED_RR: "SCHED_RR"}
+    policy = names.get(os.sched_getscheduler(0), "another policy")
+    with open(sys.argv[5], "a") as said:
+        said.write(f"{policy} {os.sched_getparam(0).sched_priority}\n")
 rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
 rx.bind(("127.0.0.1", port_in))
 tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)

@@ -107,7 +107,11 @@ impl DeviceController {
         }
         let link = Link::open(&layout)?;
         let folder = path.parent().unwrap_or(Path::new("."));
-        let supervisor = layout.process.as_ref().map(|p| Supervisor::start(&layout.name, p, folder, run_dir));
+        // The device is the controller: in realtime its program gets the controller's real-time priority.
+        let realtime = args.mode == silrig_rig::RigMode::Realtime;
+        let fifo_priority = silrig_flight::role::Role::Controller.fifo_priority().filter(|_| realtime);
+        let supervisor =
+            layout.process.as_ref().map(|p| Supervisor::start(&layout.name, p, folder, run_dir, fifo_priority));
         let supervisor = supervisor.transpose()?;
         let arming =
             layout.arming.as_ref().map(|a| Arming::new(a, &layout.name, layout.address, scenario)).transpose()?;

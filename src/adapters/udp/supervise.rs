@@ -1,7 +1,9 @@
 //! The device's program, when the rig runs it (a SITL): started with the link, its output kept in the run's folder
 //! (`device.log`), watched every tick and started again when it dies, up to `max_restarts` times; stopped with the
 //! controller, and killed by the kernel if the controller dies first (so no SITL outlives its run holding the
-//! ports).
+//! ports). In realtime it runs at the controller's real-time priority from its first start: it is the controller, and
+//! one left on the normal scheduler answered under half of a 1 kHz loop's packets when the machine was busy (while
+//! its restarts, forked once the controller had its priority, answered nearly all).
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -37,11 +39,20 @@ pub struct Supervisor {
     child: Child,
     restarts: u32,
     checked_ns: u64,
+    fifo_priority: Option<i32>,
 }
 
 impl Supervisor {
-    /// Start the program for device `device` (`folder`: the layout file's; `run_dir`: where its log goes).
-    pub fn start(device: &str, process: &DeviceProcess, folder: &Path, run_dir: &Path) -> Result<Self, String> {
+    /// Start the program for device `device` (`folder`: the layout file's; `run_dir`: where its log goes), asking
+    /// for SCHED_FIFO at `fifo_priority` for it when given (a refusal leaves it on the normal scheduler, as the
+    /// controller itself is then).
+    pub fn start(
+        device: &str,
+        process: &DeviceProcess,
+        folder: &Path,
+        run_dir: &Path,
+        fifo_priority: Option<i32>,
+    ) -> Result<Self, String> {
         if process.command.is_empty() {
             return Err(format!("device `{device}`: [process] command is empty; give the program and its arguments"));
         }
@@ -54,7 +65,7 @@ impl Supervisor {
             ));
         }
         let log = run_dir.join("device.log");
-        let child = spawn(device, process, &working_dir, &log)?;
+        let child = spawn(device, process, &working_dir, &log, fifo_priority)?;
         Ok(Self {
             device: device.to_string(),
             process: process.clone(),
@@ -63,6 +74,7 @@ impl Supervisor {
             child,
             restarts: 0,
             checked_ns: 0,
+            fifo_priority,
         })
     }
 
@@ -89,7 +101,7 @@ impl Supervisor {
         }
         eprintln!("silrig controller: device `{}`: its program ended ({status}); starting it again", self.device);
         self.restarts += 1;
-        self.child = spawn(&self.device, &self.process, &self.working_dir, &self.log)?;
+        self.child = spawn(&self.device, &self.process, &self.working_dir, &self.log, self.fifo_priority)?;
         Ok(true)
     }
 
@@ -115,7 +127,13 @@ impl Drop for Supervisor {
     }
 }
 
-fn spawn(device: &str, process: &DeviceProcess, working_dir: &Path, log: &Path) -> Result<Child, String> {
+fn spawn(
+    device: &str,
+    process: &DeviceProcess,
+    working_dir: &Path,
+    log: &Path,
+    fifo_priority: Option<i32>,
+) -> Result<Child, String> {
     let program = &process.command[0];
     let program = if program.contains('/') { working_dir.join(program) } else { PathBuf::from(program) };
     let out = std::fs::OpenOptions::new()
@@ -126,11 +144,16 @@ fn spawn(device: &str, process: &DeviceProcess, working_dir: &Path, log: &Path) 
     let err = out.try_clone().map_err(|e| format!("device `{device}`: {e}"))?;
     let mut command = Command::new(&program);
     command.args(&process.command[1..]).current_dir(working_dir).stdin(Stdio::null()).stdout(out).stderr(err);
-    // SAFETY: prctl only sets this process's parent-death signal; nothing else runs between fork and exec.
+    // SAFETY: prctl sets this process's parent-death signal and sched_setscheduler its own scheduling (a refusal
+    // leaves it as it was); both are plain system calls, and nothing else runs between fork and exec.
     unsafe {
         use std::os::unix::process::CommandExt;
-        command.pre_exec(|| {
+        command.pre_exec(move || {
             libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
+            if let Some(priority) = fifo_priority {
+                let param = libc::sched_param { sched_priority: priority };
+                libc::sched_setscheduler(0, libc::SCHED_FIFO, &param);
+            }
             Ok(())
         });
     }
