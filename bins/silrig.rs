@@ -469,7 +469,7 @@ fn soak(args: &silrig::soak::SoakArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let report = silrig::soak::run(args, &std::env::current_exe()?)?;
-    print!("{}", silrig::soak::figures::to_text(&report));
+    print!("{}", silrig::soak::text::to_text(&report));
     Ok(if report.problems.is_empty() { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 

@@ -37,7 +37,7 @@ const ROWS: [(&str, &str); 8] = [
         "logger:kill@1s,restart_after=0.3s",
         "the restarted logger appends after the last row; the rows of its absence are a gap",
     ),
-    ("logger:stop@1s,for=0.5s", "nothing lost: its queues hold 1.28 s"),
+    ("logger:stop@1s,for=0.5s", "nothing lost: its queues hold 4.1 s at 1 kHz, 41 s at 100 Hz"),
 ];
 
 fn observe(i: usize, fault: &str) -> String {

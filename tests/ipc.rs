@@ -191,19 +191,20 @@ fn a_stalled_consumer_sees_the_newest_samples_and_counts_the_gap_and_the_logger_
 
     publisher.send(0, &plant_sample(0.0)).unwrap();
     assert_eq!(consumer.drain(|_| {}).unwrap(), 1);
-    // A 1.28 s stall at 100 Hz: 128 samples while nobody reads.
-    for k in 1..=128 {
+    // A stall as long as the logger's queue: LOGGER_BUFFER samples (4.1 s at 1 kHz) while nobody reads.
+    let n = LOGGER_BUFFER as u64;
+    for k in 1..=n {
         publisher.send(k, &plant_sample(k as f64)).unwrap();
     }
     let mut seqs = Vec::new();
     consumer.drain(|r| seqs.push((r.sample.header.seq, r.seq.lost_before))).unwrap();
-    assert_eq!(seqs, vec![(125, 124), (126, 0), (127, 0), (128, 0)]);
-    assert_eq!(consumer.stats().lost, 124);
+    assert_eq!(seqs, vec![(n - 3, n - 4), (n - 2, 0), (n - 1, 0), (n, 0)]);
+    assert_eq!(consumer.stats().lost, n - 4);
 
     let mut logged = Vec::new();
     logger.drain(|r| logged.push(r.sample.header.seq)).unwrap();
-    // The first sample (seq 0) was overwritten: 129 sent into a 128-deep queue.
-    assert_eq!(logged, (1..=128).collect::<Vec<_>>());
+    // The first sample (seq 0) was overwritten: one more sent than the queue holds.
+    assert_eq!(logged, (1..=n).collect::<Vec<_>>());
     assert_eq!(logger.stats().lost, 0, "the first sample seen is never counted as loss");
 
     // A publisher restart: a new epoch, counted as a restart, not as loss or reordering.

@@ -97,14 +97,19 @@
 
 #define SILRIG_SERVICE_PLANT "silrig/plant"
 #define SILRIG_TYPE_NAME_PLANT "silrig::PlantSample::v5"
+#define SILRIG_SUBSCRIBER_MAX_BUFFER_PLANT 4096u
 #define SILRIG_SERVICE_COMMAND "silrig/command"
 #define SILRIG_TYPE_NAME_COMMAND "silrig::CommandSample::v5"
+#define SILRIG_SUBSCRIBER_MAX_BUFFER_COMMAND 4096u
 #define SILRIG_SERVICE_LOG_ACK "silrig/log-ack"
 #define SILRIG_TYPE_NAME_LOG_ACK "silrig::LogAckSample::v5"
+#define SILRIG_SUBSCRIBER_MAX_BUFFER_LOG_ACK 4u
 #define SILRIG_SERVICE_CONTROLLER_INFO "silrig/controller-info"
 #define SILRIG_TYPE_NAME_CONTROLLER_INFO "silrig::ControllerInfo::v5"
+#define SILRIG_SUBSCRIBER_MAX_BUFFER_CONTROLLER_INFO 4u
 #define SILRIG_SERVICE_PLANT_INFO "silrig/plant-info"
 #define SILRIG_TYPE_NAME_PLANT_INFO "silrig::PlantInfo::v5"
+#define SILRIG_SUBSCRIBER_MAX_BUFFER_PLANT_INFO 4u
 
 /* Bookkeeping that precedes every sample. iceoryx2 type name "silrig::SampleHeader::v5". */
 typedef struct silrig_sample_header_t {

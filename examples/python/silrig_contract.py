@@ -74,6 +74,15 @@ SERVICES = {
     "plant-info": "silrig/plant-info",
 }
 
+# The subscriber max buffer each stream's services are opened with (iceoryx2 refuses a peer asking for more).
+SUBSCRIBER_MAX_BUFFER = {
+    "plant": 4096,
+    "command": 4096,
+    "log-ack": 4,
+    "controller-info": 4,
+    "plant-info": 4,
+}
+
 
 class SampleHeader(ctypes.Structure):
     """Bookkeeping that precedes every sample."""

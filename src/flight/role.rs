@@ -38,12 +38,14 @@ impl Role {
     }
 
     /// SCHED_FIFO priority asked for in realtime mode: the plant, the time master, above the controller, whose
-    /// answer it waits for; the logger stays with SCHED_OTHER (nobody waits for it within a tick).
+    /// answer it waits for; the logger well below both (nobody waits for it within a tick), but above every
+    /// ordinary process: a build beside the rig once kept it from running for 3 s while the plant and controller
+    /// flew on, longer than its queue held then (docs/src/measurements/soak.md).
     pub fn fifo_priority(self) -> Option<i32> {
         match self {
             Role::Plant => Some(80),
             Role::Controller => Some(79),
-            Role::Logger => None,
+            Role::Logger => Some(70),
         }
     }
 

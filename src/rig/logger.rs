@@ -1,4 +1,6 @@
-//! `silrig-logger`: subscribes to the plant and command streams with queues deep enough to absorb a 1 s stall,
+//! `silrig-logger`: subscribes to the plant and command streams with queues deep enough to absorb a stall of seconds
+//! ([`silrig_wire::topology::LOGGER_BUFFER`]; in realtime its loop also asks for a real-time priority below the
+//! plant's and the controller's),
 //! pairs each plant sample with the command answering it, and writes each row, as it goes, to its sinks
 //! ([`silrig_recording`]): `trace.csv` (its columns from the plant's announcement,
 //! [`PlantSignals::trace_columns`]: for the F-16 the same columns and values as `silrig sim`), `timing.csv` (per-tick
@@ -119,6 +121,8 @@ pub struct LoggerLoop {
     reflown: Option<Reflown>,
     /// Lockstep: paced by a timer ([`LOCKSTEP_POLL_NS`]) rather than woken by every sample.
     lockstep: bool,
+    /// What the loop's thread got of the real-time priority it asks for in realtime mode, for the report.
+    scheduling: String,
     done: bool,
     error: Option<anyhow::Error>,
 }
@@ -165,6 +169,7 @@ impl LoggerLoop {
             plant: None,
             reflown: None,
             lockstep: args.mode == super::RigMode::Lockstep,
+            scheduling: String::new(),
             done: false,
             error: None,
         })
@@ -513,7 +518,7 @@ impl LoggerLoop {
             (None, LoopEnd::TerminationRequest, false) => "terminated by signal".into(),
             (None, LoopEnd::Stopped, false) => "stopped".into(),
         };
-        let meta = ReportMeta::new(args, &self.scenario.name, request_scheduling(Role::Logger, false), ended);
+        let meta = ReportMeta::new(args, &self.scenario.name, self.scheduling.clone(), ended);
         // On a full disk the report cannot be written either: say both, the loop's error first.
         let report = self.rec.finish(meta, &args.out).map_err(|report_error| match &self.error {
             Some(e) => anyhow::anyhow!("{e:#}; and the report: {report_error}"),
@@ -530,6 +535,9 @@ impl LoggerLoop {
 /// `live_foxglove`, serving the recording's channels there as it goes.
 pub fn run_logger(args: &ProcessArgs, live_foxglove: Option<SocketAddr>) -> anyhow::Result<ProcessReport> {
     let mut logger = LoggerLoop::setup(args, live_foxglove)?;
+    // Asked for after the setup, which starts the status and live-server threads: SCHED_FIFO is a thread's, so only
+    // the loop (and what it starts later) takes it, and those threads stay with the ordinary processes.
+    logger.scheduling = request_scheduling(Role::Logger, args.mode == super::RigMode::Realtime);
     let mut ports = LoggerPorts::connect(args)?;
     let exit = logger.serve(&mut ports)?;
     logger.finish(args, &ports, exit)

@@ -157,24 +157,25 @@ pub fn text() -> String {
         let readers: Vec<String> = s.readers().iter().map(|(r, depth)| format!("{r} (queue {depth})")).collect();
         let _ = writeln!(
             out,
-            "  {:<8} service \"{}\", payload {}, published by {}, read by {}",
+            "  {:<8} service \"{}\", payload {}, published by {}, read by {}; subscriber max buffer {}",
             s.label(),
             s.service_name(),
             s.payload_type_name(),
             s.publisher(),
-            readers.join(", ")
+            readers.join(", "),
+            s.settings().subscriber_max_buffer
         );
     }
     let q = STREAM_SETTINGS;
     let _ = writeln!(
         out,
         "\nService settings every peer must ask for (iceoryx2 refuses others): safe overflow on, max publishers {}, \
-         max subscribers {}, max nodes {}, subscriber max buffer {}, subscriber max borrowed samples {}, history {}; \
-         event service: max notifiers {}, max listeners {}, notifier dead event {}.",
+         max subscribers {}, max nodes {}, subscriber max buffer the stream's own (above: its deepest reader's \
+         queue), subscriber max borrowed samples {}, history {}; event service: max notifiers {}, max listeners {}, \
+         notifier dead event {}.",
         q.max_publishers,
         q.max_subscribers,
         q.max_nodes,
-        q.subscriber_max_buffer,
         q.subscriber_max_borrowed,
         q.history_size,
         q.max_notifiers,
@@ -312,6 +313,7 @@ pub fn c_header() -> String {
         let upper = s.label().to_uppercase().replace('-', "_");
         let _ = writeln!(out, "#define SILRIG_SERVICE_{upper} \"{}\"", s.service_name());
         let _ = writeln!(out, "#define SILRIG_TYPE_NAME_{upper} \"{}\"", s.payload_type_name());
+        let _ = writeln!(out, "#define SILRIG_SUBSCRIBER_MAX_BUFFER_{upper} {}u", s.settings().subscriber_max_buffer);
     }
     for t in types() {
         let c_name = c_struct_name(t.name);
@@ -365,6 +367,11 @@ pub fn python_module() -> String {
     out += "\nSERVICES = {\n";
     for s in Stream::ALL {
         let _ = writeln!(out, "    \"{}\": \"{}\",", s.label(), s.service_name());
+    }
+    out += "}\n\n# The subscriber max buffer each stream's services are opened with (iceoryx2 refuses a peer asking \
+            for more).\nSUBSCRIBER_MAX_BUFFER = {\n";
+    for s in Stream::ALL {
+        let _ = writeln!(out, "    \"{}\": {},", s.label(), s.settings().subscriber_max_buffer);
     }
     out += "}\n";
     for t in types() {

@@ -11,10 +11,17 @@ pub use silrig_flight::role::Role;
 /// the 4 newest samples, not 128 stale ones.
 pub const CONSUMER_BUFFER: usize = 4;
 
-/// Queue depth of the logger: 1.28 s at 100 Hz, so it rides out a 1 s stall without losing a sample.
-pub const LOGGER_BUFFER: usize = 128;
+/// Queue depth of the logger on the plant and command streams: 4.1 s at 1 kHz (the quadrotor, Betaflight), 41 s at
+/// 100 Hz (the F-16), so a logger stopped or not scheduled for a few seconds loses no row. The logger is the one
+/// reader that must see every sample, and nothing can make it run on time everywhere: it takes a real-time priority
+/// below the plant's and the controller's where that is allowed (`Role::fifo_priority`), not for an unprivileged
+/// user, and no priority helps against a SIGSTOP or a write the kernel holds back. The cost is shared memory the
+/// publisher preallocates for every subscriber it may have ([`Stream::settings`]): about 18 MB a run
+/// (docs/src/explanations/architecture.md, "The logger's queue").
+pub const LOGGER_BUFFER: usize = 4096;
 
-/// The settings of every stream of the rig.
+/// The settings every stream of the rig shares but its subscribers' deepest queue, which is
+/// [`Stream::settings`]'s (a stream with no deep reader would otherwise preallocate the logger's depth for nothing).
 pub const STREAM_SETTINGS: StreamSettings = StreamSettings {
     // One producer per stream and run, so a second plant or controller is refused.
     max_publishers: 1,
@@ -23,8 +30,8 @@ pub const STREAM_SETTINGS: StreamSettings = StreamSettings {
     max_subscribers: 4,
     // Plant, controller, logger, supervisor, plus restarts waiting for cleanup.
     max_nodes: 8,
-    // The logger's queue; preallocated per subscriber (4 x 128 x 3 KB at most for the plant's announcement, 1.5 MB).
-    subscriber_max_buffer: LOGGER_BUFFER,
+    // Per stream: its deepest reader's queue (`Stream::settings`), preallocated per subscriber.
+    subscriber_max_buffer: CONSUMER_BUFFER,
     // Readers copy each sample out and release it at once.
     subscriber_max_borrowed: 2,
     // A late subscriber gets the newest sample (on the publisher's next send).
@@ -108,6 +115,14 @@ impl Stream {
         }
     }
 
+    /// The iceoryx2 settings every peer of this stream must ask for: [`STREAM_SETTINGS`] with its deepest reader's
+    /// queue as the subscribers' largest. The publisher preallocates that depth for each of `max_subscribers`, so
+    /// the plant and command streams cost 4 x (4096 + 2) samples each, the announcements 4 x (4 + 2).
+    pub fn settings(self) -> StreamSettings {
+        let deepest = self.readers().iter().map(|(_, depth)| *depth).max().unwrap_or(CONSUMER_BUFFER);
+        StreamSettings { subscriber_max_buffer: deepest, ..STREAM_SETTINGS }
+    }
+
     /// Queue depth `reader` asks for on this stream (the consumer depth for a role the topology does not list).
     pub fn queue_depth(self, reader: Role) -> usize {
         self.readers().iter().find(|(r, _)| *r == reader).map_or(CONSUMER_BUFFER, |(_, depth)| *depth)
@@ -122,7 +137,7 @@ impl std::fmt::Display for Stream {
 
 impl From<Stream> for StreamSpec {
     fn from(stream: Stream) -> Self {
-        StreamSpec { label: stream.label(), service_name: stream.service_name(), settings: STREAM_SETTINGS }
+        StreamSpec { label: stream.label(), service_name: stream.service_name(), settings: stream.settings() }
     }
 }
 
@@ -140,5 +155,18 @@ mod tests {
         }
         assert_eq!(Stream::Plant.queue_depth(Role::Logger), LOGGER_BUFFER);
         assert_eq!(Stream::Command.queue_depth(Role::Plant), CONSUMER_BUFFER);
+    }
+
+    #[test]
+    fn only_the_streams_the_logger_reads_preallocate_its_depth() {
+        for s in [Stream::Plant, Stream::Command] {
+            assert_eq!(s.settings().subscriber_max_buffer, LOGGER_BUFFER, "{s}");
+        }
+        for s in [Stream::LogAck, Stream::ControllerInfo, Stream::PlantInfo] {
+            assert_eq!(s.settings().subscriber_max_buffer, CONSUMER_BUFFER, "{s}");
+        }
+        // Everything else is the same for every stream.
+        let rest = |s: Stream| StreamSettings { subscriber_max_buffer: 0, ..s.settings() };
+        assert!(Stream::ALL.iter().all(|s| rest(*s) == rest(Stream::Plant)));
     }
 }

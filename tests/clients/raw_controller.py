@@ -26,7 +26,8 @@ def open_stream(node, label, payload):
     """The stream's publish-subscribe and event services, with the settings the contract requires."""
     name = iox2.ServiceName.new(c.SERVICES[label])
     pubsub = (node.service_builder(name).publish_subscribe(payload).enable_safe_overflow(True).max_publishers(1)
-              .max_subscribers(4).max_nodes(8).subscriber_max_buffer_size(128).subscriber_max_borrowed_samples(2)
+              .max_subscribers(4).max_nodes(8)
+              .subscriber_max_buffer_size(c.SUBSCRIBER_MAX_BUFFER[label]).subscriber_max_borrowed_samples(2)
               .history_size(1).open_or_create())
     event = (node.service_builder(name).event().max_notifiers(2).max_listeners(4).max_nodes(8)
              .notifier_dead_event(iox2.EventId.new(c.EVENT_PUBLISHER_DEAD)).open_or_create())

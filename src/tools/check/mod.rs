@@ -8,7 +8,7 @@ pub mod one_process;
 mod recovery;
 pub mod repeat;
 pub mod suite;
-mod timing;
+pub(crate) mod timing;
 pub mod verdict;
 
 use anyhow::Context;

@@ -215,12 +215,13 @@ struct Misses {
     worst_stall_us: f64,
 }
 
-/// How many of the held commands (their plant send times, [`silrig_launch::run_report::held_command_times_ns`])
-/// fall in a stall of the OS floor, and the floor's worst lateness among those stalls, µs. A stall spans its
+/// How many of the moments `held_ns` (CLOCK_MONOTONIC ns) fall in a stall of the OS floor, and the floor's worst
+/// lateness among those stalls, µs: here the held commands' plant send times
+/// ([`silrig_launch::run_report::held_command_times_ns`]), in the soak the lost rows' ticks. A stall spans its
 /// deadline to its late wake-up, widened by two periods before it (the answer was due within the period before
 /// the plant needed it) and one after (the floor's loop and the rig run on CPUs of their own, so the same stall
 /// may reach them a tick apart).
-fn held_in_stalls(held_ns: &[u64], stalls: &[Stall], period_ns: u64) -> (u64, f64) {
+pub(crate) fn held_in_stalls(held_ns: &[u64], stalls: &[Stall], period_ns: u64) -> (u64, f64) {
     let mut count = 0;
     let mut worst_us: f64 = 0.0;
     for &t in held_ns {

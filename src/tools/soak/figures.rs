@@ -1,12 +1,15 @@
 //! The soak's figures, from the run folder a soak leaves: what became of each fault (the launcher's fault table,
 //! completed where the rig has no recovery event by the trace itself), losses inside and outside the faults' own
-//! windows, torn rows, failsafe engagements, and the verdict over them and the processes' measurements.
+//! windows (those outside set beside the OS floor's stalls: [`super::losses`]), torn rows, failsafe engagements, and
+//! the verdict over them and the processes' measurements.
 
+use super::losses::{FloorStalls, losses, split_by_stalls};
 use super::probe::{Leftovers, LifeProbe, ProcessProbe};
 use super::schedule::{kind_label, watched};
 use serde::{Deserialize, Serialize};
 use silrig_flight::fault::Fault;
 use silrig_launch::fault_report::FaultRecord;
+use silrig_launch::floor::timer_baseline::BaselineReport;
 use silrig_rig::events::read_events;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -77,9 +80,17 @@ pub struct Rows {
     pub timing_rows: u64,
     /// Ticks missing from the log (between tick 0 and the last logged tick) inside some fault's window.
     pub lost_in_fault_windows: u64,
-    /// ... outside every fault's window (must be 0).
+    /// ... outside every fault's window.
     pub lost_outside_fault_windows: u64,
-    /// The ticks lost outside, for the reader (first 20).
+    /// Of those, the ones lost in a stall the OS floor beside the run saw too: the machine's (a figure, not a
+    /// failure; see [`super::losses`]).
+    #[serde(default)]
+    pub lost_in_machine_stalls: u64,
+    /// The floor's latest wake-up in those stalls, µs.
+    #[serde(default)]
+    pub worst_machine_stall_us: f64,
+    /// The ticks lost outside the windows with no stall of the floor's beside them (must be none), for the reader
+    /// (first 20).
     pub lost_outside_ticks: Vec<u64>,
     /// Rows of either file that are not whole (a field missing or too many, a value that is not a number, no end
     /// of line) (must be 0).
@@ -201,11 +212,12 @@ pub struct Measured {
 /// The figures and the verdict of a soak of `plan` (loop period `dt_s`) from its run folder and measurements.
 pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
     let out = m.out.as_path();
-    let records: Vec<FaultRecord> = std::fs::read_to_string(out.join("report.json"))
+    let run_report = std::fs::read_to_string(out.join("report.json"))
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .and_then(|v| serde_json::from_value(v["faults"].clone()).ok())
         .unwrap_or_default();
+    let records: Vec<FaultRecord> = serde_json::from_value(run_report["faults"].clone()).unwrap_or_default();
+    let floor: Option<BaselineReport> = serde_json::from_value(run_report["timer_baseline"].clone()).ok();
     let timing = read_csv(&out.join("timing.csv"));
     let trace = read_csv(&out.join("trace.csv"));
     // (tick, command present) per logged row.
@@ -228,8 +240,18 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         })
         .collect();
     let mut faults = faults;
-    let (lost_in, lost_out) = losses(&logged, &mut faults, dt_s);
-    let rows = rows(&trace, &timing, &logged, lost_in, &lost_out);
+    let windows_s: Vec<Option<(f64, f64)>> = faults.iter().map(|o| o.window_s).collect();
+    let (per_fault, lost_out) = losses(&logged, &windows_s, dt_s);
+    for (o, lost) in faults.iter_mut().zip(&per_fault) {
+        o.rows_lost = *lost;
+    }
+    let lost_in = per_fault.iter().sum();
+    // The plant's send time of each logged tick, for the lost ones' place among the floor's stalls.
+    let sends: BTreeMap<u64, u64> =
+        timing.rows.iter().filter_map(|r| Some((r.first()?.parse().ok()?, r.get(3)?.parse().ok()?))).collect();
+    let stalls = floor.as_ref().map(|b| FloorStalls { stalls: &b.stalls, period_ns: b.period_ns });
+    let split = split_by_stalls(&lost_out, &sends, (dt_s * 1e9).round() as u64, stalls.as_ref());
+    let rows = rows(&trace, &timing, &logged, lost_in, split);
     let events = read_events(out);
     let injected: Vec<&FaultOutcome> = faults.iter().filter(|o| o.injected_at_s.is_some()).collect();
     let mut r = SoakReport {
@@ -266,8 +288,9 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
     r
 }
 
-/// The rows' figures: logged, lost inside and outside the faults' windows, torn and logged twice.
-fn rows(trace: &Csv, timing: &Csv, logged: &[(u64, bool)], lost_in: u64, lost_out: &[u64]) -> Rows {
+/// The rows' figures: logged, lost inside and outside the faults' windows (`lost_out`: those in the floor's stalls,
+/// its worst lateness there, the others), torn and logged twice.
+fn rows(trace: &Csv, timing: &Csv, logged: &[(u64, bool)], lost_in: u64, lost_out: (Vec<u64>, f64, Vec<u64>)) -> Rows {
     let mut ticks: Vec<u64> = logged.iter().map(|r| r.0).collect();
     ticks.sort_unstable();
     let before = ticks.len();
@@ -276,8 +299,10 @@ fn rows(trace: &Csv, timing: &Csv, logged: &[(u64, bool)], lost_in: u64, lost_ou
         trace_rows: trace.rows.len() as u64,
         timing_rows: timing.rows.len() as u64,
         lost_in_fault_windows: lost_in,
-        lost_outside_fault_windows: lost_out.len() as u64,
-        lost_outside_ticks: lost_out.iter().take(20).copied().collect(),
+        lost_outside_fault_windows: (lost_out.0.len() + lost_out.2.len()) as u64,
+        lost_in_machine_stalls: lost_out.0.len() as u64,
+        worst_machine_stall_us: lost_out.1,
+        lost_outside_ticks: lost_out.2.iter().take(20).copied().collect(),
         torn: trace.torn + timing.torn,
         duplicated: (before - ticks.len()) as u64,
     }
@@ -298,48 +323,6 @@ fn kinds(plan: &[&Fault], faults: &[FaultOutcome]) -> Vec<KindFigures> {
         k.flight_back += (o.injected_at_s.is_some() && o.flight_back_at_s.is_some()) as u64;
     }
     kinds.into_values().collect()
-}
-
-/// The processes' table (pid, RSS, descriptors and shared-memory files at the start and the end), the lives that
-/// held more at last, and the run's /dev/shm entries.
-fn processes_text(r: &SoakReport) -> String {
-    let mut s = String::new();
-    s += &format!(
-        "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
-        "process", "pid", "pid", "RSS KiB", "RSS KiB", "fds", "fds", "shm", "shm"
-    );
-    s += &format!(
-        "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
-        "", "start", "end", "start", "end", "start", "end", "start", "end"
-    );
-    for a in &r.processes_start {
-        let e = r.processes_end.iter().find(|e| e.process == a.process);
-        let f = |v: Option<u64>| v.map_or("-".to_string(), |v| v.to_string());
-        s += &format!(
-            "  {:<16} {:>8} {:>8} {:>10} {:>10} {:>6} {:>6} {:>5} {:>5}\n",
-            a.process,
-            a.pid,
-            f(e.map(|e| e.pid as u64)),
-            a.rss_kib,
-            f(e.map(|e| e.rss_kib)),
-            a.fds,
-            f(e.map(|e| e.fds)),
-            a.shm_files,
-            f(e.map(|e| e.shm_files))
-        );
-    }
-    let grew = r.lives.iter().filter(|l| l.last.fds > l.settled.fds || l.last.shm_files > l.settled.shm_files);
-    s += &format!(
-        "  {} lives measured settled and last: {} held more descriptors or shared-memory files at last\n",
-        r.lives.len(),
-        grew.count()
-    );
-    s += &format!(
-        "  the run's /dev/shm entries: {} at the start, {} at the end\n",
-        r.run_shm_start.len(),
-        r.run_shm_end.len()
-    );
-    s
 }
 
 /// The run's exit code in words: a number, or none when a signal ended it.
@@ -372,22 +355,7 @@ fn problems(r: &SoakReport) -> Vec<String> {
             ));
         }
     }
-    let rows = &r.rows;
-    if rows.lost_outside_fault_windows > 0 {
-        p.push(format!(
-            "{} rows lost outside the faults' windows (ticks {:?})",
-            rows.lost_outside_fault_windows, rows.lost_outside_ticks
-        ));
-    }
-    if rows.torn > 0 {
-        p.push(format!("{} torn rows", rows.torn));
-    }
-    if rows.duplicated > 0 {
-        p.push(format!("{} ticks logged twice", rows.duplicated));
-    }
-    if rows.trace_rows != rows.timing_rows {
-        p.push(format!("trace.csv has {} rows, timing.csv {}", rows.trace_rows, rows.timing_rows));
-    }
+    p.extend(rows_problems(&r.rows));
     if r.processes_start.is_empty() || r.processes_end.is_empty() {
         p.push("the processes were not measured at the start and the end (see the soak's chapter)".into());
     }
@@ -422,6 +390,29 @@ fn problems(r: &SoakReport) -> Vec<String> {
             "on the controller's host, still running 10 s after the run and ended by the soak: {}",
             h.still_running.join(", ")
         ));
+    }
+    p
+}
+
+/// What is wrong with the logged rows: lost outside the faults' windows with no stall of the OS floor to explain
+/// them, torn, logged twice, or the two files disagreeing.
+fn rows_problems(rows: &Rows) -> Vec<String> {
+    let mut p = Vec::new();
+    let rigs = rows.lost_outside_fault_windows - rows.lost_in_machine_stalls.min(rows.lost_outside_fault_windows);
+    if rigs > 0 {
+        p.push(format!(
+            "{rigs} rows lost outside the faults' windows with no stall of the OS floor beside them (ticks {:?})",
+            rows.lost_outside_ticks
+        ));
+    }
+    if rows.torn > 0 {
+        p.push(format!("{} torn rows", rows.torn));
+    }
+    if rows.duplicated > 0 {
+        p.push(format!("{} ticks logged twice", rows.duplicated));
+    }
+    if rows.trace_rows != rows.timing_rows {
+        p.push(format!("trace.csv has {} rows, timing.csv {}", rows.trace_rows, rows.timing_rows));
     }
     p
 }
@@ -496,30 +487,6 @@ fn outcome(
     o
 }
 
-/// Ticks missing from the log between tick 0 and the last logged tick, counted into the fault whose window holds
-/// them; (lost inside some window, the ticks lost outside every window).
-fn losses(logged: &[(u64, bool)], faults: &mut [FaultOutcome], dt_s: f64) -> (u64, Vec<u64>) {
-    let mut ticks: Vec<u64> = logged.iter().map(|r| r.0).collect();
-    ticks.sort_unstable();
-    ticks.dedup();
-    let mut inside = 0;
-    let mut outside = Vec::new();
-    let mut expected = 0u64;
-    for &k in &ticks {
-        for missing in expected..k {
-            let t = missing as f64 * dt_s;
-            if let Some(o) = faults.iter_mut().find(|o| o.window_s.is_some_and(|(a, b)| t >= a && t <= b)) {
-                o.rows_lost += 1;
-                inside += 1;
-            } else {
-                outside.push(missing);
-            }
-        }
-        expected = k + 1;
-    }
-    (inside, outside)
-}
-
 /// Roll and pitch (deg) of each logged tick, from `trace.csv`.
 fn attitude_by_tick(trace: &Csv, dt_s: f64) -> BTreeMap<u64, (f64, f64)> {
     let col = |name: &str| trace.header.iter().position(|h| h == name);
@@ -561,86 +528,23 @@ fn read_csv(path: &Path) -> Csv {
     csv
 }
 
-/// The report as text: the totals, each kind, the rows, the processes, the leftovers and the verdict.
-pub fn to_text(r: &SoakReport) -> String {
-    let mut s = format!(
-        "silrig soak: seed {}, {} s realtime, run {} ({}), load average {:?} at the start, {:?} at the end\n",
-        r.seed, r.duration_s, r.run_id, r.out_dir, r.load_average_start, r.load_average_end
-    );
-    if let Some(h) = &r.controller_host {
-        s += &format!(
-            "the controller behind the bridge, its host on this machine: namespace {}, folder {}; its bridge \
-             started {} times, its controller {}\n",
-            h.local_run_id, h.folder, h.bridge_starts, h.controller_starts
-        );
-    }
-    s += &format!(
-        "faults: {} scheduled, {} injected ({} fault-injected events), {} detected ({} of kinds the rig watches), \
-         {} recovered, the flight back after {}; failsafe engaged {} times\n",
-        r.scheduled,
-        r.injected,
-        r.fault_events,
-        r.detected,
-        r.watched,
-        r.recovered,
-        r.flight_back,
-        r.failsafe_engagements
-    );
-    s += &format!("  {:<30} {:>8} {:>8} {:>9} {:>11}\n", "kind", "injected", "detected", "recovered", "flight back");
-    for k in &r.kinds {
-        let detected = if k.watched { k.detected.to_string() } else { format!("({})", k.detected) };
-        s += &format!("  {:<30} {:>8} {:>8} {:>9} {:>11}\n", k.kind, k.injected, detected, k.recovered, k.flight_back);
-    }
-    s += "  (detected in parentheses: the rig has no detector for that kind, so it is not required)\n";
-    let rows = &r.rows;
-    s += &format!(
-        "rows: {} logged; lost {} inside the faults' windows, {} outside them; {} torn, {} logged twice\n",
-        rows.trace_rows, rows.lost_in_fault_windows, rows.lost_outside_fault_windows, rows.torn, rows.duplicated
-    );
-    s += &processes_text(r);
-    s += &format!(
-        "left after the run: {} processes, {} shared-memory files, {} lock files\n",
-        r.leftovers.processes.len(),
-        r.leftovers.shm_files.len(),
-        r.leftovers.lock_files.len()
-    );
-    if r.problems.is_empty() {
-        s += "soak passed\n";
-    } else {
-        s += &format!("soak FAILED ({} problems):\n", r.problems.len());
-        for p in &r.problems {
-            s += &format!("  {p}\n");
-        }
-    }
-    s
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn losses_inside_and_outside_the_windows() {
-        // Ticks 0..100 logged except 20..25 (inside a window at 0.2..0.3 s) and 80 (outside).
-        let logged: Vec<(u64, bool)> =
-            (0..100).filter(|k| !(20..25).contains(k) && *k != 80).map(|k| (k, true)).collect();
-        let o = FaultOutcome {
-            fault: "x".into(),
-            kind: "logger:kill".into(),
-            watched: true,
-            injected_at_s: Some(0.2),
-            detected_at_s: None,
-            detected_by: None,
-            recovered_at_s: None,
-            recovered_by: None,
-            flight_back_at_s: None,
-            max_attitude_change_deg: None,
-            window_s: Some((0.2, 0.3)),
-            rows_lost: 0,
-        };
-        let mut faults = [o];
-        assert_eq!(losses(&logged, &mut faults, 0.01), (5, vec![80]));
-        assert_eq!(faults[0].rows_lost, 5);
+    fn rows_lost_in_the_machines_stalls_pass_those_lost_without_one_fail() {
+        let mut rows = Rows { trace_rows: 1000, timing_rows: 1000, ..Rows::default() };
+        assert!(rows_problems(&rows).is_empty());
+        // 195 lost outside the windows, all in a 2 s stall the floor saw.
+        (rows.lost_outside_fault_windows, rows.lost_in_machine_stalls) = (195, 195);
+        assert!(rows_problems(&rows).is_empty(), "{:?}", rows_problems(&rows));
+        // 121 of them with no stall beside them: the rig's, and the soak fails naming them.
+        (rows.lost_in_machine_stalls, rows.lost_outside_ticks) = (74, vec![196512, 196513]);
+        let p = rows_problems(&rows);
+        assert_eq!(p.len(), 1);
+        assert!(p[0].starts_with("121 rows lost outside the faults' windows with no stall of the OS floor"), "{p:?}");
+        assert!(p[0].contains("[196512, 196513]"), "{p:?}");
     }
 
     #[test]

@@ -2,13 +2,16 @@
 //! seed ([`schedule`]): every process killed, terminated, stopped, delayed, jittered and restarted, the plant's
 //! and controller's publishing dropped, the plant's sensors and actuators faulted, at times a few seconds apart.
 //! The soak watches the run's processes from outside while it flies ([`probe`]), then reads the run folder and
-//! gives its figures and verdict ([`figures`]), printed and written as `soak.json` in the run folder. With
+//! gives its figures and verdict ([`figures`]; the rows lost, and which of them a stall of the machine explains:
+//! [`losses`]), printed ([`text`]) and written as `soak.json` in the run folder. With
 //! `--bridge` the controller flies behind the bridge, its host emulated on this machine ([`controller_host`]).
 
 pub mod controller_host;
 pub mod figures;
+pub mod losses;
 pub mod probe;
 pub mod schedule;
+pub mod text;
 
 use anyhow::Context;
 use controller_host::ControllerHost;
