@@ -20,8 +20,12 @@ pub const WINDOW_MARGIN_S: f64 = 0.2;
 /// The loop is whole again when this many consecutive ticks are logged with their commands; the flight is back
 /// when as many hold the attitude within [`ATTITUDE_BACK_DEG`] of where it was before the fault.
 pub const WHOLE_TICKS: usize = 10;
-/// How close roll and pitch must come back to their values before a fault, deg.
+/// How close roll and pitch must come back to the band they flew in before a fault, deg.
 pub const ATTITUDE_BACK_DEG: f64 = 5.0;
+/// Where the flight was before a fault: the band of roll and pitch over this long before the injection, s. One tick
+/// would judge an oscillating flight by its phase (seed 2's hour of 2026-11-29: a trough 7.4 deg of a 6.9 to 11.5 deg
+/// pitch oscillation made the same oscillation flown again read as 5 deg off).
+pub const BEFORE_BAND_S: f64 = 1.5;
 
 /// What became of one fault of the soak.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -43,10 +47,10 @@ pub struct FaultOutcome {
     /// `rig` (the rig's own recovery event) or `trace` (the first of 10 ticks logged in a row with their commands
     /// after the fault's end, where the rig has no recovery event for it).
     pub recovered_by: Option<String>,
-    /// When the flight was back: roll and pitch within 5 deg of their values before the injection from then up to
-    /// the next fault (10 ticks at least), after the fault's own end, simulated s.
+    /// When the flight was back: roll and pitch within 5 deg of the band they flew in over the 1.5 s before the
+    /// injection from then up to the next fault (10 ticks at least), after the fault's own end, simulated s.
     pub flight_back_at_s: Option<f64>,
-    /// The largest change of roll or pitch from their values before the injection, until the next fault, deg.
+    /// The largest departure of roll or pitch from that band, until the next fault, deg.
     pub max_attitude_change_deg: Option<f64>,
     /// The fault's own window for losses, simulated s.
     pub window_s: Option<(f64, f64)>,
@@ -348,8 +352,8 @@ fn problems(r: &SoakReport) -> Vec<String> {
         }
         if o.injected_at_s.is_some() && o.flight_back_at_s.is_none() {
             p.push(format!(
-                "{}: the flight did not come back within {ATTITUDE_BACK_DEG} deg of its roll and pitch before the \
-                 next fault (largest change {:.1} deg)",
+                "{}: the flight did not come back within {ATTITUDE_BACK_DEG} deg of the roll and pitch it flew in the \
+                 {BEFORE_BAND_S} s before it, before the next fault (largest departure {:.1} deg)",
                 o.fault,
                 o.max_attitude_change_deg.unwrap_or(f64::NAN)
             ));
@@ -360,17 +364,17 @@ fn problems(r: &SoakReport) -> Vec<String> {
         p.push("the processes were not measured at the start and the end (see the soak's chapter)".into());
     }
     for l in &r.lives {
-        let (s, e) = (&l.settled, &l.last);
-        if e.fds > s.fds {
+        let (s, (fds, shm_files)) = (&l.settled, l.held_to_the_end());
+        if fds > s.fds {
             p.push(format!(
-                "{} (pid {}): {} open file descriptors at last, {} settled",
-                l.process, l.pid, e.fds, s.fds
+                "{} (pid {}): {fds} open file descriptors at its last two looks, {} settled",
+                l.process, l.pid, s.fds
             ));
         }
-        if e.shm_files > s.shm_files {
+        if shm_files > s.shm_files {
             p.push(format!(
-                "{} (pid {}): {} shared-memory files at last, {} settled",
-                l.process, l.pid, e.shm_files, s.shm_files
+                "{} (pid {}): {shm_files} shared-memory files at its last two looks, {} settled",
+                l.process, l.pid, s.shm_files
             ));
         }
     }
@@ -466,11 +470,11 @@ fn outcome(
             o.recovered_by = Some("trace".into());
         }
     }
-    // The flight: roll and pitch against their values at the last logged tick before the injection.
+    // The flight: roll and pitch against the band they flew in before the injection.
     let inj_tick = (inj / dt_s).floor() as u64;
     let next_tick = if next_s.is_finite() { (next_s / dt_s).floor() as u64 } else { u64::MAX };
-    if let Some((_, &(phi0, theta0))) = attitude.range(..=inj_tick).next_back() {
-        let change = |&(phi, theta): &(f64, f64)| (phi - phi0).abs().max((theta - theta0).abs());
+    if let Some(band) = AttitudeBand::before(attitude, inj_tick, (BEFORE_BAND_S / dt_s).round() as u64) {
+        let change = |a: &(f64, f64)| band.departure(*a);
         o.max_attitude_change_deg = attitude.range(inj_tick..next_tick).map(|(_, a)| change(a)).reduce(f64::max);
         // Back, and staying back up to the next fault: the trailing run of ticks within the bound, if it is at
         // least WHOLE_TICKS long (a flight passing through its old attitude on its way elsewhere is not back).
@@ -485,6 +489,31 @@ fn outcome(
     let end_s = [Some(own_end_s), o.detected_at_s, o.recovered_at_s].into_iter().flatten().fold(inj, f64::max);
     o.window_s = Some((inj - WINDOW_MARGIN_S, end_s + WINDOW_MARGIN_S));
     o
+}
+
+/// The band of roll and pitch (deg) a flight held over a stretch of ticks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct AttitudeBand {
+    phi_deg: (f64, f64),
+    theta_deg: (f64, f64),
+}
+
+impl AttitudeBand {
+    /// Over the `ticks` logged before `tick` (at least the last logged tick at or before it); None when none is.
+    fn before(attitude: &BTreeMap<u64, (f64, f64)>, tick: u64, ticks: u64) -> Option<Self> {
+        let (&last, &(phi, theta)) = attitude.range(..=tick).next_back()?;
+        let seed = Self { phi_deg: (phi, phi), theta_deg: (theta, theta) };
+        Some(attitude.range(last.saturating_sub(ticks)..=last).fold(seed, |b, (_, &(phi, theta))| Self {
+            phi_deg: (b.phi_deg.0.min(phi), b.phi_deg.1.max(phi)),
+            theta_deg: (b.theta_deg.0.min(theta), b.theta_deg.1.max(theta)),
+        }))
+    }
+
+    /// How far roll or pitch lie outside the band, deg (0 inside).
+    fn departure(&self, (phi, theta): (f64, f64)) -> f64 {
+        let outside = |(low, high): (f64, f64), x: f64| (low - x).max(x - high).max(0.0);
+        outside(self.phi_deg, phi).max(outside(self.theta_deg, theta))
+    }
 }
 
 /// Roll and pitch (deg) of each logged tick, from `trace.csv`.
@@ -545,6 +574,25 @@ mod tests {
         assert_eq!(p.len(), 1);
         assert!(p[0].starts_with("121 rows lost outside the faults' windows with no stall of the OS floor"), "{p:?}");
         assert!(p[0].contains("[196512, 196513]"), "{p:?}");
+    }
+
+    #[test]
+    fn the_flight_is_judged_against_the_band_it_flew_before_the_fault_not_one_tick_of_it() {
+        // Pitch oscillating 7 to 11 deg before the fault.
+        let attitude: BTreeMap<u64, (f64, f64)> =
+            (0..=150u64).map(|k| (k, (0.0, 9.0 - 2.0 * (k as f64 * 0.2).cos()))).collect();
+        let band = AttitudeBand::before(&attitude, 150, 150).unwrap();
+        assert!((band.theta_deg.0 - 7.0).abs() < 0.01 && (band.theta_deg.1 - 11.0).abs() < 0.01, "{band:?}");
+        // The same oscillation flown again is back (12.3 deg lies 1.3 past the band, 5.3 past the trough) ...
+        assert!((band.departure((0.0, 12.3)) - 1.3).abs() < 0.01);
+        assert_eq!(band.departure((0.0, 9.0)), 0.0);
+        // ... and a flight that left it is not, by roll as by pitch.
+        assert!(band.departure((0.0, 16.5)) > ATTITUDE_BACK_DEG);
+        assert!((band.departure((-6.0, 9.0)) - 6.0).abs() < 1e-9);
+        // Only the ticks before the fault count; none logged before it, no band.
+        assert_eq!(AttitudeBand::before(&attitude, 0, 150).unwrap().theta_deg, (7.0, 7.0));
+        let late: BTreeMap<u64, (f64, f64)> = [(10, (0.0, 0.0))].into();
+        assert_eq!(AttitudeBand::before(&late, 5, 150), None);
     }
 
     #[test]

@@ -31,9 +31,12 @@ fn processes_text(r: &SoakReport) -> String {
             f(e.map(|e| e.shm_files))
         );
     }
-    let grew = r.lives.iter().filter(|l| l.last.fds > l.settled.fds || l.last.shm_files > l.settled.shm_files);
+    let grew = r.lives.iter().filter(|l| {
+        let (fds, shm_files) = l.held_to_the_end();
+        fds > l.settled.fds || shm_files > l.settled.shm_files
+    });
     s += &format!(
-        "  {} lives measured settled and last: {} held more descriptors or shared-memory files at last\n",
+        "  {} lives measured settled and last: {} held more descriptors or shared-memory files at their last two looks\n",
         r.lives.len(),
         grew.count()
     );
