@@ -590,9 +590,14 @@ impl Supervisor {
         for p in self.processes.iter_mut() {
             p.process.signal(libc::SIGTERM);
         }
+        // A run stopped for a process that never joined: its peers' ends now are consequences of it, not failures of
+        // their own (a controller still looking for the plant's services gave up at twice the timeout, with exit
+        // status 2, a moment before it acted on this SIGTERM: one CI run of 2026-11-29 blamed it beside the plant).
+        let culprit_never_joined = self.processes.iter().any(|p| matches!(p.joining, Joining::NeverJoined));
         for i in 0..self.processes.len() {
             let p = &mut self.processes[i];
             let already_ended = p.process.has_ended();
+            let consequence = culprit_never_joined && !matches!(p.joining, Joining::NeverJoined);
             let status = p.process.finish(STOP_GRACE)?;
             let (role, pid) = (p.role, p.process.pid());
             for what in p.process.take_outlasted() {
@@ -613,6 +618,7 @@ impl Supervisor {
             if !already_ended
                 && !status.success()
                 && !stopped_by_us
+                && !consequence
                 && !self.failures.iter().any(|f| f.starts_with(role.label()))
             {
                 let tail = stderr_tail(&self.args.out, role);
