@@ -6,7 +6,7 @@
 use crate::child::ChildProcess;
 use silrig_flight::role::Role;
 use silrig_wire::ipc::{NodeOfRun, RunId};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// A role's process as the join watch sees it: whether it has joined the run yet.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -32,6 +32,22 @@ impl Joining {
 /// ended without closing it) counts for the child itself, whose pid cannot have been reused before it is reaped.
 pub(crate) fn has_joined(process: &ChildProcess, nodes: &[NodeOfRun]) -> bool {
     nodes.iter().any(|n| if n.alive { process.owns(n.pid) } else { n.pid == i64::from(process.pid()) })
+}
+
+/// Wait until `process` has a node of `run_id` alive, has ended, or `within` has passed: what the launcher waits
+/// for before it starts the next role's process, because concurrent node creation with iceoryx2's dead-node
+/// cleanup is where iceoryx2 has had races (#1880: a node still being created can look dead to another process
+/// creating its own). A fixed pause of `within` between starts did the same at a cost every run pays (40 ms of a
+/// sweep case's 110); a process forked warm or written in C has its node within a few milliseconds.
+pub(crate) fn wait_until_joined(process: &mut ChildProcess, run_id: &RunId, within: Duration) {
+    let start = Instant::now();
+    while start.elapsed() < within {
+        let alive = nodes(run_id).iter().any(|n| n.alive && process.owns(n.pid));
+        if alive || !matches!(process.poll(), Ok(None)) {
+            return;
+        }
+        std::thread::sleep(Duration::from_micros(500));
+    }
 }
 
 /// The nodes of the run, or none when they cannot be listed right now (a node being created as it looks): the next

@@ -203,9 +203,13 @@ pub(crate) struct Supervisor {
     warm: Option<std::sync::Arc<crate::warm::WarmRig>>,
 }
 
+/// The longest the launcher waits for a process's node before it starts the next ([`joining::wait_until_joined`]).
+const STAGGER_AT_MOST: Duration = Duration::from_millis(20);
+
 impl Supervisor {
-    /// Start the three processes with `args`: the logger first and the plant last, staggered, because concurrent
-    /// node creation with dead-node cleanup is where iceoryx2 has had races (#1880).
+    /// Start the three processes with `args`: the logger first and the plant last, each once the one before has
+    /// its node (at most [`STAGGER_AT_MOST`] later), because concurrent node creation with dead-node cleanup is
+    /// where iceoryx2 has had races (#1880).
     /// `launch`: where the controller comes from, the plant's command (`None`: external), and what the logger's
     /// command line gets beyond the run's arguments. `warm`: a sweep's warm rig forks them.
     pub(crate) fn start(
@@ -245,10 +249,10 @@ impl Supervisor {
             {
                 continue;
             }
-            let process = sup.spawn(role, false)?;
+            let mut process = sup.spawn(role, false)?;
             sup.begin_life(role, 1, process.pid());
+            joining::wait_until_joined(&mut process, &sup.args.run_id, STAGGER_AT_MOST);
             sup.processes.push(RoleProcess::started(role, process, 0));
-            std::thread::sleep(Duration::from_millis(20));
         }
         Ok(sup)
     }
