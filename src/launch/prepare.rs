@@ -103,8 +103,10 @@ fn claim(scenario: Scenario, run_id: RunId, out: PathBuf) -> anyhow::Result<Prep
         let who: Vec<String> = pre.alive.iter().map(|n| format!("{} (pid {})", n.name, n.pid)).collect();
         anyhow::bail!("run id {run_id} is in use by live processes: {}; choose another --run-id", who.join(", "));
     }
-    let dead = ipc::cleanup_dead_runs(&run_id);
-    let claims_removed = remove_stale_claims();
+    let (dead, claims_removed) = match machine_cleanup_due() {
+        true => (ipc::cleanup_dead_runs(&run_id), remove_stale_claims()),
+        false => (Vec::new(), 0),
+    };
     if !dead.is_empty() || claims_removed > 0 {
         let runs: Vec<&str> = dead.iter().map(|r| r.run.as_str()).collect();
         let files: usize = dead.iter().map(|r| r.removed_shm_files.len()).sum();
@@ -209,3 +211,19 @@ fn check_fault_plan(opts: &LaunchOptions, scenario: &Scenario) -> anyhow::Result
     }
     Ok(())
 }
+
+/// Whether this run should look for what dead runs left on the machine: the first run of a process, then at most
+/// every [`MACHINE_CLEANUP_EVERY`]. Looking reads every entry of `/tmp` and `/dev/shm` (thousands on a busy
+/// machine), which a sweep's every case would pay; its own runs clean up after themselves.
+fn machine_cleanup_due() -> bool {
+    static LAST: std::sync::Mutex<Option<std::time::Instant>> = std::sync::Mutex::new(None);
+    let mut last = LAST.lock().unwrap_or_else(|e| e.into_inner());
+    let due = last.is_none_or(|t| t.elapsed() >= MACHINE_CLEANUP_EVERY);
+    if due {
+        *last = Some(std::time::Instant::now());
+    }
+    due
+}
+
+/// See [`machine_cleanup_due`].
+const MACHINE_CLEANUP_EVERY: std::time::Duration = std::time::Duration::from_secs(10);

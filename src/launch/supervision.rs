@@ -98,6 +98,12 @@ const CLEAN_EXIT_GRACE: Duration = Duration::from_secs(2);
 /// are not checked. (Comparing with the launcher's own build time, as before, warned in CI: on two cores cargo
 /// linked the binaries of one build up to a minute apart.)
 fn warn_if_stale(bin_dir: &Path) {
+    // Once a process: a sweep starts a run for every case, and the check reads every source file's time.
+    static CHECKED: std::sync::Once = std::sync::Once::new();
+    CHECKED.call_once(|| warn_if_stale_now(bin_dir));
+}
+
+fn warn_if_stale_now(bin_dir: &Path) {
     for role in Role::ALL {
         if let Some(source) = newer_source(&bin_dir.join(role.binary())) {
             eprintln!(
