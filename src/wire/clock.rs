@@ -9,6 +9,15 @@ use serde::{Deserialize, Serialize};
 /// Nanoseconds per second.
 pub const NS_PER_S: u64 = 1_000_000_000;
 
+/// How long a process waiting for its peers to join pauses between looks, `waited_ns` into the wait: 0.5 ms for
+/// the first 100 ms, then `later`. Peers started together (a sweep's case forked from warm programs) join within
+/// milliseconds of each other, and every look's pause is paid once per case on the way to its first tick; a peer
+/// started by hand, or an interpreter importing its modules, is waited for at the slower pace.
+pub fn join_look_pause(waited_ns: u64, later: std::time::Duration) -> std::time::Duration {
+    const QUICK_FOR_NS: u64 = 100_000_000;
+    if waited_ns < QUICK_FOR_NS { std::time::Duration::from_micros(500) } else { later }
+}
+
 /// `CLOCK_MONOTONIC` now, ns.
 #[inline]
 pub fn monotonic_ns() -> u64 {

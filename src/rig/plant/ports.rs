@@ -4,7 +4,7 @@
 use crate::{ProcessArgs, signals};
 use anyhow::Context;
 use silrig_flight::role::Role;
-use silrig_wire::clock::monotonic_ns;
+use silrig_wire::clock::{join_look_pause, monotonic_ns};
 use silrig_wire::ipc::{self, StreamPublisher, StreamService, StreamSubscriber};
 use silrig_wire::topology::Stream;
 use silrig_wire::wire::{CommandSample, LogAckSample, PlantInfo, PlantSample};
@@ -56,7 +56,8 @@ impl PlantPorts {
                 && self.command_stream.number_of_publishers() >= 1
                 && self.command_stream.number_of_subscribers() >= 2
         };
-        let deadline = monotonic_ns() + (timeout_s * 1e9) as u64;
+        let started_ns = monotonic_ns();
+        let deadline = started_ns + (timeout_s * 1e9) as u64;
         while !ready() {
             if signals::termination_requested() {
                 return Ok(false);
@@ -66,7 +67,7 @@ impl PlantPorts {
                 "no controller and logger connected within {timeout_s} s (start silrig-controller and silrig-logger \
                  with the same --run-id)"
             );
-            std::thread::sleep(Duration::from_millis(5));
+            std::thread::sleep(join_look_pause(monotonic_ns() - started_ns, Duration::from_millis(5)));
         }
         Ok(true)
     }

@@ -155,7 +155,8 @@ impl ControllerSession {
             }
             self.give_up_without_rig()?;
             // The announcement reaches a late subscriber from the stream's history, which wakes no listener.
-            std::thread::sleep(Duration::from_millis(2));
+            let waited_ns = monotonic_ns() - self.opened_ns;
+            std::thread::sleep(silrig_wire::clock::join_look_pause(waited_ns, Duration::from_millis(2)));
         }
     }
 
