@@ -90,7 +90,7 @@ fn run_with_cyclictest_floor(test: &str, path: Option<&str>) -> (Option<i32>, St
     }
     let o = command.output().unwrap();
     let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
-    assert!(!std::path::Path::new(&format!("/tmp/silrig_{id}")).exists(), "iceoryx2 root folder left behind");
+    assert!(!std::path::Path::new(&format!("/dev/shm/silrig_{id}")).exists(), "iceoryx2 root folder left behind");
     (o.status.code(), text, out)
 }
 

@@ -36,7 +36,7 @@ fn top_shows_every_process_of_a_running_rig_and_changes_none_of_its_counters() {
     };
     let rig_watched = run(&watched, &out_watched, false);
     let rig_alone = run(&alone, &out_alone, true);
-    let status = Path::new("/tmp").join(format!("silrig_{watched}")).join("status");
+    let status = Path::new("/dev/shm").join(format!("silrig_{watched}")).join("status");
     let start = Instant::now();
     while !status.join("plant.json").exists() {
         assert!(start.elapsed() < Duration::from_secs(20), "no status from the plant");

@@ -492,12 +492,12 @@ fn a_controller_checkpoint_with_absurd_weights_is_refused_and_the_events_say_it_
 fn a_run_id_whose_iceoryx2_folder_is_squatted_by_a_file_is_refused_naming_the_file() {
     let dir = temp_dir("squat");
     let id = run_id("squat");
-    let squat = PathBuf::from(format!("/tmp/silrig_{id}"));
+    let squat = PathBuf::from(format!("/dev/shm/silrig_{id}"));
     std::fs::write(&squat, "not a folder").unwrap();
     let (code, text, _, _) = run_to_end(&id, &dir.join("run"), &["--duration-s", "1"]);
     std::fs::remove_file(&squat).unwrap();
     assert_eq!(code, Some(2), "{text}");
-    assert!(text.contains(&format!("/tmp/silrig_{id} exists and is not a folder")), "{text}");
+    assert!(text.contains(&format!("/dev/shm/silrig_{id} exists and is not a folder")), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -574,7 +574,7 @@ fn a_process_started_by_hand_that_fails_at_start_up_leaves_no_iceoryx2_files() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("no controller and logger connected within 0.5 s"));
-    assert!(!Path::new(&format!("/tmp/silrig_{id}")).exists(), "the run's iceoryx2 folder is left");
+    assert!(!Path::new(&format!("/dev/shm/silrig_{id}")).exists(), "the run's iceoryx2 folder is left");
     no_shared_memory_left(&id);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -615,7 +615,7 @@ fn every_file_of_a_run_is_its_owners_only_whatever_the_umask() {
         found
     };
     // While it flies: the run's iceoryx2 folder (status files, locks) and its lock file.
-    let running: Vec<String> = [format!("/tmp/silrig_{id}"), format!("/tmp/silrig_{id}.lock")]
+    let running: Vec<String> = [format!("/dev/shm/silrig_{id}"), format!("/tmp/silrig_{id}.lock")]
         .iter()
         .flat_map(|p| open_to_others(Path::new(p)))
         .collect();

@@ -185,7 +185,8 @@ fn two_users_side_by_side_can_neither_read_nor_join_nor_take_the_others_run() {
     let said = String::from_utf8_lossy(&join.stderr);
     assert!(!join.status.success() && said.contains("cannot create iceoryx2 node"), "bob joined alice's run: {said}");
     // In words: whose run it is and what to do, no internal type (`NodeCreationFailure::...`).
-    let words = format!("the run's files (/tmp/silrig_{id}) belong to uid {NOBODY}, and a run is its owner's alone");
+    let words =
+        format!("the run's files (/dev/shm/silrig_{id}) belong to uid {NOBODY}, and a run is its owner's alone");
     assert!(said.contains(&words) && !said.contains("::"), "{said}");
     // Alice's run is untouched by all of it.
     let o = common::wait_with_watchdog(alice, Duration::from_secs(60));

@@ -366,7 +366,7 @@ pub fn owner_only_files() {
 
 /// End a rig process: its exit status ([`exit_status`]), and, for a process started by hand (not by `silrig
 /// run`, which cleans up after its run), the run's iceoryx2 files once no process of the run is left, so a process
-/// that fails at start-up leaves no `/tmp/silrig_<run>` folder or shared memory behind.
+/// that fails at start-up leaves no `/dev/shm/silrig_<run>` folder or shared memory behind.
 pub fn finish_process(
     process: &str,
     args: &ProcessArgs,

@@ -1,6 +1,6 @@
 //! Live status of a running rig: each process's snapshot (tick, simulated time, counters, p99 so far of each of its
 //! distributions), written about once a second by a thread of its own at normal priority, atomically, to
-//! `/tmp/silrig_<run>/status/<process>.json`. The real-time loop only hands values over through a bounded channel
+//! `/dev/shm/silrig_<run>/status/<process>.json`. The real-time loop only hands values over through a bounded channel
 //! (never blocking: a full channel drops the value from the live figure, never from the report), so watching costs
 //! the loop nothing. The folder is inside the run's iceoryx2 root, so the run's cleanup removes it with the rest;
 //! `silrig run`'s live line and `silrig top` only read it.
@@ -175,7 +175,7 @@ pub fn read_statuses(run: &RunId) -> Vec<ProcessStatus> {
 
 /// The runs of this machine that have status files now (what `silrig top` can attach to).
 pub fn live_runs() -> Vec<String> {
-    let mut runs: Vec<String> = std::fs::read_dir("/tmp")
+    let mut runs: Vec<String> = std::fs::read_dir(silrig_wire::ipc::SHM_DIR)
         .into_iter()
         .flatten()
         .flatten()

@@ -1,5 +1,5 @@
 //! The plant's newest published tick, for the launcher's process faults: a 16-byte file in the run's status folder
-//! (`/tmp/silrig_<run>/status/plant.tick`), mapped by the plant, which stores the tick after each publish (one atomic
+//! (`/dev/shm/silrig_<run>/status/plant.tick`), mapped by the plant, which stores the tick after each publish (one atomic
 //! store, no system call), and mapped read-only by `silrig run`, which then kills, stops and terminates processes at
 //! their planned simulated time, the tick, rather than at a wall-clock time from tick 0 that a stalled or restarted
 //! plant has left behind. The run's cleanup removes it with the folder.

@@ -182,7 +182,7 @@ pub fn text() -> String {
         q.max_subscribers,
         StreamEvent::PublisherDead.id()
     );
-    out += "Namespace of run <id>: iceoryx2 root dir /tmp/silrig_<id>/, file prefix sr_<id>_.\n";
+    out += "Namespace of run <id>: iceoryx2 root dir /dev/shm/silrig_<id>/, file prefix sr_<id>_.\n";
     for (title, rules) in rule_sections() {
         let _ = writeln!(out, "\n{title}:");
         for rule in rules {

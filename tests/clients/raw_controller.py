@@ -60,7 +60,7 @@ def main():
     run = os.environ["SILRIG_RUN_ID"]
     theta_setpoint = float(sys.argv[1])
     config = iox2.config.default()
-    config.global_cfg.root_path = iox2.Path.new(f"/tmp/silrig_{run}/")
+    config.global_cfg.root_path = iox2.Path.new(f"/dev/shm/silrig_{run}/")
     config.global_cfg.prefix = iox2.FileName.new(f"sr_{run}_")
     node = iox2.NodeBuilder.new().config(config).name(iox2.NodeName.new("raw-controller")).create(iox2.ServiceType.Ipc)
 

@@ -49,7 +49,7 @@ def main():
     dt_s = timing.get("dt_s", 0.01)
     ticks = round(float(os.environ.get("SILRIG_DURATION_S") or timing.get("duration_s", 10.0)) / dt_s)
     config = iox2.config.default()
-    config.global_cfg.root_path = iox2.Path.new(f"/tmp/silrig_{run}/")
+    config.global_cfg.root_path = iox2.Path.new(f"/dev/shm/silrig_{run}/")
     config.global_cfg.prefix = iox2.FileName.new(f"sr_{run}_")
     node = iox2.NodeBuilder.new().config(config).name(iox2.NodeName.new("raw-plant")).create(iox2.ServiceType.Ipc)
 

@@ -125,9 +125,9 @@ pub fn assert_sweep_left_nothing(pid: u32) {
             .filter(|n| prefixes.iter().any(|p| n.starts_with(p)))
             .collect()
     };
-    let shm = named(Path::new("/dev/shm"), &[format!("sr_{runs}")]);
+    let shm = named(Path::new("/dev/shm"), &[format!("sr_{runs}"), format!("silrig_{runs}")]);
     assert!(shm.is_empty(), "shared memory left behind: {shm:?}");
-    let tmp = named(&std::env::temp_dir(), &[format!("silrig_{runs}"), format!("silrig-sweep-{runs}")]);
+    let tmp = named(&std::env::temp_dir(), &[format!("silrig-sweep-{runs}")]);
     assert!(tmp.is_empty(), "run or scratch folders left behind: {tmp:?}");
 }
 
@@ -159,7 +159,7 @@ pub fn no_shared_memory_left(run_id: &str) {
         .filter(|n| n.starts_with(&prefix))
         .collect();
     assert!(left.is_empty(), "shared memory left behind: {left:?}");
-    assert!(!Path::new(&format!("/tmp/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
+    assert!(!Path::new(&format!("/dev/shm/silrig_{run_id}")).exists(), "iceoryx2 root folder left behind");
 }
 
 /// A message a person reads is in words: no Rust path (`Type::Variant`), no Debug dump of a value or an error

@@ -219,7 +219,7 @@ impl Leftovers {
         let lock_files = [
             format!("/tmp/silrig_{run_id}.lock"),
             out.join(".silrig-run.lock").to_string_lossy().into_owned(),
-            format!("/tmp/silrig_{run_id}"),
+            format!("{}/silrig_{run_id}", silrig_wire::ipc::SHM_DIR),
         ]
         .into_iter()
         .filter(|p| Path::new(p).exists())

@@ -41,9 +41,12 @@ impl RunId {
         format!("sr_{}_", self.0)
     }
 
-    /// Root directory of the run's iceoryx2 files: `/tmp/silrig_<run>/`.
+    /// Root directory of the run's iceoryx2 files: `/dev/shm/silrig_<run>/`. In memory, beside the run's shared
+    /// memory: iceoryx2 creates about a hundred files there a run (nodes, services, event sockets) and syncs each
+    /// static one to its disk, which on a disk-backed `/tmp` made half of a sweep case's time (ext4 without a
+    /// journal, as on this kind of VM, also scans past every file deleted in the last minutes to make one).
     pub fn root_dir(&self) -> PathBuf {
-        PathBuf::from(format!("/tmp/silrig_{}/", self.0))
+        PathBuf::from(format!("{SHM_DIR}/silrig_{}/", self.0))
     }
 }
 
@@ -336,7 +339,7 @@ const UNINSPECTABLE_GRACE: std::time::Duration = std::time::Duration::from_secs(
 /// its processes end, and may be looking at its leftovers.
 pub const DEAD_RUN_GRACE: std::time::Duration = std::time::Duration::from_secs(5);
 
-/// Run ids that have files on this machine: `/tmp/silrig_<run>/` folders and `/dev/shm/sr_<run>_*` files, with
+/// Run ids that have files on this machine: `/dev/shm/silrig_<run>/` folders and `/dev/shm/sr_<run>_*` files, with
 /// the time the newest of them was modified.
 fn runs_on_this_machine() -> Vec<(RunId, std::time::SystemTime)> {
     let mut runs: std::collections::BTreeMap<String, std::time::SystemTime> = Default::default();
@@ -345,13 +348,13 @@ fn runs_on_this_machine() -> Vec<(RunId, std::time::SystemTime)> {
         let newest = runs.entry(id.to_string()).or_insert(modified);
         *newest = (*newest).max(modified);
     };
-    for entry in std::fs::read_dir("/tmp").into_iter().flatten().flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        note(name.strip_prefix("silrig_"), &entry);
-    }
     for entry in std::fs::read_dir(SHM_DIR).into_iter().flatten().flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
-        note(name.strip_prefix("sr_").and_then(|rest| rest.split('_').next()), &entry);
+        let id = match name.strip_prefix("silrig_") {
+            Some(root) => Some(root),
+            None => name.strip_prefix("sr_").and_then(|rest| rest.split('_').next()),
+        };
+        note(id, &entry);
     }
     runs.into_iter().filter_map(|(id, t)| RunId::new(&id).ok().map(|r| (r, t))).collect()
 }
@@ -418,9 +421,9 @@ mod tests {
         assert!(RunId::new(&"x".repeat(25)).unwrap_err().to_string().contains("too long"));
         let r = RunId::new("r42").unwrap();
         assert_eq!(r.prefix(), "sr_r42_");
-        assert_eq!(r.root_dir(), PathBuf::from("/tmp/silrig_r42/"));
+        assert_eq!(r.root_dir(), PathBuf::from("/dev/shm/silrig_r42/"));
         let cfg = rig_config(&r);
         assert_eq!(cfg.global.prefix.as_str(), "sr_r42_");
-        assert_eq!(cfg.global.root_path().to_string(), "/tmp/silrig_r42/");
+        assert_eq!(cfg.global.root_path().to_string(), "/dev/shm/silrig_r42/");
     }
 }
