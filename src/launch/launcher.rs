@@ -100,7 +100,7 @@ fn supervise(
             sup.failures.push(format!("silrig run: no end after {timeout:?}"));
             return Ok(());
         }
-        std::thread::sleep(Duration::from_millis(5));
+        crate::child::wait_for_an_exit(&sup.exit_fds(), Duration::from_millis(5));
     }
 }
 

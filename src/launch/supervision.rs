@@ -576,6 +576,11 @@ impl Supervisor {
         }
     }
 
+    /// What [`crate::child::wait_for_an_exit`] waits on: the exit descriptors of the processes still running.
+    pub(crate) fn exit_fds(&self) -> Vec<std::os::fd::RawFd> {
+        self.processes.iter().filter_map(|p| p.process.exit_fd()).collect()
+    }
+
     /// The plant has ended for good and the logger has too (or had 2 s to write its last rows).
     pub(crate) fn run_is_over(&self) -> bool {
         let logger_done = self.processes.iter().any(|p| p.role == Role::Logger && p.ended_for_good());
