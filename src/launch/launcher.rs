@@ -86,6 +86,7 @@ fn supervise(
         sup.handle_exits()?;
         sup.watch_joins();
         sup.restart_due()?;
+        sup.renew_stuck();
         if let Some(live) = live.as_deref_mut() {
             live.update(sup.lives.iter().filter(|l| l.life > 1).count() as u32);
         }

@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitStatus;
 use std::time::{Duration, Instant};
 
+mod stuck;
+
 /// What to do when a process dies without a planned fault (`--restart`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum RestartMode {
@@ -207,6 +209,8 @@ pub(crate) struct Supervisor {
     pub(crate) lives: Vec<ProcessLife>,
     /// A sweep's warm rig, whose warm processes fork the run's processes.
     warm: Option<std::sync::Arc<crate::warm::WarmRig>>,
+    /// Restarted processes watched until they take the plant's samples.
+    stuck: stuck::StuckWatch,
 }
 
 /// The longest the launcher waits for a process's node before it starts the next ([`joining::wait_until_joined`]).
@@ -248,6 +252,7 @@ impl Supervisor {
             notes: Vec::new(),
             lives: Vec::new(),
             warm,
+            stuck: Default::default(),
         };
         for role in [Role::Logger, Role::Controller, Role::Plant] {
             if (role == Role::Controller && sup.controller == ControllerLaunch::External)
@@ -409,12 +414,22 @@ impl Supervisor {
             self.watch_joins();
             let p = &mut self.processes[i];
             let (role, pid, planned) = (p.role, p.process.pid(), p.planned_exit);
-            self.end_life(pid, status, if planned { " (the fault plan)" } else { "" });
+            let renewed = self.stuck.renewing.contains(&pid);
+            self.end_life(
+                pid,
+                status,
+                match (renewed, planned) {
+                    (true, _) => " (renewed: it took no sample)",
+                    (false, true) => " (the fault plan)",
+                    (false, false) => "",
+                },
+            );
             let p = &mut self.processes[i];
             if std::mem::take(&mut p.planned_exit) {
                 p.killed_by_plan = true;
                 let restarting = p.restart_at.is_some();
-                self.events.emit(None, "process-ended", format!("{role} {} (planned)", describe(status)));
+                let why = if renewed { "renewed" } else { "planned" };
+                self.events.emit(None, "process-ended", format!("{role} {} ({why})", describe(status)));
                 if !restarting && role == Role::Plant {
                     self.plant_done();
                 }
@@ -548,6 +563,7 @@ impl Supervisor {
             self.processes[i] = RoleProcess::started(role, process, restarts);
             let detail = format!("{role} as pid {pid} (restart {restarts})");
             self.events.emit_at(spawned_ns, None, "process-restarted", detail);
+            self.watch_restart(role, pid);
         }
         Ok(())
     }
