@@ -597,10 +597,14 @@ impl Supervisor {
         self.processes.iter().filter_map(|p| p.process.exit_fd()).collect()
     }
 
-    /// The plant has ended for good and the logger has too (or had 2 s to write its last rows).
+    /// The plant has ended for good and the others have too (the logger had 2 s to write its last rows, the
+    /// controller 1 s to see the end-of-run sample and leave): one still running then is stopped.
     pub(crate) fn run_is_over(&self) -> bool {
-        let logger_done = self.processes.iter().any(|p| p.role == Role::Logger && p.ended_for_good());
-        self.plant_done_at.is_some_and(|t| logger_done || t.elapsed() > Duration::from_secs(2))
+        let done = |role: Role| self.processes.iter().all(|p| p.role != role || p.ended_for_good());
+        self.plant_done_at.is_some_and(|t| {
+            (done(Role::Logger) || t.elapsed() > Duration::from_secs(2))
+                && (done(Role::Controller) || t.elapsed() > Duration::from_secs(1))
+        })
     }
 
     /// Roles a planned kill or term ended for good (they have no report to give).
