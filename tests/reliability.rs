@@ -160,6 +160,15 @@ fn ctrl_c_sigterm_and_a_hangup_stop_the_run_with_130_143_and_129_saying_when() {
         // In a process group of its own, as a shell's job: a closed terminal or a dropped ssh session hangs up
         // the whole group, the rig's processes with the launcher.
         std::os::unix::process::CommandExt::process_group(&mut command, 0);
+        // As from a terminal: a hangup its default. Under `nohup` (a test run started so) the launcher keeps the
+        // hangup ignored, as it should, and the run would fly on.
+        // SAFETY: between fork and exec, signal(2) only, which is async-signal-safe.
+        unsafe {
+            std::os::unix::process::CommandExt::pre_exec(&mut command, || {
+                libc::signal(libc::SIGHUP, libc::SIG_DFL);
+                Ok(())
+            });
+        }
         let launcher = command.stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
         wait_until_ticking(&out);
         std::thread::sleep(Duration::from_secs(1));
