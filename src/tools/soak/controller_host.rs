@@ -6,7 +6,6 @@
 use anyhow::Context;
 use silrig_rig::ProcessArgs;
 use silrig_wire::ipc::namespace::RunId;
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -25,7 +24,7 @@ pub struct ControllerHost {
     /// How often the bridge and the controller were started.
     pub starts: (u32, u32),
     /// Every pid it started.
-    pub pids: BTreeSet<u32>,
+    pub pids: super::probe::SeenPids,
 }
 
 impl ControllerHost {
@@ -49,7 +48,7 @@ impl ControllerHost {
             bridge: None,
             controller: None,
             starts: (0, 0),
-            pids: BTreeSet::new(),
+            pids: super::probe::SeenPids::new(),
         })
     }
 
@@ -105,7 +104,7 @@ impl ControllerHost {
             .stderr(log)
             .spawn()
             .with_context(|| format!("starting {program} on the controller's host"))?;
-        self.pids.insert(child.id());
+        super::probe::note_seen(&mut self.pids, child.id());
         Ok(child)
     }
 

@@ -17,7 +17,6 @@ use anyhow::Context;
 use controller_host::ControllerHost;
 use figures::{ControllerHostFigures, Measured, SoakReport};
 use probe::ProcessProbe;
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
@@ -129,7 +128,7 @@ pub fn run(args: &SoakArgs, silrig: &Path) -> anyhow::Result<SoakReport> {
 /// What the soak saw of the run while it went: every pid, the processes and the run's /dev/shm entries once settled
 /// and after the last fault, and every life's figures.
 struct Watched {
-    seen: BTreeSet<u32>,
+    seen: probe::SeenPids,
     start: Option<(Vec<ProcessProbe>, Vec<String>)>,
     end: Option<(Vec<ProcessProbe>, Vec<String>)>,
     lives: probe::Lives,
@@ -148,7 +147,8 @@ fn watch(
     let host_prefix = host.as_ref().map(|h| h.local.prefix());
     let mut host_trouble = String::new();
     let shm_prefix = format!("sr_{run_id}_");
-    let mut w = Watched { seen: BTreeSet::from([launcher]), start: None, end: None, lives: probe::Lives::default() };
+    let mut w = Watched { seen: probe::SeenPids::new(), start: None, end: None, lives: probe::Lives::default() };
+    probe::note_seen(&mut w.seen, launcher);
     let mut t0_ns: Option<u64> = None;
     let status = loop {
         if let Some(status) = child.try_wait()? {
@@ -168,7 +168,9 @@ fn watch(
             }
             probes.extend(h.probes());
         }
-        w.seen.extend(probes.iter().map(|p| p.pid));
+        for p in &probes {
+            probe::note_seen(&mut w.seen, p.pid);
+        }
         // Wall seconds from tick 0; measurements stop a second before the end, when the launcher ends the rig.
         let wall_s = t0_ns.map(|t0| silrig_wire::clock::monotonic_ns().saturating_sub(t0) as f64 / 1e9);
         if let Some(wall_s) = wall_s.filter(|t| *t <= duration_s - 1.0) {

@@ -182,6 +182,22 @@ pub fn shm_entries(shm_prefix: &str) -> Vec<String> {
     names
 }
 
+/// Every process of a run the soak saw, by pid, with the time it started (clock ticks since boot, `/proc/<pid>/stat`
+/// field 22): a pid an hour's soak saw may belong to another process by its end (pids wrap; one soak blamed two
+/// processes of a test run that had taken them), and only the same start time is the same process.
+pub type SeenPids = std::collections::BTreeMap<u32, u64>;
+
+/// Note `pid` as seen, with its start time when first seen (0 when it has gone already: never a leftover then).
+pub fn note_seen(seen: &mut SeenPids, pid: u32) {
+    seen.entry(pid).or_insert_with(|| start_time(pid).unwrap_or(0));
+}
+
+/// When process `pid` started, clock ticks since boot.
+fn start_time(pid: u32) -> Option<u64> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    text[text.rfind(')')? + 1..].split_whitespace().nth(19)?.parse().ok()
+}
+
 /// What of a run is left after it ended: processes still alive among `pids` (every process of the run the soak
 /// saw) or naming the run id on their command line, its `/dev/shm` entries, its lock files and iceoryx2 folder.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -195,11 +211,12 @@ pub struct Leftovers {
 }
 
 impl Leftovers {
-    /// Look for what `run_id` (run folder `out`) left; `pids`: every pid of the run seen while it ran.
-    pub fn find(run_id: &str, out: &Path, pids: &BTreeSet<u32>) -> Leftovers {
+    /// Look for what `run_id` (run folder `out`) left; `seen`: every process of the run seen while it ran.
+    pub fn find(run_id: &str, out: &Path, seen: &SeenPids) -> Leftovers {
         let mut processes: BTreeSet<String> = BTreeSet::new();
-        for &pid in pids {
-            if stat(pid).is_some_and(|(state, _)| state != 'Z') {
+        for (&pid, &started) in seen {
+            let same = started != 0 && start_time(pid) == Some(started);
+            if same && stat(pid).is_some_and(|(state, _)| state != 'Z') {
                 processes.insert(format!("{pid} ({})", process_name(pid)));
             }
         }
@@ -318,7 +335,7 @@ mod tests {
             std::thread::sleep(std::time::Duration::from_millis(2));
         }
         let out = std::env::temp_dir();
-        let left = Leftovers::find(&run_id, &out, &BTreeSet::new());
+        let left = Leftovers::find(&run_id, &out, &SeenPids::new());
         stray.kill().unwrap();
         stray.wait().unwrap();
         // By its program's name (python3, or the launcher of a python3 shim).
@@ -326,5 +343,21 @@ mod tests {
         let said = left.describe();
         assert!(said.starts_with("processes of the run still alive: ") && !said.contains('{'), "{said}");
         assert_eq!(Leftovers::default().describe(), "");
+    }
+
+    #[test]
+    fn a_pid_seen_during_the_run_is_a_leftover_only_while_it_is_the_same_process() {
+        let mut sleeper = std::process::Command::new("sleep").arg("30").spawn().unwrap();
+        let pid = sleeper.id();
+        let mut seen = SeenPids::new();
+        note_seen(&mut seen, pid);
+        let out = std::env::temp_dir();
+        let left = Leftovers::find("pid-reuse-test", &out, &seen);
+        assert!(left.processes.len() == 1 && left.processes[0].starts_with(&format!("{pid} (")), "{left:?}");
+        // The same pid with another start time: another process that took the pid since (pids wrap in an hour).
+        let reused = SeenPids::from([(pid, seen[&pid] + 1)]);
+        assert!(Leftovers::find("pid-reuse-test", &out, &reused).processes.is_empty());
+        sleeper.kill().unwrap();
+        sleeper.wait().unwrap();
     }
 }
