@@ -15,7 +15,8 @@ use std::time::Duration;
 const SILRIG: &str = env!("CARGO_BIN_EXE_silrig");
 
 /// Opens a controller session of the run in its environment and never asks for a sample.
-const STUCK_C: &str = r#"#include <unistd.h>
+const STUCK_C: &str = r#"#define _POSIX_C_SOURCE 200809L
+#include <unistd.h>
 #include "silrig_client.h"
 static const char *const NAMES[3] = {"err_phi_deg", "err_theta_deg", "err_psi_deg"};
 int main(void) {
@@ -29,23 +30,10 @@ int main(void) {
 "#;
 
 fn compile_stuck(dir: &Path) -> String {
-    let lib_dir = common::client_lib(SILRIG).parent().unwrap().to_path_buf();
     let source = dir.join("stuck.c");
     std::fs::write(&source, STUCK_C).unwrap();
     let exe = dir.join("stuck");
-    let o = Command::new("cc")
-        .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-I"])
-        .arg(format!("{}/examples/c", env!("CARGO_MANIFEST_DIR")))
-        .arg(&source)
-        .arg("-L")
-        .arg(&lib_dir)
-        .arg("-lsilrig_client")
-        .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
-        .arg("-o")
-        .arg(&exe)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "cc: {}", String::from_utf8_lossy(&o.stderr));
+    common::compile_c(SILRIG, &source, &exe);
     exe.display().to_string()
 }
 

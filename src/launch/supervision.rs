@@ -414,7 +414,7 @@ impl Supervisor {
             self.watch_joins();
             let p = &mut self.processes[i];
             let (role, pid, planned) = (p.role, p.process.pid(), p.planned_exit);
-            let renewed = self.stuck.renewing.contains(&pid);
+            let renewed = self.stuck.take_renewing(pid);
             self.end_life(
                 pid,
                 status,

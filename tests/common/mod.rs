@@ -52,24 +52,31 @@ pub fn c_example(silrig: &str, suite: &str, name: &str) -> String {
     let root = env!("CARGO_MANIFEST_DIR");
     let exe = std::env::temp_dir().join(format!("silrig-{suite}-{}-{name}", std::process::id()));
     if !exe.exists() {
-        let lib_dir = client_lib(silrig).parent().unwrap().to_path_buf();
         let partial = exe.with_extension(format!("{:?}", std::thread::current().id()).replace(['(', ')'], ""));
-        let o = Command::new("cc")
-            .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
-            .arg(format!("{root}/examples/c"))
-            .arg(format!("{root}/examples/c/{name}.c"))
-            .arg("-L")
-            .arg(&lib_dir)
-            .args(["-lsilrig_client", "-lm"])
-            .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
-            .arg("-o")
-            .arg(&partial)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "cc: {}", String::from_utf8_lossy(&o.stderr));
+        compile_c(silrig, Path::new(&format!("{root}/examples/c/{name}.c")), &partial);
         std::fs::rename(partial, &exe).unwrap();
     }
     exe.display().to_string()
+}
+
+/// Compile the C program `source` into `exe` with the system compiler, warnings as errors, against
+/// `libsilrig_client.so` beside `silrig` and the header in `examples/c`.
+#[allow(dead_code)]
+pub fn compile_c(silrig: &str, source: &Path, exe: &Path) {
+    let lib_dir = client_lib(silrig).parent().unwrap().to_path_buf();
+    let o = Command::new("cc")
+        .args(["-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+        .arg(format!("{}/examples/c", env!("CARGO_MANIFEST_DIR")))
+        .arg(source)
+        .arg("-L")
+        .arg(&lib_dir)
+        .args(["-lsilrig_client", "-lm"])
+        .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
+        .arg("-o")
+        .arg(exe)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "cc {}: {}", source.display(), String::from_utf8_lossy(&o.stderr));
 }
 
 /// The Python of `target/test-venv` (which `.ci/run` creates), with `package` installed there if `module` does not

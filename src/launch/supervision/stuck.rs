@@ -33,8 +33,17 @@ pub(crate) struct StuckWatch {
     watched: Vec<Watched>,
     renewals: Vec<(Role, u32)>,
     /// A renewal's kill, not yet reaped: its pid (its end is the launcher's, not the fault plan's).
-    pub(super) renewing: Vec<u32>,
+    renewing: Vec<u32>,
     last_look: Option<Instant>,
+}
+
+impl StuckWatch {
+    /// Whether `pid`'s end, reaped now, was a renewal's kill (said once: the pid may be another process's later).
+    pub(super) fn take_renewing(&mut self, pid: u32) -> bool {
+        let before = self.renewing.len();
+        self.renewing.retain(|&p| p != pid);
+        self.renewing.len() < before
+    }
 }
 
 struct Watched {
