@@ -6,6 +6,7 @@
 use super::error::{BridgeError, zenoh_err};
 use super::frame::{self, CommandTrailer, Hello, RunInfo, Side};
 use super::link::{Link, listener_fd, read_hello};
+use super::loop_watch::{LoopWatch, Step};
 use super::net::{self, Arrival, Keys};
 use super::options::{
     BridgeOptions, CONTROLLER_REPORT, FINISHED_GRACE, Plan, REFUSED_AFTER, REPORT_RECEIVED, REPORT_WAIT,
@@ -189,6 +190,7 @@ impl ControllerSide {
     }
 
     pub(super) fn run(mut self) -> anyhow::Result<(Recorder, String, String)> {
+        let watch = LoopWatch::start(self.link.events.clone());
         let ended = loop {
             if signals::termination_requested() {
                 break "terminated by signal".to_string();
@@ -197,12 +199,16 @@ impl ControllerSide {
                 break "completed".to_string();
             }
             let fds = [listener_fd(&self.commands), listener_fd(&self.infos), self.link.inbox.fd()];
+            watch.at(Step::Waiting);
             net::wait_readable(&fds, self.link.next_hello_ns);
+            watch.at(Step::Arrivals);
             for arrival in self.link.inbox.take() {
                 self.on_arrival(arrival)?;
             }
             self.plant_info.deliver_history()?;
+            watch.at(Step::Sending);
             self.forward_commands()?;
+            watch.at(Step::Hello);
             let connected =
                 self.plant_stream.number_of_subscribers() >= 1 && self.command_stream.number_of_publishers() >= 1;
             let (run_id, layout_version) = (self.link.run.clone(), self.link.layout_version);
@@ -225,6 +231,8 @@ impl ControllerSide {
                 self.link.say("bridge-peer-lost", text, false);
             }
         };
+        // The report's exchange waits on purpose.
+        drop(watch);
         if ended == "completed" {
             self.send_controller_report();
         }

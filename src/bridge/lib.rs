@@ -33,6 +33,7 @@
 //! - `link.rs`: what both sides share: the Zenoh ends and the hello, the check of a peer's hello against this
 //!   run, an iceoryx2 listener's descriptor to poll.
 //! - `stamps.rs`: when each recent tick went out, for timing the network leg.
+//! - [`loop_watch`]: a thread that says when a bridge's own loop stands still, and in which step.
 //! - `plant_side.rs`: the plant's host.
 //! - `controller_side.rs`: the controller's host.
 
@@ -42,6 +43,7 @@ pub mod frame;
 pub mod impair;
 pub mod key;
 mod link;
+pub mod loop_watch;
 pub mod net;
 mod options;
 pub mod peer;

@@ -6,6 +6,7 @@
 use super::error::zenoh_err;
 use super::frame::{self, CommandTrailer, Hello, RunInfo, Side};
 use super::link::{Link, listener_fd, read_hello};
+use super::loop_watch::{LoopWatch, Step};
 use super::net::{self, Arrival, Keys};
 use super::options::{BridgeOptions, CONTROLLER_REPORT, Plan, REPORT_ABSENT, REPORT_RECEIVED};
 use super::peer::{PeerChange, PeerWatch};
@@ -125,18 +126,23 @@ impl PlantSide {
 
     pub(super) fn run(mut self) -> anyhow::Result<(Recorder, String, String)> {
         let mut finished_seen = 0;
+        let watch = LoopWatch::start(self.link.events.clone());
         while !signals::termination_requested() {
             let hello_due = self.link.next_hello_ns;
+            watch.at(Step::Waiting);
             net::wait_readable(&[listener_fd(&self.samples), self.link.inbox.fd()], hello_due);
+            watch.at(Step::Sending);
             self.forward_samples()?;
             let finished = self.samples.stats().finished_notices;
             if finished > finished_seen {
                 finished_seen = finished;
                 let _ = self.finished_out.put(Vec::<u8>::new()).wait();
             }
+            watch.at(Step::Arrivals);
             for arrival in self.link.inbox.take() {
                 self.on_arrival(arrival)?;
             }
+            watch.at(Step::Hello);
             let serving = self.peer.alive().map(|h| h.epoch);
             let (run_id, layout_version) = (self.link.run.clone(), self.link.layout_version);
             if monotonic_ns() >= self.link.next_hello_ns {
