@@ -1,6 +1,7 @@
 //! The iceoryx2 transport of the rig, a thin layer that knows nothing of which streams the rig has (that is
 //! [`crate::topology`]): per-run namespaces and their cleanup ([`namespace`]), opening a stream's services with the
-//! settings every peer must use ([`stream`]), typed ports that stamp and check sample headers ([`publisher`],
+//! settings every peer must use ([`stream`]) and the mending of service files a dead creator left half-made
+//! ([`half_made`]), typed ports that stamp and check sample headers ([`publisher`],
 //! [`subscriber`]), and the WaitSet loop with the rig's signal rules and a timerfd tick source ([`waitset`]).
 //!
 //! Everything here uses `ipc::Service`, whose ports are `!Send`: create them on the thread that uses them.
@@ -14,6 +15,7 @@
 //! `TerminationRequest`, which ends [`run_waitset`] with [`LoopEnd::TerminationRequest`]. A process that never
 //! waits on a WaitSet keeps the default SIGTERM action and leaves a dead node behind when killed.
 
+pub mod half_made;
 pub mod namespace;
 pub mod publisher;
 pub mod stream;

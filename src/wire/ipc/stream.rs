@@ -111,7 +111,7 @@ fn transient_event(e: &EventOpenOrCreateError) -> bool {
 }
 
 /// `open_or_create` with retries on the transient errors; between attempts, dead nodes that may hold the service
-/// in a bad state are cleaned up.
+/// in a bad state are cleaned up, and so are service files a dead creator left half-made ([`super::half_made`]).
 fn open_with_retry<F, E>(
     node: &Node<ipc::Service>,
     mut attempt: impl FnMut() -> Result<F, E>,
@@ -124,10 +124,26 @@ fn open_with_retry<F, E>(
             Err(e) if tries < OPEN_ATTEMPTS && transient(&e) => {
                 tries += 1;
                 let _ = node.try_cleanup_dead_nodes();
+                mend_half_made(node);
                 std::thread::sleep(OPEN_RETRY_PAUSE);
             }
             Err(e) => return Err(e),
         }
+    }
+}
+
+/// [`super::half_made::mend`] in the node's run, each mend said on stderr (the run's messages keep it).
+fn mend_half_made(node: &Node<ipc::Service>) {
+    let dir = node.config().global.service_dir().to_string();
+    for (mend, service) in super::half_made::mend(std::path::Path::new(&dir)) {
+        let done = match mend {
+            super::half_made::Mend::Finished => "finished it, as its creator would have",
+            super::half_made::Mend::Removed => "removed it (its description was cut short)",
+        };
+        eprintln!(
+            "silrig: the service file of `{service}` was left half-made by a process that died while creating it: \
+             {done}; opening again"
+        );
     }
 }
 
