@@ -82,7 +82,7 @@ pub struct Rows {
     pub trace_rows: u64,
     /// Rows of `timing.csv`.
     pub timing_rows: u64,
-    /// Ticks missing from the log (between tick 0 and the last logged tick) inside some fault's window.
+    /// Ticks missing from the log (between tick 0 and the last tick flown) inside some fault's window.
     pub lost_in_fault_windows: u64,
     /// ... outside every fault's window.
     pub lost_outside_fault_windows: u64,
@@ -245,7 +245,7 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
         .collect();
     let mut faults = faults;
     let windows_s: Vec<Option<(f64, f64)>> = faults.iter().map(|o| o.window_s).collect();
-    let (per_fault, lost_out) = losses(&logged, &windows_s, dt_s);
+    let (per_fault, lost_out) = losses(&logged, &windows_s, dt_s, flown_to(&run_report, dt_s));
     for (o, lost) in faults.iter_mut().zip(&per_fault) {
         o.rows_lost = *lost;
     }
@@ -290,6 +290,14 @@ pub fn report(plan: &[Fault], dt_s: f64, m: Measured) -> SoakReport {
     };
     r.problems = problems(&r);
     r
+}
+
+/// The flight's last tick when the plant completed it (it flies ticks 0 to duration / dt), which the log must reach;
+/// None when it did not complete (then the run has failed already, and the log's own end is taken).
+fn flown_to(run_report: &serde_json::Value, dt_s: f64) -> Option<u64> {
+    let plant = run_report["processes"].as_array()?.iter().find(|p| p["process"] == "plant")?;
+    let duration_s = run_report["duration_s"].as_f64()?;
+    (plant["ended"] == "completed").then(|| (duration_s / dt_s).round() as u64)
 }
 
 /// The rows' figures: logged, lost inside and outside the faults' windows (`lost_out`: those in the floor's stalls,

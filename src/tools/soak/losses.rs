@@ -7,26 +7,35 @@ use crate::check::timing::held_in_stalls;
 use silrig_launch::floor::timer_baseline::Stall;
 use std::collections::BTreeMap;
 
-/// Ticks missing from the log between tick 0 and the last logged tick, counted into the first of the faults'
-/// windows (simulated s; None: a fault not injected) that holds them; (the rows lost in each window, the ticks
-/// lost outside every window).
-pub fn losses(logged: &[(u64, bool)], windows_s: &[Option<(f64, f64)>], dt_s: f64) -> (Vec<u64>, Vec<u64>) {
+/// Ticks missing from the log between tick 0 and the last tick flown (`flown_to`, when known: a logger silent
+/// before the end left the flight's last stretch unlogged; else the last logged tick), counted into the first of
+/// the faults' windows (simulated s; None: a fault not injected) that holds them; (the rows lost in each window,
+/// the ticks lost outside every window).
+pub fn losses(
+    logged: &[(u64, bool)],
+    windows_s: &[Option<(f64, f64)>],
+    dt_s: f64,
+    flown_to: Option<u64>,
+) -> (Vec<u64>, Vec<u64>) {
     let mut ticks: Vec<u64> = logged.iter().map(|r| r.0).collect();
     ticks.sort_unstable();
     ticks.dedup();
     let mut inside = vec![0; windows_s.len()];
     let mut outside = Vec::new();
+    let mut lost = |missing: u64| {
+        let t = missing as f64 * dt_s;
+        match windows_s.iter().position(|w| w.is_some_and(|(a, b)| t >= a && t <= b)) {
+            Some(i) => inside[i] += 1,
+            None => outside.push(missing),
+        }
+    };
     let mut expected = 0u64;
     for &k in &ticks {
-        for missing in expected..k {
-            let t = missing as f64 * dt_s;
-            if let Some(i) = windows_s.iter().position(|w| w.is_some_and(|(a, b)| t >= a && t <= b)) {
-                inside[i] += 1;
-            } else {
-                outside.push(missing);
-            }
-        }
+        (expected..k).for_each(&mut lost);
         expected = k + 1;
+    }
+    if let Some(last) = flown_to {
+        (expected..=last).for_each(&mut lost);
     }
     (inside, outside)
 }
@@ -88,7 +97,17 @@ mod tests {
         // Ticks 0..100 logged except 20..25 (inside a window at 0.2..0.3 s) and 80 (outside).
         let logged: Vec<(u64, bool)> =
             (0..100).filter(|k| !(20..25).contains(k) && *k != 80).map(|k| (k, true)).collect();
-        assert_eq!(losses(&logged, &[None, Some((0.2, 0.3))], 0.01), (vec![0, 5], vec![80]));
+        assert_eq!(losses(&logged, &[None, Some((0.2, 0.3))], 0.01, None), (vec![0, 5], vec![80]));
+        assert_eq!(losses(&logged, &[None, Some((0.2, 0.3))], 0.01, Some(99)), (vec![0, 5], vec![80]));
+    }
+
+    #[test]
+    fn a_logger_silent_before_the_end_loses_the_flights_last_stretch() {
+        // The plant flew to tick 120; the log stops at 99.
+        let logged: Vec<(u64, bool)> = (0..100).map(|k| (k, true)).collect();
+        let (inside, outside) = losses(&logged, &[Some((1.095, 1.155))], 0.01, Some(120));
+        assert_eq!(inside, vec![6]);
+        assert_eq!(outside, (100..=120).filter(|k| !(110..=115).contains(k)).collect::<Vec<u64>>());
     }
 
     /// A run at 100 Hz from t0, every tick sent on its grid point but the ones in `gap`, which were lost.
