@@ -195,6 +195,11 @@ impl ControllerSession {
         let info = ControllerInfo::new(diagnostic_names)
             .map_err(|e| SessionError::Setup(format!("announcing diagnostics: {e}")))?;
         let run = args.run_id.to_string();
+        let realtime = args.mode == RigMode::Realtime;
+        // Before any port exists: the plant starts flying once it sees this controller's command publisher, and
+        // locking memory takes from milliseconds to far longer on a loaded machine, which would be ticks missed at
+        // the start for a reason that is not the controller's.
+        let scheduling = request_scheduling(Role::Controller, realtime);
         let node = ipc::create_node(&args.run_id, Role::Controller.label())?;
         let plant_stream = ipc::open_stream::<PlantSample>(&node, Stream::Plant)?;
         let command_stream = ipc::open_stream::<CommandSample>(&node, Stream::Command)?;
@@ -206,7 +211,6 @@ impl ControllerSession {
         announcer.send(0, &info)?;
         let commands = command_stream.publisher().map_err(|_| SessionError::SecondController { run })?;
 
-        let realtime = args.mode == RigMode::Realtime;
         let rec = controller_recorder(&args.run_id);
         let dt = scenario.timing.dt_s;
         let events = EventLog::new(&args.out, Role::Controller.label());
@@ -215,7 +219,7 @@ impl ControllerSession {
         let stale_after =
             Duration::from_nanos(scenario.timing.period_ns() * u64::from(args.options.stale_after_periods.max(1)));
         Ok(Self {
-            scheduling: request_scheduling(Role::Controller, realtime),
+            scheduling,
             diagnostics_len: diagnostic_names.len(),
             loop_faults: LoopFaults::new(&scenario.faults, Role::Controller, dt, scenario.seed, events.clone()),
             events,
