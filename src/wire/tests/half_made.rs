@@ -28,5 +28,14 @@ fn a_stream_left_half_made_by_a_dead_creator_opens_again_and_joins_the_live_serv
         assert_eq!(std::fs::metadata(&path).unwrap().permissions().mode() & 0o777, 0o400, "{}", path.display());
     }
     drop((_writer, opened, logger, _reader, acks, plant));
-    let _ = std::fs::remove_dir_all(run.root_dir());
+    let cleaned = ipc::namespace::cleanup_run(&run).unwrap();
+    assert!(cleaned.is_clean(), "{cleaned:?}");
+    let prefix = run.prefix();
+    let left: Vec<_> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with(&prefix) || name == &format!("silrig_{run}"))
+        .collect();
+    assert!(left.is_empty(), "left in /dev/shm: {left:?}");
 }
