@@ -576,6 +576,9 @@ fn an_unreachable_address_is_named() {
     assert_eq!(o.status.code(), Some(2), "{said}");
     assert!(said.contains("no plant-side bridge answered at tcp/127.0.0.1:1 within 1 s"), "{said}");
     assert!(said.contains("firewall"), "{said}");
+    // In the events too: on the controller's host no launcher quotes the bridge's stderr.
+    let failed = events(&out).into_iter().find(|e| e["kind"] == "bridge-failed").expect("a bridge-failed event");
+    assert!(failed["detail"].as_str().unwrap().contains("no plant-side bridge answered"), "{failed}");
     let o = Command::new(BRIDGE).args(["--connect", "127.0.0.1", "--run-id", &run]).output().unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("HOST:PORT"));
     no_shared_memory_left(&run);

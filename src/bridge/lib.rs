@@ -80,14 +80,17 @@ pub fn run_bridge(opts: &BridgeOptions) -> anyhow::Result<ProcessReport> {
         }
     }
     let scheduling = silrig_wire::clock::current_policy().to_string();
-    let (mut rec, scenario, ended) = match plan.side {
-        Side::Plant => PlantSide::start(opts, &plan)?.run()?,
-        Side::Controller => {
-            let ended = ControllerSide::start(opts, &plan)?.run()?;
+    let flown = match plan.side {
+        Side::Plant => PlantSide::start(opts, &plan).and_then(PlantSide::run),
+        Side::Controller => ControllerSide::start(opts, &plan).and_then(ControllerSide::run).inspect(|_| {
             clean_controller_host(opts.local_run_id());
-            ended
-        }
+        }),
     };
+    // Said in the run's events too, beside the controller's or the plant's: on the controller's host there is no
+    // launcher to quote the bridge's stderr, and a controller there only sees its plant go quiet.
+    let (mut rec, scenario, ended) = flown.inspect_err(|e| {
+        silrig_rig::events::EventLog::new(&args.out, "bridge").emit(None, "bridge-failed", format!("{e:#}"));
+    })?;
     rec.declare(&["peer_losses"]);
     let meta = ReportMeta::new(args, &scenario, scheduling, ended);
     Ok(rec.finish(meta, &args.out)?)
