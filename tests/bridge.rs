@@ -1,14 +1,14 @@
 //! The controller on another host: two network namespaces joined by a veth pair stand for two hosts, the plant and
 //! the logger under `silrig run --bridge-listen` in one, `silrig-bridge --connect` and the unmodified
 //! `silrig-controller` in the other, which also gets a /dev/shm and /tmp of its own (a private mount namespace), so
-//! the run's iceoryx2 namespace exists twice, as on two machines. A realtime run flies with every command accounted for; a link
-//! cut trips the plant's failsafe and the flight recovers when the link returns; a restarted controller-side bridge
-//! resumes the flight, and so does a plant-side one the launcher restarts; an unreachable address, another run id
-//! and a second controller-side bridge get a clear error while the plant side flies on. With the bridges' test
-//! impairment (`SILRIG_BRIDGE_TEST_*`: added delay, loss), same-tick across hosts is held to its budget and lost
-//! commands are counted as misses; a bridge that says it speaks another wire layout is refused. Each test creates its namespaces, veth and processes and removes them in `Drop`,
-//! also when it fails; addresses exist only inside the namespaces. Needs root and iproute2; no timing bound is
-//! asserted.
+//! the run's iceoryx2 namespace exists twice, as on two machines. A realtime run flies with every command accounted
+//! for; a link cut trips the plant's failsafe and the flight recovers when the link returns; a restarted
+//! controller-side bridge resumes the flight, and so does a plant-side one the launcher restarts; an unreachable
+//! address, another run id and a second controller-side bridge get a clear error while the plant side flies on.
+//! With the bridges' test impairment (`SILRIG_BRIDGE_TEST_*`: added delay, loss), same-tick across hosts is held to
+//! its budget and lost commands are counted as misses; a bridge that says it speaks another wire layout is refused.
+//! Each test creates its namespaces, veth and processes and removes them in `Drop`, also when it fails; addresses
+//! exist only inside the namespaces. Needs root and iproute2; no timing bound is asserted.
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
