@@ -393,7 +393,7 @@ fn a_link_cut_trips_the_failsafe_and_the_flight_recovers_also_after_a_bridge_res
     assert!(status.success(), "{text}");
     assert!(counter(&report(&out), "plant", "failsafe_ticks") > 0);
     assert!(ctl.running() || ctl.wait(Duration::from_secs(1)).0.success());
-    let _ = restarted.wait_ended();
+    let _ = restarted.wait_ended(Duration::from_secs(10));
     no_shared_memory_left(&run);
     for dir in [out, ctl_out] {
         let _ = std::fs::remove_dir_all(dir);
@@ -536,11 +536,7 @@ fn the_launcher_restarts_a_killed_plant_side_bridge_and_the_flight_resumes() {
 /// The controller ends with the flight; if it has not within 30 s, the test fails with what its host said: its
 /// events (the controller's and the bridge's) and the bridge's output, once it is stopped.
 fn controller_host_ends(mut ctl: Proc, bridge: &mut Proc, ctl_out: &Path) {
-    let start = Instant::now();
-    while ctl.running() && start.elapsed() < Duration::from_secs(30) {
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    if !ctl.running() {
+    if ctl.wait_ended(Duration::from_secs(30)) {
         return;
     }
     let events = std::fs::read_to_string(ctl_out.join("events.jsonl")).unwrap_or_default();
@@ -552,10 +548,10 @@ fn controller_host_ends(mut ctl: Proc, bridge: &mut Proc, ctl_out: &Path) {
 }
 
 impl Proc {
-    /// Give it a moment to end by itself (the run is over); the drop kills it otherwise.
-    fn wait_ended(&mut self) -> bool {
+    /// Give it up to `limit` to end by itself (the run is over); whether it did (the drop kills it otherwise).
+    fn wait_ended(&mut self, limit: Duration) -> bool {
         let start = Instant::now();
-        while self.0.is_some() && self.running() && start.elapsed() < Duration::from_secs(10) {
+        while self.0.is_some() && self.running() && start.elapsed() < limit {
             std::thread::sleep(Duration::from_millis(20));
         }
         self.0.is_some() && !self.running()

@@ -3,6 +3,7 @@
 //! from them. Which streams exist and with which settings is the rig's topology ([`crate::topology`]), not this
 //! module's.
 
+use super::half_made::{self, Mend};
 use super::publisher::StreamPublisher;
 use super::subscriber::StreamSubscriber;
 use super::{IpcError, StreamEvent};
@@ -135,10 +136,10 @@ fn open_with_retry<F, E>(
 /// [`super::half_made::mend`] in the node's run, each mend said on stderr (the run's messages keep it).
 fn mend_half_made(node: &Node<ipc::Service>) {
     let dir = node.config().global.service_dir().to_string();
-    for (mend, service) in super::half_made::mend(std::path::Path::new(&dir)) {
+    for (mend, service) in half_made::mend(std::path::Path::new(&dir)) {
         let done = match mend {
-            super::half_made::Mend::Finished => "finished it, as its creator would have",
-            super::half_made::Mend::Removed => "removed it (its description was cut short)",
+            Mend::Finished => "finished it, as its creator would have",
+            Mend::Removed => "removed it (its description was cut short)",
         };
         eprintln!(
             "silrig: the service file of `{service}` was left half-made by a process that died while creating it: \
